@@ -1,0 +1,154 @@
+#!/usr/bin/env python3
+"""A minimal external DEM for lbm-server: spheres in free flight under gravity and the fluid forces.
+
+    lbm-server run SCENE.toml --dem external          # prints "DEM service: RUN"
+    python3 clients/python/example_dem.py --service RUN [--particles N] [--density KG_M3]
+
+Every step it sends the particle states, receives the hydrodynamic forces, and advances with
+symplectic Euler (v += dt (F/m + g); x += dt v), reflecting elastically at the domain faces. It
+applies gravity itself (Physics GRAVITY | BALLISTIC_STANDIN), so the fluid side must not.
+Ctrl-C (or SIGTERM) sends STOP with the next states; the run then ends cleanly after that step.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import signal
+import sys
+import time
+
+import numpy as np
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import lbmdem  # noqa: E402
+
+SOFTWARE = "lbmdem example_dem.py 1.0"
+
+
+def grid_positions(n: int, lo: np.ndarray, hi: np.ndarray, radius: float) -> np.ndarray:
+    """``n`` sphere centres on a regular grid filling the box [lo, hi], at least ``radius`` from
+    every face (spheres may overlap when the box is too small; this DEM has no contacts)."""
+    edge = hi - lo
+    # Cells per axis proportional to the edges, enough cells for n spheres.
+    scale = (n / float(np.prod(edge))) ** (1.0 / 3.0)
+    cells = np.maximum(1, np.floor(edge * scale)).astype(int)
+    axis = 0
+    while int(np.prod(cells)) < n:
+        axis = int(np.argmax(edge / cells))
+        cells[axis] += 1
+    i = np.arange(n)
+    idx = np.stack([i % cells[0], (i // cells[0]) % cells[1], i // (cells[0] * cells[1])], axis=1)
+    centre = lo + (idx + 0.5) * (edge / cells)
+    return np.clip(centre, lo + radius, hi - radius)
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--service", required=True, help="run name printed by lbm-server")
+    ap.add_argument("--particles", type=int, default=64, help="number of spheres (default 64)")
+    ap.add_argument("--density", type=float, default=2500.0,
+                    help="particle density [kg/m^3] (default 2500)")
+    ap.add_argument("--timeout", type=float, default=10.0,
+                    help="longest wait for a live but silent fluid server [s] (default 10)")
+    args = ap.parse_args()
+    if args.particles < 1:
+        print("python-dem: error: --particles must be at least 1", file=sys.stderr)
+        return 1
+    if not (args.density > 0.0 and math.isfinite(args.density)):
+        print("python-dem: error: --density must be a positive number", file=sys.stderr)
+        return 1
+
+    stop_requested = {"flag": False}
+
+    def on_signal(signum, _frame):
+        if stop_requested["flag"]:  # second Ctrl-C: leave now
+            raise KeyboardInterrupt
+        stop_requested["flag"] = True
+        print(f"python-dem: {signal.Signals(signum).name}: stopping after the next step",
+              file=sys.stderr, flush=True)
+
+    signal.signal(signal.SIGINT, on_signal)
+    signal.signal(signal.SIGTERM, on_signal)
+
+    n = args.particles
+    hello = lbmdem.Hello.new(
+        lbmdem.Units.si(),
+        lbmdem.Physics.GRAVITY | lbmdem.Physics.BALLISTIC_STANDIN,
+        initial_count=n,
+        software=SOFTWARE,
+    )
+    link = lbmdem.DemLink(args.service, timeout_s=args.timeout,
+                          interrupt=lambda: stop_requested["flag"])
+    last = None
+    try:
+        welcome = link.connect(hello)
+        dt = welcome.dt
+        lo = np.array(welcome.domain_min[:])
+        hi = np.array(welcome.domain_max[:])
+        g = np.array(welcome.gravity[:])
+        print(f"python-dem: connected to {welcome.software_text()} (pid {welcome.pid}): "
+              f"{welcome.steps} steps of {dt:g} s, domain {lo.tolist()} .. {hi.tolist()}, "
+              f"capacity {welcome.capacity}", file=sys.stderr, flush=True)
+
+        radius = 0.02 * float(np.min(hi - lo))
+        mass = args.density * 4.0 / 3.0 * math.pi * radius ** 3
+        states = np.zeros(n, lbmdem.STATE_DTYPE)
+        states["id"] = np.arange(n, dtype=np.uint64)
+        states["position"] = grid_positions(n, lo, hi, radius)
+        states["radius"] = radius
+        x = states["position"]  # views into the array that is sent
+        v = states["velocity"]
+        low, high = lo + radius, hi - radius
+
+        round_trips = []
+        step = 0
+        while True:
+            flags = lbmdem.StepFlags.STOP if stop_requested["flag"] else 0
+            t0 = time.perf_counter()
+            link.send_states(step, step * dt, states, flags)
+            header, forces = link.receive_forces(step)  # checks step, count, ids
+            round_trips.append(time.perf_counter() - t0)
+            last = step
+            ended = header.flags & (lbmdem.StepFlags.FINAL | lbmdem.StepFlags.STOP)
+            if ended or flags:
+                break
+            if step + 1 >= welcome.steps:
+                raise lbmdem.BadReply(f"the {lbmdem.FLUID} did not mark the reply to step {step}, "
+                                      f"the last of {welcome.steps}, FINAL", last)
+            # Symplectic Euler, then elastic reflection at the faces.
+            v += dt * (forces["force"] / mass + g)
+            x += dt * v
+            below, above = x < low, x > high
+            x[below] = 2.0 * np.broadcast_to(low, x.shape)[below] - x[below]
+            x[above] = 2.0 * np.broadcast_to(high, x.shape)[above] - x[above]
+            v[below | above] *= -1.0
+            np.clip(x, low, high, out=x)
+            step += 1
+    except KeyboardInterrupt:
+        link.close()
+        print(f"python-dem: interrupted twice, left after step {last}", file=sys.stderr)
+        return 1
+    except lbmdem.LinkError as e:
+        link.close()
+        print(f"python-dem: error: {e}", file=sys.stderr)
+        return 1
+    except Exception as e:  # noqa: BLE001 - report anything, exit non-zero
+        link.close()
+        print(f"python-dem: error: {type(e).__name__}: {e} (last completed step "
+              f"{last if last is not None else 'none'})", file=sys.stderr)
+        return 1
+    link.close()
+
+    rt = np.array(round_trips) * 1e6
+    print(f"python-dem: round trip median {np.median(rt):.0f} us, p99 "
+          f"{np.percentile(rt, 99):.0f} us over {rt.size} steps", file=sys.stderr)
+    if stop_requested["flag"]:
+        print(f"python-dem: stopped on request after step {last}", file=sys.stderr)
+    print(f"python-dem: completed {last + 1} steps, {n} particles, last step {last}", flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,131 @@
+//! What a run leaves behind: OUT/particles.csv, OUT/summary.json, and progress on the terminal.
+
+use protocol::{ParticleReply, ParticleState};
+use serde::Serialize;
+use std::fs::File;
+use std::io::{BufWriter, IsTerminal, Write};
+use std::path::Path;
+use std::time::{Duration, Instant};
+
+/// One row per particle per output step, SI units, header row first.
+pub struct ParticleCsv {
+    writer: BufWriter<File>,
+}
+
+impl ParticleCsv {
+    pub const HEADER: &'static str = "step,time,id,x,y,z,vx,vy,vz,wx,wy,wz,fx,fy,fz,tx,ty,tz";
+
+    pub fn create(path: &Path) -> std::io::Result<Self> {
+        let mut writer = BufWriter::with_capacity(1 << 20, File::create(path)?);
+        writeln!(writer, "{}", Self::HEADER)?;
+        Ok(Self { writer })
+    }
+
+    /// Writes the particles of one step (states and replies in SI, same order).
+    pub fn write_step(
+        &mut self,
+        step: u64,
+        time: f64,
+        states: &[ParticleState],
+        replies: &[ParticleReply],
+    ) -> std::io::Result<()> {
+        for (s, r) in states.iter().zip(replies) {
+            let w = &mut self.writer;
+            write!(w, "{step},{time:e},{}", s.id)?;
+            for v in [s.position, s.velocity, s.angular_velocity, r.force, r.torque] {
+                write!(w, ",{:e},{:e},{:e}", v[0], v[1], v[2])?;
+            }
+            writeln!(w)?;
+        }
+        Ok(())
+    }
+
+    pub fn flush(&mut self) -> std::io::Result<()> {
+        self.writer.flush()
+    }
+}
+
+/// The DEM side, as it introduced itself.
+#[derive(Debug, Clone, Serialize)]
+pub struct PeerInfo {
+    pub software: String,
+    pub pid: u64,
+    pub protocol_version: u32,
+    pub physics: Vec<&'static str>,
+}
+
+/// OUT/summary.json.
+#[derive(Debug, Clone, Serialize)]
+pub struct Summary {
+    pub scene: String,
+    pub scene_file: String,
+    pub run: String,
+    pub steps_requested: u64,
+    pub steps_completed: u64,
+    pub last_completed_step: Option<u64>,
+    pub particles_initial: u64,
+    pub wall_time_s: f64,
+    pub steps_per_second: f64,
+    pub particle_steps_per_second: f64,
+    pub fluid_physics: Vec<&'static str>,
+    pub peer: Option<PeerInfo>,
+    /// "completed", "interrupted", "stopped by the DEM client", or "error: ..."
+    pub exit_reason: String,
+    pub exit_code: u8,
+}
+
+impl Summary {
+    pub fn write(&self, path: &Path) -> std::io::Result<()> {
+        let text = serde_json::to_string_pretty(self).map_err(std::io::Error::other)?;
+        std::fs::write(path, text + "\n")
+    }
+}
+
+/// A progress bar on a terminal, plain periodic log lines otherwise.
+pub struct Progress {
+    bar: Option<indicatif::ProgressBar>,
+    total: u64,
+    start: Instant,
+    last_log: Instant,
+}
+
+/// Seconds between two plain log lines.
+const LOG_EVERY: Duration = Duration::from_secs(2);
+
+impl Progress {
+    pub fn new(total: u64) -> Self {
+        let bar = std::io::stderr().is_terminal().then(|| {
+            let bar = indicatif::ProgressBar::new(total);
+            let style = indicatif::ProgressStyle::with_template(
+                "{bar:40} {pos}/{len} steps  {per_sec}  ETA {eta}  {msg}",
+            )
+            .expect("valid template");
+            bar.set_style(style);
+            bar
+        });
+        let now = Instant::now();
+        Self { bar, total, start: now, last_log: now }
+    }
+
+    /// Records that `done` steps have completed.
+    pub fn update(&mut self, done: u64) {
+        if let Some(bar) = &self.bar {
+            bar.set_position(done);
+        } else if self.last_log.elapsed() >= LOG_EVERY || done == self.total {
+            self.last_log = Instant::now();
+            let rate = done as f64 / self.start.elapsed().as_secs_f64().max(1e-9);
+            let eta = (self.total - done) as f64 / rate.max(1e-9);
+            eprintln!(
+                "lbm-server: step {done}/{} ({:.0}%), {rate:.0} steps/s, ETA {eta:.1} s",
+                self.total,
+                100.0 * done as f64 / self.total as f64
+            );
+        }
+    }
+
+    pub fn finish(&self) {
+        if let Some(bar) = &self.bar {
+            bar.finish();
+        }
+    }
+}

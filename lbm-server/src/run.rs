@@ -1,0 +1,349 @@
+//! `lbm-server run`: load a scene, start (or wait for) the DEM side, step in lockstep, write output.
+
+use crate::launch;
+use crate::output::{ParticleCsv, PeerInfo, Progress, Summary};
+use crate::standin::StokesFluid;
+use protocol::transport::{new_run_name, LinkOptions};
+use protocol::{FluidLink, Hello, LinkError, ParticleReply, ParticleState, Physics, StepFlags, StepHeader, Welcome};
+use scene::Scene;
+use std::path::PathBuf;
+use std::process::{Child, ExitCode};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+#[derive(clap::Args)]
+pub struct RunArgs {
+    /// Scene file (TOML, SI units). Without it, the built-in default scene runs.
+    scene: Option<PathBuf>,
+    /// Number of steps (overrides the scene's time.steps).
+    #[arg(long)]
+    steps: Option<u64>,
+    /// Output folder (default: out/SCENE_NAME).
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Who runs the DEM side: `spawn` starts dem-client; `external` prints the service name and
+    /// waits for any client that speaks the protocol (PROTOCOL.md).
+    #[arg(long, value_enum, default_value_t = DemMode::Spawn)]
+    dem: DemMode,
+    /// Longest wait for the DEM side to connect [s] (default: 30 when spawned, unlimited when external).
+    #[arg(long)]
+    connect_timeout: Option<f64>,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+enum DemMode {
+    Spawn,
+    External,
+}
+
+/// Physics the fluid side applies while it is a stand-in.
+const FLUID_PHYSICS: u64 = Physics::STOKES_DRAG_STANDIN | Physics::BUOYANCY;
+
+/// Exit codes.
+const EXIT_FAILURE: u8 = 1;
+const EXIT_BAD_INPUT: u8 = 2;
+const EXIT_INTERRUPTED: u8 = 130;
+
+/// How a run ended without failure.
+enum Ending {
+    Completed,
+    Interrupted,
+    StoppedByPeer,
+}
+
+/// A scene ready to run: validated, with its output folder made.
+struct Prepared {
+    scene: Scene,
+    scene_file: String,
+    steps: u64,
+    out: PathBuf,
+    scene_copy: PathBuf,
+    connect_timeout: Duration,
+}
+
+fn prepare(args: &RunArgs) -> Result<Prepared, String> {
+    let (scene, scene_file, text) = match &args.scene {
+        Some(path) => {
+            let scene = Scene::load(path).map_err(|e| e.to_string())?;
+            let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
+            (scene, path.display().to_string(), text)
+        }
+        None => (Scene::default_scene(), scene::DEFAULT_SCENE_FILE.to_string(), scene::DEFAULT_SCENE.to_string()),
+    };
+    let steps = args.steps.unwrap_or(scene.time.steps);
+    if steps == 0 {
+        return Err("--steps = 0: must be at least 1".into());
+    }
+    let default_timeout = if args.dem == DemMode::External { f64::INFINITY } else { 30.0 };
+    let connect_timeout = args.connect_timeout.unwrap_or(default_timeout);
+    if connect_timeout.is_nan() || connect_timeout <= 0.0 {
+        return Err(format!("--connect-timeout = {connect_timeout} s: must be > 0"));
+    }
+    let out = args.out.clone().unwrap_or_else(|| PathBuf::from("out").join(&scene.name));
+    std::fs::create_dir_all(&out).map_err(|e| format!("cannot create the output folder {}: {e}", out.display()))?;
+    let scene_copy = out.join("scene.toml");
+    std::fs::write(&scene_copy, text).map_err(|e| format!("{}: {e}", scene_copy.display()))?;
+    Ok(Prepared {
+        scene,
+        scene_file,
+        steps,
+        out,
+        scene_copy,
+        connect_timeout: Duration::try_from_secs_f64(connect_timeout).unwrap_or(Duration::MAX),
+    })
+}
+
+pub fn main(args: RunArgs) -> ExitCode {
+    let prepared = match prepare(&args) {
+        Ok(p) => p,
+        Err(e) => {
+            eprintln!("lbm-server: error: {e}");
+            return ExitCode::from(EXIT_BAD_INPUT);
+        }
+    };
+    let interrupted = Arc::new(AtomicBool::new(false));
+    let flag = interrupted.clone();
+    if let Err(e) = ctrlc::set_handler(move || flag.store(true, Ordering::SeqCst)) {
+        eprintln!("lbm-server: warning: cannot install the Ctrl-C handler: {e}");
+    }
+    protocol::cleanup::remove_stale_runs();
+    let run = new_run_name();
+    let code = Session::start(prepared, &run, args.dem, interrupted);
+    protocol::cleanup::remove_run(&run);
+    ExitCode::from(code)
+}
+
+/// One run in progress.
+struct Session {
+    p: Prepared,
+    link: FluidLink,
+    child: Option<Child>,
+    csv: ParticleCsv,
+    fluid: StokesFluid,
+    interrupted: Arc<AtomicBool>,
+    peer: Option<PeerInfo>,
+    hello: Option<Hello>,
+    last_completed: Option<u64>,
+    particle_steps: u64,
+    started: Instant,
+}
+
+impl Session {
+    /// Runs the whole session and returns the process exit code.
+    fn start(p: Prepared, run: &str, mode: DemMode, interrupted: Arc<AtomicBool>) -> u8 {
+        let timeout = Duration::from_secs_f64(p.scene.coupling.timeout);
+        let capacity = p.scene.capacity() as usize;
+        let link = match FluidLink::create(LinkOptions { run: run.to_string(), timeout }, capacity) {
+            Ok(link) => link,
+            Err(e) => {
+                eprintln!("lbm-server: error: {e}");
+                return EXIT_FAILURE;
+            }
+        };
+        let csv = match ParticleCsv::create(&p.out.join("particles.csv")) {
+            Ok(csv) => csv,
+            Err(e) => {
+                eprintln!("lbm-server: error: {}: {e}", p.out.join("particles.csv").display());
+                return EXIT_FAILURE;
+            }
+        };
+        let fluid = StokesFluid {
+            density: p.scene.fluid.density,
+            dynamic_viscosity: p.scene.fluid.dynamic_viscosity,
+            gravity: p.scene.gravity,
+        };
+        let mut session = Session {
+            p,
+            link,
+            child: None,
+            csv,
+            fluid,
+            interrupted,
+            peer: None,
+            hello: None,
+            last_completed: None,
+            particle_steps: 0,
+            started: Instant::now(),
+        };
+        let result = session.connect(mode).and_then(|()| session.step_loop());
+        session.finish(result)
+    }
+
+    /// Starts or announces the DEM side and performs the handshake.
+    fn connect(&mut self, mode: DemMode) -> Result<(), String> {
+        let run = self.link.run().to_string();
+        let spawned = match mode {
+            DemMode::Spawn => {
+                let exe = launch::find_dem_client()
+                    .ok_or("cannot find dem-client next to lbm-server or on PATH (build it: cargo build)")?;
+                let child = launch::spawn_dem_client(&exe, &run, &self.p.scene_copy, self.p.scene.coupling.timeout)
+                    .map_err(|e| format!("cannot start {}: {e}", exe.display()))?;
+                let pid = child.id();
+                self.child = Some(child);
+                Some(pid)
+            }
+            DemMode::External => {
+                println!("DEM service: {run}");
+                println!("join with: dem-client connect --service {run} --scene {}", self.p.scene_copy.display());
+                use std::io::Write;
+                let _ = std::io::stdout().flush();
+                None
+            }
+        };
+        let (scene, steps) = (&self.p.scene, self.p.steps);
+        let interrupted = self.interrupted.clone();
+        let hello = self
+            .link
+            .accept(spawned, self.p.connect_timeout, &|| interrupted.load(Ordering::SeqCst), |hello| {
+                welcome_for(scene, steps, hello)
+            })
+            .map_err(|e| e.to_string())?;
+        self.peer = Some(PeerInfo {
+            software: protocol::handshake::field_text(&hello.software),
+            pid: hello.pid,
+            protocol_version: hello.version,
+            physics: Physics::names(hello.physics),
+        });
+        eprintln!(
+            "lbm-server: scene '{}', {} steps, DEM: {} (pid {}); stand-in fluid: Stokes drag + buoyancy",
+            scene.name,
+            steps,
+            protocol::handshake::field_text(&hello.software),
+            hello.pid
+        );
+        self.hello = Some(hello);
+        Ok(())
+    }
+
+    /// The lockstep loop: states(n) in, forces(n) out.
+    fn step_loop(&mut self) -> Result<Ending, String> {
+        let units = self.hello.expect("connected").units;
+        let mut progress = Progress::new(self.p.steps);
+        let (mut si, mut replies): (Vec<ParticleState>, Vec<ParticleReply>) = (Vec::new(), Vec::new());
+        self.started = Instant::now();
+        for step in 0..self.p.steps {
+            let received = self.link.receive_states(step).map_err(|e| self.describe(e))?;
+            let header = received.header();
+            si.clear();
+            si.extend(received.particles().iter().map(|s| units.state_to_si(s)));
+            drop(received);
+            let bad = check_states(&si, step);
+            replies.clear();
+            replies.extend(si.iter().map(|s| self.fluid.load(s)));
+            let last = step + 1 == self.p.steps;
+            let stop = header.has(StepFlags::STOP) || self.interrupted.load(Ordering::SeqCst) || bad.is_some();
+            let flags = if last { StepFlags::FINAL } else { 0 } | if stop { StepFlags::STOP } else { 0 };
+            let reply = StepHeader::new(step, header.time, si.len(), flags);
+            self.link
+                .send_forces(reply, |i| units.reply_from_si(&replies[i]))
+                .map_err(|e| self.describe(e))?;
+            self.last_completed = Some(step);
+            self.particle_steps += si.len() as u64;
+            if step % self.p.scene.output.interval == 0 || last || stop {
+                let time = header.time * units.time_s;
+                self.csv.write_step(step, time, &si, &replies).map_err(|e| format!("particles.csv: {e}"))?;
+            }
+            progress.update(step + 1);
+            if let Some(why) = bad {
+                return Err(why);
+            }
+            if stop {
+                progress.finish();
+                return Ok(if header.has(StepFlags::STOP) { Ending::StoppedByPeer } else { Ending::Interrupted });
+            }
+        }
+        progress.finish();
+        Ok(Ending::Completed)
+    }
+
+    fn describe(&self, e: LinkError) -> String {
+        let last = self.last_completed.map_or("none".to_string(), |s| s.to_string());
+        format!("{e}; last completed step: {last}")
+    }
+
+    /// Flushes output, ends the DEM process, writes summary.json; returns the exit code.
+    fn finish(mut self, result: Result<Ending, String>) -> u8 {
+        let (reason, code) = match &result {
+            Ok(Ending::Completed) => ("completed".to_string(), 0),
+            Ok(Ending::Interrupted) => ("interrupted".to_string(), EXIT_INTERRUPTED),
+            Ok(Ending::StoppedByPeer) => ("stopped by the DEM client".to_string(), 0),
+            Err(e) => (format!("error: {e}"), EXIT_FAILURE),
+        };
+        if let Err(msg) = &result {
+            eprintln!("lbm-server: error: {msg}");
+        }
+        if let Err(e) = self.csv.flush() {
+            eprintln!("lbm-server: error: particles.csv: {e}");
+        }
+        let grace = if result.is_ok() { Duration::from_secs(2) } else { Duration::ZERO };
+        if let Some(child) = self.child.as_mut() {
+            launch::end_child(child, grace);
+        }
+        let summary = self.summary(reason, code);
+        if let Err(e) = summary.write(&self.p.out.join("summary.json")) {
+            eprintln!("lbm-server: error: summary.json: {e}");
+        }
+        if code == 0 {
+            eprintln!(
+                "lbm-server: {} steps in {:.2} s ({:.0} steps/s); output in {}",
+                summary.steps_completed,
+                summary.wall_time_s,
+                summary.steps_per_second,
+                self.p.out.display()
+            );
+        }
+        code
+    }
+
+    fn summary(&self, exit_reason: String, exit_code: u8) -> Summary {
+        let wall = self.started.elapsed().as_secs_f64();
+        let steps_completed = self.last_completed.map_or(0, |s| s + 1);
+        Summary {
+            scene: self.p.scene.name.clone(),
+            scene_file: self.p.scene_file.clone(),
+            run: self.link.run().to_string(),
+            steps_requested: self.p.steps,
+            steps_completed,
+            last_completed_step: self.last_completed,
+            particles_initial: self.hello.map_or(0, |h| h.initial_count),
+            wall_time_s: wall,
+            steps_per_second: steps_completed as f64 / wall.max(1e-9),
+            particle_steps_per_second: self.particle_steps as f64 / wall.max(1e-9),
+            fluid_physics: Physics::names(FLUID_PHYSICS),
+            peer: self.peer.clone(),
+            exit_reason,
+            exit_code,
+        }
+    }
+}
+
+/// The fluid's answer to a DEM's Hello, in the DEM's units.
+fn welcome_for(scene: &Scene, steps: u64, hello: &Hello) -> Welcome {
+    let u = hello.units;
+    let accel = u.length_m / (u.time_s * u.time_s);
+    let mut w = Welcome::accepted(&format!("lbm-server {} (stand-in: Stokes drag)", env!("CARGO_PKG_VERSION")));
+    w.steps = steps;
+    w.dt = scene.time.dt / u.time_s;
+    w.domain_min = scene.domain.min.map(|x| x / u.length_m);
+    w.domain_max = scene.domain.max.map(|x| x / u.length_m);
+    w.gravity = scene.gravity.map(|g| g / accel);
+    w.fluid_density = scene.fluid.density / (u.mass_kg / u.length_m.powi(3));
+    w.fluid_viscosity = scene.fluid.dynamic_viscosity / (u.mass_kg / (u.length_m * u.time_s));
+    w.physics = FLUID_PHYSICS;
+    w
+}
+
+/// Health check of the DEM's states: every number finite, every radius positive.
+fn check_states(states: &[ParticleState], step: u64) -> Option<String> {
+    states.iter().find_map(|s| {
+        let finite = s.position.iter().chain(&s.velocity).chain(&s.angular_velocity).all(|v| v.is_finite());
+        (!finite || !(s.radius > 0.0)).then(|| {
+            format!(
+                "the DEM client sent an invalid state at step {step}: particle id {} with position {:?}, \
+                 velocity {:?}, radius {}",
+                s.id, s.position, s.velocity, s.radius
+            )
+        })
+    })
+}

@@ -1,0 +1,16 @@
+//! Wire protocol of the LBM-DEM co-simulation.
+//!
+//! Two processes step in lockstep: the DEM side publishes the particle states of step `n`, the
+//! fluid side replies with the hydrodynamic force and torque of step `n`, and only then does the
+//! DEM side advance to `n + 1`. `PROTOCOL.md` at the repository root is the language-neutral
+//! specification; this crate is the reference implementation over iceoryx2 shared memory.
+
+pub mod cleanup;
+pub mod handshake;
+pub mod liveness;
+pub mod transport;
+pub mod wire;
+
+pub use handshake::{Hello, Physics, Status, Units, Welcome, PROTOCOL_VERSION};
+pub use transport::{DemLink, FluidLink, LinkError, Peer};
+pub use wire::{ParticleReply, ParticleState, StepFlags, StepHeader};

@@ -1,0 +1,591 @@
+//! The iceoryx2 transport: four publish-subscribe services, each paired with an event service of
+//! the same name for blocking waits, under a per-run name that is also the shared-memory prefix.
+//!
+//! | service          | payload               | user header  | direction   |
+//! |------------------|-----------------------|--------------|-------------|
+//! | `RUN/hello`      | `[u8]` (a `Hello`)    | none         | DEM → fluid |
+//! | `RUN/welcome`    | `[u8]` (a `Welcome`)  | none         | fluid → DEM |
+//! | `RUN/states`     | `[ParticleState]`     | `StepHeader` | DEM → fluid |
+//! | `RUN/forces`     | `[ParticleReply]`     | `StepHeader` | fluid → DEM |
+
+use crate::handshake::{DecodeError, Hello, Message, Physics, Status, Welcome};
+use crate::liveness::{process_state, ProcessState};
+use crate::wire::{ParticleReply, ParticleState, StepHeader};
+use core::fmt::{self, Debug, Display};
+use core::time::Duration;
+use iceoryx2::port::listener::Listener;
+use iceoryx2::port::notifier::Notifier;
+use iceoryx2::port::publisher::Publisher;
+use iceoryx2::port::subscriber::Subscriber;
+use iceoryx2::prelude::*;
+use iceoryx2::sample::Sample;
+use std::time::Instant;
+
+type Ipc = ipc::Service;
+
+/// How often a waiting side wakes up to look at its peer.
+pub const POLL: Duration = Duration::from_millis(50);
+
+/// How long a peer may stay suspended (SIGSTOP) before it counts as hung.
+pub const STOPPED_GRACE: Duration = Duration::from_millis(400);
+
+/// Which side of the link the other process is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Peer {
+    Fluid,
+    Dem,
+}
+
+impl Display for Peer {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Peer::Fluid => write!(f, "fluid server (lbm-server)"),
+            Peer::Dem => write!(f, "DEM client"),
+        }
+    }
+}
+
+/// Everything that ends a link. The messages name the peer; callers add the last completed step.
+#[derive(Debug, Clone, PartialEq)]
+pub enum LinkError {
+    PeerDied { peer: Peer, pid: u32 },
+    PeerStopped { peer: Peer, pid: u32 },
+    Timeout { peer: Peer, waited: Duration },
+    StepMismatch { peer: Peer, expected: u64, got: u64 },
+    BadCount { peer: Peer, count: u64, len: usize, capacity: usize },
+    Refused(String),
+    Interrupted,
+    Ipc(String),
+}
+
+impl Display for LinkError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            LinkError::PeerDied { peer, pid } => write!(f, "the {peer} (pid {pid}) died"),
+            LinkError::PeerStopped { peer, pid } => {
+                write!(f, "the {peer} (pid {pid}) is suspended (stopped) and hangs the run")
+            }
+            LinkError::Timeout { peer, waited } => write!(
+                f,
+                "the {peer} did not answer within {:.1} s (hung?)",
+                waited.as_secs_f64()
+            ),
+            LinkError::StepMismatch { peer, expected, got } => write!(
+                f,
+                "the {peer} sent step {got} where step {expected} was due (lockstep broken)"
+            ),
+            LinkError::BadCount { peer, count, len, capacity } => write!(
+                f,
+                "the {peer} sent a step header counting {count} particles with {len} in the slice \
+                 (capacity {capacity})"
+            ),
+            LinkError::Refused(why) => write!(f, "handshake refused: {why}"),
+            LinkError::Interrupted => write!(f, "interrupted"),
+            LinkError::Ipc(what) => write!(f, "shared-memory transport failed: {what}"),
+        }
+    }
+}
+
+impl std::error::Error for LinkError {}
+
+fn ipc_err<E: Debug>(what: &str) -> impl FnOnce(E) -> LinkError + '_ {
+    move |e| LinkError::Ipc(format!("{what}: {e:?}"))
+}
+
+/// Options shared by both sides.
+#[derive(Debug, Clone)]
+pub struct LinkOptions {
+    /// The run's name: the service root and, followed by `_`, the shared-memory file prefix.
+    pub run: String,
+    /// Longest wait for a live peer that does not answer (a deadlock, an endless loop).
+    pub timeout: Duration,
+}
+
+/// A fresh run name, unique on this host: `lbmdem_<pid>_<nanoseconds>`.
+pub fn new_run_name() -> String {
+    let nanos = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map(|d| d.as_nanos())
+        .unwrap_or(0);
+    format!(
+        "{}{}_{:x}",
+        crate::cleanup::RUN_PREFIX,
+        std::process::id(),
+        nanos & 0xffff_ffff_ffff
+    )
+}
+
+/// iceoryx2's global configuration, without its "no config file" warning on stderr.
+pub(crate) fn global_config() -> &'static Config {
+    set_log_level(LogLevel::Error);
+    Config::global_config()
+}
+
+fn create_node(run: &str) -> Result<Node<Ipc>, LinkError> {
+    let mut config = global_config().clone();
+    config.global.prefix = FileName::new(format!("{run}_").as_bytes())
+        .map_err(ipc_err("run name is not a valid file name"))?;
+    NodeBuilder::new()
+        .config(&config)
+        .signal_handling_mode(SignalHandlingMode::Disabled)
+        .create::<Ipc>()
+        .map_err(ipc_err("cannot create the iceoryx2 node"))
+}
+
+fn service_name(run: &str, what: &str) -> Result<ServiceName, LinkError> {
+    ServiceName::new(&format!("{run}/{what}")).map_err(ipc_err("bad service name"))
+}
+
+/// Sending end: a publisher of slices and the notifier that wakes the peer.
+struct Outbox<T: Debug + ZeroCopySend + 'static, H: Debug + ZeroCopySend + 'static> {
+    publisher: Publisher<Ipc, [T], H>,
+    notifier: Notifier<Ipc>,
+    subscribers: iceoryx2::service::port_factory::publish_subscribe::PortFactory<Ipc, [T], H>,
+}
+
+/// Receiving end: a subscriber of slices and the listener it blocks on.
+struct Inbox<T: Debug + ZeroCopySend + 'static, H: Debug + ZeroCopySend + 'static> {
+    subscriber: Subscriber<Ipc, [T], H>,
+    listener: Listener<Ipc>,
+}
+
+/// Creates (fluid side) or opens (DEM side) the publish-subscribe service `what`.
+fn pubsub<T, H>(
+    node: &Node<Ipc>,
+    run: &str,
+    what: &str,
+    create: bool,
+) -> Result<iceoryx2::service::port_factory::publish_subscribe::PortFactory<Ipc, [T], H>, LinkError>
+where
+    T: Debug + ZeroCopySend + 'static,
+    H: Debug + ZeroCopySend + Default + 'static,
+{
+    let builder = node
+        .service_builder(&service_name(run, what)?)
+        .publish_subscribe::<[T]>()
+        .user_header::<H>();
+    if create {
+        builder
+            .max_publishers(1)
+            .max_subscribers(1)
+            .history_size(0)
+            .subscriber_max_buffer_size(2)
+            .enable_safe_overflow(false)
+            .create()
+            .map_err(ipc_err(what))
+    } else {
+        builder.open().map_err(ipc_err(what))
+    }
+}
+
+fn event(node: &Node<Ipc>, run: &str, what: &str, create: bool) -> Result<
+    iceoryx2::service::port_factory::event::PortFactory<Ipc>,
+    LinkError,
+> {
+    let builder = node.service_builder(&service_name(run, what)?).event();
+    if create {
+        builder.create().map_err(ipc_err(what))
+    } else {
+        builder.open().map_err(ipc_err(what))
+    }
+}
+
+fn outbox<T, H>(node: &Node<Ipc>, run: &str, what: &str, create: bool, max_len: usize)
+    -> Result<Outbox<T, H>, LinkError>
+where
+    T: Debug + ZeroCopySend + 'static,
+    H: Debug + ZeroCopySend + Default + 'static,
+{
+    let service = pubsub::<T, H>(node, run, what, create)?;
+    let publisher = service
+        .publisher_builder()
+        .initial_max_slice_len(max_len.max(1))
+        .allocation_strategy(AllocationStrategy::PowerOfTwo)
+        .create()
+        .map_err(ipc_err(what))?;
+    let notifier = event(node, run, what, create)?
+        .notifier_builder()
+        .create()
+        .map_err(ipc_err(what))?;
+    Ok(Outbox { publisher, notifier, subscribers: service })
+}
+
+fn inbox<T, H>(node: &Node<Ipc>, run: &str, what: &str, create: bool) -> Result<Inbox<T, H>, LinkError>
+where
+    T: Debug + ZeroCopySend + 'static,
+    H: Debug + ZeroCopySend + Default + 'static,
+{
+    let subscriber = pubsub::<T, H>(node, run, what, create)?
+        .subscriber_builder()
+        .create()
+        .map_err(ipc_err(what))?;
+    let listener = event(node, run, what, create)?
+        .listener_builder()
+        .create()
+        .map_err(ipc_err(what))?;
+    Ok(Inbox { subscriber, listener })
+}
+
+impl<T: Debug + ZeroCopySend + Copy + 'static, H: Debug + ZeroCopySend + Copy + Default + 'static> Outbox<T, H> {
+    /// Loans `len` elements, fills them with `fill` in place (zero copy), sends, wakes the peer.
+    fn send_with(&self, header: H, len: usize, fill: impl FnMut(usize) -> T) -> Result<(), LinkError> {
+        let mut sample = self
+            .publisher
+            .loan_slice_uninit(len)
+            .map_err(ipc_err("loan"))?;
+        *sample.user_header_mut() = header;
+        sample
+            .write_from_fn(fill)
+            .send()
+            .map_err(ipc_err("send"))?;
+        self.notifier.notify().map_err(ipc_err("notify"))?;
+        Ok(())
+    }
+
+    fn has_subscriber(&self) -> bool {
+        self.subscribers.dynamic_config().number_of_subscribers() > 0
+    }
+}
+
+/// The peer a side waits on: what to call it and, once known, its pid.
+#[derive(Debug, Clone, Copy)]
+struct Watch {
+    peer: Peer,
+    pid: Option<u32>,
+}
+
+impl Watch {
+    /// Blocks until `take` yields, the peer dies or hangs, or `timeout` passes.
+    fn wait<T, H, R>(
+        &self,
+        inbox: &Inbox<T, H>,
+        timeout: Duration,
+        interrupt: &dyn Fn() -> bool,
+        mut take: impl FnMut(&Inbox<T, H>) -> Result<Option<R>, LinkError>,
+    ) -> Result<R, LinkError>
+    where
+        T: Debug + ZeroCopySend + 'static,
+        H: Debug + ZeroCopySend + 'static,
+    {
+        let start = Instant::now();
+        let mut stopped_since: Option<Instant> = None;
+        loop {
+            if let Some(r) = take(inbox)? {
+                return Ok(r);
+            }
+            inbox
+                .listener
+                .timed_wait(|_| {}, POLL)
+                .map_err(ipc_err("wait"))?;
+            if let Some(r) = take(inbox)? {
+                return Ok(r);
+            }
+            if let Some(pid) = self.pid {
+                match process_state(pid) {
+                    ProcessState::Dead => return Err(LinkError::PeerDied { peer: self.peer, pid }),
+                    ProcessState::Stopped => {
+                        let since = *stopped_since.get_or_insert_with(Instant::now);
+                        if since.elapsed() >= STOPPED_GRACE {
+                            return Err(LinkError::PeerStopped { peer: self.peer, pid });
+                        }
+                    }
+                    ProcessState::Running => stopped_since = None,
+                }
+            }
+            if interrupt() {
+                return Err(LinkError::Interrupted);
+            }
+            if start.elapsed() >= timeout {
+                return Err(LinkError::Timeout { peer: self.peer, waited: start.elapsed() });
+            }
+        }
+    }
+}
+
+/// Takes one byte message if there is one.
+fn take_bytes(inbox: &Inbox<u8, ()>) -> Result<Option<Vec<u8>>, LinkError> {
+    Ok(inbox
+        .subscriber
+        .receive()
+        .map_err(ipc_err("receive"))?
+        .map(|s| s.payload().to_vec()))
+}
+
+/// Takes one step message if there is one and checks its step index and count.
+fn take_step<T: Debug + ZeroCopySend + 'static>(
+    inbox: &Inbox<T, StepHeader>,
+    peer: Peer,
+    expected: u64,
+    capacity: usize,
+) -> Result<Option<Sample<Ipc, [T], StepHeader>>, LinkError> {
+    let Some(sample) = inbox.subscriber.receive().map_err(ipc_err("receive"))? else {
+        return Ok(None);
+    };
+    let header = *sample.user_header();
+    if header.step != expected {
+        return Err(LinkError::StepMismatch { peer, expected, got: header.step });
+    }
+    let len = sample.payload().len();
+    if header.count != len as u64 || len > capacity {
+        return Err(LinkError::BadCount { peer, count: header.count, len, capacity });
+    }
+    Ok(Some(sample))
+}
+
+/// A received step: the header and the particles, read in place from shared memory.
+pub struct Received<T: Debug + ZeroCopySend + 'static> {
+    sample: Sample<Ipc, [T], StepHeader>,
+}
+
+impl<T: Debug + ZeroCopySend + 'static> Received<T> {
+    pub fn header(&self) -> StepHeader {
+        *self.sample.user_header()
+    }
+
+    pub fn particles(&self) -> &[T] {
+        self.sample.payload()
+    }
+}
+
+/// The fluid side of a link: creates the services, accepts one DEM client, replies with forces.
+pub struct FluidLink {
+    options: LinkOptions,
+    hello: Inbox<u8, ()>,
+    welcome: Outbox<u8, ()>,
+    states: Inbox<ParticleState, StepHeader>,
+    forces: Outbox<ParticleReply, StepHeader>,
+    watch: Watch,
+    capacity: usize,
+    // Dropped last: the ports above belong to it.
+    _node: Node<Ipc>,
+}
+
+impl FluidLink {
+    /// Creates the run's services. Any DEM may connect once this returns.
+    pub fn create(options: LinkOptions, capacity: usize) -> Result<Self, LinkError> {
+        let node = create_node(&options.run)?;
+        let run = options.run.as_str();
+        let hello = inbox(&node, run, "hello", true)?;
+        let welcome = outbox(&node, run, "welcome", true, crate::handshake::TEXT_LEN * 8)?;
+        let states = inbox(&node, run, "states", true)?;
+        let forces = outbox(&node, run, "forces", true, capacity)?;
+        Ok(Self {
+            options,
+            hello,
+            welcome,
+            states,
+            forces,
+            watch: Watch { peer: Peer::Dem, pid: None },
+            capacity,
+            _node: node,
+        })
+    }
+
+    pub fn run(&self) -> &str {
+        &self.options.run
+    }
+
+    /// Pid of the connected DEM process.
+    pub fn peer_pid(&self) -> Option<u32> {
+        self.watch.pid
+    }
+
+    /// Waits for the DEM's `Hello`, checks it, and answers with `welcome(hello)` or a refusal.
+    ///
+    /// `spawned` is the pid of a DEM process this side started itself (its death is then noticed
+    /// before the handshake too). `interrupt` aborts the wait (Ctrl-C).
+    pub fn accept(
+        &mut self,
+        spawned: Option<u32>,
+        connect_timeout: Duration,
+        interrupt: &dyn Fn() -> bool,
+        welcome: impl FnOnce(&Hello) -> Welcome,
+    ) -> Result<Hello, LinkError> {
+        let watch = Watch { peer: Peer::Dem, pid: spawned };
+        let bytes = watch.wait(&self.hello, connect_timeout, interrupt, take_bytes)?;
+        let software = format!("lbm-server {}", env!("CARGO_PKG_VERSION"));
+        let hello = match Hello::from_bytes(&bytes) {
+            Ok(hello) => hello,
+            Err(DecodeError::Version(ours, theirs)) => {
+                let why = format!(
+                    "protocol version mismatch: lbm-server speaks version {ours}, the DEM client \
+                     speaks version {theirs}"
+                );
+                return self.refuse(Welcome::refused(&software, Status::VersionMismatch, &why));
+            }
+            Err(e) => {
+                return self.refuse(Welcome::refused(&software, Status::LayoutMismatch, &e.to_string()));
+            }
+        };
+        if let Some((status, why)) = check_hello(&hello, self.capacity) {
+            return self.refuse(Welcome::refused(&software, status, &why));
+        }
+        let mut answer = welcome(&hello);
+        answer.capacity = self.capacity as u64;
+        if answer.status != Status::Accepted as u32 {
+            return self.refuse(answer);
+        }
+        if answer.physics & hello.physics & Physics::EXCLUSIVE != 0 {
+            let twice = Physics::names(answer.physics & hello.physics & Physics::EXCLUSIVE);
+            let why = format!("both sides apply {}", twice.join(", "));
+            return self.refuse(Welcome::refused(&software, Status::PhysicsConflict, &why));
+        }
+        self.send_welcome(&answer)?;
+        self.watch.pid = Some(hello.pid as u32);
+        Ok(hello)
+    }
+
+    fn send_welcome(&self, welcome: &Welcome) -> Result<(), LinkError> {
+        let bytes = welcome.to_bytes();
+        self.welcome.send_with((), bytes.len(), |i| bytes[i])
+    }
+
+    fn refuse(&self, welcome: Welcome) -> Result<Hello, LinkError> {
+        self.send_welcome(&welcome)?;
+        Err(LinkError::Refused(welcome.reason_text()))
+    }
+
+    /// Waits for the states of step `step`.
+    pub fn receive_states(&self, step: u64) -> Result<Received<ParticleState>, LinkError> {
+        let (peer, capacity) = (self.watch.peer, self.capacity);
+        let sample = self.watch.wait(&self.states, self.options.timeout, &|| false, |inbox| {
+            take_step(inbox, peer, step, capacity)
+        })?;
+        Ok(Received { sample })
+    }
+
+    /// Sends the reply of a step, built in place by `fill(i)` for particle `i`.
+    pub fn send_forces(
+        &self,
+        header: StepHeader,
+        fill: impl FnMut(usize) -> ParticleReply,
+    ) -> Result<(), LinkError> {
+        self.forces.send_with(header, header.count as usize, fill)
+    }
+}
+
+/// Version-independent checks of a `Hello`: the refusal status and reason, if any.
+fn check_hello(hello: &Hello, capacity: usize) -> Option<(Status, String)> {
+    if !hello.layout_matches() {
+        return Some((
+            Status::LayoutMismatch,
+            format!(
+                "message sizes state/reply/header {}/{}/{} bytes from the DEM, {}/{}/{} expected",
+                hello.state_size,
+                hello.reply_size,
+                hello.header_size,
+                core::mem::size_of::<ParticleState>(),
+                core::mem::size_of::<ParticleReply>(),
+                core::mem::size_of::<StepHeader>()
+            ),
+        ));
+    }
+    if !hello.units.is_valid() {
+        return Some((Status::BadUnits, format!("invalid units {:?}", hello.units)));
+    }
+    if hello.initial_count as usize > capacity {
+        let why = format!("{} particles exceed the capacity {capacity}", hello.initial_count);
+        return Some((Status::CapacityExceeded, why));
+    }
+    None
+}
+
+/// The DEM side of a link: sends states, receives forces.
+pub struct DemLink {
+    options: LinkOptions,
+    states: Outbox<ParticleState, StepHeader>,
+    forces: Inbox<ParticleReply, StepHeader>,
+    watch: Watch,
+    capacity: usize,
+    _hello: Outbox<u8, ()>,
+    _welcome: Inbox<u8, ()>,
+    _node: Node<Ipc>,
+}
+
+impl DemLink {
+    /// Opens the run's services, sends `hello`, and returns the link with the fluid's `Welcome`.
+    pub fn connect(options: LinkOptions, hello: Hello) -> Result<(Self, Welcome), LinkError> {
+        let node = create_node(&options.run)?;
+        let run = options.run.as_str();
+        let start = Instant::now();
+        // The fluid side creates the services; retry briefly in case it is still doing so.
+        let hello_box = loop {
+            match outbox::<u8, ()>(&node, run, "hello", false, core::mem::size_of::<Hello>()) {
+                Ok(b) if b.has_subscriber() => break b,
+                Ok(_) | Err(_) if start.elapsed() < options.timeout => std::thread::sleep(POLL),
+                Ok(_) => return Err(LinkError::Timeout { peer: Peer::Fluid, waited: start.elapsed() }),
+                Err(e) => {
+                    return Err(LinkError::Ipc(format!(
+                        "no run named '{run}' found ({e}); is lbm-server running?"
+                    )))
+                }
+            }
+        };
+        let welcome_box = inbox::<u8, ()>(&node, run, "welcome", false)?;
+        let forces = inbox(&node, run, "forces", false)?;
+        let capacity_guess = hello.initial_count as usize;
+        let states = outbox(&node, run, "states", false, capacity_guess)?;
+        let bytes = hello.to_bytes();
+        hello_box.send_with((), bytes.len(), |i| bytes[i])?;
+        let watch = Watch { peer: Peer::Fluid, pid: None };
+        let reply = watch.wait(&welcome_box, options.timeout, &|| false, take_bytes)?;
+        let welcome = decode_welcome(&reply)?;
+        let capacity = welcome.capacity as usize;
+        Ok((
+            Self {
+                options,
+                states,
+                forces,
+                watch: Watch { peer: Peer::Fluid, pid: Some(welcome.pid as u32) },
+                capacity,
+                _hello: hello_box,
+                _welcome: welcome_box,
+                _node: node,
+            },
+            welcome,
+        ))
+    }
+
+    pub fn run(&self) -> &str {
+        &self.options.run
+    }
+
+    /// Sends the states of a step, built in place by `fill(i)` for particle `i`.
+    pub fn send_states(
+        &self,
+        header: StepHeader,
+        fill: impl FnMut(usize) -> ParticleState,
+    ) -> Result<(), LinkError> {
+        if header.count as usize > self.capacity {
+            return Err(LinkError::BadCount {
+                peer: Peer::Dem,
+                count: header.count,
+                len: header.count as usize,
+                capacity: self.capacity,
+            });
+        }
+        self.states.send_with(header, header.count as usize, fill)
+    }
+
+    /// Waits for the fluid's reply to step `step`.
+    pub fn receive_forces(&self, step: u64) -> Result<Received<ParticleReply>, LinkError> {
+        let (peer, capacity) = (self.watch.peer, self.capacity);
+        let sample = self.watch.wait(&self.forces, self.options.timeout, &|| false, |inbox| {
+            take_step(inbox, peer, step, capacity)
+        })?;
+        Ok(Received { sample })
+    }
+}
+
+/// Reads the fluid's answer, turning a refusal or an unreadable answer into an error.
+fn decode_welcome(bytes: &[u8]) -> Result<Welcome, LinkError> {
+    match Welcome::from_bytes(bytes) {
+        Ok(w) if w.status == Status::Accepted as u32 => Ok(w),
+        Ok(w) => Err(LinkError::Refused(w.reason_text())),
+        Err(DecodeError::Version(ours, theirs)) => Err(LinkError::Refused(format!(
+            "protocol version mismatch: this DEM speaks version {ours}, the fluid server speaks \
+             version {theirs}"
+        ))),
+        Err(e) => Err(LinkError::Refused(e.to_string())),
+    }
+}

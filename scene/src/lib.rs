@@ -1,0 +1,257 @@
+//! Scene files: TOML in SI units, parsed with serde, validated before anything runs.
+//!
+//! Every mistake is reported as `FILE: FIELD = VALUE: PROBLEM`, so the user can find and fix it.
+
+use serde::Deserialize;
+use std::fmt;
+use std::path::Path;
+
+/// The default scene, shipped as a file too (`validation/scenes/default.toml`).
+pub const DEFAULT_SCENE: &str = include_str!("../../validation/scenes/default.toml");
+
+/// Name given to the built-in scene in messages.
+pub const DEFAULT_SCENE_FILE: &str = "<built-in default scene>";
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scene {
+    /// Short name, used for output folders (letters, digits, `-`, `_`, `.`).
+    pub name: String,
+    pub domain: Domain,
+    pub fluid: Fluid,
+    /// Gravitational acceleration [m/s^2].
+    #[serde(default = "default_gravity")]
+    pub gravity: [f64; 3],
+    pub time: Time,
+    #[serde(default)]
+    pub output: Output,
+    #[serde(default)]
+    pub coupling: Coupling,
+    pub particles: Particles,
+}
+
+/// The fluid box [m].
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Domain {
+    pub min: [f64; 3],
+    pub max: [f64; 3],
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Fluid {
+    /// [kg/m^3]
+    pub density: f64,
+    /// [Pa s]
+    pub dynamic_viscosity: f64,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Time {
+    /// Fluid (coupling) time step [s].
+    pub dt: f64,
+    /// Number of coupled steps.
+    pub steps: u64,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Output {
+    /// Steps between two rows of particles.csv per particle (the last step is always written).
+    #[serde(default = "default_interval")]
+    pub interval: u64,
+}
+
+impl Default for Output {
+    fn default() -> Self {
+        Self { interval: default_interval() }
+    }
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Coupling {
+    /// Longest wait for a peer that is alive but silent [s].
+    #[serde(default = "default_timeout")]
+    pub timeout: f64,
+    /// Most particles one step may carry (default: the initial count).
+    pub capacity: Option<u64>,
+}
+
+impl Default for Coupling {
+    fn default() -> Self {
+        Self { timeout: default_timeout(), capacity: None }
+    }
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Particles {
+    /// Solid density [kg/m^3].
+    pub density: f64,
+    #[serde(default)]
+    pub sphere: Vec<Sphere>,
+    #[serde(default)]
+    pub block: Vec<Block>,
+}
+
+/// One sphere [m, m/s, rad/s].
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Sphere {
+    pub position: [f64; 3],
+    pub radius: f64,
+    #[serde(default)]
+    pub velocity: [f64; 3],
+    #[serde(default)]
+    pub angular_velocity: [f64; 3],
+}
+
+/// Spheres on a simple cubic lattice: `count` per axis, `spacing` between centres, first centre at
+/// `origin` [m, m/s].
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Block {
+    pub origin: [f64; 3],
+    pub count: [u64; 3],
+    pub spacing: f64,
+    pub radius: f64,
+    #[serde(default)]
+    pub velocity: [f64; 3],
+}
+
+fn default_gravity() -> [f64; 3] {
+    [0.0, 0.0, -9.81]
+}
+fn default_interval() -> u64 {
+    100
+}
+fn default_timeout() -> f64 {
+    10.0
+}
+
+/// A particle at the start of a run, in SI units.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct InitialParticle {
+    pub id: u64,
+    pub position: [f64; 3],
+    pub velocity: [f64; 3],
+    pub angular_velocity: [f64; 3],
+    pub radius: f64,
+}
+
+/// A scene that cannot run: which file, which field, which value, and why.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SceneError {
+    pub file: String,
+    pub field: String,
+    pub value: String,
+    pub problem: String,
+}
+
+impl fmt::Display for SceneError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if self.field.is_empty() {
+            write!(f, "{}: {}", self.file, self.problem)
+        } else {
+            write!(f, "{}: {} = {}: {}", self.file, self.field, self.value, self.problem)
+        }
+    }
+}
+
+impl std::error::Error for SceneError {}
+
+/// Most particles a scene may create (a block of 1000^3 is a typo, not a scene).
+pub const MAX_PARTICLES: u64 = 50_000_000;
+
+/// Largest allowed initial overlap of two spheres, as a fraction of the smaller radius.
+pub const MAX_INITIAL_OVERLAP: f64 = 0.01;
+
+impl Scene {
+    /// Reads and validates a scene file.
+    pub fn load(path: &Path) -> Result<Scene, SceneError> {
+        let file = path.display().to_string();
+        let text = std::fs::read_to_string(path).map_err(|e| SceneError {
+            file: file.clone(),
+            field: String::new(),
+            value: String::new(),
+            problem: format!("cannot read the scene file: {e}"),
+        })?;
+        Scene::parse(&text, &file)
+    }
+
+    /// The built-in default scene.
+    pub fn default_scene() -> Scene {
+        Scene::parse(DEFAULT_SCENE, DEFAULT_SCENE_FILE).expect("the default scene is valid")
+    }
+
+    /// Parses and validates scene text; `file` names it in errors.
+    pub fn parse(text: &str, file: &str) -> Result<Scene, SceneError> {
+        let scene: Scene = toml::from_str(text).map_err(|e| SceneError {
+            file: file.to_string(),
+            field: String::new(),
+            value: String::new(),
+            problem: e.to_string().trim_end().replace('\n', "\n  "),
+        })?;
+        scene.validate(file)?;
+        Ok(scene)
+    }
+
+    /// All particles of the scene with ids 0, 1, 2, ... (spheres first, then blocks).
+    pub fn initial_particles(&self) -> Vec<InitialParticle> {
+        let spheres = self.particles.sphere.iter().map(|s| (s.position, s.velocity, s.angular_velocity, s.radius));
+        let blocks = self.particles.block.iter().flat_map(|b| {
+            block_centres(b).map(move |p| (p, b.velocity, [0.0; 3], b.radius))
+        });
+        spheres
+            .chain(blocks)
+            .enumerate()
+            .map(|(i, (position, velocity, angular_velocity, radius))| InitialParticle {
+                id: i as u64,
+                position,
+                velocity,
+                angular_velocity,
+                radius,
+            })
+            .collect()
+    }
+
+    /// Number of particles the scene creates.
+    pub fn particle_count(&self) -> u64 {
+        let blocks: u64 = self.particles.block.iter().map(|b| b.count.iter().product::<u64>()).sum();
+        self.particles.sphere.len() as u64 + blocks
+    }
+
+    /// Most particles a step may carry.
+    pub fn capacity(&self) -> u64 {
+        self.coupling.capacity.unwrap_or(self.particle_count()).max(1)
+    }
+
+    /// Particle relaxation time in Stokes flow, 2 rho_p r^2 / (9 mu), of the smallest sphere [s].
+    pub fn particle_response_time(&self) -> Option<f64> {
+        let radii = self.particles.sphere.iter().map(|s| s.radius);
+        let r = radii.chain(self.particles.block.iter().map(|b| b.radius)).fold(f64::INFINITY, f64::min);
+        r.is_finite()
+            .then(|| 2.0 * self.particles.density * r * r / (9.0 * self.fluid.dynamic_viscosity))
+    }
+}
+
+fn block_centres(b: &Block) -> impl Iterator<Item = [f64; 3]> + '_ {
+    let [nx, ny, nz] = b.count;
+    (0..nz).flat_map(move |k| {
+        (0..ny).flat_map(move |j| {
+            (0..nx).map(move |i| {
+                [
+                    b.origin[0] + i as f64 * b.spacing,
+                    b.origin[1] + j as f64 * b.spacing,
+                    b.origin[2] + k as f64 * b.spacing,
+                ]
+            })
+        })
+    })
+}
+
+mod validate;
+mod overlap;

@@ -1,0 +1,204 @@
+//! The checks a scene must pass before a run starts.
+
+use crate::{Scene, SceneError, MAX_INITIAL_OVERLAP, MAX_PARTICLES};
+
+/// Collects the first failure with its file, field and value.
+struct Checker<'a> {
+    file: &'a str,
+}
+
+impl Checker<'_> {
+    fn fail(&self, field: impl Into<String>, value: impl ToString, problem: impl Into<String>) -> SceneError {
+        SceneError {
+            file: self.file.to_string(),
+            field: field.into(),
+            value: value.to_string(),
+            problem: problem.into(),
+        }
+    }
+
+    fn positive(&self, field: &str, value: f64, unit: &str) -> Result<(), SceneError> {
+        if value.is_finite() && value > 0.0 {
+            Ok(())
+        } else {
+            Err(self.fail(field, format!("{value} {unit}"), "must be a finite number > 0"))
+        }
+    }
+
+    fn finite3(&self, field: &str, v: [f64; 3], unit: &str) -> Result<(), SceneError> {
+        if v.iter().all(|x| x.is_finite()) {
+            Ok(())
+        } else {
+            Err(self.fail(field, format!("{} {unit}", vec3(v)), "every component must be finite"))
+        }
+    }
+}
+
+fn vec3(v: [f64; 3]) -> String {
+    format!("[{}, {}, {}]", v[0], v[1], v[2])
+}
+
+impl Scene {
+    pub(crate) fn validate(&self, file: &str) -> Result<(), SceneError> {
+        let c = Checker { file };
+        self.validate_header(&c)?;
+        self.validate_fluid_and_time(&c)?;
+        self.validate_particles(&c)?;
+        self.validate_time_step(&c)
+    }
+
+    fn validate_header(&self, c: &Checker) -> Result<(), SceneError> {
+        let name_ok = !self.name.is_empty()
+            && self.name.len() <= 64
+            && self.name.chars().all(|ch| ch.is_ascii_alphanumeric() || "-_.".contains(ch));
+        if !name_ok {
+            return Err(c.fail(
+                "name",
+                format!("{:?}", self.name),
+                "must be 1-64 letters, digits, '-', '_' or '.' (it names output folders)",
+            ));
+        }
+        c.finite3("domain.min", self.domain.min, "m")?;
+        c.finite3("domain.max", self.domain.max, "m")?;
+        for axis in 0..3 {
+            if self.domain.max[axis] <= self.domain.min[axis] {
+                return Err(c.fail(
+                    format!("domain.max[{axis}]"),
+                    format!("{} m", self.domain.max[axis]),
+                    format!("must be greater than domain.min[{axis}] = {} m", self.domain.min[axis]),
+                ));
+            }
+        }
+        c.finite3("gravity", self.gravity, "m/s^2")
+    }
+
+    fn validate_fluid_and_time(&self, c: &Checker) -> Result<(), SceneError> {
+        c.positive("fluid.density", self.fluid.density, "kg/m^3")?;
+        c.positive("fluid.dynamic_viscosity", self.fluid.dynamic_viscosity, "Pa s")?;
+        c.positive("time.dt", self.time.dt, "s")?;
+        if self.time.steps == 0 {
+            return Err(c.fail("time.steps", 0, "must be at least 1"));
+        }
+        if self.output.interval == 0 {
+            return Err(c.fail("output.interval", 0, "must be at least 1 step"));
+        }
+        c.positive("coupling.timeout", self.coupling.timeout, "s")?;
+        if self.coupling.timeout > 86_400.0 {
+            return Err(c.fail("coupling.timeout", format!("{} s", self.coupling.timeout), "must be at most one day"));
+        }
+        Ok(())
+    }
+
+    fn validate_particles(&self, c: &Checker) -> Result<(), SceneError> {
+        c.positive("particles.density", self.particles.density, "kg/m^3")?;
+        for (i, s) in self.particles.sphere.iter().enumerate() {
+            let field = |f: &str| format!("particles.sphere[{i}].{f}");
+            c.positive(&field("radius"), s.radius, "m")?;
+            c.finite3(&field("position"), s.position, "m")?;
+            c.finite3(&field("velocity"), s.velocity, "m/s")?;
+            c.finite3(&field("angular_velocity"), s.angular_velocity, "rad/s")?;
+            self.inside_domain(c, &field("position"), s.position, s.radius)?;
+        }
+        for (i, b) in self.particles.block.iter().enumerate() {
+            self.validate_block(c, i)?;
+            let last = std::array::from_fn(|a| b.origin[a] + (b.count[a] - 1) as f64 * b.spacing);
+            let field = format!("particles.block[{i}]");
+            self.inside_domain(c, &format!("{field}.origin"), b.origin, b.radius)?;
+            self.inside_domain(c, &format!("{field} (last sphere)"), last, b.radius)?;
+        }
+        let count = self.particle_count();
+        if count == 0 {
+            return Err(c.fail("particles", "no sphere and no block", "a scene needs at least one particle"));
+        }
+        if count > MAX_PARTICLES {
+            return Err(c.fail("particles", format!("{count} particles"), format!("more than {MAX_PARTICLES}")));
+        }
+        if let Some(cap) = self.coupling.capacity {
+            if cap < count {
+                return Err(c.fail(
+                    "coupling.capacity",
+                    cap,
+                    format!("is below the {count} particles the scene creates"),
+                ));
+            }
+        }
+        self.no_overlap(c)
+    }
+
+    fn validate_block(&self, c: &Checker, i: usize) -> Result<(), SceneError> {
+        let b = &self.particles.block[i];
+        let field = |f: &str| format!("particles.block[{i}].{f}");
+        c.positive(&field("radius"), b.radius, "m")?;
+        c.finite3(&field("origin"), b.origin, "m")?;
+        c.finite3(&field("velocity"), b.velocity, "m/s")?;
+        if b.count.iter().any(|n| *n == 0) {
+            let value = format!("[{}, {}, {}]", b.count[0], b.count[1], b.count[2]);
+            return Err(c.fail(field("count"), value, "every count must be at least 1"));
+        }
+        let product = b.count.iter().try_fold(1u64, |acc, n| acc.checked_mul(*n));
+        if product.is_none_or(|n| n > MAX_PARTICLES) {
+            let value = format!("[{}, {}, {}]", b.count[0], b.count[1], b.count[2]);
+            return Err(c.fail(field("count"), value, format!("more than {MAX_PARTICLES} particles")));
+        }
+        c.positive(&field("spacing"), b.spacing, "m")?;
+        if b.count.iter().any(|n| *n > 1) && b.spacing < 2.0 * b.radius * (1.0 - MAX_INITIAL_OVERLAP) {
+            return Err(c.fail(
+                field("spacing"),
+                format!("{} m", b.spacing),
+                format!("is below the sphere diameter {} m: the spheres overlap", 2.0 * b.radius),
+            ));
+        }
+        Ok(())
+    }
+
+    /// A sphere must lie wholly inside the domain.
+    fn inside_domain(&self, c: &Checker, field: &str, p: [f64; 3], r: f64) -> Result<(), SceneError> {
+        let (lo, hi) = (self.domain.min, self.domain.max);
+        for a in 0..3 {
+            if p[a] - r < lo[a] || p[a] + r > hi[a] {
+                return Err(c.fail(
+                    field,
+                    format!("{} m", vec3(p)),
+                    format!(
+                        "a sphere of radius {r} m there leaves the domain [{}, {}] m along axis {a}",
+                        lo[a], hi[a]
+                    ),
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// No two explicit spheres overlap by more than MAX_INITIAL_OVERLAP of the smaller radius.
+    /// (Blocks are checked through their spacing; spheres against blocks through a cell grid.)
+    fn no_overlap(&self, c: &Checker) -> Result<(), SceneError> {
+        let particles = self.initial_particles();
+        let pairs = crate::overlap::overlapping_pairs(&particles, MAX_INITIAL_OVERLAP);
+        match pairs.first() {
+            None => Ok(()),
+            Some(&(a, b, depth)) => Err(c.fail(
+                format!("particles (ids {a} and {b})"),
+                format!("overlap {depth:.3e} m"),
+                format!(
+                    "the spheres overlap by more than {}% of the smaller radius at the start",
+                    MAX_INITIAL_OVERLAP * 100.0
+                ),
+            )),
+        }
+    }
+
+    /// The stand-in coupling (Stokes drag, explicit) is stable only while dt stays below the
+    /// particle response time; the lattice-Boltzmann issue replaces this rule with its own.
+    fn validate_time_step(&self, c: &Checker) -> Result<(), SceneError> {
+        match self.particle_response_time() {
+            Some(tau) if self.time.dt > tau => Err(c.fail(
+                "time.dt",
+                format!("{} s", self.time.dt),
+                format!(
+                    "is too large: above the response time 2 rho_p r^2 / (9 mu) = {tau:.3e} s of the smallest sphere"
+                ),
+            )),
+            _ => Ok(()),
+        }
+    }
+}
