@@ -26,6 +26,20 @@ pub struct ConnectArgs {
     /// Testing: insert or remove one particle every step.
     #[arg(long, hide = true)]
     churn: bool,
+    /// Testing: send the wrong step index at this step.
+    #[arg(long, hide = true)]
+    skip_step: Option<u64>,
+    /// Testing: stop answering (stay alive, silent) at this step.
+    #[arg(long, hide = true)]
+    stall_at: Option<u64>,
+}
+
+/// Deliberate misbehaviour, for the tests of the failure rules.
+#[derive(Clone, Copy, Default)]
+struct Faults {
+    churn: bool,
+    skip_step: Option<u64>,
+    stall_at: Option<u64>,
 }
 
 /// Physics this side applies while the DEM is a stand-in.
@@ -35,18 +49,18 @@ pub fn main(args: ConnectArgs) -> ExitCode {
     let scene = match crate::scene_or_default(args.scene.as_ref()) {
         Ok(s) => s,
         Err(e) => {
-            eprintln!("dem-client: error: {e}");
+            protocol::say!("dem-client: error: {e}");
             return ExitCode::from(2);
         }
     };
     if !(args.timeout.is_finite() && args.timeout > 0.0) {
-        eprintln!("dem-client: error: --timeout = {} s: must be a finite number > 0", args.timeout);
+        protocol::say!("dem-client: error: --timeout = {} s: must be a finite number > 0", args.timeout);
         return ExitCode::from(2);
     }
     let interrupted = Arc::new(AtomicBool::new(false));
     let flag = interrupted.clone();
     if let Err(e) = ctrlc::set_handler(move || flag.store(true, Ordering::SeqCst)) {
-        eprintln!("dem-client: warning: cannot install the Ctrl-C handler: {e}");
+        protocol::say!("dem-client: warning: cannot install the Ctrl-C handler: {e}");
     }
     let mut particles = Particles::from_scene(&scene);
     let mut hello = Hello::new(
@@ -62,19 +76,20 @@ pub fn main(args: ConnectArgs) -> ExitCode {
     let (link, welcome) = match DemLink::connect(options, hello) {
         Ok(ok) => ok,
         Err(e) => {
-            eprintln!("dem-client: error: {e}");
+            protocol::say!("dem-client: error: {e}");
             return ExitCode::from(1);
         }
     };
     let mut last = None;
-    match step_loop(&link, &welcome, &mut particles, &interrupted, args.churn, &mut last) {
+    let faults = Faults { churn: args.churn, skip_step: args.skip_step, stall_at: args.stall_at };
+    match step_loop(&link, &welcome, &mut particles, &interrupted, faults, &mut last) {
         Ok(steps) => {
-            eprintln!("dem-client: finished after {steps} steps (stand-in physics: ballistic)");
+            protocol::say!("dem-client: finished after {steps} steps (stand-in physics: ballistic)");
             ExitCode::SUCCESS
         }
         Err(e) => {
             let last = last.map_or("none".to_string(), |s: u64| s.to_string());
-            eprintln!("dem-client: error: {e}; last completed step: {last}");
+            protocol::say!("dem-client: error: {e}; last completed step: {last}");
             ExitCode::from(1)
         }
     }
@@ -86,18 +101,22 @@ fn step_loop(
     welcome: &Welcome,
     particles: &mut Particles,
     interrupted: &AtomicBool,
-    churn: bool,
+    faults: Faults,
     last: &mut Option<u64>,
 ) -> Result<u64, LinkError> {
     let domain = (welcome.domain_min, welcome.domain_max);
     let mut replies: Vec<ParticleReply> = Vec::new();
     for step in 0..welcome.steps {
-        if churn && step > 0 {
+        if faults.churn && step > 0 {
             particles.churn(step);
+        }
+        while faults.stall_at == Some(step) {
+            std::thread::sleep(Duration::from_secs(1));
         }
         let stop = interrupted.load(Ordering::SeqCst);
         let flags = if stop { StepFlags::STOP } else { 0 };
-        let header = StepHeader::new(step, step as f64 * welcome.dt, particles.states.len(), flags);
+        let sent_step = if faults.skip_step == Some(step) { step + 1 } else { step };
+        let header = StepHeader::new(sent_step, step as f64 * welcome.dt, particles.states.len(), flags);
         link.send_states(header, |i| particles.states[i])?;
         let received = link.receive_forces(step)?;
         replies.clear();

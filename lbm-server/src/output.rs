@@ -115,7 +115,7 @@ impl Progress {
             self.last_log = Instant::now();
             let rate = done as f64 / self.start.elapsed().as_secs_f64().max(1e-9);
             let eta = (self.total - done) as f64 / rate.max(1e-9);
-            eprintln!(
+            protocol::say!(
                 "lbm-server: step {done}/{} ({:.0}%), {rate:.0} steps/s, ETA {eta:.1} s",
                 self.total,
                 100.0 * done as f64 / self.total as f64

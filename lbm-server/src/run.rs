@@ -98,14 +98,14 @@ pub fn main(args: RunArgs) -> ExitCode {
     let prepared = match prepare(&args) {
         Ok(p) => p,
         Err(e) => {
-            eprintln!("lbm-server: error: {e}");
+            protocol::say!("lbm-server: error: {e}");
             return ExitCode::from(EXIT_BAD_INPUT);
         }
     };
     let interrupted = Arc::new(AtomicBool::new(false));
     let flag = interrupted.clone();
     if let Err(e) = ctrlc::set_handler(move || flag.store(true, Ordering::SeqCst)) {
-        eprintln!("lbm-server: warning: cannot install the Ctrl-C handler: {e}");
+        protocol::say!("lbm-server: warning: cannot install the Ctrl-C handler: {e}");
     }
     protocol::cleanup::remove_stale_runs();
     let run = new_run_name();
@@ -137,14 +137,14 @@ impl Session {
         let link = match FluidLink::create(LinkOptions { run: run.to_string(), timeout }, capacity) {
             Ok(link) => link,
             Err(e) => {
-                eprintln!("lbm-server: error: {e}");
+                protocol::say!("lbm-server: error: {e}");
                 return EXIT_FAILURE;
             }
         };
         let csv = match ParticleCsv::create(&p.out.join("particles.csv")) {
             Ok(csv) => csv,
             Err(e) => {
-                eprintln!("lbm-server: error: {}: {e}", p.out.join("particles.csv").display());
+                protocol::say!("lbm-server: error: {}: {e}", p.out.join("particles.csv").display());
                 return EXIT_FAILURE;
             }
         };
@@ -205,7 +205,7 @@ impl Session {
             protocol_version: hello.version,
             physics: Physics::names(hello.physics),
         });
-        eprintln!(
+        protocol::say!(
             "lbm-server: scene '{}', {} steps, DEM: {} (pid {}); stand-in fluid: Stokes drag + buoyancy",
             scene.name,
             steps,
@@ -271,10 +271,10 @@ impl Session {
             Err(e) => (format!("error: {e}"), EXIT_FAILURE),
         };
         if let Err(msg) = &result {
-            eprintln!("lbm-server: error: {msg}");
+            protocol::say!("lbm-server: error: {msg}");
         }
         if let Err(e) = self.csv.flush() {
-            eprintln!("lbm-server: error: particles.csv: {e}");
+            protocol::say!("lbm-server: error: particles.csv: {e}");
         }
         let grace = if result.is_ok() { Duration::from_secs(2) } else { Duration::ZERO };
         if let Some(child) = self.child.as_mut() {
@@ -282,10 +282,10 @@ impl Session {
         }
         let summary = self.summary(reason, code);
         if let Err(e) = summary.write(&self.p.out.join("summary.json")) {
-            eprintln!("lbm-server: error: summary.json: {e}");
+            protocol::say!("lbm-server: error: summary.json: {e}");
         }
         if code == 0 {
-            eprintln!(
+            protocol::say!(
                 "lbm-server: {} steps in {:.2} s ({:.0} steps/s); output in {}",
                 summary.steps_completed,
                 summary.wall_time_s,

@@ -14,3 +14,16 @@ pub mod wire;
 pub use handshake::{Hello, Physics, Status, Units, Welcome, PROTOCOL_VERSION};
 pub use transport::{DemLink, FluidLink, LinkError, Peer};
 pub use wire::{ParticleReply, ParticleState, StepFlags, StepHeader};
+
+/// Writes one line to stderr in a single write, so that the two processes of a run, which share
+/// a terminal, never interleave within a line.
+pub fn write_line(line: &str) {
+    use std::io::Write;
+    let _ = std::io::stderr().write_all(format!("{line}\n").as_bytes());
+}
+
+/// `eprintln!` for the co-simulation's processes: one write per line (see [`write_line`]).
+#[macro_export]
+macro_rules! say {
+    ($($arg:tt)*) => { $crate::write_line(&format!($($arg)*)) };
+}

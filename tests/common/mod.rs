@@ -1,0 +1,208 @@
+//! Helpers of the integration tests: find the binaries, write scenes, start and watch processes.
+#![allow(dead_code)]
+
+use std::io::{BufRead, BufReader};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::sync::mpsc::{channel, Receiver};
+use std::time::{Duration, Instant};
+
+/// A binary of the workspace, built next to the test executable (`cargo build` builds it).
+pub fn bin(name: &str) -> PathBuf {
+    let exe = std::env::current_exe().expect("test executable path");
+    let dir = exe.parent().and_then(Path::parent).expect("target/<profile>");
+    let path = dir.join(name);
+    assert!(path.is_file(), "{} is missing: run `cargo build --workspace --bins` first", path.display());
+    path
+}
+
+/// A fresh, empty folder for one test.
+pub fn temp_dir(tag: &str) -> PathBuf {
+    let nanos = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).unwrap().as_nanos();
+    let dir = std::env::temp_dir().join(format!("lbmdem-test-{tag}-{}-{nanos}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// A scene with a block of `count` spheres in a 1 m box, `steps` steps, as TOML text.
+pub fn scene_text(name: &str, count: [u64; 3], steps: u64, interval: u64, timeout_s: f64) -> String {
+    format!(
+        r#"name = "{name}"
+[domain]
+min = [0.0, 0.0, 0.0]
+max = [1.0, 1.0, 1.0]
+[fluid]
+density = 1000.0
+dynamic_viscosity = 1.0e-3
+[time]
+dt = 1.0e-4
+steps = {steps}
+[output]
+interval = {interval}
+[coupling]
+timeout = {timeout_s}
+[particles]
+density = 2500.0
+[[particles.block]]
+origin = [0.05, 0.05, 0.3]
+count = [{}, {}, {}]
+spacing = 0.01
+radius = 0.003
+"#,
+        count[0], count[1], count[2]
+    )
+}
+
+/// Writes a scene file into `dir` and returns its path.
+pub fn write_scene(dir: &Path, text: &str) -> PathBuf {
+    let path = dir.join("scene.toml");
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+/// A started process whose stderr (and optionally stdout) lines arrive on channels.
+pub struct Proc {
+    pub child: Child,
+    pub stderr: Receiver<String>,
+    pub stdout: Receiver<String>,
+    pub started: Instant,
+}
+
+fn pump(stream: impl std::io::Read + Send + 'static) -> Receiver<String> {
+    let (tx, rx) = channel();
+    std::thread::spawn(move || {
+        for line in BufReader::new(stream).lines().map_while(Result::ok) {
+            if tx.send(line).is_err() {
+                break;
+            }
+        }
+    });
+    rx
+}
+
+/// Starts `cmd` in a process group of its own, capturing stdout and stderr.
+pub fn start(mut cmd: Command) -> Proc {
+    use std::os::unix::process::CommandExt;
+    cmd.stdout(Stdio::piped()).stderr(Stdio::piped()).stdin(Stdio::null()).process_group(0);
+    let mut child = cmd.spawn().expect("spawn");
+    let stderr = pump(child.stderr.take().unwrap());
+    let stdout = pump(child.stdout.take().unwrap());
+    Proc { child, stderr, stdout, started: Instant::now() }
+}
+
+impl Proc {
+    /// Waits for a line containing `needle` on `stream`; returns it, or panics with what was seen.
+    pub fn wait_line(rx: &Receiver<String>, needle: &str, timeout: Duration) -> String {
+        let deadline = Instant::now() + timeout;
+        let mut seen = Vec::new();
+        while let Some(left) = deadline.checked_duration_since(Instant::now()) {
+            match rx.recv_timeout(left) {
+                Ok(line) if line.contains(needle) => return line,
+                Ok(line) => seen.push(line),
+                Err(_) => break,
+            }
+        }
+        panic!("no line containing {needle:?} within {timeout:?}; saw:\n{}", seen.join("\n"));
+    }
+
+    /// Waits for exit; returns (exit code, seconds waited). Kills and panics after `timeout`.
+    pub fn wait_exit(&mut self, timeout: Duration) -> (Option<i32>, f64) {
+        let start = Instant::now();
+        loop {
+            if let Some(status) = self.child.try_wait().unwrap() {
+                return (status.code(), start.elapsed().as_secs_f64());
+            }
+            if start.elapsed() > timeout {
+                let _ = self.child.kill();
+                panic!("process did not exit within {timeout:?}");
+            }
+            std::thread::sleep(Duration::from_millis(5));
+        }
+    }
+
+    /// All lines received so far on `rx`.
+    pub fn drain(rx: &Receiver<String>) -> String {
+        let mut text = String::new();
+        while let Ok(line) = rx.recv_timeout(Duration::from_millis(200)) {
+            text += &line;
+            text.push('\n');
+        }
+        text
+    }
+}
+
+/// `lbm-server run SCENE --out OUT extra...`
+pub fn server(scene: &Path, out: &Path, extra: &[&str]) -> Command {
+    let mut cmd = Command::new(bin("lbm-server"));
+    cmd.arg("run").arg(scene).arg("--out").arg(out).args(extra);
+    cmd
+}
+
+/// Reads OUT/summary.json.
+pub fn summary(out: &Path) -> serde_json::Value {
+    let text = std::fs::read_to_string(out.join("summary.json")).expect("summary.json written");
+    serde_json::from_str(&text).expect("summary.json is JSON")
+}
+
+/// Files of run `run` left in shared memory or under the iceoryx2 root.
+pub fn leftover_files(run: &str) -> Vec<PathBuf> {
+    let mut found = Vec::new();
+    for root in ["/dev/shm", "/tmp/iceoryx2"] {
+        collect(Path::new(root), run, &mut found);
+    }
+    found
+}
+
+fn collect(dir: &Path, needle: &str, found: &mut Vec<PathBuf>) {
+    let Ok(entries) = std::fs::read_dir(dir) else { return };
+    for entry in entries.flatten() {
+        if entry.file_type().is_ok_and(|t| t.is_dir()) {
+            collect(&entry.path(), needle, found);
+        }
+        if entry.file_name().to_string_lossy().contains(needle) {
+            found.push(entry.path());
+        }
+    }
+}
+
+/// Sends `signal` to a process.
+pub fn signal(pid: u32, signal: i32) {
+    assert_eq!(unsafe { libc::kill(pid as i32, signal) }, 0, "kill({pid}, {signal})");
+}
+
+/// Pid of the dem-client started by the lbm-server `server_pid`.
+pub fn child_pid(server_pid: u32) -> u32 {
+    let deadline = Instant::now() + Duration::from_secs(10);
+    while Instant::now() < deadline {
+        let children = std::fs::read_to_string(format!("/proc/{server_pid}/task/{server_pid}/children"))
+            .unwrap_or_default();
+        if let Some(pid) = children.split_whitespace().next() {
+            return pid.parse().unwrap();
+        }
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    panic!("lbm-server {server_pid} started no dem-client");
+}
+
+/// Is the process gone (or a zombie)?
+pub fn is_gone(pid: u32) -> bool {
+    match std::fs::read_to_string(format!("/proc/{pid}/stat")) {
+        Err(_) => true,
+        Ok(stat) => stat.rsplit(')').next().is_some_and(|rest| rest.trim_start().starts_with(['Z', 'X'])),
+    }
+}
+
+/// Rows of particles.csv grouped by step: step -> ids.
+pub fn csv_steps(out: &Path) -> std::collections::BTreeMap<u64, Vec<u64>> {
+    let text = std::fs::read_to_string(out.join("particles.csv")).expect("particles.csv");
+    let mut lines = text.lines();
+    assert_eq!(lines.next(), Some("step,time,id,x,y,z,vx,vy,vz,wx,wy,wz,fx,fy,fz,tx,ty,tz"));
+    let mut steps = std::collections::BTreeMap::new();
+    for line in lines {
+        let cols: Vec<&str> = line.split(',').collect();
+        assert_eq!(cols.len(), 18, "row {line}");
+        let entry: &mut Vec<u64> = steps.entry(cols[0].parse().unwrap()).or_default();
+        entry.push(cols[2].parse().unwrap());
+    }
+    steps
+}
