@@ -250,7 +250,9 @@ impl Session {
             }
             if stop {
                 progress.finish();
-                return Ok(if header.has(StepFlags::STOP) { Ending::StoppedByPeer } else { Ending::Interrupted });
+                // Ctrl-C on a terminal reaches both processes: our own interrupt takes precedence.
+                let ours = self.interrupted.load(Ordering::SeqCst);
+                return Ok(if ours { Ending::Interrupted } else { Ending::StoppedByPeer });
             }
         }
         progress.finish();
@@ -268,9 +270,10 @@ impl Session {
             Ok(Ending::Completed) => ("completed".to_string(), 0),
             Ok(Ending::Interrupted) => ("interrupted".to_string(), EXIT_INTERRUPTED),
             Ok(Ending::StoppedByPeer) => ("stopped by the DEM client".to_string(), 0),
+            Err(_) if self.interrupted.load(Ordering::SeqCst) => ("interrupted".to_string(), EXIT_INTERRUPTED),
             Err(e) => (format!("error: {e}"), EXIT_FAILURE),
         };
-        if let Err(msg) = &result {
+        if let (Err(msg), false) = (&result, code == EXIT_INTERRUPTED) {
             protocol::say!("lbm-server: error: {msg}");
         }
         if let Err(e) = self.csv.flush() {

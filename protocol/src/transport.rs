@@ -13,7 +13,7 @@ use crate::liveness::{process_state, ProcessState};
 use crate::wire::{ParticleReply, ParticleState, StepHeader};
 use core::fmt::{self, Debug, Display};
 use core::time::Duration;
-use iceoryx2::port::listener::Listener;
+use iceoryx2::port::listener::{Listener, ListenerWaitError};
 use iceoryx2::port::notifier::Notifier;
 use iceoryx2::port::publisher::Publisher;
 use iceoryx2::port::subscriber::Subscriber;
@@ -273,10 +273,11 @@ impl Watch {
             if let Some(r) = take(inbox)? {
                 return Ok(r);
             }
-            inbox
-                .listener
-                .timed_wait(|_| {}, POLL)
-                .map_err(ipc_err("wait"))?;
+            match inbox.listener.timed_wait(|_| {}, POLL) {
+                // A signal (Ctrl-C) woke the wait early: look again, the caller decides.
+                Ok(_) | Err(ListenerWaitError::InterruptSignal) => {}
+                Err(e) => return Err(ipc_err("wait")(e)),
+            }
             if let Some(r) = take(inbox)? {
                 return Ok(r);
             }

@@ -1,0 +1,74 @@
+//! Every mistake in a scene file is refused before anything runs, naming the file, the field and
+//! the bad value.
+
+mod common;
+use common::*;
+
+/// (what is wrong, text to replace, replacement, words the error must contain)
+const MISTAKES: &[(&str, &str, &str, &[&str])] = &[
+    ("unknown key", "density = 1000.0", "densty = 1000.0", &["unknown field `densty`", "line"]),
+    ("negative radius", "radius = 0.003", "radius = -0.003", &["particles.block[0].radius = -0.003 m"]),
+    ("time step too large", "dt = 1.0e-4", "dt = 5.0", &["time.dt = 5 s", "too large"]),
+    ("zero steps", "steps = 100", "steps = 0", &["time.steps = 0"]),
+    ("negative viscosity", "dynamic_viscosity = 1.0e-3", "dynamic_viscosity = -1.0e-3", &["fluid.dynamic_viscosity = -0.001 Pa s"]),
+    ("inverted domain", "max = [1.0, 1.0, 1.0]", "max = [1.0, -1.0, 1.0]", &["domain.max[1] = -1 m", "greater than domain.min[1]"]),
+    ("overlapping block", "spacing = 0.01", "spacing = 0.004", &["particles.block[0].spacing = 0.004 m", "overlap"]),
+    ("wrong type", "steps = 100", "steps = \"many\"", &["steps", "invalid type"]),
+    ("missing section", "[fluid]\ndensity = 1000.0\ndynamic_viscosity = 1.0e-3\n", "", &["missing field `fluid`"]),
+    ("zero output interval", "interval = 10", "interval = 0", &["output.interval = 0"]),
+    ("negative timeout", "timeout = 10", "timeout = -1", &["coupling.timeout = -1 s"]),
+    ("bad name", "name = \"bad\"", "name = \"my scene/1\"", &["name = \"my scene/1\""]),
+    ("non-finite gravity", "[domain]", "gravity = [0.0, 0.0, nan]\n[domain]", &["gravity = [0, 0, NaN] m/s^2"]),
+    ("zero particle density", "density = 2500.0", "density = 0.0", &["particles.density = 0 kg/m^3"]),
+    (
+        "sphere outside the domain",
+        "[[particles.block]]",
+        "[[particles.sphere]]\nposition = [1.2, 0.5, 0.5]\nradius = 0.01\n[[particles.block]]",
+        &["particles.sphere[0].position = [1.2, 0.5, 0.5] m", "leaves the domain"],
+    ),
+    (
+        "overlapping spheres",
+        "[[particles.block]]",
+        "[[particles.sphere]]\nposition = [0.9, 0.9, 0.9]\nradius = 0.01\n[[particles.sphere]]\nposition = [0.905, 0.9, 0.9]\nradius = 0.01\n[[particles.block]]",
+        &["particles (ids 0 and 1)", "overlap"],
+    ),
+    ("capacity below count", "timeout = 10", "timeout = 10\ncapacity = 3", &["coupling.capacity = 3", "below the 8 particles"]),
+];
+
+#[test]
+fn each_mistake_is_rejected_naming_file_field_and_value() {
+    let base = scene_text("bad", [2, 2, 2], 100, 10, 10.0);
+    assert!(MISTAKES.len() >= 10);
+    for (what, from, to, words) in MISTAKES {
+        assert!(base.contains(from), "{what}: the base scene lacks {from:?}");
+        let dir = temp_dir("bad");
+        let scene = write_scene(&dir, &base.replacen(from, to, 1));
+        let out = dir.join("out");
+        let result = server(&scene, &out, &[]).output().unwrap();
+        let err = String::from_utf8_lossy(&result.stderr);
+        assert_eq!(result.status.code(), Some(2), "{what}: exit code; stderr:\n{err}");
+        assert!(err.contains(&scene.display().to_string()), "{what}: file not named:\n{err}");
+        for w in *words {
+            assert!(err.contains(w), "{what}: {w:?} missing from:\n{err}");
+        }
+        assert!(!out.exists(), "{what}: the run started (output folder made)");
+    }
+}
+
+#[test]
+fn the_base_scene_itself_is_valid() {
+    let dir = temp_dir("good");
+    let scene = write_scene(&dir, &scene_text("good", [2, 2, 2], 3, 1, 10.0));
+    let result = server(&scene, &dir.join("out"), &[]).output().unwrap();
+    assert!(result.status.success(), "{}", String::from_utf8_lossy(&result.stderr));
+}
+
+#[test]
+fn a_missing_scene_file_is_named() {
+    let result = server(std::path::Path::new("/nonexistent/scene.toml"), std::path::Path::new("/tmp/x"), &[])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&result.stderr);
+    assert_eq!(result.status.code(), Some(2));
+    assert!(err.contains("/nonexistent/scene.toml: cannot read the scene file"), "{err}");
+}

@@ -1,0 +1,143 @@
+//! A dead, suspended or silent peer ends the run within a second, named, with outputs kept;
+//! Ctrl-C stops both processes cleanly; shared-memory files never outlive a run.
+
+mod common;
+use common::*;
+use std::time::Duration;
+
+/// Starts a long run (spawned DEM) and waits until it is stepping; returns (server, dem pid, out).
+fn long_run(tag: &str, timeout_s: f64) -> (Proc, u32, std::path::PathBuf) {
+    let dir = temp_dir(tag);
+    let scene = write_scene(&dir, &scene_text(tag, [4, 4, 4], 10_000_000, 1000, timeout_s));
+    let out = dir.join("out");
+    let server = start(server(&scene, &out, &[]));
+    Proc::wait_line(&server.stderr, "lbm-server: scene", Duration::from_secs(20));
+    std::thread::sleep(Duration::from_millis(300));
+    let dem = child_pid(server.child.id());
+    (server, dem, out)
+}
+
+/// The server's stderr must name the DEM and the last completed step, and its summary agree.
+fn assert_failure_reported(server: &mut Proc, out: &std::path::Path, words: &str) -> String {
+    let stderr = Proc::drain(&server.stderr);
+    assert!(stderr.contains("the DEM client"), "peer not named:\n{stderr}");
+    assert!(stderr.contains(words), "expected {words:?}:\n{stderr}");
+    let last: u64 = stderr
+        .split("last completed step: ")
+        .nth(1)
+        .and_then(|rest| rest.split_whitespace().next())
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("no last completed step in:\n{stderr}"));
+    let s = summary(out);
+    assert_eq!(s["last_completed_step"], last);
+    assert!(s["exit_reason"].as_str().unwrap().starts_with("error: "), "{s}");
+    let rows = std::fs::read_to_string(out.join("particles.csv")).unwrap();
+    assert!(rows.lines().count() > 1, "particles.csv was flushed:\n{rows}");
+    stderr
+}
+
+#[test]
+fn killed_dem_is_noticed_within_a_second() {
+    let (mut server, dem, out) = long_run("kill-dem", 30.0);
+    signal(dem, libc::SIGKILL);
+    let (code, waited) = server.wait_exit(Duration::from_secs(10));
+    assert_eq!(code, Some(1));
+    assert!(waited < 1.0, "lbm-server took {waited:.3} s to notice");
+    assert_failure_reported(&mut server, &out, "died");
+}
+
+#[test]
+fn killed_server_is_noticed_by_the_dem_within_a_second() {
+    let (mut server, dem, out) = long_run("kill-server", 30.0);
+    let run = wait_summary_run(&out, &mut server);
+    signal(server.child.id(), libc::SIGKILL);
+    let start = std::time::Instant::now();
+    server.wait_exit(Duration::from_secs(5));
+    while !is_gone(dem) && start.elapsed() < Duration::from_secs(10) {
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    let waited = start.elapsed().as_secs_f64();
+    assert!(waited < 1.0, "dem-client took {waited:.3} s to notice");
+    let stderr = Proc::drain(&server.stderr);
+    assert!(stderr.contains("dem-client: error: the fluid server (lbm-server)"), "{stderr}");
+    assert!(stderr.contains("died; last completed step: "), "{stderr}");
+    // The crashed run left files; the next run removes them.
+    let dir = temp_dir("after-crash");
+    let scene = write_scene(&dir, &scene_text("after", [1, 1, 1], 5, 1, 10.0));
+    let mut next = start_and_wait(server_cmd(&scene, &dir.join("out")));
+    assert_eq!(next.0, Some(0), "{}", next.1);
+    assert!(leftover_files(&run).is_empty(), "stale files of {run}: {:?}", leftover_files(&run));
+    next.1.clear();
+}
+
+/// The run name, from the files the run created in shared memory.
+fn wait_summary_run(_out: &std::path::Path, server: &mut Proc) -> String {
+    let pid = server.child.id();
+    let needle = format!("lbmdem_{pid}_");
+    let files = leftover_files(&needle);
+    let name = files[0].file_name().unwrap().to_string_lossy().to_string();
+    let start = name.find(&needle).unwrap();
+    name[start..].splitn(4, '_').take(3).collect::<Vec<_>>().join("_")
+}
+
+fn server_cmd(scene: &std::path::Path, out: &std::path::Path) -> std::process::Command {
+    server(scene, out, &[])
+}
+
+fn start_and_wait(cmd: std::process::Command) -> (Option<i32>, String) {
+    let mut p = start(cmd);
+    let (code, _) = p.wait_exit(Duration::from_secs(60));
+    (code, Proc::drain(&p.stderr))
+}
+
+#[test]
+fn suspended_dem_is_caught_within_a_second() {
+    let (mut server, dem, out) = long_run("stop-dem", 30.0);
+    signal(dem, libc::SIGSTOP);
+    let (code, waited) = server.wait_exit(Duration::from_secs(10));
+    assert_eq!(code, Some(1));
+    assert!(waited < 1.0, "lbm-server took {waited:.3} s to notice");
+    assert_failure_reported(&mut server, &out, "suspended");
+    let start = std::time::Instant::now();
+    while !is_gone(dem) && start.elapsed() < Duration::from_secs(5) {
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    assert!(is_gone(dem), "the hung DEM process was ended");
+}
+
+#[test]
+fn silent_live_dem_is_caught_by_the_timeout() {
+    let dir = temp_dir("stall");
+    let scene = write_scene(&dir, &scene_text("stall", [2, 2, 2], 1000, 10, 0.5));
+    let out = dir.join("out");
+    let mut server = start(server(&scene, &out, &["--dem", "external"]));
+    let line = Proc::wait_line(&server.stdout, "DEM service:", Duration::from_secs(20));
+    let run = line.split_whitespace().last().unwrap().to_string();
+    let mut client = std::process::Command::new(bin("dem-client"));
+    client.args(["connect", "--service", &run, "--stall-at", "20", "--scene"]).arg(&scene);
+    let mut client = start(client);
+    let (code, waited) = server.wait_exit(Duration::from_secs(10));
+    assert_eq!(code, Some(1));
+    assert!(waited < 1.5, "timeout of 0.5 s took {waited:.3} s");
+    let stderr = assert_failure_reported(&mut server, &out, "did not answer within 0.5 s");
+    assert!(stderr.contains("last completed step: 19"), "{stderr}");
+    let _ = client.child.kill();
+    client.wait_exit(Duration::from_secs(5));
+}
+
+#[test]
+fn ctrl_c_stops_both_cleanly() {
+    let (mut server, dem, out) = long_run("ctrl-c", 30.0);
+    // A terminal's Ctrl-C reaches the whole process group.
+    assert_eq!(unsafe { libc::kill(-(server.child.id() as i32), libc::SIGINT) }, 0);
+    let (code, waited) = server.wait_exit(Duration::from_secs(10));
+    assert_eq!(code, Some(130), "{}", Proc::drain(&server.stderr));
+    assert!(waited < 1.0, "took {waited:.3} s");
+    assert!(is_gone(dem));
+    let stderr = Proc::drain(&server.stderr);
+    assert!(stderr.contains("dem-client: finished after"), "the DEM ended cleanly:\n{stderr}");
+    let s = summary(&out);
+    assert_eq!(s["exit_reason"], "interrupted");
+    let run = s["run"].as_str().unwrap();
+    assert!(leftover_files(run).is_empty(), "{:?}", leftover_files(run));
+}
