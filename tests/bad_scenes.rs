@@ -47,7 +47,10 @@ fn each_mistake_is_rejected_naming_file_field_and_value() {
         let result = server(&scene, &out, &[]).output().unwrap();
         let err = String::from_utf8_lossy(&result.stderr);
         assert_eq!(result.status.code(), Some(2), "{what}: exit code; stderr:\n{err}");
-        assert!(err.contains(&scene.display().to_string()), "{what}: file not named:\n{err}");
+        assert!(
+            err.contains(&scene.display().to_string()),
+            "{what}: file not named:\n{err}"
+        );
         for w in *words {
             assert!(err.contains(w), "{what}: {w:?} missing from:\n{err}");
         }
@@ -60,15 +63,26 @@ fn the_base_scene_itself_is_valid() {
     let dir = temp_dir("good");
     let scene = write_scene(&dir, &scene_text("good", [2, 2, 2], 3, 1, 10.0));
     let result = server(&scene, &dir.join("out"), &[]).output().unwrap();
-    assert!(result.status.success(), "{}", String::from_utf8_lossy(&result.stderr));
+    assert!(
+        result.status.success(),
+        "{}",
+        String::from_utf8_lossy(&result.stderr)
+    );
 }
 
 #[test]
 fn a_missing_scene_file_is_named() {
-    let result = server(std::path::Path::new("/nonexistent/scene.toml"), std::path::Path::new("/tmp/x"), &[])
-        .output()
-        .unwrap();
+    let result = server(
+        std::path::Path::new("/nonexistent/scene.toml"),
+        std::path::Path::new("/tmp/x"),
+        &[],
+    )
+    .output()
+    .unwrap();
     let err = String::from_utf8_lossy(&result.stderr);
     assert_eq!(result.status.code(), Some(2));
-    assert!(err.contains("/nonexistent/scene.toml: cannot read the scene file"), "{err}");
+    assert!(
+        err.contains("/nonexistent/scene.toml: cannot read the scene file"),
+        "{err}"
+    );
 }

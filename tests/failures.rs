@@ -59,14 +59,21 @@ fn killed_server_is_noticed_by_the_dem_within_a_second() {
     let waited = start.elapsed().as_secs_f64();
     assert!(waited < 1.0, "dem-client took {waited:.3} s to notice");
     let stderr = Proc::drain(&server.stderr);
-    assert!(stderr.contains("dem-client: error: the fluid server (lbm-server)"), "{stderr}");
+    assert!(
+        stderr.contains("dem-client: error: the fluid server (lbm-server)"),
+        "{stderr}"
+    );
     assert!(stderr.contains("died; last completed step: "), "{stderr}");
     // The crashed run left files; the next run removes them.
     let dir = temp_dir("after-crash");
     let scene = write_scene(&dir, &scene_text("after", [1, 1, 1], 5, 1, 10.0));
     let mut next = start_and_wait(server_cmd(&scene, &dir.join("out")));
     assert_eq!(next.0, Some(0), "{}", next.1);
-    assert!(leftover_files(&run).is_empty(), "stale files of {run}: {:?}", leftover_files(&run));
+    assert!(
+        leftover_files(&run).is_empty(),
+        "stale files of {run}: {:?}",
+        leftover_files(&run)
+    );
     next.1.clear();
 }
 
@@ -114,7 +121,9 @@ fn silent_live_dem_is_caught_by_the_timeout() {
     let line = Proc::wait_line(&server.stdout, "DEM service:", Duration::from_secs(20));
     let run = line.split_whitespace().last().unwrap().to_string();
     let mut client = std::process::Command::new(bin("dem-client"));
-    client.args(["connect", "--service", &run, "--stall-at", "20", "--scene"]).arg(&scene);
+    client
+        .args(["connect", "--service", &run, "--stall-at", "20", "--scene"])
+        .arg(&scene);
     let mut client = start(client);
     let (code, waited) = server.wait_exit(Duration::from_secs(10));
     assert_eq!(code, Some(1));
@@ -129,13 +138,19 @@ fn silent_live_dem_is_caught_by_the_timeout() {
 fn ctrl_c_stops_both_cleanly() {
     let (mut server, dem, out) = long_run("ctrl-c", 30.0);
     // A terminal's Ctrl-C reaches the whole process group.
-    assert_eq!(unsafe { libc::kill(-(server.child.id() as i32), libc::SIGINT) }, 0);
+    assert_eq!(
+        unsafe { libc::kill(-(server.child.id() as i32), libc::SIGINT) },
+        0
+    );
     let (code, waited) = server.wait_exit(Duration::from_secs(10));
     assert_eq!(code, Some(130), "{}", Proc::drain(&server.stderr));
     assert!(waited < 1.0, "took {waited:.3} s");
     assert!(is_gone(dem));
     let stderr = Proc::drain(&server.stderr);
-    assert!(stderr.contains("dem-client: finished after"), "the DEM ended cleanly:\n{stderr}");
+    assert!(
+        stderr.contains("dem-client: finished after"),
+        "the DEM ended cleanly:\n{stderr}"
+    );
     let s = summary(&out);
     assert_eq!(s["exit_reason"], "interrupted");
     let run = s["run"].as_str().unwrap();

@@ -48,7 +48,12 @@ fn two_runs_at_the_same_time_do_not_interfere() {
             let dir = temp_dir(tag);
             let scene = write_scene(&dir, &scene_text(tag, count, steps, 100, 10.0));
             let out = dir.join("out");
-            (start(server(&scene, &out, &[])), out, count.iter().product::<u64>(), steps)
+            (
+                start(server(&scene, &out, &[])),
+                out,
+                count.iter().product::<u64>(),
+                steps,
+            )
         })
         .collect();
     for (mut server, out, n, steps) in runs {

@@ -14,14 +14,19 @@ fn lockstep_run(tag: &str, count: [u64; 3], steps: u64, interval: u64) {
     let (code, _) = server.wait_exit(Duration::from_secs(300));
     let stderr = Proc::drain(&server.stderr);
     assert_eq!(code, Some(0), "lbm-server failed:\n{stderr}");
-    assert!(stderr.contains(&format!("dem-client: finished after {steps} steps")), "{stderr}");
+    assert!(
+        stderr.contains(&format!("dem-client: finished after {steps} steps")),
+        "{stderr}"
+    );
     let s = summary(&out);
     assert_eq!(s["steps_completed"], steps);
     assert_eq!(s["last_completed_step"], steps - 1);
     assert_eq!(s["particles_initial"], n);
     assert_eq!(s["exit_reason"], "completed");
     let rows = csv_steps(&out);
-    let expected: Vec<u64> = (0..steps).filter(|k| k % interval == 0 || *k == steps - 1).collect();
+    let expected: Vec<u64> = (0..steps)
+        .filter(|k| k % interval == 0 || *k == steps - 1)
+        .collect();
     assert_eq!(rows.keys().copied().collect::<Vec<_>>(), expected);
     for (step, ids) in &rows {
         let mut sorted = ids.clone();
@@ -29,7 +34,11 @@ fn lockstep_run(tag: &str, count: [u64; 3], steps: u64, interval: u64) {
         assert_eq!(sorted, (0..n).collect::<Vec<_>>(), "ids at step {step}");
     }
     let run = s["run"].as_str().unwrap();
-    assert!(leftover_files(run).is_empty(), "clean run left {:?}", leftover_files(run));
+    assert!(
+        leftover_files(run).is_empty(),
+        "clean run left {:?}",
+        leftover_files(run)
+    );
 }
 
 #[test]
@@ -60,13 +69,21 @@ fn particle_count_changes_between_steps() {
         .arg(&scene)
         .output()
         .unwrap();
-    assert!(client.status.success(), "{}", String::from_utf8_lossy(&client.stderr));
+    assert!(
+        client.status.success(),
+        "{}",
+        String::from_utf8_lossy(&client.stderr)
+    );
     let (code, _) = server.wait_exit(Duration::from_secs(60));
     assert_eq!(code, Some(0), "{}", Proc::drain(&server.stderr));
     let rows = csv_steps(&out);
     assert_eq!(rows.len(), 200);
     let counts: Vec<usize> = rows.values().map(Vec::len).collect();
-    assert_eq!(&counts[..4], &[27, 26, 27, 26], "one removed, one inserted, alternately");
+    assert_eq!(
+        &counts[..4],
+        &[27, 26, 27, 26],
+        "one removed, one inserted, alternately"
+    );
     assert!(rows[&2].contains(&27), "the inserted particle carries a fresh id");
 }
 
@@ -79,7 +96,9 @@ fn a_wrong_step_index_breaks_the_run_on_both_sides() {
     let line = Proc::wait_line(&server.stdout, "DEM service:", Duration::from_secs(20));
     let run = line.split_whitespace().last().unwrap().to_string();
     let mut client = std::process::Command::new(bin("dem-client"));
-    client.args(["connect", "--service", &run, "--skip-step", "37", "--scene"]).arg(&scene);
+    client
+        .args(["connect", "--service", &run, "--skip-step", "37", "--scene"])
+        .arg(&scene);
     let mut client = start(client);
     let (code, _) = server.wait_exit(Duration::from_secs(30));
     let stderr = Proc::drain(&server.stderr);

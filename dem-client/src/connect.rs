@@ -54,7 +54,10 @@ pub fn main(args: ConnectArgs) -> ExitCode {
         }
     };
     if !(args.timeout.is_finite() && args.timeout > 0.0) {
-        protocol::say!("dem-client: error: --timeout = {} s: must be a finite number > 0", args.timeout);
+        protocol::say!(
+            "dem-client: error: --timeout = {} s: must be a finite number > 0",
+            args.timeout
+        );
         return ExitCode::from(2);
     }
     let interrupted = Arc::new(AtomicBool::new(false));
@@ -72,7 +75,10 @@ pub fn main(args: ConnectArgs) -> ExitCode {
     if let Some(v) = args.protocol_version {
         hello.version = v;
     }
-    let options = LinkOptions { run: args.service.clone(), timeout: Duration::from_secs_f64(args.timeout) };
+    let options = LinkOptions {
+        run: args.service.clone(),
+        timeout: Duration::from_secs_f64(args.timeout),
+    };
     let (link, welcome) = match DemLink::connect(options, hello) {
         Ok(ok) => ok,
         Err(e) => {
@@ -81,7 +87,11 @@ pub fn main(args: ConnectArgs) -> ExitCode {
         }
     };
     let mut last = None;
-    let faults = Faults { churn: args.churn, skip_step: args.skip_step, stall_at: args.stall_at };
+    let faults = Faults {
+        churn: args.churn,
+        skip_step: args.skip_step,
+        stall_at: args.stall_at,
+    };
     match step_loop(&link, &welcome, &mut particles, &interrupted, faults, &mut last) {
         Ok(steps) => {
             protocol::say!("dem-client: finished after {steps} steps (stand-in physics: ballistic)");
@@ -115,7 +125,11 @@ fn step_loop(
         }
         let stop = interrupted.load(Ordering::SeqCst);
         let flags = if stop { StepFlags::STOP } else { 0 };
-        let sent_step = if faults.skip_step == Some(step) { step + 1 } else { step };
+        let sent_step = if faults.skip_step == Some(step) {
+            step + 1
+        } else {
+            step
+        };
         let header = StepHeader::new(sent_step, step as f64 * welcome.dt, particles.states.len(), flags);
         link.send_states(header, |i| particles.states[i])?;
         let received = link.receive_forces(step)?;
@@ -135,7 +149,11 @@ fn step_loop(
 
 /// The fluid must answer every particle, in order.
 fn check_ids(particles: &Particles, replies: &[ParticleReply]) -> Result<(), LinkError> {
-    let wrong = particles.states.iter().zip(replies).position(|(s, r)| s.id != r.id);
+    let wrong = particles
+        .states
+        .iter()
+        .zip(replies)
+        .position(|(s, r)| s.id != r.id);
     if replies.len() != particles.states.len() || wrong.is_some() {
         return Err(LinkError::Ipc(format!(
             "the fluid's reply does not match the states sent (count {} vs {}, first wrong index {:?})",

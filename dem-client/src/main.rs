@@ -11,7 +11,11 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 #[derive(Parser)]
-#[command(name = "dem-client", version, about = "DEM particle solver of the LBM-DEM co-simulation")]
+#[command(
+    name = "dem-client",
+    version,
+    about = "DEM particle solver of the LBM-DEM co-simulation"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,

@@ -29,14 +29,25 @@ impl Particles {
             .collect();
         let mass = states.iter().map(|s| sphere_mass(density, s.radius)).collect();
         let next_id = states.iter().map(|s| s.id + 1).max().unwrap_or(0);
-        Self { states, mass, density, next_id }
+        Self {
+            states,
+            mass,
+            density,
+            next_id,
+        }
     }
 
     /// Advances every particle by `dt` under `gravity` and the fluid's replies (same order).
-    pub fn advance(&mut self, replies: &[ParticleReply], gravity: [f64; 3], dt: f64, domain: ([f64; 3], [f64; 3])) {
+    pub fn advance(
+        &mut self,
+        replies: &[ParticleReply],
+        gravity: [f64; 3],
+        dt: f64,
+        domain: ([f64; 3], [f64; 3]),
+    ) {
         for ((s, m), r) in self.states.iter_mut().zip(&self.mass).zip(replies) {
-            for a in 0..3 {
-                s.velocity[a] += dt * (r.force[a] / m + gravity[a]);
+            for (a, g) in gravity.iter().enumerate() {
+                s.velocity[a] += dt * (r.force[a] / m + g);
                 s.position[a] += dt * s.velocity[a];
             }
             reflect(s, domain);
@@ -83,7 +94,12 @@ mod tests {
     #[test]
     fn free_fall_matches_symplectic_euler_and_reflects() {
         let mut p = Particles {
-            states: vec![ParticleState { id: 0, position: [0.5, 0.5, 0.5], radius: 0.1, ..Default::default() }],
+            states: vec![ParticleState {
+                id: 0,
+                position: [0.5, 0.5, 0.5],
+                radius: 0.1,
+                ..Default::default()
+            }],
             mass: vec![1.0],
             density: 1.0,
             next_id: 1,
@@ -96,6 +112,10 @@ mod tests {
         for _ in 0..10 {
             p.advance(&none, [0.0, 0.0, -10.0], 0.1, domain);
         }
-        assert!(p.states[0].position[2] >= 0.1, "stays inside: {:?}", p.states[0].position);
+        assert!(
+            p.states[0].position[2] >= 0.1,
+            "stays inside: {:?}",
+            p.states[0].position
+        );
     }
 }

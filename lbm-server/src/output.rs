@@ -104,7 +104,12 @@ impl Progress {
             bar
         });
         let now = Instant::now();
-        Self { bar, total, start: now, last_log: now }
+        Self {
+            bar,
+            total,
+            start: now,
+            last_log: now,
+        }
     }
 
     /// Records that `done` steps have completed.

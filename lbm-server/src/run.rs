@@ -4,7 +4,9 @@ use crate::launch;
 use crate::output::{ParticleCsv, PeerInfo, Progress, Summary};
 use crate::standin::StokesFluid;
 use protocol::transport::{new_run_name, LinkOptions};
-use protocol::{FluidLink, Hello, LinkError, ParticleReply, ParticleState, Physics, StepFlags, StepHeader, Welcome};
+use protocol::{
+    FluidLink, Hello, LinkError, ParticleReply, ParticleState, Physics, StepFlags, StepHeader, Welcome,
+};
 use scene::Scene;
 use std::path::PathBuf;
 use std::process::{Child, ExitCode};
@@ -69,19 +71,31 @@ fn prepare(args: &RunArgs) -> Result<Prepared, String> {
             let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
             (scene, path.display().to_string(), text)
         }
-        None => (Scene::default_scene(), scene::DEFAULT_SCENE_FILE.to_string(), scene::DEFAULT_SCENE.to_string()),
+        None => (
+            Scene::default_scene(),
+            scene::DEFAULT_SCENE_FILE.to_string(),
+            scene::DEFAULT_SCENE.to_string(),
+        ),
     };
     let steps = args.steps.unwrap_or(scene.time.steps);
     if steps == 0 {
         return Err("--steps = 0: must be at least 1".into());
     }
-    let default_timeout = if args.dem == DemMode::External { f64::INFINITY } else { 30.0 };
+    let default_timeout = if args.dem == DemMode::External {
+        f64::INFINITY
+    } else {
+        30.0
+    };
     let connect_timeout = args.connect_timeout.unwrap_or(default_timeout);
     if connect_timeout.is_nan() || connect_timeout <= 0.0 {
         return Err(format!("--connect-timeout = {connect_timeout} s: must be > 0"));
     }
-    let out = args.out.clone().unwrap_or_else(|| PathBuf::from("out").join(&scene.name));
-    std::fs::create_dir_all(&out).map_err(|e| format!("cannot create the output folder {}: {e}", out.display()))?;
+    let out = args
+        .out
+        .clone()
+        .unwrap_or_else(|| PathBuf::from("out").join(&scene.name));
+    std::fs::create_dir_all(&out)
+        .map_err(|e| format!("cannot create the output folder {}: {e}", out.display()))?;
     let scene_copy = out.join("scene.toml");
     std::fs::write(&scene_copy, text).map_err(|e| format!("{}: {e}", scene_copy.display()))?;
     Ok(Prepared {
@@ -134,7 +148,13 @@ impl Session {
     fn start(p: Prepared, run: &str, mode: DemMode, interrupted: Arc<AtomicBool>) -> u8 {
         let timeout = Duration::from_secs_f64(p.scene.coupling.timeout);
         let capacity = p.scene.capacity() as usize;
-        let link = match FluidLink::create(LinkOptions { run: run.to_string(), timeout }, capacity) {
+        let link = match FluidLink::create(
+            LinkOptions {
+                run: run.to_string(),
+                timeout,
+            },
+            capacity,
+        ) {
             Ok(link) => link,
             Err(e) => {
                 protocol::say!("lbm-server: error: {e}");
@@ -144,7 +164,10 @@ impl Session {
         let csv = match ParticleCsv::create(&p.out.join("particles.csv")) {
             Ok(csv) => csv,
             Err(e) => {
-                protocol::say!("lbm-server: error: {}: {e}", p.out.join("particles.csv").display());
+                protocol::say!(
+                    "lbm-server: error: {}: {e}",
+                    p.out.join("particles.csv").display()
+                );
                 return EXIT_FAILURE;
             }
         };
@@ -177,15 +200,19 @@ impl Session {
             DemMode::Spawn => {
                 let exe = launch::find_dem_client()
                     .ok_or("cannot find dem-client next to lbm-server or on PATH (build it: cargo build)")?;
-                let child = launch::spawn_dem_client(&exe, &run, &self.p.scene_copy, self.p.scene.coupling.timeout)
-                    .map_err(|e| format!("cannot start {}: {e}", exe.display()))?;
+                let child =
+                    launch::spawn_dem_client(&exe, &run, &self.p.scene_copy, self.p.scene.coupling.timeout)
+                        .map_err(|e| format!("cannot start {}: {e}", exe.display()))?;
                 let pid = child.id();
                 self.child = Some(child);
                 Some(pid)
             }
             DemMode::External => {
                 println!("DEM service: {run}");
-                println!("join with: dem-client connect --service {run} --scene {}", self.p.scene_copy.display());
+                println!(
+                    "join with: dem-client connect --service {run} --scene {}",
+                    self.p.scene_copy.display()
+                );
                 use std::io::Write;
                 let _ = std::io::stdout().flush();
                 None
@@ -195,9 +222,12 @@ impl Session {
         let interrupted = self.interrupted.clone();
         let hello = self
             .link
-            .accept(spawned, self.p.connect_timeout, &|| interrupted.load(Ordering::SeqCst), |hello| {
-                welcome_for(scene, steps, hello)
-            })
+            .accept(
+                spawned,
+                self.p.connect_timeout,
+                &|| interrupted.load(Ordering::SeqCst),
+                |hello| welcome_for(scene, steps, hello),
+            )
             .map_err(|e| e.to_string())?;
         self.peer = Some(PeerInfo {
             software: protocol::handshake::field_text(&hello.software),
@@ -232,7 +262,8 @@ impl Session {
             replies.clear();
             replies.extend(si.iter().map(|s| self.fluid.load(s)));
             let last = step + 1 == self.p.steps;
-            let stop = header.has(StepFlags::STOP) || self.interrupted.load(Ordering::SeqCst) || bad.is_some();
+            let stop =
+                header.has(StepFlags::STOP) || self.interrupted.load(Ordering::SeqCst) || bad.is_some();
             let flags = if last { StepFlags::FINAL } else { 0 } | if stop { StepFlags::STOP } else { 0 };
             let reply = StepHeader::new(step, header.time, si.len(), flags);
             self.link
@@ -242,7 +273,9 @@ impl Session {
             self.particle_steps += si.len() as u64;
             if step % self.p.scene.output.interval == 0 || last || stop {
                 let time = header.time * units.time_s;
-                self.csv.write_step(step, time, &si, &replies).map_err(|e| format!("particles.csv: {e}"))?;
+                self.csv
+                    .write_step(step, time, &si, &replies)
+                    .map_err(|e| format!("particles.csv: {e}"))?;
             }
             progress.update(step + 1);
             if let Some(why) = bad {
@@ -252,7 +285,11 @@ impl Session {
                 progress.finish();
                 // Ctrl-C on a terminal reaches both processes: our own interrupt takes precedence.
                 let ours = self.interrupted.load(Ordering::SeqCst);
-                return Ok(if ours { Ending::Interrupted } else { Ending::StoppedByPeer });
+                return Ok(if ours {
+                    Ending::Interrupted
+                } else {
+                    Ending::StoppedByPeer
+                });
             }
         }
         progress.finish();
@@ -270,7 +307,9 @@ impl Session {
             Ok(Ending::Completed) => ("completed".to_string(), 0),
             Ok(Ending::Interrupted) => ("interrupted".to_string(), EXIT_INTERRUPTED),
             Ok(Ending::StoppedByPeer) => ("stopped by the DEM client".to_string(), 0),
-            Err(_) if self.interrupted.load(Ordering::SeqCst) => ("interrupted".to_string(), EXIT_INTERRUPTED),
+            Err(_) if self.interrupted.load(Ordering::SeqCst) => {
+                ("interrupted".to_string(), EXIT_INTERRUPTED)
+            }
             Err(e) => (format!("error: {e}"), EXIT_FAILURE),
         };
         if let (Err(msg), false) = (&result, code == EXIT_INTERRUPTED) {
@@ -279,7 +318,11 @@ impl Session {
         if let Err(e) = self.csv.flush() {
             protocol::say!("lbm-server: error: particles.csv: {e}");
         }
-        let grace = if result.is_ok() { Duration::from_secs(2) } else { Duration::ZERO };
+        let grace = if result.is_ok() {
+            Duration::from_secs(2)
+        } else {
+            Duration::ZERO
+        };
         if let Some(child) = self.child.as_mut() {
             launch::end_child(child, grace);
         }
@@ -325,7 +368,10 @@ impl Session {
 fn welcome_for(scene: &Scene, steps: u64, hello: &Hello) -> Welcome {
     let u = hello.units;
     let accel = u.length_m / (u.time_s * u.time_s);
-    let mut w = Welcome::accepted(&format!("lbm-server {} (stand-in: Stokes drag)", env!("CARGO_PKG_VERSION")));
+    let mut w = Welcome::accepted(&format!(
+        "lbm-server {} (stand-in: Stokes drag)",
+        env!("CARGO_PKG_VERSION")
+    ));
     w.steps = steps;
     w.dt = scene.time.dt / u.time_s;
     w.domain_min = scene.domain.min.map(|x| x / u.length_m);
@@ -340,8 +386,13 @@ fn welcome_for(scene: &Scene, steps: u64, hello: &Hello) -> Welcome {
 /// Health check of the DEM's states: every number finite, every radius positive.
 fn check_states(states: &[ParticleState], step: u64) -> Option<String> {
     states.iter().find_map(|s| {
-        let finite = s.position.iter().chain(&s.velocity).chain(&s.angular_velocity).all(|v| v.is_finite());
-        (!finite || !(s.radius > 0.0)).then(|| {
+        let finite = s
+            .position
+            .iter()
+            .chain(&s.velocity)
+            .chain(&s.angular_velocity)
+            .all(|v| v.is_finite());
+        (!finite || s.radius.is_nan() || s.radius <= 0.0).then(|| {
             format!(
                 "the DEM client sent an invalid state at step {step}: particle id {} with position {:?}, \
                  velocity {:?}, radius {}",

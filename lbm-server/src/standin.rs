@@ -17,7 +17,11 @@ impl StokesFluid {
         let drag = -6.0 * std::f64::consts::PI * self.dynamic_viscosity * s.radius;
         let volume = 4.0 / 3.0 * std::f64::consts::PI * s.radius.powi(3);
         let force = std::array::from_fn(|a| drag * s.velocity[a] - self.density * volume * self.gravity[a]);
-        ParticleReply { id: s.id, force, torque: [0.0; 3] }
+        ParticleReply {
+            id: s.id,
+            force,
+            torque: [0.0; 3],
+        }
     }
 }
 
@@ -27,8 +31,17 @@ mod tests {
 
     #[test]
     fn drag_opposes_motion_and_buoyancy_opposes_gravity() {
-        let fluid = StokesFluid { density: 1000.0, dynamic_viscosity: 1e-3, gravity: [0.0, 0.0, -9.81] };
-        let s = ParticleState { id: 3, velocity: [0.01, 0.0, 0.0], radius: 1e-3, ..Default::default() };
+        let fluid = StokesFluid {
+            density: 1000.0,
+            dynamic_viscosity: 1e-3,
+            gravity: [0.0, 0.0, -9.81],
+        };
+        let s = ParticleState {
+            id: 3,
+            velocity: [0.01, 0.0, 0.0],
+            radius: 1e-3,
+            ..Default::default()
+        };
         let r = fluid.load(&s);
         assert_eq!(r.id, 3);
         let drag = 6.0 * std::f64::consts::PI * 1e-3 * 1e-3 * 0.01;

@@ -23,7 +23,9 @@ fn entries_with(needle: &str) -> Vec<PathBuf> {
 }
 
 fn walk(dir: &Path, needle: &str, found: &mut Vec<PathBuf>) {
-    let Ok(entries) = std::fs::read_dir(dir) else { return };
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return;
+    };
     for entry in entries.flatten() {
         let path = entry.path();
         if entry.file_type().is_ok_and(|t| t.is_dir()) {

@@ -418,7 +418,11 @@ mod tests {
 
     #[test]
     fn units_convert_states_and_replies() {
-        let mm_ms_g = Units { length_m: 1e-3, time_s: 1e-3, mass_kg: 1e-3 };
+        let mm_ms_g = Units {
+            length_m: 1e-3,
+            time_s: 1e-3,
+            mass_kg: 1e-3,
+        };
         let s = crate::ParticleState {
             id: 1,
             position: [2.0, 0.0, 0.0],
@@ -431,7 +435,11 @@ mod tests {
         assert!((si.velocity[0] - 3.0).abs() < 1e-12, "mm/ms is m/s");
         assert!((si.angular_velocity[0] - 5e3).abs() < 1e-9);
         assert_eq!(si.radius, 5e-4);
-        let r = crate::ParticleReply { id: 1, force: [1.0, 0.0, 0.0], torque: [1.0, 0.0, 0.0] };
+        let r = crate::ParticleReply {
+            id: 1,
+            force: [1.0, 0.0, 0.0],
+            torque: [1.0, 0.0, 0.0],
+        };
         let back = mm_ms_g.reply_from_si(&r);
         // 1 g mm / ms^2 = 1e-3 N; 1 g mm^2 / ms^2 = 1e-6 N m
         assert!((back.force[0] - 1e3).abs() < 1e-6);

@@ -48,11 +48,29 @@ impl Display for Peer {
 /// Everything that ends a link. The messages name the peer; callers add the last completed step.
 #[derive(Debug, Clone, PartialEq)]
 pub enum LinkError {
-    PeerDied { peer: Peer, pid: u32 },
-    PeerStopped { peer: Peer, pid: u32 },
-    Timeout { peer: Peer, waited: Duration },
-    StepMismatch { peer: Peer, expected: u64, got: u64 },
-    BadCount { peer: Peer, count: u64, len: usize, capacity: usize },
+    PeerDied {
+        peer: Peer,
+        pid: u32,
+    },
+    PeerStopped {
+        peer: Peer,
+        pid: u32,
+    },
+    Timeout {
+        peer: Peer,
+        waited: Duration,
+    },
+    StepMismatch {
+        peer: Peer,
+        expected: u64,
+        got: u64,
+    },
+    BadCount {
+        peer: Peer,
+        count: u64,
+        len: usize,
+        capacity: usize,
+    },
     Refused(String),
     Interrupted,
     Ipc(String),
@@ -63,7 +81,10 @@ impl Display for LinkError {
         match self {
             LinkError::PeerDied { peer, pid } => write!(f, "the {peer} (pid {pid}) died"),
             LinkError::PeerStopped { peer, pid } => {
-                write!(f, "the {peer} (pid {pid}) is suspended (stopped) and hangs the run")
+                write!(
+                    f,
+                    "the {peer} (pid {pid}) is suspended (stopped) and hangs the run"
+                )
             }
             LinkError::Timeout { peer, waited } => write!(
                 f,
@@ -74,7 +95,12 @@ impl Display for LinkError {
                 f,
                 "the {peer} sent step {got} where step {expected} was due (lockstep broken)"
             ),
-            LinkError::BadCount { peer, count, len, capacity } => write!(
+            LinkError::BadCount {
+                peer,
+                count,
+                len,
+                capacity,
+            } => write!(
                 f,
                 "the {peer} sent a step header counting {count} particles with {len} in the slice \
                  (capacity {capacity})"
@@ -123,8 +149,8 @@ pub(crate) fn global_config() -> &'static Config {
 
 fn create_node(run: &str) -> Result<Node<Ipc>, LinkError> {
     let mut config = global_config().clone();
-    config.global.prefix = FileName::new(format!("{run}_").as_bytes())
-        .map_err(ipc_err("run name is not a valid file name"))?;
+    config.global.prefix =
+        FileName::new(format!("{run}_").as_bytes()).map_err(ipc_err("run name is not a valid file name"))?;
     NodeBuilder::new()
         .config(&config)
         .signal_handling_mode(SignalHandlingMode::Disabled)
@@ -178,10 +204,12 @@ where
     }
 }
 
-fn event(node: &Node<Ipc>, run: &str, what: &str, create: bool) -> Result<
-    iceoryx2::service::port_factory::event::PortFactory<Ipc>,
-    LinkError,
-> {
+fn event(
+    node: &Node<Ipc>,
+    run: &str,
+    what: &str,
+    create: bool,
+) -> Result<iceoryx2::service::port_factory::event::PortFactory<Ipc>, LinkError> {
     let builder = node.service_builder(&service_name(run, what)?).event();
     if create {
         builder.create().map_err(ipc_err(what))
@@ -190,8 +218,13 @@ fn event(node: &Node<Ipc>, run: &str, what: &str, create: bool) -> Result<
     }
 }
 
-fn outbox<T, H>(node: &Node<Ipc>, run: &str, what: &str, create: bool, max_len: usize)
-    -> Result<Outbox<T, H>, LinkError>
+fn outbox<T, H>(
+    node: &Node<Ipc>,
+    run: &str,
+    what: &str,
+    create: bool,
+    max_len: usize,
+) -> Result<Outbox<T, H>, LinkError>
 where
     T: Debug + ZeroCopySend + 'static,
     H: Debug + ZeroCopySend + Default + 'static,
@@ -207,7 +240,11 @@ where
         .notifier_builder()
         .create()
         .map_err(ipc_err(what))?;
-    Ok(Outbox { publisher, notifier, subscribers: service })
+    Ok(Outbox {
+        publisher,
+        notifier,
+        subscribers: service,
+    })
 }
 
 fn inbox<T, H>(node: &Node<Ipc>, run: &str, what: &str, create: bool) -> Result<Inbox<T, H>, LinkError>
@@ -226,18 +263,14 @@ where
     Ok(Inbox { subscriber, listener })
 }
 
-impl<T: Debug + ZeroCopySend + Copy + 'static, H: Debug + ZeroCopySend + Copy + Default + 'static> Outbox<T, H> {
+impl<T: Debug + ZeroCopySend + Copy + 'static, H: Debug + ZeroCopySend + Copy + Default + 'static>
+    Outbox<T, H>
+{
     /// Loans `len` elements, fills them with `fill` in place (zero copy), sends, wakes the peer.
     fn send_with(&self, header: H, len: usize, fill: impl FnMut(usize) -> T) -> Result<(), LinkError> {
-        let mut sample = self
-            .publisher
-            .loan_slice_uninit(len)
-            .map_err(ipc_err("loan"))?;
+        let mut sample = self.publisher.loan_slice_uninit(len).map_err(ipc_err("loan"))?;
         *sample.user_header_mut() = header;
-        sample
-            .write_from_fn(fill)
-            .send()
-            .map_err(ipc_err("send"))?;
+        sample.write_from_fn(fill).send().map_err(ipc_err("send"))?;
         self.notifier.notify().map_err(ipc_err("notify"))?;
         Ok(())
     }
@@ -297,7 +330,10 @@ impl Watch {
                 return Err(LinkError::Interrupted);
             }
             if start.elapsed() >= timeout {
-                return Err(LinkError::Timeout { peer: self.peer, waited: start.elapsed() });
+                return Err(LinkError::Timeout {
+                    peer: self.peer,
+                    waited: start.elapsed(),
+                });
             }
         }
     }
@@ -324,11 +360,20 @@ fn take_step<T: Debug + ZeroCopySend + 'static>(
     };
     let header = *sample.user_header();
     if header.step != expected {
-        return Err(LinkError::StepMismatch { peer, expected, got: header.step });
+        return Err(LinkError::StepMismatch {
+            peer,
+            expected,
+            got: header.step,
+        });
     }
     let len = sample.payload().len();
     if header.count != len as u64 || len > capacity {
-        return Err(LinkError::BadCount { peer, count: header.count, len, capacity });
+        return Err(LinkError::BadCount {
+            peer,
+            count: header.count,
+            len,
+            capacity,
+        });
     }
     Ok(Some(sample))
 }
@@ -376,7 +421,10 @@ impl FluidLink {
             welcome,
             states,
             forces,
-            watch: Watch { peer: Peer::Dem, pid: None },
+            watch: Watch {
+                peer: Peer::Dem,
+                pid: None,
+            },
             capacity,
             _node: node,
         })
@@ -402,7 +450,10 @@ impl FluidLink {
         interrupt: &dyn Fn() -> bool,
         welcome: impl FnOnce(&Hello) -> Welcome,
     ) -> Result<Hello, LinkError> {
-        let watch = Watch { peer: Peer::Dem, pid: spawned };
+        let watch = Watch {
+            peer: Peer::Dem,
+            pid: spawned,
+        };
         let bytes = watch.wait(&self.hello, connect_timeout, interrupt, take_bytes)?;
         let software = format!("lbm-server {}", env!("CARGO_PKG_VERSION"));
         let hello = match Hello::from_bytes(&bytes) {
@@ -415,7 +466,11 @@ impl FluidLink {
                 return self.refuse(Welcome::refused(&software, Status::VersionMismatch, &why));
             }
             Err(e) => {
-                return self.refuse(Welcome::refused(&software, Status::LayoutMismatch, &e.to_string()));
+                return self.refuse(Welcome::refused(
+                    &software,
+                    Status::LayoutMismatch,
+                    &e.to_string(),
+                ));
             }
         };
         if let Some((status, why)) = check_hello(&hello, self.capacity) {
@@ -449,9 +504,11 @@ impl FluidLink {
     /// Waits for the states of step `step`.
     pub fn receive_states(&self, step: u64) -> Result<Received<ParticleState>, LinkError> {
         let (peer, capacity) = (self.watch.peer, self.capacity);
-        let sample = self.watch.wait(&self.states, self.options.timeout, &|| false, |inbox| {
-            take_step(inbox, peer, step, capacity)
-        })?;
+        let sample = self
+            .watch
+            .wait(&self.states, self.options.timeout, &|| false, |inbox| {
+                take_step(inbox, peer, step, capacity)
+            })?;
         Ok(Received { sample })
     }
 
@@ -514,7 +571,12 @@ impl DemLink {
             match outbox::<u8, ()>(&node, run, "hello", false, core::mem::size_of::<Hello>()) {
                 Ok(b) if b.has_subscriber() => break b,
                 Ok(_) | Err(_) if start.elapsed() < options.timeout => std::thread::sleep(POLL),
-                Ok(_) => return Err(LinkError::Timeout { peer: Peer::Fluid, waited: start.elapsed() }),
+                Ok(_) => {
+                    return Err(LinkError::Timeout {
+                        peer: Peer::Fluid,
+                        waited: start.elapsed(),
+                    })
+                }
                 Err(e) => {
                     return Err(LinkError::Ipc(format!(
                         "no run named '{run}' found ({e}); is lbm-server running?"
@@ -528,7 +590,10 @@ impl DemLink {
         let states = outbox(&node, run, "states", false, capacity_guess)?;
         let bytes = hello.to_bytes();
         hello_box.send_with((), bytes.len(), |i| bytes[i])?;
-        let watch = Watch { peer: Peer::Fluid, pid: None };
+        let watch = Watch {
+            peer: Peer::Fluid,
+            pid: None,
+        };
         let reply = watch.wait(&welcome_box, options.timeout, &|| false, take_bytes)?;
         let welcome = decode_welcome(&reply)?;
         let capacity = welcome.capacity as usize;
@@ -537,7 +602,10 @@ impl DemLink {
                 options,
                 states,
                 forces,
-                watch: Watch { peer: Peer::Fluid, pid: Some(welcome.pid as u32) },
+                watch: Watch {
+                    peer: Peer::Fluid,
+                    pid: Some(welcome.pid as u32),
+                },
                 capacity,
                 _hello: hello_box,
                 _welcome: welcome_box,
@@ -571,9 +639,11 @@ impl DemLink {
     /// Waits for the fluid's reply to step `step`.
     pub fn receive_forces(&self, step: u64) -> Result<Received<ParticleReply>, LinkError> {
         let (peer, capacity) = (self.watch.peer, self.capacity);
-        let sample = self.watch.wait(&self.forces, self.options.timeout, &|| false, |inbox| {
-            take_step(inbox, peer, step, capacity)
-        })?;
+        let sample = self
+            .watch
+            .wait(&self.forces, self.options.timeout, &|| false, |inbox| {
+                take_step(inbox, peer, step, capacity)
+            })?;
         Ok(Received { sample })
     }
 }

@@ -66,7 +66,9 @@ pub struct Output {
 
 impl Default for Output {
     fn default() -> Self {
-        Self { interval: default_interval() }
+        Self {
+            interval: default_interval(),
+        }
     }
 }
 
@@ -82,7 +84,10 @@ pub struct Coupling {
 
 impl Default for Coupling {
     fn default() -> Self {
-        Self { timeout: default_timeout(), capacity: None }
+        Self {
+            timeout: default_timeout(),
+            capacity: None,
+        }
     }
 }
 
@@ -156,7 +161,11 @@ impl fmt::Display for SceneError {
         if self.field.is_empty() {
             write!(f, "{}: {}", self.file, self.problem)
         } else {
-            write!(f, "{}: {} = {}: {}", self.file, self.field, self.value, self.problem)
+            write!(
+                f,
+                "{}: {} = {}: {}",
+                self.file, self.field, self.value, self.problem
+            )
         }
     }
 }
@@ -201,26 +210,39 @@ impl Scene {
 
     /// All particles of the scene with ids 0, 1, 2, ... (spheres first, then blocks).
     pub fn initial_particles(&self) -> Vec<InitialParticle> {
-        let spheres = self.particles.sphere.iter().map(|s| (s.position, s.velocity, s.angular_velocity, s.radius));
-        let blocks = self.particles.block.iter().flat_map(|b| {
-            block_centres(b).map(move |p| (p, b.velocity, [0.0; 3], b.radius))
-        });
+        let spheres = self
+            .particles
+            .sphere
+            .iter()
+            .map(|s| (s.position, s.velocity, s.angular_velocity, s.radius));
+        let blocks = self
+            .particles
+            .block
+            .iter()
+            .flat_map(|b| block_centres(b).map(move |p| (p, b.velocity, [0.0; 3], b.radius)));
         spheres
             .chain(blocks)
             .enumerate()
-            .map(|(i, (position, velocity, angular_velocity, radius))| InitialParticle {
-                id: i as u64,
-                position,
-                velocity,
-                angular_velocity,
-                radius,
-            })
+            .map(
+                |(i, (position, velocity, angular_velocity, radius))| InitialParticle {
+                    id: i as u64,
+                    position,
+                    velocity,
+                    angular_velocity,
+                    radius,
+                },
+            )
             .collect()
     }
 
     /// Number of particles the scene creates.
     pub fn particle_count(&self) -> u64 {
-        let blocks: u64 = self.particles.block.iter().map(|b| b.count.iter().product::<u64>()).sum();
+        let blocks: u64 = self
+            .particles
+            .block
+            .iter()
+            .map(|b| b.count.iter().product::<u64>())
+            .sum();
         self.particles.sphere.len() as u64 + blocks
     }
 
@@ -232,7 +254,9 @@ impl Scene {
     /// Particle relaxation time in Stokes flow, 2 rho_p r^2 / (9 mu), of the smallest sphere [s].
     pub fn particle_response_time(&self) -> Option<f64> {
         let radii = self.particles.sphere.iter().map(|s| s.radius);
-        let r = radii.chain(self.particles.block.iter().map(|b| b.radius)).fold(f64::INFINITY, f64::min);
+        let r = radii
+            .chain(self.particles.block.iter().map(|b| b.radius))
+            .fold(f64::INFINITY, f64::min);
         r.is_finite()
             .then(|| 2.0 * self.particles.density * r * r / (9.0 * self.fluid.dynamic_viscosity))
     }
@@ -253,5 +277,5 @@ fn block_centres(b: &Block) -> impl Iterator<Item = [f64; 3]> + '_ {
     })
 }
 
-mod validate;
 mod overlap;
+mod validate;

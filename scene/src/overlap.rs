@@ -21,10 +21,15 @@ pub fn overlapping_pairs(particles: &[InitialParticle], fraction: f64) -> Vec<(u
         for dx in -1..=1 {
             for dy in -1..=1 {
                 for dz in -1..=1 {
-                    let Some(cell) = grid.get(&[k[0] + dx, k[1] + dy, k[2] + dz]) else { continue };
+                    let Some(cell) = grid.get(&[k[0] + dx, k[1] + dy, k[2] + dz]) else {
+                        continue;
+                    };
                     for &j in cell.iter().filter(|&&j| j > i) {
                         let q = &particles[j];
-                        let d = (0..3).map(|a| (p.position[a] - q.position[a]).powi(2)).sum::<f64>().sqrt();
+                        let d = (0..3)
+                            .map(|a| (p.position[a] - q.position[a]).powi(2))
+                            .sum::<f64>()
+                            .sqrt();
                         let depth = p.radius + q.radius - d;
                         if depth > fraction * p.radius.min(q.radius) {
                             pairs.push((p.id, q.id, depth));
@@ -34,6 +39,6 @@ pub fn overlapping_pairs(particles: &[InitialParticle], fraction: f64) -> Vec<(u
             }
         }
     }
-    pairs.sort_by(|a, b| (a.0, a.1).cmp(&(b.0, b.1)));
+    pairs.sort_by_key(|p| (p.0, p.1));
     pairs
 }

@@ -29,7 +29,11 @@ impl Checker<'_> {
         if v.iter().all(|x| x.is_finite()) {
             Ok(())
         } else {
-            Err(self.fail(field, format!("{} {unit}", vec3(v)), "every component must be finite"))
+            Err(self.fail(
+                field,
+                format!("{} {unit}", vec3(v)),
+                "every component must be finite",
+            ))
         }
     }
 }
@@ -50,7 +54,10 @@ impl Scene {
     fn validate_header(&self, c: &Checker) -> Result<(), SceneError> {
         let name_ok = !self.name.is_empty()
             && self.name.len() <= 64
-            && self.name.chars().all(|ch| ch.is_ascii_alphanumeric() || "-_.".contains(ch));
+            && self
+                .name
+                .chars()
+                .all(|ch| ch.is_ascii_alphanumeric() || "-_.".contains(ch));
         if !name_ok {
             return Err(c.fail(
                 "name",
@@ -65,7 +72,10 @@ impl Scene {
                 return Err(c.fail(
                     format!("domain.max[{axis}]"),
                     format!("{} m", self.domain.max[axis]),
-                    format!("must be greater than domain.min[{axis}] = {} m", self.domain.min[axis]),
+                    format!(
+                        "must be greater than domain.min[{axis}] = {} m",
+                        self.domain.min[axis]
+                    ),
                 ));
             }
         }
@@ -84,7 +94,11 @@ impl Scene {
         }
         c.positive("coupling.timeout", self.coupling.timeout, "s")?;
         if self.coupling.timeout > 86_400.0 {
-            return Err(c.fail("coupling.timeout", format!("{} s", self.coupling.timeout), "must be at most one day"));
+            return Err(c.fail(
+                "coupling.timeout",
+                format!("{} s", self.coupling.timeout),
+                "must be at most one day",
+            ));
         }
         Ok(())
     }
@@ -108,10 +122,18 @@ impl Scene {
         }
         let count = self.particle_count();
         if count == 0 {
-            return Err(c.fail("particles", "no sphere and no block", "a scene needs at least one particle"));
+            return Err(c.fail(
+                "particles",
+                "no sphere and no block",
+                "a scene needs at least one particle",
+            ));
         }
         if count > MAX_PARTICLES {
-            return Err(c.fail("particles", format!("{count} particles"), format!("more than {MAX_PARTICLES}")));
+            return Err(c.fail(
+                "particles",
+                format!("{count} particles"),
+                format!("more than {MAX_PARTICLES}"),
+            ));
         }
         if let Some(cap) = self.coupling.capacity {
             if cap < count {
@@ -131,21 +153,28 @@ impl Scene {
         c.positive(&field("radius"), b.radius, "m")?;
         c.finite3(&field("origin"), b.origin, "m")?;
         c.finite3(&field("velocity"), b.velocity, "m/s")?;
-        if b.count.iter().any(|n| *n == 0) {
+        if b.count.contains(&0) {
             let value = format!("[{}, {}, {}]", b.count[0], b.count[1], b.count[2]);
             return Err(c.fail(field("count"), value, "every count must be at least 1"));
         }
         let product = b.count.iter().try_fold(1u64, |acc, n| acc.checked_mul(*n));
         if product.is_none_or(|n| n > MAX_PARTICLES) {
             let value = format!("[{}, {}, {}]", b.count[0], b.count[1], b.count[2]);
-            return Err(c.fail(field("count"), value, format!("more than {MAX_PARTICLES} particles")));
+            return Err(c.fail(
+                field("count"),
+                value,
+                format!("more than {MAX_PARTICLES} particles"),
+            ));
         }
         c.positive(&field("spacing"), b.spacing, "m")?;
         if b.count.iter().any(|n| *n > 1) && b.spacing < 2.0 * b.radius * (1.0 - MAX_INITIAL_OVERLAP) {
             return Err(c.fail(
                 field("spacing"),
                 format!("{} m", b.spacing),
-                format!("is below the sphere diameter {} m: the spheres overlap", 2.0 * b.radius),
+                format!(
+                    "is below the sphere diameter {} m: the spheres overlap",
+                    2.0 * b.radius
+                ),
             ));
         }
         Ok(())

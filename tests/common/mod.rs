@@ -12,13 +12,20 @@ pub fn bin(name: &str) -> PathBuf {
     let exe = std::env::current_exe().expect("test executable path");
     let dir = exe.parent().and_then(Path::parent).expect("target/<profile>");
     let path = dir.join(name);
-    assert!(path.is_file(), "{} is missing: run `cargo build --workspace --bins` first", path.display());
+    assert!(
+        path.is_file(),
+        "{} is missing: run `cargo build --workspace --bins` first",
+        path.display()
+    );
     path
 }
 
 /// A fresh, empty folder for one test.
 pub fn temp_dir(tag: &str) -> PathBuf {
-    let nanos = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).unwrap().as_nanos();
+    let nanos = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .unwrap()
+        .as_nanos();
     let dir = std::env::temp_dir().join(format!("lbmdem-test-{tag}-{}-{nanos}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     dir
@@ -83,11 +90,19 @@ fn pump(stream: impl std::io::Read + Send + 'static) -> Receiver<String> {
 /// Starts `cmd` in a process group of its own, capturing stdout and stderr.
 pub fn start(mut cmd: Command) -> Proc {
     use std::os::unix::process::CommandExt;
-    cmd.stdout(Stdio::piped()).stderr(Stdio::piped()).stdin(Stdio::null()).process_group(0);
+    cmd.stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .stdin(Stdio::null())
+        .process_group(0);
     let mut child = cmd.spawn().expect("spawn");
     let stderr = pump(child.stderr.take().unwrap());
     let stdout = pump(child.stdout.take().unwrap());
-    Proc { child, stderr, stdout, started: Instant::now() }
+    Proc {
+        child,
+        stderr,
+        stdout,
+        started: Instant::now(),
+    }
 }
 
 impl Proc {
@@ -102,7 +117,10 @@ impl Proc {
                 Err(_) => break,
             }
         }
-        panic!("no line containing {needle:?} within {timeout:?}; saw:\n{}", seen.join("\n"));
+        panic!(
+            "no line containing {needle:?} within {timeout:?}; saw:\n{}",
+            seen.join("\n")
+        );
     }
 
     /// Waits for exit; returns (exit code, seconds waited). Kills and panics after `timeout`.
@@ -154,7 +172,9 @@ pub fn leftover_files(run: &str) -> Vec<PathBuf> {
 }
 
 fn collect(dir: &Path, needle: &str, found: &mut Vec<PathBuf>) {
-    let Ok(entries) = std::fs::read_dir(dir) else { return };
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return;
+    };
     for entry in entries.flatten() {
         if entry.file_type().is_ok_and(|t| t.is_dir()) {
             collect(&entry.path(), needle, found);
@@ -167,7 +187,11 @@ fn collect(dir: &Path, needle: &str, found: &mut Vec<PathBuf>) {
 
 /// Sends `signal` to a process.
 pub fn signal(pid: u32, signal: i32) {
-    assert_eq!(unsafe { libc::kill(pid as i32, signal) }, 0, "kill({pid}, {signal})");
+    assert_eq!(
+        unsafe { libc::kill(pid as i32, signal) },
+        0,
+        "kill({pid}, {signal})"
+    );
 }
 
 /// Pid of the dem-client started by the lbm-server `server_pid`.
@@ -188,7 +212,10 @@ pub fn child_pid(server_pid: u32) -> u32 {
 pub fn is_gone(pid: u32) -> bool {
     match std::fs::read_to_string(format!("/proc/{pid}/stat")) {
         Err(_) => true,
-        Ok(stat) => stat.rsplit(')').next().is_some_and(|rest| rest.trim_start().starts_with(['Z', 'X'])),
+        Ok(stat) => stat
+            .rsplit(')')
+            .next()
+            .is_some_and(|rest| rest.trim_start().starts_with(['Z', 'X'])),
     }
 }
 
@@ -196,7 +223,10 @@ pub fn is_gone(pid: u32) -> bool {
 pub fn csv_steps(out: &Path) -> std::collections::BTreeMap<u64, Vec<u64>> {
     let text = std::fs::read_to_string(out.join("particles.csv")).expect("particles.csv");
     let mut lines = text.lines();
-    assert_eq!(lines.next(), Some("step,time,id,x,y,z,vx,vy,vz,wx,wy,wz,fx,fy,fz,tx,ty,tz"));
+    assert_eq!(
+        lines.next(),
+        Some("step,time,id,x,y,z,vx,vy,vz,wx,wy,wz,fx,fy,fz,tx,ty,tz")
+    );
     let mut steps = std::collections::BTreeMap::new();
     for line in lines {
         let cols: Vec<&str> = line.split(',').collect();

@@ -1,0 +1,58 @@
+//! An external DEM written in Python (PyPI `iceoryx2`), knowing only PROTOCOL.md, completes a run.
+
+mod common;
+use common::*;
+use std::process::Command;
+use std::time::Duration;
+
+fn python_run(tag: &str, particles: u64, steps: u64) {
+    let dir = temp_dir(tag);
+    // The external DEM brings its own particles: the scene only sets the capacity.
+    let text =
+        scene_text(tag, [2, 2, 2], steps, 50, 10.0).replace("timeout = 10", "timeout = 10\ncapacity = 4096");
+    let scene = write_scene(&dir, &text);
+    let out = dir.join("out");
+    let mut server = start(server(&scene, &out, &["--dem", "external"]));
+    let line = Proc::wait_line(&server.stdout, "DEM service:", Duration::from_secs(20));
+    let run = line.split_whitespace().last().unwrap().to_string();
+    let script = concat!(env!("CARGO_MANIFEST_DIR"), "/clients/python/example_dem.py");
+    let client = Command::new("python3")
+        .arg(script)
+        .args(["--service", &run, "--particles", &particles.to_string()])
+        .output()
+        .expect("python3 runs");
+    let client_out = String::from_utf8_lossy(&client.stdout);
+    let client_err = String::from_utf8_lossy(&client.stderr);
+    assert!(
+        client.status.success(),
+        "python client failed:\n{client_out}\n{client_err}"
+    );
+    let (code, _) = server.wait_exit(Duration::from_secs(60));
+    assert_eq!(code, Some(0), "{}", Proc::drain(&server.stderr));
+    let expected = format!(
+        "python-dem: completed {steps} steps, {particles} particles, last step {}",
+        steps - 1
+    );
+    assert!(client_out.contains(&expected), "{client_out}\n{client_err}");
+    let s = summary(&out);
+    assert_eq!(s["steps_completed"], steps);
+    assert_eq!(s["particles_initial"], particles);
+    assert!(
+        s["peer"]["software"].as_str().unwrap().contains("example_dem.py"),
+        "{s}"
+    );
+    // Forces arrived for every particle of every output step.
+    let rows = csv_steps(&out);
+    assert!(rows.values().all(|ids| ids.len() as u64 == particles));
+    assert!(leftover_files(&run).is_empty(), "{:?}", leftover_files(&run));
+}
+
+#[test]
+fn python_client_completes_a_run() {
+    python_run("python", 64, 300);
+}
+
+#[test]
+fn python_client_with_2000_particles() {
+    python_run("python2k", 2000, 200);
+}
