@@ -66,7 +66,7 @@ def main() -> int:
         if stop_requested["flag"]:  # second Ctrl-C: leave now
             raise KeyboardInterrupt
         stop_requested["flag"] = True
-        print(f"python-dem: {signal.Signals(signum).name}: stopping after the next step",
+        print(f"python-dem: {signal.Signals(signum).name}: stopping (STOP goes with the next states)",
               file=sys.stderr, flush=True)
 
     signal.signal(signal.SIGINT, on_signal)
@@ -146,6 +146,8 @@ def main() -> int:
           f"{np.percentile(rt, 99):.0f} us over {rt.size} steps", file=sys.stderr)
     if stop_requested["flag"]:
         print(f"python-dem: stopped on request after step {last}", file=sys.stderr)
+    elif last + 1 < welcome.steps:
+        print(f"python-dem: the fluid server stopped the run after step {last}", file=sys.stderr)
     print(f"python-dem: completed {last + 1} steps, {n} particles, last step {last}", flush=True)
     return 0
 

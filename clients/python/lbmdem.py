@@ -277,7 +277,7 @@ class Welcome(ctypes.Structure):
     @classmethod
     def from_bytes(cls, raw: bytes) -> "Welcome":
         """Decodes a Welcome; raises VersionMismatch / Refused for anything unreadable."""
-        _check_prefix(raw, KIND_WELCOME, ctypes.sizeof(cls), "fluid server")
+        _check_prefix(raw, KIND_WELCOME, ctypes.sizeof(cls), FLUID)
         return cls.from_buffer_copy(raw[: ctypes.sizeof(cls)])
 
     def software_text(self) -> str:
@@ -364,8 +364,9 @@ class Refused(LinkError):
 class VersionMismatch(Refused):
     def __init__(self, ours: int, theirs: int, peer: str, last_step: Optional[int] = None):
         self.ours, self.theirs = ours, theirs
+        me = "this side" if "DEM" in peer else "this DEM"
         super().__init__(
-            f"protocol version mismatch: this DEM speaks version {ours}, the {peer} speaks "
+            f"protocol version mismatch: {me} speaks version {ours}, the {peer} speaks "
             f"version {theirs}", last_step)
 
 
@@ -442,10 +443,14 @@ def _states_array(states) -> np.ndarray:
     if isinstance(states, np.ndarray):
         if states.dtype == STATE_DTYPE:
             return np.ascontiguousarray(states)
-        if states.dtype.names:
+        if states.dtype.names:  # other structured dtype: copy the fields by name, zeros else
+            missing = {"id", "position", "radius"} - set(states.dtype.names)
+            if missing:
+                raise TypeError(f"states array lacks the fields {sorted(missing)}")
             out = np.zeros(states.shape[0] if states.ndim else 1, STATE_DTYPE)
             for name in STATE_DTYPE.names:
-                out[name] = states[name]
+                if name in states.dtype.names:
+                    out[name] = states[name]
             return out
         raise TypeError(f"states array has dtype {states.dtype}, expected lbmdem.STATE_DTYPE")
     if isinstance(states, ctypes.Array) and states._type_ is ParticleState:
@@ -538,7 +543,7 @@ class DemLink:
         service = self._pubsub(what, payload, header)
         subscriber = self._port(service.subscriber_builder().create())
         listener = self._port(self._event(what).listener_builder().create())
-        return subscriber, listener
+        return service, subscriber, listener
 
     @staticmethod
     def _send(publisher, notifier, header: Optional[ctypes.Structure], data: np.ndarray | bytes,
@@ -556,8 +561,9 @@ class DemLink:
         notifier.notify()
 
     def _wait(self, subscriber, listener, what: str, pid: Optional[int], timeout_s: float,
-              take: Callable, interruptible: bool):
-        """Blocks until ``take(sample)`` yields, the fluid dies or hangs, or the timeout passes."""
+              take: Callable, interruptible: bool, left: Callable[[], bool]):
+        """Blocks until ``take(sample)`` yields, the fluid dies, hangs or leaves, or the timeout
+        passes. ``left()`` is True once the fluid has removed the port it should answer on."""
         start = _time.monotonic()
         stopped_since = None
         while True:
@@ -572,6 +578,11 @@ class DemLink:
             sample = subscriber.receive()
             if sample is not None:
                 return take(sample)
+            if left():
+                # A message whose sender is gone can be lost: iceoryx2 maps a growable
+                # (PowerOfTwo) data segment on first use, and the sender unlinks it on exit.
+                raise self._fail(PeerDied, f"the {FLUID} closed the run without sending {what} "
+                                           f"(see its output for the reason)")
             if pid is not None:
                 state = process_state(pid)
                 if state == "dead":
@@ -590,6 +601,12 @@ class DemLink:
             if waited >= timeout_s:
                 raise self._fail(PeerTimeout, f"the {FLUID} did not send {what} within "
                                               f"{waited:.1f} s (hung?)")
+
+    def _fluid_left_hello(self) -> bool:
+        return self._hello_service.dynamic_config.number_of_subscribers == 0
+
+    def _fluid_left_forces(self) -> bool:
+        return self._forces_service.dynamic_config.number_of_publishers == 0
 
     @staticmethod
     def _take_bytes(sample) -> bytes:
@@ -623,9 +640,26 @@ class DemLink:
 
         # 1. The fluid side creates the services: wait until the hello service exists and the
         #    fluid's subscriber is on it (start-up barrier: history 0 loses earlier messages).
+        #    Failures come back as exceptions without traceback and are raised after close():
+        #    a traceback would keep iceoryx2 objects (and so the node) alive.
+        failure = self._open_and_greet(hello)
+        welcome = self._await_welcome() if failure is None else failure
+        if isinstance(welcome, Exception):
+            self.close()
+            raise welcome
+        self.welcome = welcome
+        self.peer_pid = int(welcome.pid)
+        self.capacity = int(welcome.capacity)
+        if hello.initial_count > self.capacity:
+            self.close()
+            raise BadCount(f"{hello.initial_count} particles exceed the capacity "
+                           f"{self.capacity} of the {FLUID}")
+        return welcome
+
+    def _open_and_greet(self, hello: Hello):
         start = _time.monotonic()
         hello_service = None
-        last_error = None
+        last_error = ""
         while True:
             try:
                 if hello_service is None:
@@ -633,57 +667,46 @@ class DemLink:
                 if hello_service.dynamic_config.number_of_subscribers > 0:
                     break
             except Exception as e:  # DoesNotExist while the server is starting
-                last_error = e
+                last_error = repr(e)
             if self.interrupt is not None and self.interrupt():
-                self._fail_close()
-                raise Interrupted("interrupted while waiting for the fluid server")
+                return Interrupted("interrupted while waiting for the fluid server")
             if _time.monotonic() - start >= self.timeout_s:
-                self._fail_close()
                 if hello_service is None:
-                    raise PeerTimeout(f"no run named '{self.run}' found ({last_error!r}); is "
-                                      f"lbm-server running?")
-                raise PeerTimeout(f"the {FLUID} of run '{self.run}' has no hello subscriber "
-                                  f"after {self.timeout_s:.1f} s")
+                    return PeerTimeout(f"no run named '{self.run}' found ({last_error}); is "
+                                       f"lbm-server running?")
+                return PeerTimeout(f"the {FLUID} of run '{self.run}' has no hello subscriber "
+                                   f"after {self.timeout_s:.1f} s")
             _time.sleep(POLL_S)
-
         try:
             # 2. All DEM ports exist before Hello is sent.
-            self._services.remove(hello_service)  # _outbox opens it again, keeps it
-            _, self._hello_pub, self._hello_notifier = self._outbox(
+            self._services.remove(hello_service)  # _outbox opens it again and keeps it
+            del hello_service
+            self._hello_service, self._hello_pub, self._hello_notifier = self._outbox(
                 "hello", ctypes.c_uint8, None, ctypes.sizeof(Hello))
-            self._welcome_sub, self._welcome_listener = self._inbox(
+            _, self._welcome_sub, self._welcome_listener = self._inbox(
                 "welcome", ctypes.c_uint8, None)
-            self._forces_sub, self._forces_listener = self._inbox(
+            self._forces_service, self._forces_sub, self._forces_listener = self._inbox(
                 "forces", ParticleReply, StepHeader)
             _, self._states_pub, self._states_notifier = self._outbox(
                 "states", ParticleState, StepHeader, hello.initial_count)
-            del hello_service
-
-            # 3. Hello, then wait for Welcome (no fluid pid yet: only the timeout applies).
+            # 3. Hello.
             raw = hello.to_bytes()
             self._send(self._hello_pub, self._hello_notifier, None, raw, len(raw))
-        except LinkError:
-            self._fail_close()
-            raise
         except Exception as e:
-            self._fail_close()
-            raise TransportError(f"cannot open the services of run '{self.run}': {e!r}")
+            return TransportError(f"cannot open the services of run '{self.run}': {e!r}")
+        return None
 
+    def _await_welcome(self):
+        # No fluid pid before the Welcome: only the timeout applies.
         try:
             reply = self._wait(self._welcome_sub, self._welcome_listener, "the Welcome", None,
-                               self.timeout_s, self._take_bytes, interruptible=True)
-            welcome = decode_welcome(reply)
-        except Exception:
-            self._fail_close()
-            raise
-        self.welcome = welcome
-        self.peer_pid = int(welcome.pid)
-        self.capacity = int(welcome.capacity)
-        if hello.initial_count > self.capacity:
-            self._fail_close()
-            raise BadCount(f"{hello.initial_count} particles exceed the capacity "
-                           f"{self.capacity} of the {FLUID}")
-        return welcome
+                               self.timeout_s, self._take_bytes, interruptible=True,
+                               left=self._fluid_left_hello)
+            return decode_welcome(reply)
+        except LinkError as e:
+            return e.with_traceback(None)
+        except Exception as e:
+            return TransportError(f"waiting for the Welcome failed: {e!r}")
 
     def send_states(self, step: int, time: float, states, flags: int = 0) -> None:
         """Publishes the states of ``step`` (numpy array of STATE_DTYPE, ctypes array or list of
@@ -736,7 +759,7 @@ class DemLink:
 
         header, forces = self._wait(self._forces_sub, self._forces_listener,
                                     f"the forces of step {step}", self.peer_pid, self.timeout_s,
-                                    take, interruptible=False)
+                                    take, interruptible=False, left=self._fluid_left_forces)
         sent = self._sent_ids
         if forces.shape[0] != sent.shape[0]:
             raise self._fail(BadCount, f"the {FLUID} answered step {step} with {forces.shape[0]} "
@@ -764,7 +787,8 @@ class DemLink:
         self._ports.clear()
         self._services.clear()
         for name in ("_hello_pub", "_hello_notifier", "_welcome_sub", "_welcome_listener",
-                     "_forces_sub", "_forces_listener", "_states_pub", "_states_notifier"):
+                     "_forces_sub", "_forces_listener", "_states_pub", "_states_notifier",
+                     "_hello_service", "_forces_service"):
             self.__dict__.pop(name, None)
         had_node = self._node is not None
         self._node = None
@@ -772,13 +796,14 @@ class DemLink:
         if had_node:
             self._remove_global_mgmt()
 
-    def _fail_close(self) -> None:
-        self.close()
-
     def _remove_global_mgmt(self) -> None:
-        """iceoryx2 keeps one 16-byte ``PREFIX<hash>_node.<ver>.global_mgmt`` file per prefix
-        after a clean exit; the last process of the run removes it."""
+        """Removes what a dead fluid server left behind (kill -9), and iceoryx2's one 16-byte
+        ``/dev/shm/PREFIX<hash>_node.<ver>.global_mgmt`` file that remains per prefix after a
+        clean exit, when this process is the last one of the run."""
         try:
+            for state in iox.Node.list(iox.ServiceType.Ipc, self._config):
+                if isinstance(state, iox.NodeState.Dead):
+                    state[0].try_remove_stale_resources()
             if list(iox.Node.list(iox.ServiceType.Ipc, self._config)):
                 return  # the fluid server still runs: it is the last one out
         except Exception:

@@ -325,6 +325,9 @@ impl Session {
         };
         if let Some(child) = self.child.as_mut() {
             launch::end_child(child, grace);
+        } else if result.is_ok() {
+            // An external DEM: let it read the last reply before our ports close.
+            self.link.linger(protocol::transport::LINGER);
         }
         let summary = self.summary(reason, code);
         if let Err(e) = summary.write(&self.p.out.join("summary.json")) {

@@ -441,9 +441,9 @@ mod tests {
             torque: [1.0, 0.0, 0.0],
         };
         let back = mm_ms_g.reply_from_si(&r);
-        // 1 g mm / ms^2 = 1e-3 N; 1 g mm^2 / ms^2 = 1e-6 N m
-        assert!((back.force[0] - 1e3).abs() < 1e-6);
-        assert!((back.torque[0] - 1e6).abs() < 1e-3);
+        // 1 g mm / ms^2 = 1 N, and 1 g mm^2 / ms^2 = 1e-3 N m
+        assert!((back.force[0] - 1.0).abs() < 1e-12);
+        assert!((back.torque[0] - 1e3).abs() < 1e-9);
     }
 
     #[test]

@@ -26,6 +26,9 @@ type Ipc = ipc::Service;
 /// How often a waiting side wakes up to look at its peer.
 pub const POLL: Duration = Duration::from_millis(50);
 
+/// Longest wait for the DEM to read the fluid's last message before the fluid's ports close.
+pub const LINGER: Duration = Duration::from_secs(1);
+
 /// How long a peer may stay suspended (SIGSTOP) before it counts as hung.
 pub const STOPPED_GRACE: Duration = Duration::from_millis(400);
 
@@ -48,6 +51,9 @@ impl Display for Peer {
 /// Everything that ends a link. The messages name the peer; callers add the last completed step.
 #[derive(Debug, Clone, PartialEq)]
 pub enum LinkError {
+    PeerLeft {
+        peer: Peer,
+    },
     PeerDied {
         peer: Peer,
         pid: u32,
@@ -86,6 +92,7 @@ impl Display for LinkError {
                     "the {peer} (pid {pid}) is suspended (stopped) and hangs the run"
                 )
             }
+            LinkError::PeerLeft { peer } => write!(f, "the {peer} left the run (its port closed)"),
             LinkError::Timeout { peer, waited } => write!(
                 f,
                 "the {peer} did not answer within {:.1} s (hung?)",
@@ -173,6 +180,16 @@ struct Outbox<T: Debug + ZeroCopySend + 'static, H: Debug + ZeroCopySend + 'stat
 struct Inbox<T: Debug + ZeroCopySend + 'static, H: Debug + ZeroCopySend + 'static> {
     subscriber: Subscriber<Ipc, [T], H>,
     listener: Listener<Ipc>,
+    service: PubSub<T, H>,
+}
+
+type PubSub<T, H> = iceoryx2::service::port_factory::publish_subscribe::PortFactory<Ipc, [T], H>;
+
+impl<T: Debug + ZeroCopySend + 'static, H: Debug + ZeroCopySend + 'static> Inbox<T, H> {
+    /// Does the peer still hold its publisher on this service?
+    fn has_publisher(&self) -> bool {
+        self.service.dynamic_config().number_of_publishers() > 0
+    }
 }
 
 /// Creates (fluid side) or opens (DEM side) the publish-subscribe service `what`.
@@ -252,15 +269,13 @@ where
     T: Debug + ZeroCopySend + 'static,
     H: Debug + ZeroCopySend + Default + 'static,
 {
-    let subscriber = pubsub::<T, H>(node, run, what, create)?
-        .subscriber_builder()
-        .create()
-        .map_err(ipc_err(what))?;
+    let service = pubsub::<T, H>(node, run, what, create)?;
+    let subscriber = service.subscriber_builder().create().map_err(ipc_err(what))?;
     let listener = event(node, run, what, create)?
         .listener_builder()
         .create()
         .map_err(ipc_err(what))?;
-    Ok(Inbox { subscriber, listener })
+    Ok(Inbox { subscriber, listener, service })
 }
 
 impl<T: Debug + ZeroCopySend + Copy + 'static, H: Debug + ZeroCopySend + Copy + Default + 'static>
@@ -285,6 +300,8 @@ impl<T: Debug + ZeroCopySend + Copy + 'static, H: Debug + ZeroCopySend + Copy + 
 struct Watch {
     peer: Peer,
     pid: Option<u32>,
+    /// The peer has connected: its publisher must stay on the awaited service.
+    connected: bool,
 }
 
 impl Watch {
@@ -325,6 +342,9 @@ impl Watch {
                     }
                     ProcessState::Running => stopped_since = None,
                 }
+            }
+            if self.connected && !inbox.has_publisher() {
+                return Err(LinkError::PeerLeft { peer: self.peer });
             }
             if interrupt() {
                 return Err(LinkError::Interrupted);
@@ -424,6 +444,7 @@ impl FluidLink {
             watch: Watch {
                 peer: Peer::Dem,
                 pid: None,
+                connected: false,
             },
             capacity,
             _node: node,
@@ -453,6 +474,7 @@ impl FluidLink {
         let watch = Watch {
             peer: Peer::Dem,
             pid: spawned,
+            connected: false,
         };
         let bytes = watch.wait(&self.hello, connect_timeout, interrupt, take_bytes)?;
         let software = format!("lbm-server {}", env!("CARGO_PKG_VERSION"));
@@ -487,7 +509,11 @@ impl FluidLink {
             return self.refuse(Welcome::refused(&software, Status::PhysicsConflict, &why));
         }
         self.send_welcome(&answer)?;
-        self.watch.pid = Some(hello.pid as u32);
+        self.watch = Watch {
+            peer: Peer::Dem,
+            pid: Some(hello.pid as u32),
+            connected: true,
+        };
         Ok(hello)
     }
 
@@ -498,7 +524,22 @@ impl FluidLink {
 
     fn refuse(&self, welcome: Welcome) -> Result<Hello, LinkError> {
         self.send_welcome(&welcome)?;
+        self.linger(LINGER);
         Err(LinkError::Refused(welcome.reason_text()))
+    }
+
+    /// Keeps this side's ports (and so the shared memory of its last message) alive until the DEM
+    /// has closed its own ports, died, or `max` has passed: a message must not vanish unread.
+    pub fn linger(&self, max: Duration) {
+        let start = Instant::now();
+        while start.elapsed() < max {
+            let open = self.hello.has_publisher() || self.states.has_publisher();
+            let dead = self.watch.pid.is_some_and(|pid| process_state(pid) == ProcessState::Dead);
+            if !open || dead {
+                return;
+            }
+            std::thread::sleep(Duration::from_millis(2));
+        }
     }
 
     /// Waits for the states of step `step`.
@@ -578,9 +619,12 @@ impl DemLink {
                     })
                 }
                 Err(e) => {
+                    // No fluid side exists, so the only files of this run are our node's.
+                    drop(node);
+                    crate::cleanup::remove_run(run);
                     return Err(LinkError::Ipc(format!(
                         "no run named '{run}' found ({e}); is lbm-server running?"
-                    )))
+                    )));
                 }
             }
         };
@@ -593,6 +637,7 @@ impl DemLink {
         let watch = Watch {
             peer: Peer::Fluid,
             pid: None,
+            connected: true,
         };
         let reply = watch.wait(&welcome_box, options.timeout, &|| false, take_bytes)?;
         let welcome = decode_welcome(&reply)?;
@@ -605,6 +650,7 @@ impl DemLink {
                 watch: Watch {
                     peer: Peer::Fluid,
                     pid: Some(welcome.pid as u32),
+                    connected: true,
                 },
                 capacity,
                 _hello: hello_box,
