@@ -1,6 +1,7 @@
 //! `lbm-server`: the fluid side of the LBM-DEM co-simulation, and its launcher.
 
 mod bench_link;
+mod lbm;
 mod launch;
 mod output;
 mod run;

@@ -1,0 +1,208 @@
+//! What the lattice looks like: size, the boundary type of each domain face, solid cells, and the
+//! collision operator. Everything in lattice units.
+
+use super::lattice::{self, opposite, C, W};
+use super::mrt;
+
+/// The six faces, in this order: -x, +x, -y, +y, -z, +z.
+pub const FACE_NAMES: [&str; 6] = ["x_min", "x_max", "y_min", "y_max", "z_min", "z_max"];
+
+/// Boundary type of a domain face (the wall lies half-way between the last cell and the outside).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Face {
+    /// Wraps around to the opposite face (which must be periodic too).
+    Periodic,
+    /// No-slip wall at rest: half-way bounce-back.
+    Wall,
+    /// No-slip wall moving with this velocity (Ladd's bounce-back with momentum term).
+    MovingWall([f64; 3]),
+    /// Velocity inlet: bounce-back imposing this velocity.
+    VelocityInlet([f64; 3]),
+    /// Pressure (density) outlet: anti-bounce-back with this density.
+    PressureOutlet(f64),
+}
+
+impl Face {
+    /// Code used by the shader.
+    pub fn code(&self) -> u32 {
+        match self {
+            Face::Periodic => 0,
+            Face::Wall => 1,
+            Face::MovingWall(_) => 2,
+            Face::VelocityInlet(_) => 2,
+            Face::PressureOutlet(_) => 3,
+        }
+    }
+
+    /// (velocity, density) parameters of the face.
+    pub fn values(&self) -> ([f64; 3], f64) {
+        match *self {
+            Face::MovingWall(u) | Face::VelocityInlet(u) => (u, 1.0),
+            Face::PressureOutlet(rho) => ([0.0; 3], rho),
+            _ => ([0.0; 3], 1.0),
+        }
+    }
+}
+
+/// Collision operator.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Operator {
+    /// Single relaxation time (seed eq. 4).
+    Bgk,
+    /// Two relaxation times with the magic parameter Lambda (3/16 puts the bounce-back wall
+    /// exactly half-way for Poiseuille flow, independent of tau).
+    Trt { magic: f64 },
+    /// Multiple relaxation times on the d'Humieres moments; the shear rate is 1/tau.
+    Mrt { rates: mrt::Rates },
+}
+
+impl Operator {
+    pub fn code(&self) -> u32 {
+        match self {
+            Operator::Bgk => 0,
+            Operator::Trt { .. } => 1,
+            Operator::Mrt { .. } => 2,
+        }
+    }
+
+    pub fn name(&self) -> &'static str {
+        match self {
+            Operator::Bgk => "bgk",
+            Operator::Trt { .. } => "trt",
+            Operator::Mrt { .. } => "mrt",
+        }
+    }
+}
+
+/// A lattice ready to run: size, faces, solid mask, relaxation, body force.
+#[derive(Debug, Clone)]
+pub struct Setup {
+    pub n: [usize; 3],
+    pub faces: [Face; 6],
+    /// One flag per cell, x fastest: true = solid (no-slip, at rest).
+    pub solid: Vec<bool>,
+    /// Relaxation time of the shear moments.
+    pub tau: f64,
+    pub operator: Operator,
+    /// Body force density (lattice units), Guo forcing.
+    pub force: [f64; 3],
+}
+
+/// What lies along a link from a fluid cell.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Link {
+    Cell(usize),
+    Boundary(Face),
+}
+
+impl Setup {
+    pub fn new(n: [usize; 3], faces: [Face; 6], tau: f64, operator: Operator) -> Self {
+        Self { n, faces, solid: vec![false; n[0] * n[1] * n[2]], tau, operator, force: [0.0; 3] }
+    }
+
+    pub fn cells(&self) -> usize {
+        self.n[0] * self.n[1] * self.n[2]
+    }
+
+    pub fn index(&self, x: [usize; 3]) -> usize {
+        x[0] + self.n[0] * (x[1] + self.n[1] * x[2])
+    }
+
+    pub fn coords(&self, cell: usize) -> [usize; 3] {
+        [cell % self.n[0], (cell / self.n[0]) % self.n[1], cell / (self.n[0] * self.n[1])]
+    }
+
+    /// The neighbour of `cell` along `c` (periodic faces wrap). Across a non-periodic face, the
+    /// first crossed face in axis order x, y, z decides; a solid neighbour is a resting wall.
+    pub fn link(&self, cell: usize, c: [i32; 3]) -> Link {
+        let x = self.coords(cell);
+        let mut y = [0usize; 3];
+        for a in 0..3 {
+            let v = x[a] as i64 + c[a] as i64;
+            let n = self.n[a] as i64;
+            if v < 0 || v >= n {
+                let face = self.faces[2 * a + usize::from(v >= n)];
+                if face != Face::Periodic {
+                    return Link::Boundary(face);
+                }
+            }
+            y[a] = v.rem_euclid(n) as usize;
+        }
+        let t = self.index(y);
+        if self.solid[t] {
+            Link::Boundary(Face::Wall)
+        } else {
+            Link::Cell(t)
+        }
+    }
+
+    /// Omega of the antisymmetric (odd) moments for TRT.
+    pub fn omega_minus(&self) -> f64 {
+        match self.operator {
+            Operator::Trt { magic } => 1.0 / (magic / (self.tau - 0.5) + 0.5),
+            _ => 1.0 / self.tau,
+        }
+    }
+
+    /// Kinematic viscosity nu = (tau - 1/2) / 3.
+    pub fn viscosity(&self) -> f64 {
+        (self.tau - 0.5) / 3.0
+    }
+}
+
+/// The population f_ibar that comes back to a cell whose post-collision f*_i left through `face`.
+pub fn bounce(face: Face, i: usize, f_star: f64, rho: f64, u: [f64; 3]) -> f64 {
+    match face {
+        Face::Wall | Face::Periodic => f_star,
+        Face::MovingWall(uw) | Face::VelocityInlet(uw) => f_star - 6.0 * W[i] * rho * lattice::dot(i, uw),
+        Face::PressureOutlet(rho_w) => {
+            let cu = lattice::dot(i, u);
+            let uu = u[0] * u[0] + u[1] * u[1] + u[2] * u[2];
+            -f_star + 2.0 * W[i] * (rho_w * (1.0 + 4.5 * cu * cu - 1.5 * uu) - 1.0)
+        }
+    }
+}
+
+/// The 19 shifted populations (f_i - w_i) of one cell.
+pub type Cell = [f64; 19];
+
+/// Density and velocity (with the half-force correction of Guo forcing).
+pub fn moments(f: &Cell, force: [f64; 3]) -> (f64, [f64; 3]) {
+    let rho = 1.0 + f.iter().sum::<f64>();
+    let u = std::array::from_fn(|a| {
+        let j: f64 = (0..19).map(|i| f[i] * C[i][a] as f64).sum();
+        (j + 0.5 * force[a]) / rho
+    });
+    (rho, u)
+}
+
+/// Post-collision populations of one cell, with its density and velocity.
+pub fn collide(setup: &Setup, f: &Cell) -> (Cell, f64, [f64; 3]) {
+    let (rho, u) = moments(f, setup.force);
+    let neq: Cell = std::array::from_fn(|i| f[i] - lattice::equilibrium_shifted(i, rho, u));
+    let s: Cell = std::array::from_fn(|i| lattice::guo_source(i, u, setup.force));
+    let out = match setup.operator {
+        Operator::Bgk => {
+            let w = 1.0 / setup.tau;
+            std::array::from_fn(|i| f[i] - w * neq[i] + (1.0 - w / 2.0) * s[i])
+        }
+        Operator::Trt { .. } => {
+            let (wp, wm) = (1.0 / setup.tau, setup.omega_minus());
+            std::array::from_fn(|i| {
+                let o = opposite(i);
+                let (np, nm) = ((neq[i] + neq[o]) / 2.0, (neq[i] - neq[o]) / 2.0);
+                let (sp, sm) = ((s[i] + s[o]) / 2.0, (s[i] - s[o]) / 2.0);
+                f[i] - wp * np - wm * nm + (1.0 - wp / 2.0) * sp + (1.0 - wm / 2.0) * sm
+            })
+        }
+        Operator::Mrt { rates } => {
+            let (a, b) = mrt::collision_matrices(&rates);
+            std::array::from_fn(|i| {
+                let relax: f64 = (0..19).map(|j| a[i][j] * neq[j]).sum();
+                let source: f64 = (0..19).map(|j| b[i][j] * s[j]).sum();
+                f[i] - relax + source
+            })
+        }
+    };
+    (out, rho, u)
+}

@@ -1,0 +1,394 @@
+//! The lattice on the GPU (wgpu): buffers, pipelines and the AA-pattern step loop.
+
+use super::geometry::{Cell, Face, Link, Operator, Setup};
+use super::lattice::{opposite, C, W};
+use super::mrt;
+use wgpu::util::DeviceExt;
+
+/// The kernels' source, kept in its own file.
+pub const SHADER: &str = include_str!("../../../shaders/lbm.wgsl");
+
+/// Invocations per workgroup (must match `@workgroup_size` in the shader).
+const WORKGROUP: u32 = 64;
+/// Most workgroups along one dispatch dimension.
+const MAX_GROUPS: u32 = 65_535;
+/// Bindings before the 19 population buffers.
+const FIRST_POPULATION_BINDING: u32 = 5;
+
+/// The device and its queue.
+pub struct Gpu {
+    pub device: wgpu::Device,
+    pub queue: wgpu::Queue,
+    pub adapter: wgpu::AdapterInfo,
+    pub limits: wgpu::Limits,
+}
+
+impl Gpu {
+    /// Picks the first adapter of the backends allowed by WGPU_BACKEND (default: all).
+    pub fn new() -> Result<Gpu, String> {
+        // WGPU_BACKEND (vulkan, metal, dx12, gl) and friends are honoured.
+        let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+        let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
+            power_preference: wgpu::PowerPreference::HighPerformance,
+            ..Default::default()
+        }))
+        .map_err(|e| format!("no GPU adapter found (on a machine without a GPU install Mesa lavapipe: mesa-vulkan-drivers): {e}"))?;
+        let limits = adapter.limits();
+        let need = FIRST_POPULATION_BINDING + 19;
+        if limits.max_storage_buffers_per_shader_stage < need {
+            return Err(format!(
+                "adapter {} allows {} storage buffers per shader stage, the lattice needs {need}",
+                adapter.get_info().name,
+                limits.max_storage_buffers_per_shader_stage
+            ));
+        }
+        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            label: Some("lbm"),
+            required_limits: limits.clone(),
+            ..Default::default()
+        }))
+        .map_err(|e| format!("cannot open the GPU device: {e}"))?;
+        Ok(Gpu { device, queue, adapter: adapter.get_info(), limits })
+    }
+
+    /// Waits until the queue is idle.
+    pub fn wait(&self) {
+        let _ = self.device.poll(wgpu::PollType::wait_indefinitely());
+    }
+
+    /// Copies a GPU buffer back to the host.
+    pub fn read_buffer(&self, buffer: &wgpu::Buffer, bytes: u64) -> Vec<u8> {
+        let staging = self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("readback"),
+            size: bytes,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let mut encoder = self.device.create_command_encoder(&Default::default());
+        encoder.copy_buffer_to_buffer(buffer, 0, &staging, 0, bytes);
+        self.queue.submit([encoder.finish()]);
+        let slice = staging.slice(..);
+        slice.map_async(wgpu::MapMode::Read, |_| {});
+        self.wait();
+        let data = slice.get_mapped_range().expect("mapped").to_vec();
+        staging.unmap();
+        data
+    }
+}
+
+/// Parameters as laid out in the shader's `Params`.
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct Params {
+    n: [u32; 4],
+    face_lo: [u32; 4],
+    face_hi: [u32; 4],
+    relax: [f32; 4],
+    force: [f32; 4],
+    face_value: [[f32; 4]; 6],
+}
+
+/// Limits of the health check, in lattice units.
+#[derive(Debug, Clone, Copy)]
+pub struct Health {
+    /// Largest speed |u| allowed.
+    pub max_speed: f64,
+    /// Largest |rho - 1| allowed.
+    pub max_density_deviation: f64,
+}
+
+impl Default for Health {
+    fn default() -> Self {
+        Self { max_speed: 0.4, max_density_deviation: 0.5 }
+    }
+}
+
+/// A lattice living on the GPU.
+pub struct Lattice {
+    pub setup: Setup,
+    gpu: std::sync::Arc<Gpu>,
+    populations: Vec<wgpu::Buffer>,
+    fields: wgpu::Buffer,
+    status: wgpu::Buffer,
+    bind_groups: [wgpu::BindGroup; 2],
+    stream_collide: wgpu::ComputePipeline,
+    macroscopic: wgpu::ComputePipeline,
+    /// Completed steps; its parity selects the AA phase.
+    pub time: u64,
+}
+
+/// The first unhealthy cell found by a health check.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Unhealthy {
+    pub cell: usize,
+    pub coords: [usize; 3],
+    pub rho: f32,
+    pub u: [f32; 3],
+}
+
+impl Lattice {
+    /// Allocates the lattice, at rest (rho = 1, u = 0).
+    pub fn new(gpu: std::sync::Arc<Gpu>, setup: Setup, health: Health) -> Result<Lattice, String> {
+        let cells = setup.cells();
+        let bytes = (cells * 4) as u64;
+        let binding_limit = gpu.limits.max_storage_buffer_binding_size as u64;
+        if bytes > binding_limit.min(gpu.limits.max_buffer_size) || cells as u64 >= (1u64 << 31) {
+            return Err(format!(
+                "grid {}x{}x{} needs {bytes} bytes per direction, above this device's limit of {binding_limit}",
+                setup.n[0], setup.n[1], setup.n[2]
+            ));
+        }
+        let d = &gpu.device;
+        let storage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST;
+        let populations: Vec<wgpu::Buffer> = (0..19)
+            .map(|i| {
+                d.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some(&format!("f{i}")),
+                    size: bytes,
+                    usage: storage,
+                    mapped_at_creation: false,
+                })
+            })
+            .collect();
+        let flags = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("flags"),
+            contents: bytemuck::cast_slice(&pack_flags(&setup.solid)),
+            usage: wgpu::BufferUsages::STORAGE,
+        });
+        let mrt = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("mrt"),
+            contents: bytemuck::cast_slice(&mrt_matrices(&setup)),
+            usage: wgpu::BufferUsages::STORAGE,
+        });
+        let fields = d.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("fields"),
+            size: bytes * 4,
+            usage: storage,
+            mapped_at_creation: false,
+        });
+        let status = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("status"),
+            contents: bytemuck::cast_slice(&[u32::MAX; 4]),
+            usage: storage,
+        });
+        let params: Vec<wgpu::Buffer> = (0..2)
+            .map(|parity| {
+                d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some("params"),
+                    contents: bytemuck::bytes_of(&params(&setup, parity, health)),
+                    usage: wgpu::BufferUsages::UNIFORM,
+                })
+            })
+            .collect();
+        let module = d.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("lbm.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(SHADER.into()),
+        });
+        let layout = bind_group_layout(d);
+        let pipeline_layout = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("lattice"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let pipeline = |entry: &str| {
+            d.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(entry),
+                layout: Some(&pipeline_layout),
+                module: &module,
+                entry_point: Some(entry),
+                compilation_options: wgpu::PipelineCompilationOptions {
+                    constants: &[("OPERATOR", setup.operator.code() as f64)],
+                    ..Default::default()
+                },
+                cache: None,
+            })
+        };
+        let stream_collide = pipeline("stream_collide");
+        let macroscopic = pipeline("macroscopic");
+        let bind_groups = [0, 1].map(|parity| {
+            let mut entries = vec![
+                entry(0, &params[parity]),
+                entry(1, &flags),
+                entry(2, &mrt),
+                entry(3, &fields),
+                entry(4, &status),
+            ];
+            entries.extend(populations.iter().enumerate().map(|(i, b)| entry(FIRST_POPULATION_BINDING + i as u32, b)));
+            d.create_bind_group(&wgpu::BindGroupDescriptor { label: Some("lattice"), layout: &layout, entries: &entries })
+        });
+        let lattice =
+            Lattice { setup, gpu, populations, fields, status, bind_groups, stream_collide, macroscopic, time: 0 };
+        lattice.upload(&vec![[0.0; 19]; cells]);
+        Ok(lattice)
+    }
+
+    pub fn gpu(&self) -> &Gpu {
+        &self.gpu
+    }
+
+    /// Replaces the populations (shifted, natural layout) and restarts the AA phase at even.
+    pub fn upload(&self, f: &[Cell]) {
+        for (i, buffer) in self.populations.iter().enumerate() {
+            let column: Vec<f32> = f.iter().map(|c| c[i] as f32).collect();
+            self.gpu.queue.write_buffer(buffer, 0, bytemuck::cast_slice(&column));
+        }
+    }
+
+    /// Sets populations and resets the clock to an even step.
+    pub fn set_populations(&mut self, f: &[Cell]) {
+        self.upload(f);
+        self.time = 0;
+    }
+
+    /// Advances `steps` steps (submitted in batches; returns once submitted, not completed).
+    pub fn step(&mut self, steps: u64) {
+        let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
+        for done in 0..steps {
+            self.dispatch(&mut encoder, &self.stream_collide, self.time % 2);
+            self.time += 1;
+            if done % 64 == 63 {
+                let full = std::mem::replace(&mut encoder, self.gpu.device.create_command_encoder(&Default::default()));
+                self.gpu.queue.submit([full.finish()]);
+            }
+        }
+        self.gpu.queue.submit([encoder.finish()]);
+    }
+
+    fn dispatch(&self, encoder: &mut wgpu::CommandEncoder, pipeline: &wgpu::ComputePipeline, parity: u64) {
+        let groups = (self.setup.cells() as u32).div_ceil(WORKGROUP);
+        let x = groups.min(MAX_GROUPS);
+        let mut pass = encoder.begin_compute_pass(&Default::default());
+        pass.set_pipeline(pipeline);
+        pass.set_bind_group(0, &self.bind_groups[parity as usize], &[]);
+        pass.dispatch_workgroups(x, groups.div_ceil(x), 1);
+    }
+
+    /// Density and velocity of every cell, and the first unhealthy cell if any.
+    pub fn fields(&self) -> (Vec<[f32; 4]>, Option<Unhealthy>) {
+        let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
+        self.dispatch(&mut encoder, &self.macroscopic, self.time % 2);
+        self.gpu.queue.submit([encoder.finish()]);
+        let bytes = self.gpu.read_buffer(&self.fields, (self.setup.cells() * 16) as u64);
+        let fields: Vec<[f32; 4]> = bytemuck::cast_slice(&bytes).to_vec();
+        let status: Vec<u32> = bytemuck::cast_slice(&self.gpu.read_buffer(&self.status, 16)).to_vec();
+        let bad = (status[0] != u32::MAX).then(|| {
+            let cell = status[0] as usize;
+            let v = fields[cell];
+            Unhealthy { cell, coords: self.setup.coords(cell), rho: v[0], u: [v[1], v[2], v[3]] }
+        });
+        (fields, bad)
+    }
+
+    /// The populations (shifted) at the current time in natural layout, whatever the AA phase.
+    pub fn populations(&self) -> Vec<Cell> {
+        let columns: Vec<Vec<f32>> = self
+            .populations
+            .iter()
+            .map(|b| bytemuck::cast_slice(&self.gpu.read_buffer(b, (self.setup.cells() * 4) as u64)).to_vec())
+            .collect();
+        (0..self.setup.cells())
+            .map(|k| {
+                std::array::from_fn(|i| {
+                    if self.time % 2 == 0 || self.setup.solid[k] {
+                        return columns[i][k] as f64;
+                    }
+                    // Odd phase: f_i(x) sits in slot opposite(i) of x - c_i, or in slot i of x
+                    // when that link leaves the fluid.
+                    match self.setup.link(k, C[opposite(i)]) {
+                        Link::Cell(s) => columns[opposite(i)][s] as f64,
+                        Link::Boundary(_) => columns[i][k] as f64,
+                    }
+                })
+            })
+            .collect()
+    }
+}
+
+/// Params (uniform), flags and MRT matrices (read-only), then fields, status and the 19
+/// population buffers (read-write): one layout for both kernels.
+fn bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
+    let storage = |binding: u32, read_only: bool| wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Storage { read_only },
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    };
+    let mut entries = vec![wgpu::BindGroupLayoutEntry {
+        binding: 0,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Uniform,
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }];
+    entries.extend([storage(1, true), storage(2, true)]);
+    entries.extend((3..FIRST_POPULATION_BINDING + 19).map(|b| storage(b, false)));
+    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some("lattice"), entries: &entries })
+}
+
+fn entry(binding: u32, buffer: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
+    wgpu::BindGroupEntry { binding, resource: buffer.as_entire_binding() }
+}
+
+/// One byte per cell, four per word.
+fn pack_flags(solid: &[bool]) -> Vec<u32> {
+    solid
+        .chunks(4)
+        .map(|c| c.iter().enumerate().map(|(j, s)| u32::from(*s) << (8 * j)).sum())
+        .chain(std::iter::once(0))
+        .collect()
+}
+
+fn params(setup: &Setup, parity: usize, health: Health) -> Params {
+    let face = |f: usize| setup.faces[f].code();
+    let values = |f: &Face| {
+        let (u, rho) = f.values();
+        [u[0] as f32, u[1] as f32, u[2] as f32, rho as f32]
+    };
+    Params {
+        n: [setup.n[0] as u32, setup.n[1] as u32, setup.n[2] as u32, parity as u32],
+        face_lo: [face(0), face(1), face(2), face(3)],
+        face_hi: [face(4), face(5), 0, 0],
+        relax: [
+            (1.0 / setup.tau) as f32,
+            setup.omega_minus() as f32,
+            health.max_speed as f32,
+            health.max_density_deviation as f32,
+        ],
+        force: [setup.force[0] as f32, setup.force[1] as f32, setup.force[2] as f32, 0.0],
+        face_value: std::array::from_fn(|f| values(&setup.faces[f])),
+    }
+}
+
+/// The MRT matrices A and B (zeros for other operators: the buffer must exist anyway).
+fn mrt_matrices(setup: &Setup) -> Vec<f32> {
+    let (a, b) = match setup.operator {
+        Operator::Mrt { rates } => mrt::collision_matrices(&rates),
+        _ => ([[0.0; 19]; 19], [[0.0; 19]; 19]),
+    };
+    a.iter().chain(b.iter()).flat_map(|row| row.iter().map(|v| *v as f32)).collect()
+}
+
+/// Shifted equilibrium populations of a whole lattice for given density and velocity per cell.
+pub fn equilibrium_field(setup: &Setup, state: impl Fn([usize; 3]) -> (f64, [f64; 3])) -> Vec<Cell> {
+    (0..setup.cells())
+        .map(|k| {
+            let (rho, u) = state(setup.coords(k));
+            std::array::from_fn(|i| super::lattice::equilibrium_shifted(i, rho, u))
+        })
+        .collect()
+}
+
+/// Total mass sum(rho) of the fluid cells, from shifted populations.
+pub fn total_mass(setup: &Setup, f: &[Cell]) -> f64 {
+    (0..setup.cells())
+        .filter(|k| !setup.solid[*k])
+        .map(|k| f[k].iter().zip(W.iter()).map(|(fi, wi)| fi + wi).sum::<f64>())
+        .sum()
+}

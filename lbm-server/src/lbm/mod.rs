@@ -1,0 +1,9 @@
+//! The lattice-Boltzmann fluid: D3Q19 on the GPU (wgpu), with an f64 reference for the tests.
+
+pub mod geometry;
+pub mod gpu;
+pub mod lattice;
+pub mod mrt;
+pub mod reference;
+#[cfg(test)]
+mod tests;
