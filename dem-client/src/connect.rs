@@ -1,8 +1,12 @@
 //! `dem-client connect`: the DEM side of the lockstep loop.
 
-use crate::standin::Particles;
+use crate::dem::timestep::substeps;
+use crate::dem::world::{Body, World};
+use crate::dem::V3;
 use protocol::transport::LinkOptions;
-use protocol::{DemLink, Hello, LinkError, ParticleReply, Physics, StepFlags, StepHeader, Units, Welcome};
+use protocol::{
+    DemLink, Hello, LinkError, ParticleReply, ParticleState, Physics, StepFlags, StepHeader, Units, Welcome,
+};
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -42,8 +46,8 @@ struct Faults {
     stall_at: Option<u64>,
 }
 
-/// Physics this side applies while the DEM is a stand-in.
-const PHYSICS: u64 = Physics::GRAVITY | Physics::BALLISTIC_STANDIN;
+/// Physics this side applies: gravity and contacts (buoyancy is the fluid's).
+const PHYSICS: u64 = Physics::GRAVITY | Physics::CONTACTS;
 
 pub fn main(args: ConnectArgs) -> ExitCode {
     let scene = match crate::scene_or_default(args.scene.as_ref()) {
@@ -65,12 +69,27 @@ pub fn main(args: ConnectArgs) -> ExitCode {
     if let Err(e) = ctrlc::set_handler(move || flag.store(true, Ordering::SeqCst)) {
         protocol::say!("dem-client: warning: cannot install the Ctrl-C handler: {e}");
     }
-    let mut particles = Particles::from_scene(&scene);
+    let file = args
+        .scene
+        .as_ref()
+        .map_or(scene::DEFAULT_SCENE_FILE.to_string(), |p| p.display().to_string());
+    let setup = match crate::dem::setup(&scene, &file) {
+        Ok(s) => s,
+        Err(e) => {
+            protocol::say!("dem-client: error: {e}");
+            return ExitCode::from(2);
+        }
+    };
+    let mut particles = Particles {
+        world: setup.world,
+        density: scene.particles.density,
+        next_id: scene.particle_count(),
+    };
     let mut hello = Hello::new(
         Units::SI,
         PHYSICS,
-        particles.states.len(),
-        &format!("dem-client {} (stand-in: ballistic)", env!("CARGO_PKG_VERSION")),
+        particles.world.bodies.len(),
+        &format!("dem-client {} (soft-sphere DEM)", env!("CARGO_PKG_VERSION")),
     );
     if let Some(v) = args.protocol_version {
         hello.version = v;
@@ -92,9 +111,29 @@ pub fn main(args: ConnectArgs) -> ExitCode {
         skip_step: args.skip_step,
         stall_at: args.stall_at,
     };
-    match step_loop(&link, &welcome, &mut particles, &interrupted, faults, &mut last) {
+    let (k, dt) = substeps(welcome.dt, setup.dt_max);
+    particles.world.dt = dt;
+    particles.world.gravity = V3::from(welcome.gravity);
+    protocol::say!(
+        "dem-client: DEM step {dt:.3e} s = fluid step / {k} (shortest contact time {:.3e} s), {} walls",
+        setup.contact_time,
+        particles.world.walls.len()
+    );
+    match step_loop(
+        &link,
+        &welcome,
+        &mut particles,
+        k,
+        &interrupted,
+        faults,
+        &mut last,
+    ) {
         Ok(steps) => {
-            protocol::say!("dem-client: finished after {steps} steps (stand-in physics: ballistic)");
+            protocol::say!(
+                "dem-client: finished after {steps} steps ({} DEM steps, {} neighbour-list builds)",
+                steps * k,
+                particles.world.builds
+            );
             ExitCode::SUCCESS
         }
         Err(e) => {
@@ -110,11 +149,12 @@ fn step_loop(
     link: &DemLink,
     welcome: &Welcome,
     particles: &mut Particles,
+    substeps: u64,
     interrupted: &AtomicBool,
     faults: Faults,
     last: &mut Option<u64>,
 ) -> Result<u64, LinkError> {
-    let domain = (welcome.domain_min, welcome.domain_max);
+    let mut states: Vec<ParticleState> = Vec::new();
     let mut replies: Vec<ParticleReply> = Vec::new();
     for step in 0..welcome.steps {
         if faults.churn && step > 0 {
@@ -130,37 +170,94 @@ fn step_loop(
         } else {
             step
         };
-        let header = StepHeader::new(sent_step, step as f64 * welcome.dt, particles.states.len(), flags);
-        link.send_states(header, |i| particles.states[i])?;
+        particles.states_into(&mut states);
+        let header = StepHeader::new(sent_step, step as f64 * welcome.dt, states.len(), flags);
+        link.send_states(header, |i| states[i])?;
         let received = link.receive_forces(step)?;
         replies.clear();
         replies.extend_from_slice(received.particles());
-        check_ids(particles, &replies)?;
+        check_ids(&states, &replies)?;
         let done = received.header().has(StepFlags::FINAL | StepFlags::STOP) || stop;
         drop(received);
         *last = Some(step);
         if done {
             return Ok(step + 1);
         }
-        particles.advance(&replies, welcome.gravity, welcome.dt, domain);
+        particles.advance(&replies, substeps);
     }
     Ok(welcome.steps)
 }
 
 /// The fluid must answer every particle, in order.
-fn check_ids(particles: &Particles, replies: &[ParticleReply]) -> Result<(), LinkError> {
-    let wrong = particles
-        .states
-        .iter()
-        .zip(replies)
-        .position(|(s, r)| s.id != r.id);
-    if replies.len() != particles.states.len() || wrong.is_some() {
+fn check_ids(states: &[ParticleState], replies: &[ParticleReply]) -> Result<(), LinkError> {
+    let wrong = states.iter().zip(replies).position(|(s, r)| s.id != r.id);
+    if replies.len() != states.len() || wrong.is_some() {
         return Err(LinkError::Ipc(format!(
             "the fluid's reply does not match the states sent (count {} vs {}, first wrong index {:?})",
             replies.len(),
-            particles.states.len(),
+            states.len(),
             wrong
         )));
     }
     Ok(())
+}
+
+/// The DEM side's particles in a coupled run.
+struct Particles {
+    world: World,
+    density: f64,
+    next_id: u64,
+}
+
+impl Particles {
+    fn states_into(&self, out: &mut Vec<ParticleState>) {
+        out.clear();
+        out.extend(self.world.bodies.iter().map(|b| ParticleState {
+            id: b.id,
+            position: b.x.into(),
+            velocity: b.v.into(),
+            angular_velocity: b.w.into(),
+            radius: b.r,
+        }));
+    }
+
+    /// Takes the fluid's force and torque (same order as the states), held constant over the
+    /// fluid step, and advances `k` DEM steps: dt_fluid = k dt_dem.
+    fn advance(&mut self, replies: &[ParticleReply], k: u64) {
+        for (b, r) in self.world.bodies.iter_mut().zip(replies) {
+            b.f_ext = V3::from(r.force);
+            b.t_ext = V3::from(r.torque);
+        }
+        for _ in 0..k {
+            self.world.step();
+        }
+    }
+
+    /// Test aid: removes the last particle or inserts a copy of the first with a fresh id, next to
+    /// it where there is room, so the particle count changes between steps.
+    fn churn(&mut self, step: u64) {
+        if step % 2 == 1 && self.world.bodies.len() > 1 {
+            self.world.pop();
+            return;
+        }
+        let first = self.world.bodies[0];
+        let free = |x: V3| self.world.bodies.iter().all(|b| (b.x - x).norm() > b.r + first.r);
+        let offsets = [V3::x(), -V3::x(), V3::y(), -V3::y(), V3::z(), -V3::z()];
+        let x = offsets
+            .iter()
+            .map(|o| first.x + 2.5 * first.r * o)
+            .find(|x| free(*x))
+            .unwrap_or(first.x + 2.5 * first.r * V3::z());
+        let body = Body::sphere(
+            self.next_id,
+            x,
+            first.v,
+            first.w,
+            first.r,
+            self.density,
+            first.material,
+        );
+        self.next_id += 1;
+        self.world.insert(body);
+    }
 }

@@ -1,10 +1,12 @@
 //! `dem-client`: the particle side of the co-simulation.
 //!
-//! Until the DEM physics issue lands, the particles move by a stand-in rule (ballistic flight under
-//! gravity and the fluid's force, elastic reflection at the domain faces), named as such everywhere.
+//! A soft-sphere DEM in f64 (nalgebra, rayon): `run` steps a granular scene alone, `connect` joins
+//! a running `lbm-server` as the DEM side of the co-simulation. See docs/dem.md.
 
 mod connect;
-mod standin;
+mod dem;
+mod output;
+mod run;
 
 use clap::{Parser, Subcommand};
 use std::path::PathBuf;
@@ -25,6 +27,8 @@ struct Cli {
 enum Command {
     /// Join a running `lbm-server` as its DEM side.
     Connect(connect::ConnectArgs),
+    /// Run a granular scene alone (no fluid): particles.csv, energy.csv, VTK polydata.
+    Run(run::RunArgs),
 }
 
 /// Scene file argument shared by subcommands.
@@ -39,5 +43,6 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
         Command::Connect(args) => connect::main(args),
+        Command::Run(args) => run::main(args),
     }
 }

@@ -28,6 +28,9 @@ pub struct Scene {
     #[serde(default)]
     pub coupling: Coupling,
     pub particles: Particles,
+    /// The DEM: materials, contact model, walls, insertion, DEM output (every field has a default).
+    #[serde(default)]
+    pub dem: dem::Dem,
 }
 
 /// The fluid box [m].
@@ -198,13 +201,15 @@ impl Scene {
 
     /// Parses and validates scene text; `file` names it in errors.
     pub fn parse(text: &str, file: &str) -> Result<Scene, SceneError> {
-        let scene: Scene = toml::from_str(text).map_err(|e| SceneError {
+        let mut scene: Scene = toml::from_str(text).map_err(|e| SceneError {
             file: file.to_string(),
             field: String::new(),
             value: String::new(),
             problem: e.to_string().trim_end().replace('\n', "\n  "),
         })?;
+        scene.dem.load(file)?;
         scene.validate(file)?;
+        dem::validate_placement(&scene, file)?;
         Ok(scene)
     }
 
@@ -220,8 +225,14 @@ impl Scene {
             .block
             .iter()
             .flat_map(|b| block_centres(b).map(move |p| (p, b.velocity, [0.0; 3], b.radius)));
+        let generated = self
+            .dem
+            .generated
+            .iter()
+            .map(|(p, _)| (p.position, p.velocity, p.angular_velocity, p.radius));
         spheres
             .chain(blocks)
+            .chain(generated)
             .enumerate()
             .map(
                 |(i, (position, velocity, angular_velocity, radius))| InitialParticle {
@@ -243,7 +254,7 @@ impl Scene {
             .iter()
             .map(|b| b.count.iter().product::<u64>())
             .sum();
-        self.particles.sphere.len() as u64 + blocks
+        self.particles.sphere.len() as u64 + blocks + self.dem.generated.len() as u64
     }
 
     /// Most particles a step may carry.
@@ -277,5 +288,6 @@ fn block_centres(b: &Block) -> impl Iterator<Item = [f64; 3]> + '_ {
     })
 }
 
+pub mod dem;
 mod overlap;
 mod validate;

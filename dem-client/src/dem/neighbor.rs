@@ -1,0 +1,174 @@
+//! Broad phase: a sorted-cell (linked-cell) grid builds a Verlet list of every pair closer than
+//! r_i + r_j + skin; it is rebuilt only once some particle has moved more than skin / 2 since the
+//! last build. O(N) per build, never O(N^2).
+
+use super::V3;
+use rayon::prelude::*;
+
+/// A uniform grid over the particles' bounding box, particles sorted by cell.
+struct Grid {
+    lo: V3,
+    cell: f64,
+    dims: [usize; 3],
+    /// Start of each cell in `order` (len cells + 1).
+    start: Vec<u32>,
+    /// Particle indices sorted by cell.
+    order: Vec<u32>,
+}
+
+impl Grid {
+    fn build(x: &[V3], cell: f64) -> Grid {
+        let mut lo = V3::repeat(f64::INFINITY);
+        let mut hi = V3::repeat(f64::NEG_INFINITY);
+        for p in x {
+            lo = lo.inf(p);
+            hi = hi.sup(p);
+        }
+        // Never more cells than ~8 per particle: a runaway particle widens the cells instead.
+        let mut cell = cell;
+        let max_cells = (8 * x.len()).max(64) as f64;
+        let dims = loop {
+            let d = (hi - lo) / cell;
+            if !d.iter().all(|v| v.is_finite()) {
+                break [1, 1, 1];
+            }
+            let dims = [d.x, d.y, d.z].map(|v| v.floor() as usize + 1);
+            if dims.iter().map(|&v| v as f64).product::<f64>() <= max_cells {
+                break dims;
+            }
+            cell *= 1.5;
+        };
+        let mut grid = Grid {
+            lo,
+            cell,
+            dims,
+            start: Vec::new(),
+            order: Vec::new(),
+        };
+        let keys: Vec<u32> = x.iter().map(|p| grid.key(grid.coords(p))).collect();
+        let n_cells = dims[0] * dims[1] * dims[2];
+        let mut start = vec![0u32; n_cells + 1];
+        for &k in &keys {
+            start[k as usize + 1] += 1;
+        }
+        for c in 0..n_cells {
+            start[c + 1] += start[c];
+        }
+        let mut fill = start.clone();
+        let mut order = vec![0u32; x.len()];
+        for (i, &k) in keys.iter().enumerate() {
+            order[fill[k as usize] as usize] = i as u32;
+            fill[k as usize] += 1;
+        }
+        grid.start = start;
+        grid.order = order;
+        grid
+    }
+
+    fn coords(&self, p: &V3) -> [usize; 3] {
+        let c = (p - self.lo) / self.cell;
+        let f = |v: f64, d: usize| (v.max(0.0) as usize).min(d - 1);
+        [f(c.x, self.dims[0]), f(c.y, self.dims[1]), f(c.z, self.dims[2])]
+    }
+
+    fn key(&self, c: [usize; 3]) -> u32 {
+        ((c[2] * self.dims[1] + c[1]) * self.dims[0] + c[0]) as u32
+    }
+
+    /// Indices of the particles in the 27 cells around `c`.
+    fn around(&self, c: [usize; 3], mut visit: impl FnMut(u32)) {
+        let range = |a: usize| c[a].saturating_sub(1)..=(c[a] + 1).min(self.dims[a] - 1);
+        for z in range(2) {
+            for y in range(1) {
+                for x in range(0) {
+                    let k = self.key([x, y, z]) as usize;
+                    for &j in &self.order[self.start[k] as usize..self.start[k + 1] as usize] {
+                        visit(j);
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// Pairs (i, j), i < j, with |x_i - x_j| < r_i + r_j + skin, sorted by i then j.
+pub fn verlet_pairs(x: &[V3], r: &[f64], skin: f64) -> Vec<(u32, u32)> {
+    if x.len() < 2 {
+        return Vec::new();
+    }
+    let r_max = r.iter().copied().fold(0.0, f64::max);
+    let grid = Grid::build(x, 2.0 * r_max + skin);
+    (0..x.len())
+        .into_par_iter()
+        .flat_map_iter(|i| {
+            let mut near = Vec::new();
+            grid.around(grid.coords(&x[i]), |j| {
+                let j = j as usize;
+                if j > i {
+                    let cut = r[i] + r[j] + skin;
+                    if (x[i] - x[j]).norm_squared() < cut * cut {
+                        near.push(j as u32);
+                    }
+                }
+            });
+            near.sort_unstable();
+            near.into_iter().map(move |j| (i as u32, j))
+        })
+        .collect()
+}
+
+/// Reference O(N^2) search, for tests only.
+#[cfg(test)]
+pub fn brute_force_pairs(x: &[V3], r: &[f64], skin: f64) -> Vec<(u32, u32)> {
+    let mut out = Vec::new();
+    for i in 0..x.len() {
+        for j in i + 1..x.len() {
+            let cut = r[i] + r[j] + skin;
+            if (x[i] - x[j]).norm_squared() < cut * cut {
+                out.push((i as u32, j as u32));
+            }
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn random_set(n: usize, seed: u64, box_size: f64) -> (Vec<V3>, Vec<f64>) {
+        let mut s = seed;
+        let mut unit = move || {
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (s >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let x = (0..n)
+            .map(|_| V3::new(unit() * box_size, unit() * box_size, unit() * box_size * 0.5))
+            .collect();
+        let r = (0..n).map(|_| 0.002 + 0.006 * unit()).collect();
+        (x, r)
+    }
+
+    #[test]
+    fn cell_search_equals_brute_force_on_random_polydisperse_sets() {
+        for (n, seed, size) in [(2, 1, 0.01), (500, 2, 0.1), (2000, 3, 0.2), (3000, 4, 5.0)] {
+            let (x, r) = random_set(n, seed, size);
+            for skin in [0.0, 0.001, 0.004] {
+                assert_eq!(
+                    verlet_pairs(&x, &r, skin),
+                    brute_force_pairs(&x, &r, skin),
+                    "n {n} skin {skin}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn a_runaway_particle_does_not_blow_up_the_grid() {
+        let (mut x, r) = random_set(1000, 7, 0.1);
+        x[0] = V3::new(1e6, -1e6, 3e5);
+        assert_eq!(verlet_pairs(&x, &r, 0.001), brute_force_pairs(&x, &r, 0.001));
+    }
+}

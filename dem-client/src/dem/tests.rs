@@ -1,0 +1,449 @@
+//! Contact laws against closed forms, energy conservation, friction, and the time-step rule.
+
+use super::contact::{beta_thornton, ContactLaw, Linear, Switches};
+use super::timestep::{hertz_contact_time, linear_contact_time, linear_restitution};
+use super::world::{Body, Shape, Wall, World};
+use super::V3;
+use scene::dem::{Material, NormalLaw, RollingLaw, TangentialLaw};
+
+const RHO: f64 = 2500.0;
+const R: f64 = 0.002;
+
+fn material(e: f64, mu: f64) -> Material {
+    Material {
+        restitution: e,
+        friction: mu,
+        ..Material::default()
+    }
+}
+
+fn law(normal: NormalLaw, tangential: TangentialLaw, switches: Switches, linear: Linear) -> ContactLaw {
+    ContactLaw {
+        normal,
+        tangential,
+        rolling: RollingLaw::None,
+        linear,
+        switches,
+    }
+}
+
+fn stiff(k: f64, gamma: Option<f64>) -> Linear {
+    Linear {
+        normal_stiffness: Some(k),
+        normal_damping: gamma,
+        ..Linear::default()
+    }
+}
+
+/// Two equal spheres approaching head-on at relative speed `v` (no gravity).
+fn head_on(law: ContactLaw, m: Material, v: f64, dt: f64) -> World {
+    let a = Body::sphere(
+        0,
+        V3::new(-R - 1e-5, 0.0, 0.0),
+        V3::new(0.5 * v, 0.0, 0.0),
+        V3::zeros(),
+        R,
+        RHO,
+        0,
+    );
+    let b = Body::sphere(
+        1,
+        V3::new(R + 1e-5, 0.0, 0.0),
+        V3::new(-0.5 * v, 0.0, 0.0),
+        V3::zeros(),
+        R,
+        RHO,
+        0,
+    );
+    World::new(vec![a, b], vec![], law, &[m], V3::zeros(), dt, 0.5 * R)
+}
+
+/// Steps until the contact is over; returns (relative separation speed after, contact time).
+fn collide(world: &mut World) -> (f64, f64) {
+    let mut touching_steps = 0u64;
+    let mut was = false;
+    for _ in 0..10_000_000 {
+        world.step();
+        let now = world.contact_count() > 0;
+        if now {
+            touching_steps += 1;
+        }
+        if was && !now {
+            break;
+        }
+        was = now;
+    }
+    let dv = match world.bodies.len() {
+        1 => world.bodies[0].v,
+        _ => world.bodies[1].v - world.bodies[0].v,
+    };
+    (dv.x, touching_steps as f64 * world.dt)
+}
+
+fn mass() -> f64 {
+    RHO * 4.0 / 3.0 * std::f64::consts::PI * R.powi(3)
+}
+
+/// Steps per contact time of the energy test. Measured relative energy errors (head-on, 1 m/s):
+/// Hertz 7.9e-5 at t_c/50, 1.2e-5 at /100, 8e-7 at /200, 1e-7 at /500; linear 2.0e-5, 8e-7,
+/// 3e-7, 3e-8. The error comes from the steps that straddle the start and end of the contact.
+const STEPS_PER_CONTACT_FOR_ENERGY: f64 = 500.0;
+
+#[test]
+fn frictionless_elastic_collision_conserves_energy() {
+    for normal in [NormalLaw::Hertz, NormalLaw::Linear] {
+        let l = law(
+            normal,
+            TangentialLaw::None,
+            Switches::LIGGGHTS,
+            stiff(2000.0, Some(0.0)),
+        );
+        let m = material(1.0, 0.0);
+        let m_eff = 0.5 * mass();
+        let t_c = match normal {
+            NormalLaw::Hertz => hertz_contact_time(
+                m_eff,
+                0.5 * R,
+                super::contact::PairMaterial::mix(&m, &m).y_star,
+                1.0,
+            ),
+            NormalLaw::Linear => linear_contact_time(2000.0, 0.0, m_eff),
+        };
+        let mut w = head_on(l, m, 1.0, t_c / STEPS_PER_CONTACT_FOR_ENERGY);
+        let before = w.kinetic_energy();
+        collide(&mut w);
+        let after = w.kinetic_energy();
+        assert!(
+            ((after - before) / before).abs() < 1e-6,
+            "{normal:?}: {before} -> {after}, relative {:e}",
+            (after - before) / before
+        );
+    }
+}
+
+#[test]
+fn linear_spring_dashpot_matches_closed_form_restitution_and_contact_time() {
+    let (k, gamma) = (5000.0, 0.02);
+    let m_eff = 0.5 * mass();
+    let t_c = linear_contact_time(k, gamma, m_eff);
+    let e = linear_restitution(k, gamma, m_eff);
+    let l = law(
+        NormalLaw::Linear,
+        TangentialLaw::None,
+        Switches::LIGGGHTS,
+        stiff(k, Some(gamma)),
+    );
+    let mut w = head_on(l, material(0.5, 0.0), 1.0, t_c / 2000.0);
+    let (v_after, t) = collide(&mut w);
+    assert!((v_after - e).abs() < 1e-3 * e, "e {v_after} vs closed form {e}");
+    assert!((t - t_c).abs() < 2e-3 * t_c, "t_c {t} vs closed form {t_c}");
+}
+
+#[test]
+fn linear_law_from_restitution_and_contact_time_hits_both() {
+    for e in [0.3, 0.7, 0.95] {
+        let t_c = 1e-4;
+        let linear = Linear {
+            contact_time: Some(t_c),
+            ..Linear::default()
+        };
+        let l = law(NormalLaw::Linear, TangentialLaw::None, Switches::LIGGGHTS, linear);
+        let mut w = head_on(l, material(e, 0.0), 0.5, t_c / 2000.0);
+        let (v, t) = collide(&mut w);
+        assert!((v / 0.5 - e).abs() < 1e-3 * e, "e {} vs {e}", v / 0.5);
+        assert!((t - t_c).abs() < 2e-3 * t_c, "t_c {t} vs {t_c}");
+    }
+}
+
+#[test]
+fn clamping_the_normal_force_raises_the_restitution() {
+    let run = |clamp: bool| {
+        let switches = Switches {
+            clamp_normal: clamp,
+            ..Switches::LIGGGHTS
+        };
+        let l = law(
+            NormalLaw::Linear,
+            TangentialLaw::None,
+            switches,
+            stiff(5000.0, Some(0.3)),
+        );
+        let mut w = head_on(l, material(0.5, 0.0), 1.0, 1e-7);
+        collide(&mut w).0
+    };
+    let (free, clamped) = (run(false), run(true));
+    let m_eff = 0.5 * mass();
+    assert!(
+        (free - linear_restitution(5000.0, 0.3, m_eff)).abs() < 2e-3,
+        "{free}"
+    );
+    assert!(clamped > free + 0.01, "clamped {clamped} vs unclamped {free}");
+}
+
+/// A sphere dropped on a plane at speed v: (rebound speed, contact time).
+fn drop_on_wall(l: ContactLaw, m: Material, v: f64, steps_per_tc: f64) -> (f64, f64) {
+    let body = Body::sphere(
+        0,
+        V3::new(0.0, 0.0, R + 1e-6),
+        V3::new(0.0, 0.0, -v),
+        V3::zeros(),
+        R,
+        RHO,
+        0,
+    );
+    let wall = Wall {
+        shape: Shape::Plane {
+            point: V3::zeros(),
+            normal: V3::z(),
+        },
+        material: 0,
+    };
+    let y = super::contact::PairMaterial::mix(&m, &m).y_star;
+    let t_c = hertz_contact_time(mass(), l.switches.wall_radius_factor * R, y, v);
+    let mut w = World::new(
+        vec![body],
+        vec![wall],
+        l,
+        &[m],
+        V3::zeros(),
+        t_c / steps_per_tc,
+        0.5 * R,
+    );
+    let (_, t) = collide(&mut w);
+    (w.bodies[0].v.z, t)
+}
+
+#[test]
+fn hertz_contact_time_matches_closed_form_on_a_wall() {
+    for switches in [Switches::LIGGGHTS, Switches::YADE] {
+        let l = law(NormalLaw::Hertz, TangentialLaw::None, switches, Linear::default());
+        let m = material(1.0, 0.0);
+        let y = super::contact::PairMaterial::mix(&m, &m).y_star;
+        let t_c = hertz_contact_time(mass(), switches.wall_radius_factor * R, y, 0.8);
+        let (v, t) = drop_on_wall(l, m, 0.8, 2000.0);
+        assert!((v - 0.8).abs() < 1e-6, "elastic rebound {v}");
+        assert!(
+            (t - t_c).abs() < 2e-3 * t_c,
+            "{switches:?}: t_c {t} vs closed form {t_c}"
+        );
+    }
+}
+
+#[test]
+fn yade_wall_contact_lasts_longer_by_two_to_the_fifth() {
+    let m = material(1.0, 0.0);
+    let (_, t_l) = drop_on_wall(
+        law(
+            NormalLaw::Hertz,
+            TangentialLaw::None,
+            Switches::LIGGGHTS,
+            Linear::default(),
+        ),
+        m.clone(),
+        1.0,
+        1000.0,
+    );
+    let (_, t_y) = drop_on_wall(
+        law(
+            NormalLaw::Hertz,
+            TangentialLaw::None,
+            Switches::YADE,
+            Linear::default(),
+        ),
+        m,
+        1.0,
+        1000.0,
+    );
+    assert!((t_y / t_l - 2f64.powf(0.2)).abs() < 5e-3, "{}", t_y / t_l);
+}
+
+#[test]
+fn thornton_damping_gives_the_requested_restitution_for_clamped_hertz() {
+    for e in [0.3, 0.5, 0.8, 0.95] {
+        let l = law(
+            NormalLaw::Hertz,
+            TangentialLaw::None,
+            Switches::YADE,
+            Linear::default(),
+        );
+        let (v, _) = drop_on_wall(l, material(e, 0.0), 1.0, 2000.0);
+        assert!((v - e).abs() < 0.01 * e, "e {v} vs requested {e}");
+    }
+    assert_eq!(beta_thornton(1.0), 0.0);
+}
+
+#[test]
+fn liggghts_hertz_restitution_is_independent_of_impact_speed() {
+    let l = law(
+        NormalLaw::Hertz,
+        TangentialLaw::None,
+        Switches::LIGGGHTS,
+        Linear::default(),
+    );
+    let (slow, _) = drop_on_wall(l, material(0.6, 0.0), 0.2, 1000.0);
+    let (fast, _) = drop_on_wall(l, material(0.6, 0.0), 2.0, 1000.0);
+    assert!(
+        (slow / 0.2 - fast / 2.0).abs() < 2e-3,
+        "{} vs {}",
+        slow / 0.2,
+        fast / 2.0
+    );
+}
+
+/// A sphere sliding without spin on a plane under gravity ends up rolling at 5/7 of its speed.
+#[test]
+fn sliding_sphere_rolls_at_five_sevenths() {
+    for switches in [Switches::LIGGGHTS, Switches::YADE] {
+        let l = law(
+            NormalLaw::Hertz,
+            TangentialLaw::History,
+            switches,
+            Linear::default(),
+        );
+        let m = material(0.5, 0.4);
+        let body = Body::sphere(
+            0,
+            V3::new(0.0, 0.0, R * 0.9999),
+            V3::new(0.5, 0.0, 0.0),
+            V3::zeros(),
+            R,
+            RHO,
+            0,
+        );
+        let wall = Wall {
+            shape: Shape::Plane {
+                point: V3::zeros(),
+                normal: V3::z(),
+            },
+            material: 0,
+        };
+        let mut w = World::new(
+            vec![body],
+            vec![wall],
+            l,
+            &[m],
+            V3::new(0.0, 0.0, -9.81),
+            2e-6,
+            0.5 * R,
+        );
+        for _ in 0..200_000 {
+            w.step();
+        }
+        let b = w.bodies[0];
+        assert!(
+            (b.v.x - 0.5 * 5.0 / 7.0).abs() < 0.01 * 0.5,
+            "{switches:?}: v {}",
+            b.v.x
+        );
+        assert!(
+            (b.w.y * R - b.v.x).abs() < 0.01 * b.v.x,
+            "rolls: w r {} vs v {}",
+            b.w.y * R,
+            b.v.x
+        );
+    }
+}
+
+/// Coulomb limit in the total spring: the stored displacement is cut back to mu F_n / k_t.
+#[test]
+fn tangential_slider_caps_the_force_at_mu_fn() {
+    use super::contact::{tangential_force, Coefficients};
+    let l = law(
+        NormalLaw::Linear,
+        TangentialLaw::History,
+        Switches::LIGGGHTS,
+        Linear::default(),
+    );
+    let k = Coefficients {
+        f_elastic: 10.0,
+        gamma_n: 0.0,
+        k_t: 1000.0,
+        gamma_t: 0.5,
+    };
+    let mut xi = V3::zeros();
+    let f = tangential_force(&l, &k, 5.0, V3::z(), V3::new(1.0, 0.0, 0.0), &mut xi, 1e-3);
+    assert!(
+        (f - V3::new(-1.0 - 0.5, 0.0, 0.0)).norm() < 1e-12,
+        "stick: spring + dashpot {f}"
+    );
+    let f = tangential_force(&l, &k, 5.0, V3::z(), V3::new(10.0, 0.0, 0.0), &mut xi, 1e-3);
+    assert!((f.norm() - 5.0).abs() < 1e-12 && f.x < 0.0, "slip: {f}");
+    assert!((xi.x - 5.0 / 1000.0).abs() < 1e-15, "history cut back: {xi}");
+}
+
+#[test]
+fn a_dense_pour_settles_inside_its_box() {
+    let text = r#"name = "pour"
+[domain]
+min = [0.0, 0.0, 0.0]
+max = [0.04, 0.04, 0.08]
+[fluid]
+density = 1.2
+dynamic_viscosity = 1.8e-5
+[time]
+dt = 1.0e-3
+steps = 300
+[particles]
+density = 2500.0
+[[dem.material]]
+name = "glass"
+restitution = 0.5
+friction = 0.5
+[[dem.insert]]
+origin = [0.004, 0.004, 0.004]
+count = [7, 7, 8]
+spacing = 0.005
+radius = [0.0015, 0.002]
+jitter = 0.0004
+"#;
+    let scene = scene::Scene::parse(text, "pour.toml").unwrap();
+    let mut setup = super::setup(&scene, "pour.toml").unwrap();
+    let w = &mut setup.world;
+    let (k, dt) = super::timestep::substeps(scene.time.dt, setup.dt_max);
+    w.dt = dt;
+    let potential: f64 = w.bodies.iter().map(|b| b.m * 9.81 * b.x.z).sum();
+    for _ in 0..300 * k {
+        w.step();
+    }
+    assert!(
+        w.kinetic_energy() < 1e-5 * potential,
+        "settled: {} J of {potential} J",
+        w.kinetic_energy()
+    );
+    assert!(
+        w.contact_count() > w.bodies.len(),
+        "a packed bed: {} contacts",
+        w.contact_count()
+    );
+    for b in &w.bodies {
+        assert!(b.x.z > b.r * 0.9 && b.x.z < 0.08, "inside the box: {:?}", b.x);
+    }
+}
+
+#[test]
+fn a_time_step_above_the_stability_limit_is_refused() {
+    let text = r#"name = "t"
+[domain]
+min = [0.0, 0.0, 0.0]
+max = [0.1, 0.1, 0.1]
+[fluid]
+density = 1.2
+dynamic_viscosity = 1.8e-5
+[time]
+dt = 1.0e-3
+steps = 3
+[particles]
+density = 2500.0
+[[particles.sphere]]
+position = [0.05, 0.05, 0.05]
+radius = 0.002
+[dem]
+dt = 1.0e-3
+"#;
+    let scene = scene::Scene::parse(text, "t.toml").unwrap();
+    let e = super::setup(&scene, "t.toml").err().unwrap().to_string();
+    assert!(
+        e.starts_with("t.toml: dem.dt = 0.001 s: is above the stability limit t_c / 10"),
+        "{e}"
+    );
+}

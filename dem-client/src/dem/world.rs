@@ -1,0 +1,382 @@
+//! The particle system and its time integration.
+//!
+//! Equations of motion (seed paper eqs. 12-13), per sphere i:
+//!   m_i dv_i/dt = m_i g + sum_j f_ij + F_ext,i
+//!   I_i dw_i/dt = sum_j l_ij x f_ij + T_ext,i,      I_i = 2/5 m_i r_i^2,
+//! F_ext, T_ext the fluid's force and torque (held constant over a fluid step when coupled).
+//! Integrated by velocity Verlet (LIGGGHTS's scheme): half kick, drift, forces, half kick.
+
+use super::contact::{contact_force, Contact, ContactForce, ContactLaw, PairMaterial};
+use super::neighbor::verlet_pairs;
+use super::V3;
+use rayon::prelude::*;
+use std::collections::HashMap;
+
+/// One sphere.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Body {
+    pub id: u64,
+    pub x: V3,
+    pub v: V3,
+    pub w: V3,
+    pub r: f64,
+    pub m: f64,
+    /// Moment of inertia 2/5 m r^2 [kg m^2].
+    pub inertia: f64,
+    /// Index into the world's materials.
+    pub material: usize,
+    /// Contact force and torque of the last force evaluation.
+    pub f: V3,
+    pub t: V3,
+    /// External (fluid) force and torque.
+    pub f_ext: V3,
+    pub t_ext: V3,
+}
+
+impl Body {
+    pub fn sphere(id: u64, x: V3, v: V3, w: V3, r: f64, density: f64, material: usize) -> Body {
+        let m = density * 4.0 / 3.0 * std::f64::consts::PI * r.powi(3);
+        Body {
+            id,
+            x,
+            v,
+            w,
+            r,
+            m,
+            inertia: 0.4 * m * r * r,
+            material,
+            f: V3::zeros(),
+            t: V3::zeros(),
+            f_ext: V3::zeros(),
+            t_ext: V3::zeros(),
+        }
+    }
+
+    /// v += dt/2 a, w += dt/2 alpha with a = (f + F_ext)/m + g, alpha = (t + T_ext)/I.
+    fn kick(&mut self, half_dt: f64, g: V3) {
+        self.v += half_dt * ((self.f + self.f_ext) / self.m + g);
+        self.w += half_dt * (self.t + self.t_ext) / self.inertia;
+    }
+
+    pub fn kinetic_energy(&self) -> f64 {
+        0.5 * self.m * self.v.norm_squared() + 0.5 * self.inertia * self.w.norm_squared()
+    }
+}
+
+/// A fixed wall.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Shape {
+    /// Particles on the side the unit `normal` points to.
+    Plane { point: V3, normal: V3 },
+    /// A solid axis-aligned box; particles outside.
+    Solid { min: V3, max: V3 },
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Wall {
+    pub shape: Shape,
+    pub material: usize,
+}
+
+impl Wall {
+    /// (unit normal from the wall to the sphere, overlap) when touching.
+    fn touch(&self, x: V3, r: f64) -> Option<(V3, f64)> {
+        match self.shape {
+            Shape::Plane { point, normal } => {
+                let overlap = r - (x - point).dot(&normal);
+                (overlap > 0.0).then_some((normal, overlap))
+            }
+            Shape::Solid { min, max } => {
+                let delta = x - x.sup(&min).inf(&max);
+                let dist = delta.norm();
+                (dist < r && dist > 0.0).then(|| (delta / dist, r - dist))
+            }
+        }
+    }
+}
+
+/// A pair of the Verlet list with its contact history.
+#[derive(Debug, Clone, Copy)]
+struct Slot {
+    i: u32,
+    j: u32,
+    touching: bool,
+    history: V3,
+    out: ContactForce,
+}
+
+/// The particles, the walls and the contact model.
+pub struct World {
+    pub bodies: Vec<Body>,
+    pub walls: Vec<Wall>,
+    pub law: ContactLaw,
+    /// Pair materials, `n_materials x n_materials`.
+    pair_materials: Vec<PairMaterial>,
+    n_materials: usize,
+    pub gravity: V3,
+    pub dt: f64,
+    pub skin: f64,
+    pub time: f64,
+    slots: Vec<Slot>,
+    /// Per body, the slots it belongs to: (slot, +1 for i / -1 for j), CSR.
+    adj_start: Vec<u32>,
+    adj: Vec<(u32, f64)>,
+    /// Per body and wall: contact history.
+    wall_history: Vec<V3>,
+    x_at_build: Vec<V3>,
+    stale: bool,
+    /// Number of neighbour-list builds so far.
+    pub builds: u64,
+    contacts: usize,
+}
+
+impl World {
+    pub fn new(
+        bodies: Vec<Body>,
+        walls: Vec<Wall>,
+        law: ContactLaw,
+        materials: &[scene::dem::Material],
+        gravity: V3,
+        dt: f64,
+        skin: f64,
+    ) -> World {
+        let n = materials.len();
+        let pair_materials = (0..n * n)
+            .map(|k| PairMaterial::mix(&materials[k / n], &materials[k % n]))
+            .collect();
+        let mut world = World {
+            bodies,
+            walls,
+            law,
+            pair_materials,
+            n_materials: n,
+            gravity,
+            dt,
+            skin,
+            time: 0.0,
+            slots: Vec::new(),
+            adj_start: Vec::new(),
+            adj: Vec::new(),
+            wall_history: Vec::new(),
+            x_at_build: Vec::new(),
+            stale: true,
+            builds: 0,
+            contacts: 0,
+        };
+        world.forces(0.0);
+        world
+    }
+
+    fn pair_material(&self, a: usize, b: usize) -> &PairMaterial {
+        &self.pair_materials[a * self.n_materials + b]
+    }
+
+    /// Contacts (sphere-sphere and sphere-wall) at the last force evaluation.
+    pub fn contact_count(&self) -> usize {
+        self.contacts
+    }
+
+    pub fn kinetic_energy(&self) -> f64 {
+        self.bodies.par_iter().map(Body::kinetic_energy).sum()
+    }
+
+    /// Adds a sphere (its contact forces are evaluated at once).
+    pub fn insert(&mut self, body: Body) {
+        self.bodies.push(body);
+        self.stale = true;
+        self.forces(0.0);
+    }
+
+    /// Removes the last sphere.
+    pub fn pop(&mut self) -> Option<Body> {
+        let b = self.bodies.pop();
+        self.stale = true;
+        self.forces(0.0);
+        b
+    }
+
+    /// One velocity-Verlet step of `dt`.
+    pub fn step(&mut self) {
+        let (dt, g) = (self.dt, self.gravity);
+        self.bodies.par_iter_mut().for_each(|b| {
+            b.kick(0.5 * dt, g);
+            b.x += dt * b.v;
+        });
+        self.forces(dt);
+        self.bodies.par_iter_mut().for_each(|b| b.kick(0.5 * dt, g));
+        self.time += dt;
+    }
+
+    /// Has some sphere moved more than skin / 2 since the last build?
+    fn needs_rebuild(&self) -> bool {
+        if self.stale || self.x_at_build.len() != self.bodies.len() {
+            return true;
+        }
+        let limit = 0.25 * self.skin * self.skin;
+        self.bodies
+            .par_iter()
+            .zip(&self.x_at_build)
+            .any(|(b, x0)| (b.x - x0).norm_squared() > limit)
+    }
+
+    /// Rebuilds the Verlet list, carrying the history of the pairs still listed.
+    fn rebuild(&mut self) {
+        let x: Vec<V3> = self.bodies.iter().map(|b| b.x).collect();
+        let r: Vec<f64> = self.bodies.iter().map(|b| b.r).collect();
+        let kept: HashMap<(u64, u64), V3> = self
+            .slots
+            .iter()
+            .filter(|s| s.touching)
+            .filter_map(|s| {
+                let (a, b) = (self.bodies.get(s.i as usize)?, self.bodies.get(s.j as usize)?);
+                Some(((a.id, b.id), s.history))
+            })
+            .collect();
+        let ids: Vec<u64> = self.bodies.iter().map(|b| b.id).collect();
+        self.slots = verlet_pairs(&x, &r, self.skin)
+            .into_iter()
+            .map(|(i, j)| {
+                let (a, b) = (ids[i as usize], ids[j as usize]);
+                let history = kept
+                    .get(&(a, b))
+                    .copied()
+                    .or_else(|| kept.get(&(b, a)).map(|h| -h))
+                    .unwrap_or_else(V3::zeros);
+                Slot {
+                    i,
+                    j,
+                    touching: history != V3::zeros(),
+                    history,
+                    out: ContactForce::default(),
+                }
+            })
+            .collect();
+        self.build_adjacency();
+        let w = self.walls.len();
+        self.wall_history
+            .resize(self.bodies.len() * w.max(1), V3::zeros());
+        self.x_at_build = x;
+        self.stale = false;
+        self.builds += 1;
+    }
+
+    fn build_adjacency(&mut self) {
+        let n = self.bodies.len();
+        let mut start = vec![0u32; n + 1];
+        for s in &self.slots {
+            start[s.i as usize + 1] += 1;
+            start[s.j as usize + 1] += 1;
+        }
+        for k in 0..n {
+            start[k + 1] += start[k];
+        }
+        let mut fill = start.clone();
+        let mut adj = vec![(0u32, 0.0); 2 * self.slots.len()];
+        for (k, s) in self.slots.iter().enumerate() {
+            for (body, sign) in [(s.i, 1.0), (s.j, -1.0)] {
+                adj[fill[body as usize] as usize] = (k as u32, sign);
+                fill[body as usize] += 1;
+            }
+        }
+        self.adj_start = start;
+        self.adj = adj;
+    }
+
+    /// Contact forces and torques at the present positions; `dt` advances the contact histories.
+    fn forces(&mut self, dt: f64) {
+        if self.needs_rebuild() {
+            self.rebuild();
+        }
+        self.pair_forces(dt);
+        let pair_contacts = self.slots.par_iter().filter(|s| s.touching).count();
+        let wall_contacts = self.gather(dt);
+        self.contacts = pair_contacts + wall_contacts;
+    }
+
+    /// Sphere-sphere contacts, in parallel over the Verlet pairs.
+    fn pair_forces(&mut self, dt: f64) {
+        let bodies = &self.bodies;
+        let law = &self.law;
+        let (pm, nm) = (&self.pair_materials, self.n_materials);
+        self.slots.par_iter_mut().for_each(|s| {
+            let (a, b) = (&bodies[s.i as usize], &bodies[s.j as usize]);
+            let d = a.x - b.x;
+            let dist = d.norm();
+            let overlap = a.r + b.r - dist;
+            if overlap <= 0.0 {
+                s.touching = false;
+                s.history = V3::zeros();
+                s.out = ContactForce::default();
+                return;
+            }
+            let n = if dist > 0.0 { d / dist } else { V3::z() };
+            let c = Contact {
+                n,
+                overlap,
+                r_i: a.r,
+                r_j: b.r,
+                r_eff: a.r * b.r / (a.r + b.r),
+                m_eff: a.m * b.m / (a.m + b.m),
+                dv: a.v - b.v,
+                w_i: a.w,
+                w_j: b.w,
+            };
+            s.touching = true;
+            s.out = contact_force(law, &pm[a.material * nm + b.material], &c, &mut s.history, dt);
+        });
+    }
+
+    /// Sums the pair forces and adds the wall contacts, in parallel over the bodies; returns the
+    /// number of wall contacts.
+    fn gather(&mut self, dt: f64) -> usize {
+        let w = self.walls.len();
+        let (slots, adj, start) = (&self.slots, &self.adj, &self.adj_start);
+        let walls = &self.walls;
+        let law = &self.law;
+        let (pm, nm) = (&self.pair_materials, self.n_materials);
+        let factor = law.switches.wall_radius_factor;
+        self.bodies
+            .par_iter_mut()
+            .zip(self.wall_history.par_chunks_mut(w.max(1)))
+            .enumerate()
+            .map(|(k, (b, hist))| {
+                let (mut f, mut t) = (V3::zeros(), V3::zeros());
+                for &(slot, sign) in &adj[start[k] as usize..start[k + 1] as usize] {
+                    let out = &slots[slot as usize].out;
+                    f += sign * out.force;
+                    t += if sign > 0.0 { out.torque_i } else { out.torque_j };
+                }
+                let mut touching = 0;
+                for (wall, h) in walls.iter().zip(hist.iter_mut()) {
+                    let Some((n, overlap)) = wall.touch(b.x, b.r) else {
+                        *h = V3::zeros();
+                        continue;
+                    };
+                    let c = Contact {
+                        n,
+                        overlap,
+                        r_i: b.r,
+                        r_j: 0.0,
+                        r_eff: factor * b.r,
+                        m_eff: b.m,
+                        dv: b.v,
+                        w_i: b.w,
+                        w_j: V3::zeros(),
+                    };
+                    let out = contact_force(law, &pm[b.material * nm + wall.material], &c, h, dt);
+                    f += out.force;
+                    t += out.torque_i;
+                    touching += 1;
+                }
+                b.f = f;
+                b.t = t;
+                touching
+            })
+            .sum()
+    }
+
+    /// The pair material of two material indices (for the time-step rule).
+    pub fn pair(&self, a: usize, b: usize) -> PairMaterial {
+        *self.pair_material(a, b)
+    }
+}

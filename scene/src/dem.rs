@@ -1,0 +1,951 @@
+//! The DEM part of a scene (`[dem]`): materials, contact model, walls, insertion, DEM output.
+//!
+//! Every field has a default, so scenes written before the DEM existed stay valid. SI units.
+//!
+//! ```toml
+//! [dem]
+//! dt = 2.0e-6                 # s, optional: DEM step (default t_c / dt_divisor)
+//! particle_material = "glass" # material of particles.sphere / particles.block (default: the first)
+//!
+//! [[dem.material]]
+//! name = "glass"
+//! young_modulus = 5.0e6       # Pa
+//! poisson_ratio = 0.3
+//! restitution = 0.9
+//! friction = 0.5
+//!
+//! [dem.contact]
+//! preset = "liggghts"         # or "yade"; switches below override the preset
+//! normal = "hertz"            # or "linear"
+//!
+//! [[dem.plane]]
+//! point = [0.0, 0.0, 0.0]
+//! normal = [0.0, 0.0, 1.0]    # towards the particles
+//!
+//! [[dem.insert]]              # a lattice with jitter
+//! origin = [0.01, 0.01, 0.01]
+//! count = [10, 10, 20]
+//! spacing = 0.005
+//! radius = [0.0015, 0.002]    # uniform in [min, max]
+//! jitter = 0.0004             # m
+//! ```
+
+use crate::{InitialParticle, Scene, SceneError};
+use serde::Deserialize;
+use std::path::{Path, PathBuf};
+
+/// The `[dem]` section.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Dem {
+    /// DEM time step [s]; default: contact time / `dt_divisor`.
+    pub dt: Option<f64>,
+    /// The default DEM step is the shortest contact time divided by this (default 50).
+    #[serde(default = "default_dt_divisor")]
+    pub dt_divisor: f64,
+    /// Verlet skin [m]; default: half the smallest radius.
+    pub skin: Option<f64>,
+    /// Material of the particles of `particles.sphere` and `particles.block` (default: the first).
+    pub particle_material: Option<String>,
+    /// Materials; without any, [`Material::default`] named `default`.
+    #[serde(default)]
+    pub material: Vec<Material>,
+    #[serde(default)]
+    pub contact: Contact,
+    /// The faces of `[domain]` act as walls (default: true when the scene defines no plane or box).
+    pub domain_walls: Option<bool>,
+    /// Material of the domain walls (default: the particle material).
+    pub domain_wall_material: Option<String>,
+    #[serde(default)]
+    pub plane: Vec<Plane>,
+    #[serde(rename = "box", default)]
+    pub boxes: Vec<BoxWall>,
+    /// Particles on a lattice with jitter.
+    #[serde(default)]
+    pub insert: Vec<Insert>,
+    /// Particles read from CSV files.
+    #[serde(default)]
+    pub csv: Vec<CsvInsert>,
+    #[serde(default)]
+    pub output: DemOutput,
+    /// Particles generated from `insert` and `csv`, filled by [`Dem::load`]: (sphere, material).
+    #[serde(skip)]
+    pub generated: Vec<(InitialParticle, String)>,
+}
+
+impl Default for Dem {
+    fn default() -> Self {
+        toml::from_str("").expect("every [dem] field has a default")
+    }
+}
+
+/// A solid's elastic and frictional properties.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Material {
+    pub name: String,
+    /// Young's modulus E [Pa].
+    #[serde(default = "default_young")]
+    pub young_modulus: f64,
+    /// Poisson's ratio nu [-], in [0, 0.5).
+    #[serde(default = "default_poisson")]
+    pub poisson_ratio: f64,
+    /// Coefficient of restitution e [-], in (0, 1].
+    #[serde(default = "default_restitution")]
+    pub restitution: f64,
+    /// Coulomb friction coefficient mu [-] (>= 0).
+    #[serde(default = "default_friction")]
+    pub friction: f64,
+    /// Rolling friction coefficient mu_r [-] (>= 0), used by `contact.rolling`.
+    #[serde(default)]
+    pub rolling_friction: f64,
+    /// Solid density [kg/m^3] (default: `particles.density`).
+    pub density: Option<f64>,
+}
+
+impl Default for Material {
+    /// A soft glass-like solid, E = 5 MPa as in the LIGGGHTS examples (real glass, 60 GPa, would
+    /// need a time step 100x smaller for the same result in a dense granular flow).
+    fn default() -> Self {
+        Self {
+            name: "default".into(),
+            young_modulus: default_young(),
+            poisson_ratio: default_poisson(),
+            restitution: default_restitution(),
+            friction: default_friction(),
+            rolling_friction: 0.0,
+            density: None,
+        }
+    }
+}
+
+/// The contact model: normal, tangential and rolling parts and the switches that select a
+/// reference code's variant of each.
+#[derive(Debug, Clone, Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+pub struct Contact {
+    /// `liggghts` (default) or `yade`.
+    #[serde(default)]
+    pub preset: Preset,
+    #[serde(default)]
+    pub normal: NormalLaw,
+    #[serde(default)]
+    pub tangential: TangentialLaw,
+    #[serde(default)]
+    pub rolling: RollingLaw,
+    /// Linear law: normal stiffness k_n [N/m].
+    pub normal_stiffness: Option<f64>,
+    /// Linear law: normal damping gamma_n [N s/m] (default: from the restitution).
+    pub normal_damping: Option<f64>,
+    /// Linear law: tangential stiffness k_t [N/m] (default k_n).
+    pub tangential_stiffness: Option<f64>,
+    /// Linear law: tangential damping gamma_t [N s/m] (default gamma_n).
+    pub tangential_damping: Option<f64>,
+    /// Linear law: contact time t_c [s]; k_n and gamma_n follow from it and the restitution.
+    pub contact_time: Option<f64>,
+    /// Hertz law: impact velocity for the contact time of the time-step rule [m/s]
+    /// (default sqrt(2 |g| H) + the fastest initial speed, H the domain height).
+    pub impact_velocity: Option<f64>,
+    pub damping_law: Option<DampingLaw>,
+    /// Normal force clamped to >= 0 (no attraction at the end of a damped contact).
+    pub clamp_normal_force: Option<bool>,
+    pub tangential_spring: Option<TangentialSpring>,
+    /// Effective radius of a sphere-wall contact = factor * r (LIGGGHTS 1, YADE 0.5).
+    pub wall_radius_factor: Option<f64>,
+    pub coulomb_normal: Option<CoulombNormal>,
+    pub lever_arm: Option<LeverArm>,
+}
+
+#[derive(Debug, Clone, Copy, Deserialize, Default, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum Preset {
+    #[default]
+    Liggghts,
+    Yade,
+}
+
+#[derive(Debug, Clone, Copy, Deserialize, Default, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum NormalLaw {
+    /// F = 4/3 E* sqrt(R*) d^(3/2) + damping.
+    #[default]
+    Hertz,
+    /// F = k_n d + gamma_n v_n (the seed paper's spring-dashpot).
+    Linear,
+}
+
+#[derive(Debug, Clone, Copy, Deserialize, Default, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum TangentialLaw {
+    /// Spring-dashpot with Coulomb slider and contact history.
+    #[default]
+    History,
+    /// Frictionless.
+    None,
+}
+
+#[derive(Debug, Clone, Copy, Deserialize, Default, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum RollingLaw {
+    #[default]
+    None,
+    /// Constant directional torque: M_r = -mu_r R* |F_n| w_rel / |w_rel|.
+    ConstantTorque,
+}
+
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum DampingLaw {
+    /// gamma = 2 sqrt(5/6) |beta| sqrt(S m*), beta = ln e / sqrt(ln^2 e + pi^2).
+    Liggghts,
+    /// gamma = 2 beta sqrt(m* S), beta from e by Thornton et al. 2013 (B6/B7).
+    Thornton,
+}
+
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum TangentialSpring {
+    /// F_t = -k_t xi, xi the total shear displacement (LIGGGHTS).
+    Total,
+    /// F_t += -k_t v_t dt, the force rotated with the contact (YADE).
+    Incremental,
+}
+
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum CoulombNormal {
+    /// mu |F_n| of the total normal force, damping included (LIGGGHTS).
+    Absolute,
+    /// mu max(F_n, 0) (YADE).
+    Clamped,
+}
+
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum LeverArm {
+    /// r - d/2: the contact point in the middle of the overlap (LIGGGHTS).
+    ContactPoint,
+    /// r (YADE).
+    Radius,
+}
+
+/// An infinite plane wall; particles live on the side `normal` points to.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Plane {
+    pub point: [f64; 3],
+    pub normal: [f64; 3],
+    pub material: Option<String>,
+}
+
+/// An axis-aligned box: a container (`inside = true`, particles inside) or a solid obstacle.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BoxWall {
+    pub min: [f64; 3],
+    pub max: [f64; 3],
+    #[serde(default = "yes")]
+    pub inside: bool,
+    pub material: Option<String>,
+}
+
+/// Spheres on a simple cubic lattice, each moved by a random offset of at most `jitter` per axis,
+/// radii uniform in `radius` = [min, max] (or one value).
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Insert {
+    pub origin: [f64; 3],
+    pub count: [u64; 3],
+    pub spacing: f64,
+    pub radius: Radius,
+    #[serde(default)]
+    pub jitter: f64,
+    #[serde(default)]
+    pub velocity: [f64; 3],
+    #[serde(default = "default_seed")]
+    pub seed: u64,
+    pub material: Option<String>,
+}
+
+/// One radius or a range [min, max].
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(untagged)]
+pub enum Radius {
+    One(f64),
+    Range([f64; 2]),
+}
+
+impl Radius {
+    pub fn bounds(self) -> [f64; 2] {
+        match self {
+            Radius::One(r) => [r, r],
+            Radius::Range(b) => b,
+        }
+    }
+}
+
+/// Particles from a CSV file with a header naming at least `x,y,z,r` (or `radius`); optional
+/// `vx,vy,vz,wx,wy,wz`. A relative path is taken from the scene file's folder, else the working
+/// folder.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CsvInsert {
+    pub file: PathBuf,
+    pub material: Option<String>,
+}
+
+/// What `dem-client run` writes besides particles.csv and energy.csv.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DemOutput {
+    /// VTK polydata (particles_NNNNNN.vtp and particles.pvd) every `output.interval` steps.
+    #[serde(default = "yes")]
+    pub vtk: bool,
+}
+
+impl Default for DemOutput {
+    fn default() -> Self {
+        Self { vtk: true }
+    }
+}
+
+fn default_dt_divisor() -> f64 {
+    50.0
+}
+fn default_young() -> f64 {
+    5.0e6
+}
+fn default_poisson() -> f64 {
+    0.3
+}
+fn default_restitution() -> f64 {
+    0.9
+}
+fn default_friction() -> f64 {
+    0.5
+}
+fn default_seed() -> u64 {
+    1
+}
+fn yes() -> bool {
+    true
+}
+
+fn fail(
+    file: &str,
+    field: impl Into<String>,
+    value: impl ToString,
+    problem: impl Into<String>,
+) -> SceneError {
+    SceneError {
+        file: file.to_string(),
+        field: field.into(),
+        value: value.to_string(),
+        problem: problem.into(),
+    }
+}
+
+fn vec3(v: [f64; 3]) -> String {
+    format!("[{}, {}, {}]", v[0], v[1], v[2])
+}
+
+fn positive(file: &str, field: &str, v: f64, unit: &str) -> Result<(), SceneError> {
+    if v.is_finite() && v > 0.0 {
+        Ok(())
+    } else {
+        Err(fail(
+            file,
+            field,
+            format!("{v} {unit}"),
+            "must be a finite number > 0",
+        ))
+    }
+}
+
+fn finite3(file: &str, field: &str, v: [f64; 3], unit: &str) -> Result<(), SceneError> {
+    if v.iter().all(|x| x.is_finite()) {
+        Ok(())
+    } else {
+        Err(fail(
+            file,
+            field,
+            format!("{} {unit}", vec3(v)),
+            "every component must be finite",
+        ))
+    }
+}
+
+impl Dem {
+    /// The materials, with the built-in default when the scene names none.
+    pub fn materials(&self) -> Vec<Material> {
+        if self.material.is_empty() {
+            vec![Material::default()]
+        } else {
+            self.material.clone()
+        }
+    }
+
+    /// Index into [`Dem::materials`] of a material name (`None`: the particle material).
+    pub fn material_index(&self, name: Option<&str>) -> usize {
+        let name = name.or(self.particle_material.as_deref());
+        name.and_then(|n| self.materials().iter().position(|m| m.name == n))
+            .unwrap_or(0)
+    }
+
+    /// Do the domain faces act as walls?
+    pub fn uses_domain_walls(&self) -> bool {
+        self.domain_walls
+            .unwrap_or(self.plane.is_empty() && self.boxes.is_empty())
+    }
+
+    /// Checks the `[dem]` fields and reads the CSV files; fills [`Dem::generated`].
+    pub fn load(&mut self, file: &str) -> Result<(), SceneError> {
+        self.validate_settings(file)?;
+        self.validate_materials(file)?;
+        self.validate_contact(file)?;
+        self.validate_walls(file)?;
+        let mut generated = Vec::new();
+        for (i, ins) in self.insert.iter().enumerate() {
+            validate_insert(file, i, ins)?;
+            let material = self.material_name(ins.material.as_deref());
+            generated.extend(lattice(ins).into_iter().map(|p| (p, material.clone())));
+        }
+        for (i, csv) in self.csv.iter().enumerate() {
+            let material = self.material_name(csv.material.as_deref());
+            let spheres = read_csv(file, i, &csv.file)?;
+            generated.extend(spheres.into_iter().map(|p| (p, material.clone())));
+        }
+        self.generated = generated;
+        Ok(())
+    }
+
+    fn material_name(&self, name: Option<&str>) -> String {
+        self.materials()[self.material_index(name)].name.clone()
+    }
+
+    fn validate_settings(&self, file: &str) -> Result<(), SceneError> {
+        if let Some(dt) = self.dt {
+            positive(file, "dem.dt", dt, "s")?;
+        }
+        positive(file, "dem.dt_divisor", self.dt_divisor, "")?;
+        if self.dt_divisor < 10.0 {
+            return Err(fail(
+                file,
+                "dem.dt_divisor",
+                self.dt_divisor,
+                "must be at least 10 (a contact needs at least 10 steps)",
+            ));
+        }
+        if let Some(skin) = self.skin {
+            positive(file, "dem.skin", skin, "m")?;
+        }
+        Ok(())
+    }
+
+    fn validate_materials(&self, file: &str) -> Result<(), SceneError> {
+        for (i, m) in self.material.iter().enumerate() {
+            let field = |f: &str| format!("dem.material[{i}].{f}");
+            if m.name.is_empty() || self.material[..i].iter().any(|o| o.name == m.name) {
+                return Err(fail(
+                    file,
+                    field("name"),
+                    format!("{:?}", m.name),
+                    "must be non-empty and unique",
+                ));
+            }
+            positive(file, &field("young_modulus"), m.young_modulus, "Pa")?;
+            if !(0.0..0.5).contains(&m.poisson_ratio) {
+                return Err(fail(
+                    file,
+                    field("poisson_ratio"),
+                    m.poisson_ratio,
+                    "must lie in [0, 0.5)",
+                ));
+            }
+            if !(m.restitution > 0.0 && m.restitution <= 1.0) {
+                return Err(fail(
+                    file,
+                    field("restitution"),
+                    m.restitution,
+                    "must lie in (0, 1]",
+                ));
+            }
+            for (name, v) in [("friction", m.friction), ("rolling_friction", m.rolling_friction)] {
+                if !(v.is_finite() && v >= 0.0) {
+                    return Err(fail(file, field(name), v, "must be a finite number >= 0"));
+                }
+            }
+            if let Some(rho) = m.density {
+                positive(file, &field("density"), rho, "kg/m^3")?;
+            }
+        }
+        let names: Vec<(String, Option<&String>)> = [
+            (
+                "dem.particle_material".to_string(),
+                self.particle_material.as_ref(),
+            ),
+            (
+                "dem.domain_wall_material".to_string(),
+                self.domain_wall_material.as_ref(),
+            ),
+        ]
+        .into_iter()
+        .chain(
+            self.plane
+                .iter()
+                .enumerate()
+                .map(|(i, p)| (format!("dem.plane[{i}].material"), p.material.as_ref())),
+        )
+        .chain(
+            self.boxes
+                .iter()
+                .enumerate()
+                .map(|(i, b)| (format!("dem.box[{i}].material"), b.material.as_ref())),
+        )
+        .chain(
+            self.insert
+                .iter()
+                .enumerate()
+                .map(|(i, b)| (format!("dem.insert[{i}].material"), b.material.as_ref())),
+        )
+        .chain(
+            self.csv
+                .iter()
+                .enumerate()
+                .map(|(i, b)| (format!("dem.csv[{i}].material"), b.material.as_ref())),
+        )
+        .collect();
+        let known: Vec<String> = self.materials().into_iter().map(|m| m.name).collect();
+        for (field, name) in names {
+            if let Some(name) = name.filter(|n| !known.contains(n)) {
+                return Err(fail(
+                    file,
+                    field,
+                    format!("{name:?}"),
+                    format!("no such material (known: {})", known.join(", ")),
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    fn validate_contact(&self, file: &str) -> Result<(), SceneError> {
+        let c = &self.contact;
+        let optional = [
+            ("dem.contact.normal_stiffness", c.normal_stiffness, "N/m"),
+            ("dem.contact.normal_damping", c.normal_damping, "N s/m"),
+            ("dem.contact.tangential_stiffness", c.tangential_stiffness, "N/m"),
+            ("dem.contact.tangential_damping", c.tangential_damping, "N s/m"),
+            ("dem.contact.contact_time", c.contact_time, "s"),
+            ("dem.contact.impact_velocity", c.impact_velocity, "m/s"),
+            ("dem.contact.wall_radius_factor", c.wall_radius_factor, ""),
+        ];
+        for (field, v, unit) in optional {
+            match v {
+                Some(v) if field.ends_with("damping") && v.is_finite() && v >= 0.0 => {}
+                Some(v) => positive(file, field, v, unit)?,
+                None => {}
+            }
+        }
+        let linear_only = [
+            ("normal_stiffness", c.normal_stiffness),
+            ("normal_damping", c.normal_damping),
+            ("tangential_stiffness", c.tangential_stiffness),
+            ("tangential_damping", c.tangential_damping),
+            ("contact_time", c.contact_time),
+        ];
+        match c.normal {
+            NormalLaw::Hertz => {
+                if let Some((name, v)) = linear_only.iter().find(|(_, v)| v.is_some()) {
+                    return Err(fail(
+                        file,
+                        format!("dem.contact.{name}"),
+                        v.unwrap(),
+                        "applies to normal = \"linear\" only (Hertz takes its stiffness from the materials)",
+                    ));
+                }
+            }
+            NormalLaw::Linear => {
+                if c.normal_stiffness.is_some() == c.contact_time.is_some() {
+                    return Err(fail(
+                        file,
+                        "dem.contact.normal",
+                        "\"linear\"",
+                        "needs exactly one of normal_stiffness [N/m] or contact_time [s]",
+                    ));
+                }
+                if let (Some(_), Some(damping)) = (c.contact_time, c.normal_damping) {
+                    return Err(fail(
+                        file,
+                        "dem.contact.normal_damping",
+                        damping,
+                        "cannot be given with contact_time (the damping follows from it and the restitution)",
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    fn validate_walls(&self, file: &str) -> Result<(), SceneError> {
+        for (i, p) in self.plane.iter().enumerate() {
+            finite3(file, &format!("dem.plane[{i}].point"), p.point, "m")?;
+            let n = p.normal;
+            if !n.iter().all(|x| x.is_finite()) || n.iter().map(|x| x * x).sum::<f64>() == 0.0 {
+                return Err(fail(
+                    file,
+                    format!("dem.plane[{i}].normal"),
+                    vec3(n),
+                    "must be a finite, non-zero vector",
+                ));
+            }
+        }
+        for (i, b) in self.boxes.iter().enumerate() {
+            finite3(file, &format!("dem.box[{i}].min"), b.min, "m")?;
+            finite3(file, &format!("dem.box[{i}].max"), b.max, "m")?;
+            if let Some(a) = (0..3).find(|&a| b.max[a] <= b.min[a]) {
+                return Err(fail(
+                    file,
+                    format!("dem.box[{i}].max[{a}]"),
+                    format!("{} m", b.max[a]),
+                    format!("must be greater than min[{a}] = {} m", b.min[a]),
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+fn validate_insert(file: &str, i: usize, ins: &Insert) -> Result<(), SceneError> {
+    let field = |f: &str| format!("dem.insert[{i}].{f}");
+    finite3(file, &field("origin"), ins.origin, "m")?;
+    finite3(file, &field("velocity"), ins.velocity, "m/s")?;
+    if ins.count.contains(&0) || ins.count.iter().product::<u64>() > crate::MAX_PARTICLES {
+        let value = format!("[{}, {}, {}]", ins.count[0], ins.count[1], ins.count[2]);
+        return Err(fail(
+            file,
+            field("count"),
+            value,
+            format!(
+                "every count must be at least 1, at most {} particles",
+                crate::MAX_PARTICLES
+            ),
+        ));
+    }
+    positive(file, &field("spacing"), ins.spacing, "m")?;
+    let [lo, hi] = ins.radius.bounds();
+    positive(file, &field("radius"), lo, "m")?;
+    positive(file, &field("radius"), hi, "m")?;
+    if hi < lo {
+        return Err(fail(
+            file,
+            field("radius"),
+            format!("[{lo}, {hi}] m"),
+            "min must not exceed max",
+        ));
+    }
+    if !(ins.jitter.is_finite() && ins.jitter >= 0.0) {
+        return Err(fail(
+            file,
+            field("jitter"),
+            format!("{} m", ins.jitter),
+            "must be a finite number >= 0",
+        ));
+    }
+    let gap = ins.spacing - 2.0 * hi;
+    if ins.count.iter().any(|n| *n > 1) && 2.0 * ins.jitter > gap.max(0.0) + 1e-15 {
+        return Err(fail(
+            file,
+            field("jitter"),
+            format!("{} m", ins.jitter),
+            format!(
+                "spheres of radius up to {hi} m at spacing {} m may overlap: jitter must be at most (spacing - 2 r_max) / 2 = {} m",
+                ins.spacing,
+                gap.max(0.0) / 2.0
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// SplitMix64: a small, reproducible random source for jitter and radii.
+struct SplitMix(u64);
+
+impl SplitMix {
+    fn next(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+
+    /// Uniform in [0, 1).
+    fn unit(&mut self) -> f64 {
+        (self.next() >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
+/// The spheres of one lattice insertion (ids 0..; renumbered by the scene).
+fn lattice(ins: &Insert) -> Vec<InitialParticle> {
+    let mut rng = SplitMix(ins.seed);
+    let [lo, hi] = ins.radius.bounds();
+    let [nx, ny, nz] = ins.count;
+    let mut out = Vec::with_capacity((nx * ny * nz) as usize);
+    for k in 0..nz {
+        for j in 0..ny {
+            for i in 0..nx {
+                let ijk = [i, j, k];
+                let position = std::array::from_fn(|a| {
+                    ins.origin[a] + ijk[a] as f64 * ins.spacing + ins.jitter * (2.0 * rng.unit() - 1.0)
+                });
+                let radius = lo + (hi - lo) * rng.unit();
+                out.push(InitialParticle {
+                    id: 0,
+                    position,
+                    velocity: ins.velocity,
+                    angular_velocity: [0.0; 3],
+                    radius,
+                });
+            }
+        }
+    }
+    out
+}
+
+/// Where a CSV path points: absolute as is; relative, next to the scene file, else the working folder.
+fn resolve(scene_file: &str, path: &Path) -> PathBuf {
+    if path.is_absolute() {
+        return path.to_path_buf();
+    }
+    let beside = Path::new(scene_file).parent().map(|d| d.join(path));
+    match beside {
+        Some(p) if p.is_file() => p,
+        _ => path.to_path_buf(),
+    }
+}
+
+fn read_csv(file: &str, i: usize, path: &Path) -> Result<Vec<InitialParticle>, SceneError> {
+    let field = format!("dem.csv[{i}].file");
+    let resolved = resolve(file, path);
+    let shown = format!("{:?}", path.display().to_string());
+    let text = std::fs::read_to_string(&resolved).map_err(|e| {
+        fail(
+            file,
+            &field,
+            &shown,
+            format!("cannot read {}: {e}", resolved.display()),
+        )
+    })?;
+    let mut lines = text
+        .lines()
+        .enumerate()
+        .filter(|(_, l)| !l.trim().is_empty() && !l.starts_with('#'));
+    let header: Vec<String> = match lines.next() {
+        Some((_, h)) => h.split(',').map(|c| c.trim().to_ascii_lowercase()).collect(),
+        None => return Err(fail(file, &field, &shown, "is empty (needs a header x,y,z,r)")),
+    };
+    let col = |names: &[&str]| header.iter().position(|h| names.contains(&h.as_str()));
+    let (Some(x), Some(y), Some(z), Some(r)) = (col(&["x"]), col(&["y"]), col(&["z"]), col(&["r", "radius"]))
+    else {
+        return Err(fail(
+            file,
+            &field,
+            &shown,
+            "the header must name the columns x, y, z and r (or radius)",
+        ));
+    };
+    let optional = ["vx", "vy", "vz", "wx", "wy", "wz"].map(|n| col(&[n]));
+    let mut out = Vec::new();
+    for (row, line) in lines {
+        let cells: Vec<&str> = line.split(',').map(str::trim).collect();
+        let num = |c: Option<usize>| -> Result<f64, SceneError> {
+            let Some(c) = c else { return Ok(0.0) };
+            let cell = cells.get(c).copied().unwrap_or("");
+            cell.parse::<f64>().ok().filter(|v| v.is_finite()).ok_or_else(|| {
+                fail(
+                    file,
+                    format!("{field} line {} column {}", row + 1, header[c]),
+                    format!("{cell:?}"),
+                    "must be a finite number",
+                )
+            })
+        };
+        let radius = num(Some(r))?;
+        if radius <= 0.0 {
+            return Err(fail(
+                file,
+                format!("{field} line {} column r", row + 1),
+                format!("{radius} m"),
+                "must be a finite number > 0",
+            ));
+        }
+        out.push(InitialParticle {
+            id: 0,
+            position: [num(Some(x))?, num(Some(y))?, num(Some(z))?],
+            velocity: [num(optional[0])?, num(optional[1])?, num(optional[2])?],
+            angular_velocity: [num(optional[3])?, num(optional[4])?, num(optional[5])?],
+            radius,
+        });
+    }
+    Ok(out)
+}
+
+/// Largest allowed initial overlap of a sphere with a wall, as a fraction of its radius.
+pub const MAX_INITIAL_WALL_OVERLAP: f64 = crate::MAX_INITIAL_OVERLAP;
+
+/// After the scene's own checks: generated particles inside the domain, no sphere deep in a wall.
+pub fn validate_placement(scene: &Scene, file: &str) -> Result<(), SceneError> {
+    let base = scene.particle_count() as usize - scene.dem.generated.len();
+    let particles = scene.initial_particles();
+    for p in &particles[base..] {
+        let (lo, hi) = (scene.domain.min, scene.domain.max);
+        if let Some(a) =
+            (0..3).find(|&a| p.position[a] - p.radius < lo[a] || p.position[a] + p.radius > hi[a])
+        {
+            return Err(fail(
+                file,
+                format!("dem particle id {}", p.id),
+                format!("{} m", vec3(p.position)),
+                format!(
+                    "a sphere of radius {} m there leaves the domain [{}, {}] m along axis {a}",
+                    p.radius, lo[a], hi[a]
+                ),
+            ));
+        }
+    }
+    for p in &particles {
+        for (field, depth) in wall_overlaps(scene, p) {
+            if depth > MAX_INITIAL_WALL_OVERLAP * p.radius {
+                return Err(fail(
+                    file,
+                    format!("particles (id {}) against {field}", p.id),
+                    format!("overlap {depth:.3e} m"),
+                    format!(
+                        "the sphere overlaps the wall by more than {}% of its radius at the start",
+                        MAX_INITIAL_WALL_OVERLAP * 100.0
+                    ),
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// (wall field, overlap depth [m]) of one sphere with each wall of the scene.
+fn wall_overlaps(scene: &Scene, p: &InitialParticle) -> Vec<(String, f64)> {
+    let x = p.position;
+    let mut out = Vec::new();
+    for (i, w) in scene.dem.plane.iter().enumerate() {
+        let len = w.normal.iter().map(|v| v * v).sum::<f64>().sqrt();
+        let dist: f64 = (0..3).map(|a| (x[a] - w.point[a]) * w.normal[a] / len).sum();
+        out.push((format!("dem.plane[{i}]"), p.radius - dist));
+    }
+    for (i, b) in scene.dem.boxes.iter().enumerate() {
+        let depth = if b.inside {
+            (0..3)
+                .map(|a| p.radius - (x[a] - b.min[a]).min(b.max[a] - x[a]))
+                .fold(f64::MIN, f64::max)
+        } else {
+            let d2: f64 = (0..3)
+                .map(|a| (x[a] - x[a].clamp(b.min[a], b.max[a])).powi(2))
+                .sum();
+            p.radius - d2.sqrt()
+        };
+        out.push((format!("dem.box[{i}]"), depth));
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::Scene;
+
+    const BASE: &str = r#"name = "t"
+[domain]
+min = [0.0, 0.0, 0.0]
+max = [0.1, 0.1, 0.1]
+[fluid]
+density = 1.2
+dynamic_viscosity = 1.8e-5
+[time]
+dt = 1.0e-4
+steps = 10
+[particles]
+density = 2500.0
+"#;
+
+    fn parse(extra: &str) -> Result<Scene, String> {
+        Scene::parse(&format!("{BASE}{extra}"), "s.toml").map_err(|e| e.to_string())
+    }
+
+    #[test]
+    fn a_scene_without_dem_section_gets_the_defaults() {
+        let s = parse("[[particles.sphere]]\nposition = [0.05, 0.05, 0.05]\nradius = 0.001\n").unwrap();
+        assert_eq!(s.dem.dt_divisor, 50.0);
+        assert!(s.dem.uses_domain_walls());
+        assert_eq!(s.dem.materials()[0].young_modulus, 5.0e6);
+        assert!(s.dem.output.vtk);
+    }
+
+    #[test]
+    fn lattice_with_jitter_is_reproducible_and_polydisperse() {
+        let extra = "[[dem.insert]]\norigin = [0.01, 0.01, 0.01]\ncount = [4, 4, 4]\nspacing = 0.01\nradius = [0.002, 0.004]\njitter = 0.001\n";
+        let a = parse(extra).unwrap();
+        let b = parse(extra).unwrap();
+        assert_eq!(a.particle_count(), 64);
+        assert_eq!(a.initial_particles(), b.initial_particles());
+        let radii: Vec<f64> = a.initial_particles().iter().map(|p| p.radius).collect();
+        assert!(radii.iter().any(|r| *r > 0.003) && radii.iter().any(|r| *r < 0.003));
+    }
+
+    #[test]
+    fn bad_dem_fields_are_named() {
+        let e = parse("[[dem.insert]]\norigin = [0.01, 0.01, 0.01]\ncount = [2, 1, 1]\nspacing = 0.01\nradius = -0.001\n")
+            .unwrap_err();
+        assert_eq!(
+            e,
+            "s.toml: dem.insert[0].radius = -0.001 m: must be a finite number > 0"
+        );
+        let e = parse("[dem]\ndt = 0.0\n").unwrap_err();
+        assert!(e.starts_with("s.toml: dem.dt = 0 s:"), "{e}");
+        let e = parse("[[dem.material]]\nname = \"a\"\nrestitution = 1.5\n").unwrap_err();
+        assert!(e.starts_with("s.toml: dem.material[0].restitution = 1.5:"), "{e}");
+        let e = parse("[dem.contact]\nnormal = \"linear\"\n").unwrap_err();
+        assert!(e.contains("dem.contact.normal"), "{e}");
+        let e = parse("[dem]\nparticle_material = \"steel\"\n").unwrap_err();
+        assert!(e.contains("no such material"), "{e}");
+    }
+
+    #[test]
+    fn sphere_in_a_wall_is_refused() {
+        let e = parse(
+            "[[particles.sphere]]\nposition = [0.05, 0.05, 0.0105]\nradius = 0.001\n[[dem.plane]]\npoint = [0.0, 0.0, 0.01]\nnormal = [0.0, 0.0, 1.0]\n",
+        )
+        .unwrap_err();
+        assert!(e.contains("particles (id 0) against dem.plane[0]"), "{e}");
+        assert!(e.contains("overlaps the wall"), "{e}");
+    }
+
+    #[test]
+    fn csv_insertion_reads_columns() {
+        let dir = std::env::temp_dir().join(format!("scene-dem-csv-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        std::fs::write(
+            dir.join("p.csv"),
+            "x,y,z,r,vz\n0.05,0.05,0.05,0.002,-1.0\n0.02,0.02,0.02,0.003,0\n",
+        )
+        .unwrap();
+        let text = format!("{BASE}[[dem.csv]]\nfile = \"p.csv\"\n");
+        let path = dir.join("s.toml");
+        std::fs::write(&path, text).unwrap();
+        let s = Scene::load(&path).unwrap();
+        let p = s.initial_particles();
+        assert_eq!(p.len(), 2);
+        assert_eq!(p[0].velocity, [0.0, 0.0, -1.0]);
+        assert_eq!(p[1].radius, 0.003);
+        std::fs::write(dir.join("p.csv"), "x,y,z,r\n0.05,0.05,0.05,0\n").unwrap();
+        let e = Scene::load(&path).unwrap_err().to_string();
+        assert!(e.contains("dem.csv[0].file line 2 column r = 0 m"), "{e}");
+    }
+}
