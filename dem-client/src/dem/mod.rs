@@ -8,6 +8,8 @@ pub mod world;
 
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod validation;
 
 use contact::{coefficients, Contact, ContactLaw};
 use scene::dem::NormalLaw;
