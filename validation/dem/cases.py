@@ -108,7 +108,7 @@ def oblique_params(angle_deg):
 POUR = dict(
     n=2000, box_m=[0.04, 0.04], lattice_spacing_m=0.0047, lattice_n_xy=8, lattice_origin_m=0.0025,
     jitter_m=1.0e-4, radius_mean_m=R0, radius_halfwidth_rel=0.1,
-    gravity_m_s2=[0.0, 0.0, -9.81], dt_s=5.0e-6, t_end_s=0.6, ke_every_steps=400,
+    gravity_m_s2=[0.0, 0.0, -9.81], dt_s=5.0e-6, t_end_s=float(os.environ.get("POUR_T_END_S", "0.6")), ke_every_steps=400,
     friction=MAT["friction"], model="hertz",
     walls="floor z = 0 (normal +z); side walls x = 0, x = 0.04, y = 0, y = 0.04; open top; all fixed planes, same material",
 )

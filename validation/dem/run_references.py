@@ -93,7 +93,8 @@ SWITCHES = {
         "wall": "fix wall/gran model hooke/stiffness tangential history primitive type 1 zplane 0.0 absolute_damping on",
         "normal_force": "Fn = kn d + cn v_n (v_n approach speed); NO clamp: Fn may become attractive at the end of contact",
         "tangential": "total shear displacement xi (projected onto the tangent plane each step); Ft = -kt xi - ct v_t; "
-                      "if |Ft| > mu |Fn| Ft is scaled to mu |Fn| (Fn incl. damping)",
+                      "if kt |xi| > mu |Fn| (Fn incl. damping, absolute value) Ft is scaled to mu |Fn|",
+        "limitForce": "off (default); the variant drop_linear_limitforce turns it on (clamp Fn >= 0, as YADE)",
         "material_values": "kn, kt, gamman_abs (=cn), gammat_abs (=ct) given per type pair = the contact values",
         "integrator": "velocity Verlet (nve/sphere)",
     },
@@ -103,7 +104,9 @@ SWITCHES = {
         "normal_force": "Fn = 4/3 Y* sqrt(R*) d^1.5 + gamma_n v_n, gamma_n = 2 sqrt(5/6) |beta| sqrt(2 Y* sqrt(R* d) m*), "
                         "beta = ln e / sqrt(ln^2 e + pi^2), Y* = E / (2 (1 - nu^2)); NO clamp",
         "tangential": "kt = 8 G* sqrt(R* d), G* = E / (4 (2 - nu)(1 + nu)); gamma_t = 2 sqrt(5/6) |beta| sqrt(kt m*); "
-                      "total shear displacement; Coulomb limit mu |Fn| (Fn incl. damping), no damping when sliding",
+                      "total shear displacement; Coulomb limit mu |Fn| (Fn incl. damping), no damping when sliding; "
+                      "while kt |xi| is below the limit the damping -gamma_t v_t is added on top, so |Ft| can exceed mu |Fn| "
+                      "at the start of a contact (tangential_damping on, the default)",
         "lever_arm": "r - d/2",
         "integrator": "velocity Verlet (nve/sphere)",
     },
@@ -114,6 +117,7 @@ SWITCHES = {
         "wall": "utils.wall(0, axis=2, sense=1) (massless, fixed)",
         "normal_force": "Fn = kn d + cn v_n, CLAMPED to Fn >= 0",
         "tangential": "incremental shear force (rotated each step), Coulomb limit tan(phi) x clamped Fn",
+        "lever_arm": "r - d/2 (force applied at the contact point)",
         "integrator": "leapfrog (NewtonIntegrator damping = 0)",
     },
     ("yade", "hertz"): {
@@ -121,9 +125,13 @@ SWITCHES = {
         "functors": "Ig2_Sphere_Sphere_ScGeom, Ig2_Wall_Sphere_ScGeom, Ip2_FrictMat_FrictMat_MindlinPhys(en=e, es=e), "
                     "Law2_ScGeom_MindlinPhys_Mindlin",
         "wall": "utils.wall(...) (massless, fixed); Mindlin uses R = r/2 for a sphere-wall contact (LIGGGHTS: r)",
-        "normal_force": "Fn = 4/3 E* sqrt(R) d^1.5 + viscous term from en (YADE's own damping law), CLAMPED to Fn >= 0",
+        "normal_force": "Fn = 4/3 E* sqrt(R) d^1.5 + cn v_n, cn = 2 beta_n sqrt(mbar kn_tangent), kn_tangent = 2 E* sqrt(R d), "
+                        "beta_n from en by Thornton et al. 2013 eq. B6 (calibrated for the clamped force), "
+                        "mbar = m for a fixed wall; CLAMPED to Fn >= 0",
         "tangential": "ks = 4 Gbar sqrt(R d) / (2 - nubar) (tangent stiffness, incremental shear force rotated each step); "
-                      "Coulomb limit tan(phi) x clamped Fn",
+                      "shear damping cs = 2 beta_s sqrt(mbar ks) from es = e; Coulomb limit tan(phi) x clamped Fn on the elastic "
+                      "part; when the elastic part is below the limit the damping is added on top (total may exceed the limit)",
+        "lever_arm": "force applied at the contact point (midway in the overlap): r - d/2 for equal spheres",
         "integrator": "leapfrog (NewtonIntegrator damping = 0)",
     },
 }
@@ -328,8 +336,59 @@ def plot_oblique(out):
     fig.savefig(os.path.join(REF, "oblique.png"), dpi=110)
 
 
+def table():
+    """Markdown table of all results (both codes side by side), for README.md."""
+    def load(n):
+        p = os.path.join(REF, n)
+        return json.load(open(p)) if os.path.exists(p) else None
+    out = ["| case | quantity | LIGGGHTS | YADE |", "|---|---|---|---|"]
+    for m in ("linear", "hertz"):
+        L, Y = load(f"drop_{m}_liggghts.json"), load(f"drop_{m}_yade.json")
+        if not (L and Y):
+            continue
+        for k, lab, f, s in (("restitution", "restitution", "%.5f", 1), ("contact_duration_s", "contact duration [us]", "%.2f", 1e6),
+                             ("peak_overlap_m", "peak overlap [um]", "%.3f", 1e6)):
+            out.append(f"| drop {m} | {lab} | {f % (L[k] * s)} | {f % (Y[k] * s)} |")
+        for d in (L, Y):
+            for vn, v in d.get("variants", {}).items():
+                cell = "e = %.5f, %.2f us, %.3f um" % (v["restitution"], v["contact_duration_s"] * 1e6, v["peak_overlap_m"] * 1e6)
+                out.append(f"| drop {m} | variant `{vn}` | {cell if d['code'] == 'liggghts' else ''} | {cell if d['code'] == 'yade' else ''} |")
+    vec = lambda v: "(" + ", ".join("%.5f" % x for x in v[:2]) + ")"
+    for m in ("hertz", "linear"):
+        for a in cases.OBLIQUE_ANGLES:
+            L, Y = load(f"oblique_{m}_{a}_liggghts.json"), load(f"oblique_{m}_{a}_yade.json")
+            if not (L and Y):
+                continue
+            c = f"oblique {m} {a} deg"
+            out.append(f"| {c} | v1 (x, y) [m/s] (v2 = -v1) | {vec(L['post']['v1'])} | {vec(Y['post']['v1'])} |")
+            out.append(f"| {c} | w1_z = w2_z [rad/s] | %.3f | %.3f |" % (L["post"]["w1"][2], Y["post"]["w1"][2]))
+            out.append(f"| {c} | normal restitution | %.4f | %.4f |" % (L["normal_restitution"], Y["normal_restitution"]))
+            out.append(f"| {c} | contact slip ratio after/before | %.4f | %.4f |" % (L["tangential_contact_velocity_ratio"], Y["tangential_contact_velocity_ratio"]))
+            out.append(f"| {c} | contact duration [us] | %.2f | %.2f |" % (L["contact_duration_s"] * 1e6, Y["contact_duration_s"] * 1e6))
+    L, Y = load("pour_liggghts.json"), load("pour_yade.json")
+    if L and Y:
+        pf = lambda d: "%.4f +- %.4f (runs: %s)" % (d["packing_fraction"], d["packing_fraction_std"] or 0,
+                                                    ", ".join("%.4f" % x for x in d["packing_fraction_runs"]))
+        out.append(f"| pour | packing fraction (mean +- std) | {pf(L)} | {pf(Y)} |")
+        bh = lambda d: "%.2f (runs: %s)" % (d["bed_height_m"] * 1e3, ", ".join("%.2f" % (x * 1e3) for x in d["bed_height_m_runs"]))
+        out.append(f"| pour | bed height [mm] | {bh(L)} | {bh(Y)} |")
+        ke = lambda d: "%.2e" % d["kinetic_energy_J"][-1][1]
+        out.append(f"| pour | KE at 0.6 s [J] ({L['kinetic_energy_J_run']} / {Y['kinetic_energy_J_run']}) | {ke(L)} | {ke(Y)} |")
+        tl = L["timings"]
+        out.append("| pour | particle-steps/s, 1 process | %.3g (runs: %s) | -j1: %.3g |" % (
+            L["particle_steps_per_second"], ", ".join("%.3g" % v["particle_steps_per_second"] for v in tl.values()),
+            Y.get("particle_steps_per_second_j1", float("nan"))))
+        out.append("| pour | particle-steps/s, YADE -j2 | | %.3g |" % Y.get("particle_steps_per_second_j2", float("nan")))
+        out.append("| pour | wall time per run [s] | %s | %s |" % (
+            ", ".join("%.1f" % v["wall_time_s"] for v in tl.values()),
+            ", ".join("%s: %.1f" % (k.replace("yade_", ""), v["wall_time_s"]) for k, v in Y["timings"].items())))
+    return "\n".join(out)
+
+
 if __name__ == "__main__":
     which = sys.argv[1:] or ["drop", "oblique", "pour"]
+    if "table" in which:
+        print(table())
     if "drop" in which:
         drop_case()
     if "oblique" in which:
