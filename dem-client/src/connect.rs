@@ -228,9 +228,7 @@ impl Particles {
             b.f_ext = V3::from(r.force);
             b.t_ext = V3::from(r.torque);
         }
-        for _ in 0..k {
-            self.world.step();
-        }
+        self.world.advance(k);
     }
 
     /// Test aid: removes the last particle or inserts a copy of the first with a fresh id, next to

@@ -114,18 +114,30 @@ pub struct PairMaterial {
     pub friction: f64,
     /// Rolling friction mu_r = min.
     pub rolling_friction: f64,
+    /// Damping factor f of gamma = f sqrt(S m*) under each law (index: `DampingLaw as usize`):
+    /// LIGGGHTS 2 sqrt(5/6) |beta|, Thornton 2 beta_T. Precomputed: ln, exp and the polynomial
+    /// stay out of the contact loop.
+    pub damping_factor: [f64; 2],
+    /// sqrt(4 G* / Y*) = sqrt(k_t / S_n) of the Hertz-Mindlin law.
+    pub shear_to_normal_sqrt: f64,
 }
 
 impl PairMaterial {
     pub fn mix(a: &Material, b: &Material) -> PairMaterial {
         let y = |m: &Material| (1.0 - m.poisson_ratio.powi(2)) / m.young_modulus;
         let g = |m: &Material| 2.0 * (2.0 - m.poisson_ratio) * (1.0 + m.poisson_ratio) / m.young_modulus;
+        let (y_star, g_star) = (1.0 / (y(a) + y(b)), 1.0 / (g(a) + g(b)));
         PairMaterial {
-            y_star: 1.0 / (y(a) + y(b)),
-            g_star: 1.0 / (g(a) + g(b)),
+            y_star,
+            g_star,
+            shear_to_normal_sqrt: (4.0 * g_star / y_star).sqrt(),
             restitution: a.restitution.min(b.restitution),
             friction: a.friction.min(b.friction),
             rolling_friction: a.rolling_friction.min(b.rolling_friction),
+            damping_factor: [
+                damping_factor(DampingLaw::Liggghts, a.restitution.min(b.restitution)),
+                damping_factor(DampingLaw::Thornton, a.restitution.min(b.restitution)),
+            ],
         }
     }
 }
@@ -150,11 +162,12 @@ pub fn beta_thornton(e: f64) -> f64 {
     (1.0 / (1.0 - (1.0 + e).powi(2) * alpha.exp()) - 1.0).sqrt()
 }
 
-/// Damping coefficient [N s/m] of a spring of tangent stiffness `s` [N/m] under the law.
-pub fn damping_coefficient(law: DampingLaw, e: f64, s: f64, m_eff: f64) -> f64 {
+/// Factor f of the damping coefficient gamma = f sqrt(S m*) of a spring of tangent stiffness S:
+/// LIGGGHTS f = 2 sqrt(5/6) |beta|, Thornton f = 2 beta_T.
+pub fn damping_factor(law: DampingLaw, e: f64) -> f64 {
     match law {
-        DampingLaw::Liggghts => 2.0 * (5.0f64 / 6.0).sqrt() * beta_liggghts(e).abs() * (s * m_eff).sqrt(),
-        DampingLaw::Thornton => 2.0 * beta_thornton(e) * (m_eff * s).sqrt(),
+        DampingLaw::Liggghts => 2.0 * (5.0f64 / 6.0).sqrt() * beta_liggghts(e).abs(),
+        DampingLaw::Thornton => 2.0 * beta_thornton(e),
     }
 }
 
@@ -207,12 +220,13 @@ pub fn coefficients(law: &ContactLaw, m: &PairMaterial, c: &Contact) -> Coeffici
             let a = (c.r_eff * c.overlap).sqrt();
             let s_n = 2.0 * m.y_star * a;
             let k_t = 8.0 * m.g_star * a;
-            let d = law.switches.damping;
+            let gamma_n = m.damping_factor[law.switches.damping as usize] * (s_n * c.m_eff).sqrt();
             Coefficients {
                 f_elastic: 4.0 / 3.0 * m.y_star * a * c.overlap,
-                gamma_n: damping_coefficient(d, m.restitution, s_n, c.m_eff),
+                gamma_n,
                 k_t,
-                gamma_t: damping_coefficient(d, m.restitution, k_t, c.m_eff),
+                // f sqrt(k_t m*) = gamma_n sqrt(k_t / S_n) = gamma_n sqrt(4 G* / Y*).
+                gamma_t: gamma_n * m.shear_to_normal_sqrt,
             }
         }
         NormalLaw::Linear => {
@@ -287,8 +301,9 @@ pub fn tangential_force(
             *history
         }
     };
-    let magnitude = elastic.norm();
-    if magnitude > mu_fn {
+    let magnitude2 = elastic.norm_squared();
+    if magnitude2 > mu_fn * mu_fn {
+        let magnitude = magnitude2.sqrt();
         let scaled = if magnitude > 0.0 {
             elastic * (mu_fn / magnitude)
         } else {

@@ -12,6 +12,9 @@ use super::V3;
 use rayon::prelude::*;
 use std::collections::HashMap;
 
+/// Fewest bodies per parallel task (tasks of a few microseconds at least).
+const CHUNK: usize = 256;
+
 /// One sphere.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Body {
@@ -163,7 +166,7 @@ impl World {
             builds: 0,
             contacts: 0,
         };
-        world.forces(0.0);
+        world.forces(0.0, false);
         world
     }
 
@@ -184,37 +187,65 @@ impl World {
     pub fn insert(&mut self, body: Body) {
         self.bodies.push(body);
         self.stale = true;
-        self.forces(0.0);
+        self.forces(0.0, false);
     }
 
     /// Removes the last sphere.
     pub fn pop(&mut self) -> Option<Body> {
         let b = self.bodies.pop();
         self.stale = true;
-        self.forces(0.0);
+        self.forces(0.0, false);
         b
     }
 
-    /// One velocity-Verlet step of `dt`.
+    /// `steps` velocity-Verlet steps, run on a worker of rayon's pool so that the parallel
+    /// loops inside need no hand-off from (and wake-up of) the calling thread.
+    pub fn advance(&mut self, steps: u64) {
+        rayon::scope(|_| {
+            for _ in 0..steps {
+                self.step();
+            }
+        });
+    }
+
+    /// One velocity-Verlet step of `dt`: half kick and drift (one pass, which also finds the
+    /// largest displacement since the last neighbour-list build), forces, half kick (fused with
+    /// the force gather).
     pub fn step(&mut self) {
         let (dt, g) = (self.dt, self.gravity);
-        self.bodies.par_iter_mut().for_each(|b| {
-            b.kick(0.5 * dt, g);
-            b.x += dt * b.v;
-        });
-        self.forces(dt);
-        self.bodies.par_iter_mut().for_each(|b| b.kick(0.5 * dt, g));
+        let moved = if self.x_at_build.len() == self.bodies.len() {
+            self.bodies
+                .par_iter_mut()
+                .with_min_len(CHUNK)
+                .zip(&self.x_at_build)
+                .map(|(b, x0)| {
+                    b.kick(0.5 * dt, g);
+                    b.x += dt * b.v;
+                    (b.x - x0).norm_squared()
+                })
+                .reduce(|| 0.0, f64::max)
+        } else {
+            self.bodies.par_iter_mut().with_min_len(CHUNK).for_each(|b| {
+                b.kick(0.5 * dt, g);
+                b.x += dt * b.v;
+            });
+            f64::INFINITY
+        };
+        if moved > 0.25 * self.skin * self.skin {
+            self.stale = true;
+        }
+        self.forces(dt, true);
         self.time += dt;
     }
 
-    /// Has some sphere moved more than skin / 2 since the last build?
+    /// Has some sphere moved more than skin / 2 since the last build (or the set changed)?
     fn needs_rebuild(&self) -> bool {
         if self.stale || self.x_at_build.len() != self.bodies.len() {
             return true;
         }
         let limit = 0.25 * self.skin * self.skin;
         self.bodies
-            .par_iter()
+            .iter()
             .zip(&self.x_at_build)
             .any(|(b, x0)| (b.x - x0).norm_squared() > limit)
     }
@@ -282,53 +313,66 @@ impl World {
         self.adj = adj;
     }
 
-    /// Contact forces and torques at the present positions; `dt` advances the contact histories.
-    fn forces(&mut self, dt: f64) {
+    /// Contact forces and torques at the present positions; `dt` advances the contact histories;
+    /// `kick` ends the Verlet step (v += dt/2 a) in the same pass.
+    fn forces(&mut self, dt: f64, kick: bool) {
         if self.needs_rebuild() {
             self.rebuild();
         }
-        self.pair_forces(dt);
-        let pair_contacts = self.slots.par_iter().filter(|s| s.touching).count();
-        let wall_contacts = self.gather(dt);
+        let pair_contacts = self.pair_forces(dt);
+        let wall_contacts = self.gather(dt, kick);
         self.contacts = pair_contacts + wall_contacts;
     }
 
-    /// Sphere-sphere contacts, in parallel over the Verlet pairs.
-    fn pair_forces(&mut self, dt: f64) {
+    /// Sphere-sphere contacts, in parallel over the Verlet pairs; returns how many touch.
+    fn pair_forces(&mut self, dt: f64) -> usize {
         let bodies = &self.bodies;
         let law = &self.law;
         let (pm, nm) = (&self.pair_materials, self.n_materials);
-        self.slots.par_iter_mut().for_each(|s| {
-            let (a, b) = (&bodies[s.i as usize], &bodies[s.j as usize]);
-            let d = a.x - b.x;
-            let dist = d.norm();
-            let overlap = a.r + b.r - dist;
-            if overlap <= 0.0 {
-                s.touching = false;
-                s.history = V3::zeros();
-                s.out = ContactForce::default();
-                return;
-            }
-            let n = if dist > 0.0 { d / dist } else { V3::z() };
-            let c = Contact {
-                n,
-                overlap,
-                r_i: a.r,
-                r_j: b.r,
-                r_eff: a.r * b.r / (a.r + b.r),
-                m_eff: a.m * b.m / (a.m + b.m),
-                dv: a.v - b.v,
-                w_i: a.w,
-                w_j: b.w,
-            };
-            s.touching = true;
-            s.out = contact_force(law, &pm[a.material * nm + b.material], &c, &mut s.history, dt);
-        });
+        self.slots
+            .par_iter_mut()
+            .with_min_len(4 * CHUNK)
+            .map(|s| {
+                let (a, b) = (&bodies[s.i as usize], &bodies[s.j as usize]);
+                let d = a.x - b.x;
+                let dist2 = d.norm_squared();
+                if dist2 >= (a.r + b.r) * (a.r + b.r) {
+                    s.touching = false;
+                    s.history = V3::zeros();
+                    s.out = ContactForce::default();
+                    return 0;
+                }
+                let dist = dist2.sqrt();
+                let overlap = a.r + b.r - dist;
+                if overlap <= 0.0 {
+                    s.touching = false;
+                    s.history = V3::zeros();
+                    s.out = ContactForce::default();
+                    return 0;
+                }
+                let n = if dist > 0.0 { d / dist } else { V3::z() };
+                let c = Contact {
+                    n,
+                    overlap,
+                    r_i: a.r,
+                    r_j: b.r,
+                    r_eff: a.r * b.r / (a.r + b.r),
+                    m_eff: a.m * b.m / (a.m + b.m),
+                    dv: a.v - b.v,
+                    w_i: a.w,
+                    w_j: b.w,
+                };
+                s.touching = true;
+                s.out = contact_force(law, &pm[a.material * nm + b.material], &c, &mut s.history, dt);
+                1
+            })
+            .sum()
     }
 
     /// Sums the pair forces and adds the wall contacts, in parallel over the bodies; returns the
     /// number of wall contacts.
-    fn gather(&mut self, dt: f64) -> usize {
+    fn gather(&mut self, dt: f64, kick: bool) -> usize {
+        let g = self.gravity;
         let w = self.walls.len();
         let (slots, adj, start) = (&self.slots, &self.adj, &self.adj_start);
         let walls = &self.walls;
@@ -337,6 +381,7 @@ impl World {
         let factor = law.switches.wall_radius_factor;
         self.bodies
             .par_iter_mut()
+            .with_min_len(CHUNK)
             .zip(self.wall_history.par_chunks_mut(w.max(1)))
             .enumerate()
             .map(|(k, (b, hist))| {
@@ -370,6 +415,9 @@ impl World {
                 }
                 b.f = f;
                 b.t = t;
+                if kick {
+                    b.kick(0.5 * dt, g);
+                }
                 touching
             })
             .sum()
