@@ -4,6 +4,11 @@
 //
 // Populations are stored shifted (f_i - w_i) for single-precision accuracy, one storage buffer per
 // direction (structure of arrays, coalesced; no binding ever exceeds the per-binding size limit).
+// Lines between `//#for i` and `//#end` are repeated for the 19 directions before compilation
+// (lbm-server/src/lbm/unroll.rs), with {i} the direction, {i.o} its opposite, {i.cx} {i.cy} {i.cz}
+// its velocity and {i.w} its weight: every population is then a register and every buffer access
+// static, which CPU drivers such as lavapipe need to be fast.
+//
 // Boundaries are applied on the way out: a post-collision population that would leave through a
 // wall, moving wall, inlet or outlet, or into a solid cell, comes back as the reversed population
 // of the same cell, stored where the next step reads it.
@@ -27,7 +32,8 @@ struct Params {
 override OPERATOR: u32 = 0u;
 
 @group(0) @binding(0) var<uniform> params: Params;
-// One byte per cell, four cells per word: 0 fluid, 1 solid.
+// One word per cell: bit i (0-18) set when link i leaves the fluid (a face that is not periodic,
+// or a solid cell), SOLID for a solid cell, WRAPS for a cell on a periodic face.
 @group(0) @binding(1) var<storage, read> flags: array<u32>;
 // MRT: A = M^-1 S M (361 values) then B = M^-1 (I - S/2) M (361 values), row-major.
 @group(0) @binding(2) var<storage, read> mrt: array<f32>;
@@ -55,88 +61,28 @@ override OPERATOR: u32 = 0u;
 @group(0) @binding(22) var<storage, read_write> f17: array<f32>;
 @group(0) @binding(23) var<storage, read_write> f18: array<f32>;
 
-const CX = array<i32, 19>(0, 1, -1, 0, 0, 0, 0, 1, -1, 1, -1, 0, 0, 1, -1, 1, -1, 0, 0);
-const CY = array<i32, 19>(0, 0, 0, 1, -1, 0, 0, 1, -1, 0, 0, 1, -1, -1, 1, 0, 0, 1, -1);
-const CZ = array<i32, 19>(0, 0, 0, 0, 0, 1, -1, 0, 0, 1, -1, 1, -1, 0, 0, -1, 1, -1, 1);
-const W = array<f32, 19>(
-    1.0 / 3.0,
-    1.0 / 18.0, 1.0 / 18.0, 1.0 / 18.0, 1.0 / 18.0, 1.0 / 18.0, 1.0 / 18.0,
-    1.0 / 36.0, 1.0 / 36.0, 1.0 / 36.0, 1.0 / 36.0, 1.0 / 36.0, 1.0 / 36.0,
-    1.0 / 36.0, 1.0 / 36.0, 1.0 / 36.0, 1.0 / 36.0, 1.0 / 36.0, 1.0 / 36.0,
-);
-
 // A link that leaves the fluid: BOUNDARY | face (0-5), or BOUNDARY | 6 for a solid cell.
 const BOUNDARY: u32 = 0x80000000u;
 const SOLID_LINK: u32 = 6u;
+
+const SOLID: u32 = 0x80000u;
+const WRAPS: u32 = 0x100000u;
 
 const PERIODIC: u32 = 0u;
 const WALL: u32 = 1u;
 const MOVING: u32 = 2u;
 const PRESSURE: u32 = 3u;
 
-fn load(i: u32, k: u32) -> f32 {
-    switch i {
-        case 0u: { return f0[k]; }
-        case 1u: { return f1[k]; }
-        case 2u: { return f2[k]; }
-        case 3u: { return f3[k]; }
-        case 4u: { return f4[k]; }
-        case 5u: { return f5[k]; }
-        case 6u: { return f6[k]; }
-        case 7u: { return f7[k]; }
-        case 8u: { return f8[k]; }
-        case 9u: { return f9[k]; }
-        case 10u: { return f10[k]; }
-        case 11u: { return f11[k]; }
-        case 12u: { return f12[k]; }
-        case 13u: { return f13[k]; }
-        case 14u: { return f14[k]; }
-        case 15u: { return f15[k]; }
-        case 16u: { return f16[k]; }
-        case 17u: { return f17[k]; }
-        default: { return f18[k]; }
-    }
-}
-
-fn store(i: u32, k: u32, v: f32) {
-    switch i {
-        case 0u: { f0[k] = v; }
-        case 1u: { f1[k] = v; }
-        case 2u: { f2[k] = v; }
-        case 3u: { f3[k] = v; }
-        case 4u: { f4[k] = v; }
-        case 5u: { f5[k] = v; }
-        case 6u: { f6[k] = v; }
-        case 7u: { f7[k] = v; }
-        case 8u: { f8[k] = v; }
-        case 9u: { f9[k] = v; }
-        case 10u: { f10[k] = v; }
-        case 11u: { f11[k] = v; }
-        case 12u: { f12[k] = v; }
-        case 13u: { f13[k] = v; }
-        case 14u: { f14[k] = v; }
-        case 15u: { f15[k] = v; }
-        case 16u: { f16[k] = v; }
-        case 17u: { f17[k] = v; }
-        default: { f18[k] = v; }
-    }
-}
-
-fn opposite(i: u32) -> u32 {
-    if i == 0u { return 0u; }
-    return select(i - 1u, i + 1u, (i & 1u) == 1u);
-}
-
-fn velocity_of(i: u32) -> vec3<i32> {
-    return vec3<i32>(CX[i], CY[i], CZ[i]);
-}
-
 fn cell_count() -> u32 {
     return params.n.x * params.n.y * params.n.z;
 }
 
 fn is_solid(k: u32) -> bool {
-    return ((flags[k >> 2u] >> ((k & 3u) * 8u)) & 0xffu) == 1u;
+    return (flags[k] & SOLID) != 0u;
+}
+
+fn leaves(flag: u32, i: u32) -> bool {
+    return ((flag >> i) & 1u) != 0u;
 }
 
 fn face_type(face: u32) -> u32 {
@@ -145,20 +91,40 @@ fn face_type(face: u32) -> u32 {
     return params.face_hi[face - 4u];
 }
 
-// The cell at p + c, or BOUNDARY | face when the link leaves the fluid.
+// The face a link crosses along one axis, or 0xff; keeps the face of highest type.
+fn crossed(face: u32, q: i32, n: i32, axis: u32) -> u32 {
+    if q >= 0 && q < n { return face; }
+    let f = 2u * axis + select(0u, 1u, q >= n);
+    let kind = face_type(f);
+    if kind == PERIODIC || (face != 0xffu && kind <= face_type(face)) { return face; }
+    return f;
+}
+
+// Periodic wrap of a coordinate at most one cell outside [0, n) (no division: CPU drivers
+// cannot vectorise it).
+fn wrap(q: i32, n: i32) -> u32 {
+    return u32(select(select(q, q - n, q >= n), q + n, q < 0));
+}
+
+// The cell at p + c, or BOUNDARY | face when the link leaves the fluid. A link through an edge
+// or corner takes the crossed face of highest type (wall < moving wall or inlet < outlet), so
+// that, e.g., a moving lid owns its edge links and conserves mass.
 fn neighbour(p: vec3<i32>, c: vec3<i32>) -> u32 {
     let n = vec3<i32>(params.n.xyz);
-    var q = p + c;
-    for (var a = 0u; a < 3u; a++) {
-        if q[a] < 0 || q[a] >= n[a] {
-            let face = 2u * a + select(0u, 1u, q[a] >= n[a]);
-            if face_type(face) != PERIODIC { return BOUNDARY | face; }
-            q[a] = (q[a] + n[a]) % n[a];
-        }
-    }
-    let k = u32(q.x) + params.n.x * (u32(q.y) + params.n.y * u32(q.z));
+    let q = p + c;
+    var face = crossed(0xffu, q.x, n.x, 0u);
+    face = crossed(face, q.y, n.y, 1u);
+    face = crossed(face, q.z, n.z, 2u);
+    if face != 0xffu { return BOUNDARY | face; }
+    let k = wrap(q.x, n.x) + params.n.x * (wrap(q.y, n.y) + params.n.y * wrap(q.z, n.z));
     if is_solid(k) { return BOUNDARY | SOLID_LINK; }
     return k;
+}
+
+// The cell along c from cell k, for a link that stays in the fluid.
+fn next_cell(k: u32, c: vec3<i32>, flag: u32) -> u32 {
+    if (flag & WRAPS) != 0u { return neighbour(coords(k), c); }
+    return u32(i32(k) + c.x + i32(params.n.x) * (c.y + i32(params.n.y) * c.z));
 }
 
 fn coords(k: u32) -> vec3<i32> {
@@ -173,19 +139,20 @@ fn cell_index(wg: vec3<u32>, nwg: vec3<u32>, local: u32) -> u32 {
 }
 
 // Pre-collision populations of cell k at the current time, whatever the step parity.
-fn read_populations(k: u32, p: vec3<i32>) -> array<f32, 19> {
+fn read_populations(k: u32, flag: u32) -> array<f32, 19> {
     var f: array<f32, 19>;
-    for (var i = 0u; i < 19u; i++) {
-        if params.n.w == 0u {
-            f[i] = load(i, k);
+    if params.n.w == 0u {
+        //#for i
+        f[{i}] = f{i}[k];
+        //#end
+    } else {
+        //#for i
+        if leaves(flag, {i.o}u) {
+            f[{i}] = f{i}[k];
         } else {
-            let source = neighbour(p, -velocity_of(i));
-            if (source & BOUNDARY) != 0u {
-                f[i] = load(i, k);
-            } else {
-                f[i] = load(opposite(i), source);
-            }
+            f[{i}] = f{i.o}[next_cell(k, -vec3<i32>({i.cx}, {i.cy}, {i.cz}), flag)];
         }
+        //#end
     }
     return f;
 }
@@ -199,72 +166,72 @@ struct Moments {
 fn moments(f: array<f32, 19>) -> Moments {
     var drho = 0.0;
     var j = vec3<f32>(0.0);
-    for (var i = 0u; i < 19u; i++) {
-        drho += f[i];
-        j += f[i] * vec3<f32>(velocity_of(i));
-    }
+    //#for i
+    drho += f[{i}];
+    j += f[{i}] * vec3<f32>({i.cx}.0, {i.cy}.0, {i.cz}.0);
+    //#end
     let rho = 1.0 + drho;
     return Moments(rho, (j + 0.5 * params.force.xyz) / rho);
 }
 
-// Shifted equilibrium f_eq_i - w_i.
-fn equilibrium(i: u32, m: Moments) -> f32 {
-    let cu = dot(vec3<f32>(velocity_of(i)), m.u);
-    let uu = dot(m.u, m.u);
-    return W[i] * ((m.rho - 1.0) + m.rho * (3.0 * cu + 4.5 * cu * cu - 1.5 * uu));
+// Shifted equilibrium f_eq_i - w_i of direction c with weight w.
+fn equilibrium(c: vec3<f32>, w: f32, m: Moments) -> f32 {
+    let cu = dot(c, m.u);
+    return w * ((m.rho - 1.0) + m.rho * (3.0 * cu + 4.5 * cu * cu - 1.5 * dot(m.u, m.u)));
 }
 
-// Guo forcing term (before its relaxation factor).
-fn guo_source(i: u32, m: Moments) -> f32 {
-    let c = vec3<f32>(velocity_of(i));
-    let cu = dot(c, m.u);
-    return W[i] * dot(3.0 * (c - m.u) + 9.0 * cu * c, params.force.xyz);
+// Guo forcing term of direction c with weight w (before its relaxation factor).
+fn guo_source(c: vec3<f32>, w: f32, m: Moments) -> f32 {
+    return w * dot(3.0 * (c - m.u) + 9.0 * dot(c, m.u) * c, params.force.xyz);
 }
 
 fn collide(f: array<f32, 19>, m: Moments) -> array<f32, 19> {
     var neq: array<f32, 19>;
     var src: array<f32, 19>;
-    for (var i = 0u; i < 19u; i++) {
-        neq[i] = f[i] - equilibrium(i, m);
-        src[i] = guo_source(i, m);
-    }
+    //#for i
+    neq[{i}] = f[{i}] - equilibrium(vec3<f32>({i.cx}.0, {i.cy}.0, {i.cz}.0), {i.w}, m);
+    src[{i}] = guo_source(vec3<f32>({i.cx}.0, {i.cy}.0, {i.cz}.0), {i.w}, m);
+    //#end
     var out: array<f32, 19>;
     let wp = params.relax.x;
     let wm = params.relax.y;
-    for (var i = 0u; i < 19u; i++) {
-        if OPERATOR == 0u {
-            out[i] = f[i] - wp * neq[i] + (1.0 - 0.5 * wp) * src[i];
-        } else if OPERATOR == 1u {
-            let o = opposite(i);
-            let np = 0.5 * (neq[i] + neq[o]);
-            let nm = 0.5 * (neq[i] - neq[o]);
-            let sp = 0.5 * (src[i] + src[o]);
-            let sm = 0.5 * (src[i] - src[o]);
-            out[i] = f[i] - wp * np - wm * nm + (1.0 - 0.5 * wp) * sp + (1.0 - 0.5 * wm) * sm;
-        } else {
-            var relax = 0.0;
-            var source = 0.0;
-            for (var j = 0u; j < 19u; j++) {
-                relax += mrt[i * 19u + j] * neq[j];
-                source += mrt[361u + i * 19u + j] * src[j];
-            }
-            out[i] = f[i] - relax + source;
-        }
+    if OPERATOR == 0u {
+        //#for i
+        out[{i}] = f[{i}] - wp * neq[{i}] + (1.0 - 0.5 * wp) * src[{i}];
+        //#end
+    } else if OPERATOR == 1u {
+        //#for i
+        out[{i}] = f[{i}] - 0.5 * (wp * (neq[{i}] + neq[{i.o}]) + wm * (neq[{i}] - neq[{i.o}]))
+            + 0.5 * ((1.0 - 0.5 * wp) * (src[{i}] + src[{i.o}]) + (1.0 - 0.5 * wm) * (src[{i}] - src[{i.o}]));
+        //#end
+    } else {
+        //#for i
+        out[{i}] = f[{i}] - mrt_row({i}u, neq) + mrt_row(19u + {i}u, src);
+        //#end
     }
     return out;
 }
 
-// The population that comes back into the cell when post-collision f_i leaves through `face`.
-fn bounce(face: u32, i: u32, f_star: f32, m: Moments) -> f32 {
+// Row r of the MRT matrices (A for r < 19, B for r >= 19) applied to v.
+fn mrt_row(r: u32, v: array<f32, 19>) -> f32 {
+    var sum = 0.0;
+    //#for j
+    sum += mrt[r * 19u + {j}u] * v[{j}];
+    //#end
+    return sum;
+}
+
+// The population that comes back into the cell when post-collision f_i (velocity c, weight w)
+// leaves through `face`.
+fn bounce(face: u32, c: vec3<f32>, w: f32, f_star: f32, m: Moments) -> f32 {
     let kind = face_type(face);
-    let c = vec3<f32>(velocity_of(i));
     if kind == MOVING {
-        return f_star - 6.0 * W[i] * m.rho * dot(c, params.face_value[face].xyz);
+        return f_star - 6.0 * w * m.rho * dot(c, params.face_value[face].xyz);
     }
     if kind == PRESSURE {
         let cu = dot(c, m.u);
         let rho_w = params.face_value[face].w;
-        return -f_star + 2.0 * W[i] * (rho_w * (1.0 + 4.5 * cu * cu - 1.5 * dot(m.u, m.u)) - 1.0);
+        return -f_star + 2.0 * w * (rho_w * (1.0 + 4.5 * cu * cu - 1.5 * dot(m.u, m.u)) - 1.0);
     }
     return f_star;
 }
@@ -276,22 +243,23 @@ fn stream_collide(
     @builtin(local_invocation_index) local: u32,
 ) {
     let k = cell_index(wg, nwg, local);
-    if k >= cell_count() || is_solid(k) { return; }
-    let p = coords(k);
-    let f = read_populations(k, p);
+    if k >= cell_count() { return; }
+    let flag = flags[k];
+    if (flag & SOLID) != 0u { return; }
+    let f = read_populations(k, flag);
     let m = moments(f);
     let post = collide(f, m);
     let odd = params.n.w == 1u;
-    for (var i = 0u; i < 19u; i++) {
-        let target_cell = neighbour(p, velocity_of(i));
-        if (target_cell & BOUNDARY) != 0u {
-            store(opposite(i), k, bounce(target_cell & 0xffu, i, post[i], m));
-        } else if odd {
-            store(i, target_cell, post[i]);
-        } else {
-            store(opposite(i), k, post[i]);
-        }
+    //#for i
+    if leaves(flag, {i}u) {
+        let face = neighbour(coords(k), vec3<i32>({i.cx}, {i.cy}, {i.cz})) & 0xffu;
+        f{i.o}[k] = bounce(face, vec3<f32>({i.cx}.0, {i.cy}.0, {i.cz}.0), {i.w}, post[{i}], m);
+    } else if odd {
+        f{i}[next_cell(k, vec3<i32>({i.cx}, {i.cy}, {i.cz}), flag)] = post[{i}];
+    } else {
+        f{i.o}[k] = post[{i}];
     }
+    //#end
 }
 
 // Density and velocity of every cell, and the health check: the smallest index of a cell with a
@@ -304,11 +272,12 @@ fn macroscopic(
 ) {
     let k = cell_index(wg, nwg, local);
     if k >= cell_count() { return; }
-    if is_solid(k) {
+    let flag = flags[k];
+    if (flag & SOLID) != 0u {
         fields[k] = vec4<f32>(1.0, 0.0, 0.0, 0.0);
         return;
     }
-    let m = moments(read_populations(k, coords(k)));
+    let m = moments(read_populations(k, flag));
     fields[k] = vec4<f32>(m.rho, m.u);
     let speed = length(m.u);
     // NaN fails every comparison: written so that NaN and infinity count as unhealthy.

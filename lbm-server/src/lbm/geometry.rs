@@ -112,21 +112,27 @@ impl Setup {
         [cell % self.n[0], (cell / self.n[0]) % self.n[1], cell / (self.n[0] * self.n[1])]
     }
 
-    /// The neighbour of `cell` along `c` (periodic faces wrap). Across a non-periodic face, the
-    /// first crossed face in axis order x, y, z decides; a solid neighbour is a resting wall.
+    /// The neighbour of `cell` along `c` (periodic faces wrap). A link that crosses several
+    /// non-periodic faces (an edge or corner) takes the face of highest code (wall < moving wall or
+    /// inlet < outlet): a moving lid then owns its edge links and conserves mass. A solid neighbour
+    /// is a wall at rest.
     pub fn link(&self, cell: usize, c: [i32; 3]) -> Link {
         let x = self.coords(cell);
         let mut y = [0usize; 3];
+        let mut crossed: Option<Face> = None;
         for a in 0..3 {
             let v = x[a] as i64 + c[a] as i64;
             let n = self.n[a] as i64;
             if v < 0 || v >= n {
                 let face = self.faces[2 * a + usize::from(v >= n)];
-                if face != Face::Periodic {
-                    return Link::Boundary(face);
+                if face != Face::Periodic && crossed.is_none_or(|f| face.code() > f.code()) {
+                    crossed = Some(face);
                 }
             }
             y[a] = v.rem_euclid(n) as usize;
+        }
+        if let Some(face) = crossed {
+            return Link::Boundary(face);
         }
         let t = self.index(y);
         if self.solid[t] {

@@ -152,7 +152,7 @@ impl Lattice {
             .collect();
         let flags = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("flags"),
-            contents: bytemuck::cast_slice(&pack_flags(&setup.solid)),
+            contents: bytemuck::cast_slice(&cell_flags(&setup)),
             usage: wgpu::BufferUsages::STORAGE,
         });
         let mrt = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -182,7 +182,7 @@ impl Lattice {
             .collect();
         let module = d.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("lbm.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(SHADER.into()),
+            source: wgpu::ShaderSource::Wgsl(super::unroll::unroll(SHADER).into()),
         });
         let layout = bind_group_layout(d);
         let pipeline_layout = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -336,12 +336,29 @@ fn entry(binding: u32, buffer: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
     wgpu::BindGroupEntry { binding, resource: buffer.as_entire_binding() }
 }
 
-/// One byte per cell, four per word.
-fn pack_flags(solid: &[bool]) -> Vec<u32> {
-    solid
-        .chunks(4)
-        .map(|c| c.iter().enumerate().map(|(j, s)| u32::from(*s) << (8 * j)).sum())
-        .chain(std::iter::once(0))
+/// Bit i set when link i of the cell leaves the fluid.
+const SOLID_FLAG: u32 = 1 << 19;
+/// The cell lies on a periodic face: its neighbours need wrapping.
+const WRAPS_FLAG: u32 = 1 << 20;
+
+/// One word per cell: the links that leave the fluid, solid, and periodic-face bits.
+pub fn cell_flags(setup: &Setup) -> Vec<u32> {
+    (0..setup.cells())
+        .map(|k| {
+            if setup.solid[k] {
+                return SOLID_FLAG;
+            }
+            let links: u32 = (0..19)
+                .filter(|&i| matches!(setup.link(k, C[i]), Link::Boundary(_)))
+                .map(|i| 1u32 << i)
+                .sum();
+            let x = setup.coords(k);
+            let on_periodic_face = (0..3).any(|a| {
+                (x[a] == 0 && setup.faces[2 * a] == Face::Periodic)
+                    || (x[a] + 1 == setup.n[a] && setup.faces[2 * a + 1] == Face::Periodic)
+            });
+            links | if on_periodic_face { WRAPS_FLAG } else { 0 }
+        })
         .collect()
 }
 

@@ -4,6 +4,9 @@ pub mod geometry;
 pub mod gpu;
 pub mod lattice;
 pub mod mrt;
+pub mod random;
 pub mod reference;
+pub mod unroll;
+pub mod validation;
 #[cfg(test)]
 mod tests;

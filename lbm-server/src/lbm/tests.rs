@@ -2,40 +2,10 @@
 
 use super::geometry::{Cell, Face, Operator, Setup};
 use super::gpu::{Gpu, Health, Lattice};
-use super::lattice::equilibrium_shifted;
+use super::random::{random_populations, Random};
 use super::mrt::Rates;
 use super::reference;
 use std::sync::Arc;
-
-/// xorshift64*: reproducible random numbers without a dependency.
-pub struct Random(u64);
-
-impl Random {
-    pub fn new(seed: u64) -> Self {
-        Self(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1)
-    }
-
-    /// Uniform in [-1, 1).
-    pub fn next(&mut self) -> f64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        let v = self.0.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 11;
-        v as f64 / (1u64 << 52) as f64 - 1.0
-    }
-}
-
-/// Near-equilibrium random populations with a random non-equilibrium part.
-pub fn random_populations(setup: &Setup, seed: u64) -> Vec<Cell> {
-    let mut r = Random::new(seed);
-    (0..setup.cells())
-        .map(|_| {
-            let rho = 1.0 + 0.05 * r.next();
-            let u = [0.05 * r.next(), 0.05 * r.next(), 0.05 * r.next()];
-            std::array::from_fn(|i| equilibrium_shifted(i, rho, u) + 1e-3 * r.next())
-        })
-        .collect()
-}
 
 pub fn gpu() -> Arc<Gpu> {
     Arc::new(Gpu::new().expect("a wgpu adapter (lavapipe in CI)"))
@@ -123,4 +93,63 @@ fn bgk_inlet_outlet_on_every_axis_matches_reference() {
     ];
     let setup = Setup::new([5, 6, 4], faces, 1.3, Operator::Bgk);
     check_against_reference(setup, 6);
+}
+
+mod validation_cases {
+    use super::super::validation::*;
+    use super::*;
+
+    const MAGIC: f64 = 3.0 / 16.0;
+
+    #[test]
+    fn poiseuille_plates_converge_at_second_order_with_bgk() {
+        let g = gpu();
+        let runs: Vec<Channel> =
+            [8, 16, 32].iter().map(|&n| poiseuille_plates(&g, n, 0.9, Operator::Bgk, 0.02)).collect();
+        for pair in runs.windows(2) {
+            let p = order(&pair[0], &pair[1]);
+            assert!((1.8..2.3).contains(&p), "order {p:.2} between {:?} and {:?}", pair[0], pair[1]);
+        }
+    }
+
+    #[test]
+    fn trt_wall_location_is_viscosity_independent_bgk_is_not() {
+        let g = gpu();
+        let trt = Operator::Trt { magic: MAGIC };
+        let taus = [0.6, 1.0, 2.0];
+        let trt_err: Vec<f64> = taus.iter().map(|&t| poiseuille_plates(&g, 16, t, trt, 0.02).l2_error).collect();
+        let bgk_err: Vec<f64> =
+            taus.iter().map(|&t| poiseuille_plates(&g, 16, t, Operator::Bgk, 0.02).l2_error).collect();
+        // TRT with Lambda = 3/16 is exact for Poiseuille flow up to round-off, at every tau.
+        assert!(trt_err.iter().all(|e| *e < 2e-4), "TRT errors {trt_err:?}");
+        // BGK's wall moves with tau: its error grows by far more than 10x from tau 0.6 to 2.
+        assert!(bgk_err[2] > 10.0 * bgk_err[0], "BGK errors {bgk_err:?}");
+        assert!(bgk_err[2] > 100.0 * trt_err[2], "BGK {bgk_err:?} vs TRT {trt_err:?}");
+    }
+
+    #[test]
+    fn square_duct_converges_at_second_order() {
+        let g = gpu();
+        let runs: Vec<Channel> =
+            [8, 16, 24].iter().map(|&n| poiseuille_duct(&g, n, 0.8, Operator::Bgk, 0.02)).collect();
+        for pair in runs.windows(2) {
+            let p = order(&pair[0], &pair[1]);
+            assert!((1.7..2.4).contains(&p), "order {p:.2} between {:?} and {:?}", pair[0], pair[1]);
+        }
+    }
+
+    #[test]
+    fn taylor_green_decay_gives_the_viscosity_within_one_percent() {
+        let g = gpu();
+        for op in [Operator::Bgk, Operator::Trt { magic: MAGIC }, Operator::Mrt { rates: Rates::dhumieres(1.0 / 0.8) }] {
+            let d = taylor_green(&g, 32, 0.8, op, 0.02, 1000);
+            assert!(d.relative_error < 0.01, "{}: {d:?}", op.name());
+        }
+    }
+
+    #[test]
+    fn mass_is_conserved_to_round_off_over_10000_steps() {
+        let m = closed_box_mass(&gpu(), 12, 10_000, Operator::Trt { magic: MAGIC });
+        assert!(m.relative_drift < 1e-6, "{m:?}");
+    }
 }

@@ -1,0 +1,151 @@
+//! Analytic validation cases of the lattice (lattice units). Each returns what it measured, so the
+//! tests assert on it and `lbm-server validate` writes it to validation/lbm/REPORT.md.
+
+use super::geometry::{Face, Operator, Setup};
+use super::gpu::{equilibrium_field, total_mass, Gpu, Health, Lattice};
+use std::sync::Arc;
+
+/// Result of a steady channel flow: L2 error of u_x against the analytic profile, relative to max.
+#[derive(Debug, Clone, Copy)]
+pub struct Channel {
+    pub cells: usize,
+    pub tau: f64,
+    pub l2_error: f64,
+    pub steps: u64,
+}
+
+/// Poiseuille flow between plates at y = -1/2 and y = n - 1/2 (half-way bounce-back), driven by a
+/// body force chosen for a centre-line speed `u_max`.
+pub fn poiseuille_plates(gpu: &Arc<Gpu>, n: usize, tau: f64, operator: Operator, u_max: f64) -> Channel {
+    let faces = [Face::Periodic, Face::Periodic, Face::Wall, Face::Wall, Face::Periodic, Face::Periodic];
+    let mut setup = Setup::new([1, n, 1], faces, tau, operator);
+    let nu = setup.viscosity();
+    let h = n as f64;
+    setup.force = [8.0 * nu * u_max / (h * h), 0.0, 0.0];
+    let exact = |y: usize| {
+        let y = y as f64 + 0.5;
+        4.0 * u_max * y * (h - y) / (h * h)
+    };
+    let steps = relaxation_steps(h, nu, 10.0);
+    let (fields, _) = run_steady(gpu, &setup, |p| (1.0, [exact(p[1]), 0.0, 0.0]), steps);
+    let error = l2_relative((0..n).map(|y| (fields[y][1] as f64, exact(y))));
+    Channel { cells: n, tau, l2_error: error, steps }
+}
+
+/// Flow through a square duct of n x n cells (walls on y and z), against the series solution.
+pub fn poiseuille_duct(gpu: &Arc<Gpu>, n: usize, tau: f64, operator: Operator, u_max: f64) -> Channel {
+    let faces = [Face::Periodic, Face::Periodic, Face::Wall, Face::Wall, Face::Wall, Face::Wall];
+    let mut setup = Setup::new([1, n, n], faces, tau, operator);
+    let nu = setup.viscosity();
+    let a = n as f64;
+    // Series solution for unit forcing, scaled so that the centre speed is u_max.
+    let unit = |y: f64, z: f64| duct_series(y / a, z / a) * a * a / nu;
+    let g = u_max / unit(a / 2.0, a / 2.0);
+    setup.force = [g, 0.0, 0.0];
+    let exact = |p: [usize; 3]| g * unit(p[1] as f64 + 0.5, p[2] as f64 + 0.5);
+    let steps = relaxation_steps(a, nu, 6.0);
+    let (fields, _) = run_steady(gpu, &setup, |p| (1.0, [exact(p), 0.0, 0.0]), steps);
+    let error = l2_relative((0..setup.cells()).map(|k| (fields[k][1] as f64, exact(setup.coords(k)))));
+    Channel { cells: n, tau, l2_error: error, steps }
+}
+
+/// u(y, z) of unit force, unit viscosity in the unit square with no-slip walls (Fourier series).
+fn duct_series(y: f64, z: f64) -> f64 {
+    let pi = std::f64::consts::PI;
+    let mut sum = 0.0;
+    for i in (1..80).step_by(2) {
+        for j in (1..80).step_by(2) {
+            let (a, b) = (i as f64 * pi, j as f64 * pi);
+            sum += 16.0 / (a * b * (a * a + b * b)) * (a * y).sin() * (b * z).sin();
+        }
+    }
+    sum
+}
+
+/// Steps for a diffusive start-up to decay by e^-k: k L^2 / (pi^2 nu).
+fn relaxation_steps(length: f64, nu: f64, k: f64) -> u64 {
+    (k * length * length / (std::f64::consts::PI.powi(2) * nu)).ceil() as u64 + 100
+}
+
+fn run_steady(
+    gpu: &Arc<Gpu>,
+    setup: &Setup,
+    initial: impl Fn([usize; 3]) -> (f64, [f64; 3]),
+    steps: u64,
+) -> (Vec<[f32; 4]>, u64) {
+    let mut lattice = Lattice::new(gpu.clone(), setup.clone(), Health::default()).expect("lattice");
+    lattice.set_populations(&equilibrium_field(setup, initial));
+    lattice.step(steps);
+    let (fields, bad) = lattice.fields();
+    assert!(bad.is_none(), "unhealthy: {bad:?}");
+    (fields, steps)
+}
+
+fn l2_relative(pairs: impl Iterator<Item = (f64, f64)>) -> f64 {
+    let (mut num, mut den) = (0.0, 0.0);
+    for (got, want) in pairs {
+        num += (got - want).powi(2);
+        den += want * want;
+    }
+    (num / den).sqrt()
+}
+
+/// Observed order of convergence between two (resolution, error) points.
+pub fn order(a: &Channel, b: &Channel) -> f64 {
+    (a.l2_error / b.l2_error).ln() / (b.cells as f64 / a.cells as f64).ln()
+}
+
+/// Taylor-Green vortex decay: the measured viscosity against the one set by tau.
+#[derive(Debug, Clone, Copy)]
+pub struct Decay {
+    pub nu_expected: f64,
+    pub nu_measured: f64,
+    pub relative_error: f64,
+}
+
+/// A 2D Taylor-Green vortex in an n x n periodic box: kinetic energy decays as exp(-4 nu k^2 t).
+pub fn taylor_green(gpu: &Arc<Gpu>, n: usize, tau: f64, operator: Operator, u0: f64, steps: u64) -> Decay {
+    let setup = Setup::new([n, n, 1], [Face::Periodic; 6], tau, operator);
+    let k = 2.0 * std::f64::consts::PI / n as f64;
+    let state = |p: [usize; 3]| {
+        let (x, y) = (p[0] as f64 + 0.5, p[1] as f64 + 0.5);
+        let u = [u0 * (k * x).sin() * (k * y).cos(), -u0 * (k * x).cos() * (k * y).sin(), 0.0];
+        let pressure = -u0 * u0 / 4.0 * ((2.0 * k * x).cos() + (2.0 * k * y).cos());
+        (1.0 + 3.0 * pressure, u)
+    };
+    let mut lattice = Lattice::new(gpu.clone(), setup.clone(), Health::default()).expect("lattice");
+    lattice.set_populations(&equilibrium_field(&setup, state));
+    // Skip the first steps (initial pressure transients), then fit between two times.
+    let energy = |lattice: &Lattice| -> f64 {
+        let (fields, _) = lattice.fields();
+        fields.iter().map(|f| (f[1] * f[1] + f[2] * f[2]) as f64).sum()
+    };
+    lattice.step(steps / 10);
+    let e0 = energy(&lattice);
+    lattice.step(steps);
+    let e1 = energy(&lattice);
+    let nu_measured = (e0 / e1).ln() / (4.0 * k * k * steps as f64);
+    let nu_expected = setup.viscosity();
+    Decay { nu_expected, nu_measured, relative_error: (nu_measured - nu_expected).abs() / nu_expected }
+}
+
+/// Mass in a closed box with a moving lid, before and after `steps` steps.
+#[derive(Debug, Clone, Copy)]
+pub struct Mass {
+    pub before: f64,
+    pub after: f64,
+    pub relative_drift: f64,
+}
+
+pub fn closed_box_mass(gpu: &Arc<Gpu>, n: usize, steps: u64, operator: Operator) -> Mass {
+    let mut faces = [Face::Wall; 6];
+    faces[5] = Face::MovingWall([0.05, 0.0, 0.0]);
+    let setup = Setup::new([n, n, n], faces, 0.6, operator);
+    let mut lattice = Lattice::new(gpu.clone(), setup.clone(), Health::default()).expect("lattice");
+    let start = super::random::random_populations(&setup, 7);
+    lattice.set_populations(&start);
+    let before = total_mass(&setup, &lattice.populations());
+    lattice.step(steps);
+    let after = total_mass(&setup, &lattice.populations());
+    Mass { before, after, relative_drift: (after - before).abs() / before }
+}
