@@ -2,11 +2,13 @@
 
 mod bench;
 mod bench_link;
+mod fluid;
 mod lbm;
 mod launch;
 mod output;
 mod run;
 mod standin;
+mod vtk;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;

@@ -77,6 +77,13 @@ fn prepare(args: &RunArgs) -> Result<Prepared, String> {
             scene::DEFAULT_SCENE.to_string(),
         ),
     };
+    if scene.lattice.is_some() && scene.particle_count() > 0 {
+        return Err(format!(
+            "{scene_file}: particles with a [lattice]: coupling the lattice to particles (immersed moving \
+             boundary) is not available yet; run the particles with the stand-in fluid (no [lattice]) \
+             or the fluid alone (no particles)"
+        ));
+    }
     let steps = args.steps.unwrap_or(scene.time.steps);
     if steps == 0 {
         return Err("--steps = 0: must be at least 1".into());
@@ -120,6 +127,10 @@ pub fn main(args: RunArgs) -> ExitCode {
     let flag = interrupted.clone();
     if let Err(e) = ctrlc::set_handler(move || flag.store(true, Ordering::SeqCst)) {
         protocol::say!("lbm-server: warning: cannot install the Ctrl-C handler: {e}");
+    }
+    if prepared.scene.lattice.is_some() {
+        let p = &prepared;
+        return ExitCode::from(crate::fluid::run(&p.scene, &p.scene_file, p.steps, &p.out, interrupted));
     }
     protocol::cleanup::remove_stale_runs();
     let run = new_run_name();

@@ -27,7 +27,15 @@ pub struct Scene {
     pub output: Output,
     #[serde(default)]
     pub coupling: Coupling,
+    /// The particles (optional for a fluid-only scene with a `[lattice]`).
+    #[serde(default)]
     pub particles: Particles,
+    /// The lattice-Boltzmann discretisation of the fluid (`[lattice]`, optional).
+    #[serde(default)]
+    pub lattice: Option<lattice::Lattice>,
+    /// The lattice in lattice units, derived from `lattice` when the scene is loaded.
+    #[serde(skip)]
+    pub lattice_units: Option<lattice::LatticeUnits>,
     /// The DEM: materials, contact model, walls, insertion, DEM output (every field has a default).
     #[serde(default)]
     pub dem: dem::Dem,
@@ -53,7 +61,8 @@ pub struct Fluid {
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Time {
-    /// Fluid (coupling) time step [s].
+    /// Fluid (coupling) time step [s]. With a `[lattice]` it is derived and must not be given.
+    #[serde(default = "unset")]
     pub dt: f64,
     /// Number of coupled steps.
     pub steps: u64,
@@ -62,17 +71,30 @@ pub struct Time {
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Output {
-    /// Steps between two rows of particles.csv per particle (the last step is always written).
+    /// Steps between two rows of particles.csv per particle, and between two rows of the line
+    /// probes (the last step is always written).
     #[serde(default = "default_interval")]
     pub interval: u64,
+    /// Steps between two VTK snapshots of the fluid (fields/*.vti + fields.pvd); 0: last step only.
+    #[serde(default)]
+    pub fields_interval: u64,
+    /// Probe lines through the fluid, written as line<N>.csv.
+    #[serde(default)]
+    pub line: Vec<ProbeLine>,
 }
 
 impl Default for Output {
     fn default() -> Self {
-        Self {
-            interval: default_interval(),
-        }
+        Self { interval: default_interval(), fields_interval: 0, line: Vec::new() }
     }
+}
+
+/// The cells along `axis` ("x", "y" or "z") through the point `through` [m].
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ProbeLine {
+    pub axis: String,
+    pub through: [f64; 3],
 }
 
 #[derive(Debug, Clone, Deserialize)]
@@ -105,6 +127,13 @@ pub struct Particles {
     pub block: Vec<Block>,
 }
 
+/// No `[particles]` section: no particles (a fluid-only scene).
+impl Default for Particles {
+    fn default() -> Self {
+        Self { density: unset(), sphere: Vec::new(), block: Vec::new() }
+    }
+}
+
 /// One sphere [m, m/s, rad/s].
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -128,6 +157,11 @@ pub struct Block {
     pub radius: f64,
     #[serde(default)]
     pub velocity: [f64; 3],
+}
+
+/// Marks a number the file did not give.
+fn unset() -> f64 {
+    f64::NAN
 }
 
 fn default_gravity() -> [f64; 3] {
@@ -207,10 +241,39 @@ impl Scene {
             value: String::new(),
             problem: e.to_string().trim_end().replace('\n', "\n  "),
         })?;
+        scene.resolve_lattice(file)?;
         scene.dem.load(file)?;
         scene.validate(file)?;
         dem::validate_placement(&scene, file)?;
         Ok(scene)
+    }
+
+    /// Derives the lattice (and with it the time step) when the scene has a `[lattice]`.
+    fn resolve_lattice(&mut self, file: &str) -> Result<(), SceneError> {
+        let Some(lattice) = &self.lattice else {
+            if self.time.dt.is_nan() {
+                return Err(SceneError {
+                    file: file.into(),
+                    field: "time.dt".into(),
+                    value: "missing".into(),
+                    problem: "give the coupling time step [s] (or a [lattice] section, which derives it)".into(),
+                });
+            }
+            return Ok(());
+        };
+        if !self.time.dt.is_nan() {
+            return Err(SceneError {
+                file: file.into(),
+                field: "time.dt".into(),
+                value: format!("{} s", self.time.dt),
+                problem: "the [lattice] section derives the time step: remove time.dt".into(),
+            });
+        }
+        self.validate_domain(file)?;
+        let units = lattice::LatticeUnits::derive(self, lattice, file)?;
+        self.time.dt = units.dt;
+        self.lattice_units = Some(units);
+        Ok(())
     }
 
     /// All particles of the scene with ids 0, 1, 2, ... (spheres first, then blocks).
@@ -290,4 +353,5 @@ fn block_centres(b: &Block) -> impl Iterator<Item = [f64; 3]> + '_ {
 
 pub mod dem;
 mod overlap;
+pub mod lattice;
 mod validate;

@@ -51,6 +51,14 @@ impl Scene {
         self.validate_time_step(&c)
     }
 
+    /// Name, domain and fluid: what the lattice needs before it can be derived.
+    pub(crate) fn validate_domain(&self, file: &str) -> Result<(), SceneError> {
+        let c = Checker { file };
+        self.validate_header(&c)?;
+        c.positive("fluid.density", self.fluid.density, "kg/m^3")?;
+        c.positive("fluid.dynamic_viscosity", self.fluid.dynamic_viscosity, "Pa s")
+    }
+
     fn validate_header(&self, c: &Checker) -> Result<(), SceneError> {
         let name_ok = !self.name.is_empty()
             && self.name.len() <= 64
@@ -92,6 +100,18 @@ impl Scene {
         if self.output.interval == 0 {
             return Err(c.fail("output.interval", 0, "must be at least 1 step"));
         }
+        for (i, line) in self.output.line.iter().enumerate() {
+            if !["x", "y", "z"].contains(&line.axis.as_str()) {
+                let field = format!("output.line[{i}].axis");
+                return Err(c.fail(field, format!("{:?}", line.axis), "expected \"x\", \"y\" or \"z\""));
+            }
+            let inside =
+                (0..3).all(|a| line.through[a] >= self.domain.min[a] && line.through[a] <= self.domain.max[a]);
+            if !inside {
+                let field = format!("output.line[{i}].through");
+                return Err(c.fail(field, format!("{} m", vec3(line.through)), "lies outside the domain"));
+            }
+        }
         c.positive("coupling.timeout", self.coupling.timeout, "s")?;
         if self.coupling.timeout > 86_400.0 {
             return Err(c.fail(
@@ -104,7 +124,9 @@ impl Scene {
     }
 
     fn validate_particles(&self, c: &Checker) -> Result<(), SceneError> {
-        c.positive("particles.density", self.particles.density, "kg/m^3")?;
+        if self.particle_count() > 0 {
+            c.positive("particles.density", self.particles.density, "kg/m^3")?;
+        }
         for (i, s) in self.particles.sphere.iter().enumerate() {
             let field = |f: &str| format!("particles.sphere[{i}].{f}");
             c.positive(&field("radius"), s.radius, "m")?;
@@ -121,7 +143,7 @@ impl Scene {
             self.inside_domain(c, &format!("{field} (last sphere)"), last, b.radius)?;
         }
         let count = self.particle_count();
-        if count == 0 {
+        if count == 0 && self.lattice.is_none() {
             return Err(c.fail(
                 "particles",
                 "no sphere and no block",

@@ -1,0 +1,303 @@
+//! A fluid-only scene (a `[lattice]` and no particles): the GPU lattice alone, with health checks,
+//! VTK snapshots, probe lines and a summary.
+
+use crate::lbm::geometry::{Face, Operator, Setup};
+use crate::lbm::gpu::{Gpu, Health, Lattice, Unhealthy};
+use crate::lbm::mrt::Rates;
+use crate::output::Progress;
+use crate::vtk::{write_vti, Grid, Series};
+use scene::lattice::{mach_limit, LatticeFace, LatticeUnits};
+use scene::Scene;
+use serde::Serialize;
+use std::io::Write;
+use std::path::Path;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::time::Instant;
+
+/// The lattice of a scene, for the kernels.
+pub fn setup_of(units: &LatticeUnits) -> Setup {
+    let face = |f: &LatticeFace| match *f {
+        LatticeFace::Periodic => Face::Periodic,
+        LatticeFace::Wall => Face::Wall,
+        LatticeFace::MovingWall(u) => Face::MovingWall(u),
+        LatticeFace::VelocityInlet(u) => Face::VelocityInlet(u),
+        LatticeFace::PressureOutlet(rho) => Face::PressureOutlet(rho),
+    };
+    let operator = match units.operator.as_str() {
+        "bgk" => Operator::Bgk,
+        "trt" => Operator::Trt { magic: units.magic },
+        _ => {
+            let r = units.mrt;
+            Operator::Mrt { rates: Rates { nu: 1.0 / units.tau, e: r.e, epsilon: r.epsilon, q: r.q, pi: r.pi, m: r.m } }
+        }
+    };
+    let mut setup = Setup::new(units.n, units.faces.map(|f| face(&f)), units.tau, operator);
+    setup.solid = units.solid.clone();
+    setup.force = units.force;
+    setup
+}
+
+/// Health limits: twice the operator's Mach limit, and a density deviation of 50%.
+pub fn health_of(units: &LatticeUnits) -> Health {
+    Health { max_speed: 2.0 * mach_limit(&units.operator) / 3f64.sqrt(), max_density_deviation: 0.5 }
+}
+
+#[derive(Debug, Serialize)]
+struct LatticeInfo {
+    cells: [usize; 3],
+    dx_m: f64,
+    dt_s: f64,
+    tau: f64,
+    mach: f64,
+    operator: String,
+}
+
+#[derive(Debug, Serialize)]
+struct FluidSummary {
+    scene: String,
+    scene_file: String,
+    adapter: String,
+    lattice: LatticeInfo,
+    steps_requested: u64,
+    steps_completed: u64,
+    wall_time_s: f64,
+    mlups: f64,
+    exit_reason: String,
+    exit_code: u8,
+}
+
+/// What stopped a run early.
+enum Stop {
+    Interrupted,
+    Failed(String),
+}
+
+/// Runs a fluid-only scene; returns the exit code.
+pub fn run(scene: &Scene, scene_file: &str, steps: u64, out: &Path, interrupted: Arc<AtomicBool>) -> u8 {
+    let units = scene.lattice_units.as_ref().expect("fluid scenes have a lattice");
+    let gpu = match Gpu::new() {
+        Ok(g) => Arc::new(g),
+        Err(e) => {
+            protocol::say!("lbm-server: error: {e}");
+            return 1;
+        }
+    };
+    protocol::say!(
+        "lbm-server: scene '{}': {}x{}x{} cells, dx {:e} m, dt {:e} s, tau {:.4}, Mach {:.3}, {} on {}",
+        scene.name,
+        units.n[0],
+        units.n[1],
+        units.n[2],
+        units.dx,
+        units.dt,
+        units.tau,
+        units.mach,
+        units.operator,
+        gpu.adapter.name
+    );
+    let mut lattice = match Lattice::new(gpu.clone(), setup_of(units), health_of(units)) {
+        Ok(l) => l,
+        Err(e) => {
+            protocol::say!("lbm-server: error: {e}");
+            return 1;
+        }
+    };
+    let started = Instant::now();
+    let result = FluidRun::new(scene, units, out).and_then(|mut r| r.steps(&mut lattice, steps, &interrupted));
+    let wall = started.elapsed().as_secs_f64();
+    let (reason, code) = match &result {
+        Ok(()) => ("completed".to_string(), 0),
+        Err(Stop::Interrupted) => ("interrupted".to_string(), 130),
+        Err(Stop::Failed(e)) => (format!("error: {e}"), 1),
+    };
+    if let Err(Stop::Failed(e)) = &result {
+        protocol::say!("lbm-server: error: {e}");
+    }
+    let cells = units.n.iter().product::<usize>() as f64;
+    let summary = FluidSummary {
+        scene: scene.name.clone(),
+        scene_file: scene_file.to_string(),
+        adapter: gpu.adapter.name.clone(),
+        lattice: LatticeInfo {
+            cells: units.n,
+            dx_m: units.dx,
+            dt_s: units.dt,
+            tau: units.tau,
+            mach: units.mach,
+            operator: units.operator.clone(),
+        },
+        steps_requested: steps,
+        steps_completed: lattice.time,
+        wall_time_s: wall,
+        mlups: cells * lattice.time as f64 / wall.max(1e-9) / 1e6,
+        exit_reason: reason,
+        exit_code: code,
+    };
+    let text = serde_json::to_string_pretty(&summary).unwrap_or_default();
+    if let Err(e) = std::fs::write(out.join("summary.json"), text + "\n") {
+        protocol::say!("lbm-server: error: summary.json: {e}");
+    }
+    if code == 0 {
+        protocol::say!(
+            "lbm-server: {} steps in {wall:.2} s ({:.2} MLUPS); output in {}",
+            lattice.time,
+            summary.mlups,
+            out.display()
+        );
+    }
+    code
+}
+
+/// The outputs of one fluid run.
+struct FluidRun<'a> {
+    scene: &'a Scene,
+    units: &'a LatticeUnits,
+    out: &'a Path,
+    grid: Grid,
+    series: Series,
+    lines: Vec<std::io::BufWriter<std::fs::File>>,
+    last_good: Option<(u64, Vec<[f32; 4]>)>,
+}
+
+impl<'a> FluidRun<'a> {
+    fn new(scene: &'a Scene, units: &'a LatticeUnits, out: &'a Path) -> Result<Self, Stop> {
+        let io = |e: std::io::Error| Stop::Failed(format!("{}: {e}", out.display()));
+        std::fs::create_dir_all(out.join("fields")).map_err(io)?;
+        let mut lines = Vec::new();
+        for i in 0..scene.output.line.len() {
+            let mut w = std::io::BufWriter::new(std::fs::File::create(out.join(format!("line{i}.csv"))).map_err(io)?);
+            writeln!(w, "step,time,s,density,ux,uy,uz").map_err(io)?;
+            lines.push(w);
+        }
+        Ok(Self {
+            scene,
+            units,
+            out,
+            grid: Grid { n: units.n, origin: scene.domain.min, dx: units.dx },
+            series: Series::new(out.join("fields.pvd")),
+            lines,
+            last_good: None,
+        })
+    }
+
+    fn steps(&mut self, lattice: &mut Lattice, steps: u64, interrupted: &AtomicBool) -> Result<(), Stop> {
+        let check = self.units.check_interval;
+        let lines_every = self.scene.output.interval;
+        let fields_every = self.scene.output.fields_interval;
+        let due = |s: u64, every: u64| every > 0 && s % every == 0;
+        let mut progress = Progress::new(steps);
+        while lattice.time < steps {
+            let now = lattice.time;
+            let next = [check, lines_every, fields_every]
+                .iter()
+                .filter(|e| **e > 0)
+                .map(|e| (now / e + 1) * e)
+                .chain([steps])
+                .min()
+                .expect("steps");
+            lattice.step(next - now);
+            let last = next == steps;
+            let (fields, bad) = lattice.fields();
+            if let Some(bad) = bad {
+                return Err(self.blow_up(next, check, bad));
+            }
+            if due(next, lines_every) || last {
+                self.write_lines(next, &fields)?;
+            }
+            if due(next, fields_every) || last {
+                self.write_snapshot(next, &fields)?;
+            }
+            self.last_good = Some((next, fields));
+            progress.update(next);
+            if interrupted.load(Ordering::SeqCst) {
+                self.flush()?;
+                return Err(Stop::Interrupted);
+            }
+        }
+        progress.finish();
+        self.flush()
+    }
+
+    fn flush(&mut self) -> Result<(), Stop> {
+        for w in &mut self.lines {
+            w.flush().map_err(|e| Stop::Failed(format!("line probe: {e}")))?;
+        }
+        Ok(())
+    }
+
+    /// Density [kg/m^3] and velocity [m/s] of every cell.
+    fn si_fields(&self, fields: &[[f32; 4]]) -> (Vec<f32>, Vec<[f32; 3]>) {
+        let rho = self.scene.fluid.density as f32;
+        let c = (self.units.dx / self.units.dt) as f32;
+        (fields.iter().map(|f| f[0] * rho).collect(), fields.iter().map(|f| [f[1] * c, f[2] * c, f[3] * c]).collect())
+    }
+
+    fn write_snapshot(&mut self, step: u64, fields: &[[f32; 4]]) -> Result<(), Stop> {
+        let name = format!("fields/step{step:09}.vti");
+        let (density, velocity) = self.si_fields(fields);
+        let io = |e: std::io::Error| Stop::Failed(format!("{name}: {e}"));
+        write_vti(&self.out.join(&name), &self.grid, &density, &velocity).map_err(io)?;
+        self.series.add(step as f64 * self.units.dt, &name).map_err(io)
+    }
+
+    fn write_lines(&mut self, step: u64, fields: &[[f32; 4]]) -> Result<(), Stop> {
+        let n = self.units.n;
+        let (rho, c) = (self.scene.fluid.density, self.units.dx / self.units.dt);
+        for (line, w) in self.scene.output.line.iter().zip(self.lines.iter_mut()) {
+            let axis = ["x", "y", "z"].iter().position(|a| *a == line.axis).expect("validated axis");
+            let cell_of = |a: usize| {
+                let v = ((line.through[a] - self.scene.domain.min[a]) / self.units.dx).floor();
+                (v.max(0.0) as usize).min(n[a] - 1)
+            };
+            let mut idx = [cell_of(0), cell_of(1), cell_of(2)];
+            for i in 0..n[axis] {
+                idx[axis] = i;
+                let f = fields[idx[0] + n[0] * (idx[1] + n[1] * idx[2])];
+                let s = self.scene.domain.min[axis] + (i as f64 + 0.5) * self.units.dx;
+                let u = [f[1] as f64 * c, f[2] as f64 * c, f[3] as f64 * c];
+                writeln!(
+                    w,
+                    "{step},{:e},{s:e},{:e},{:e},{:e},{:e}",
+                    step as f64 * self.units.dt,
+                    f[0] as f64 * rho,
+                    u[0],
+                    u[1],
+                    u[2]
+                )
+                .map_err(|e| Stop::Failed(format!("line probe: {e}")))?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Describes an unhealthy cell and writes the last good snapshot.
+    fn blow_up(&mut self, step: u64, check: u64, bad: Unhealthy) -> Stop {
+        let quantity = if !(bad.rho.is_finite() && bad.u.iter().all(|v| v.is_finite())) {
+            format!("non-finite values (density {}, velocity {:?})", bad.rho, bad.u)
+        } else if (bad.rho - 1.0).abs() > 0.5 {
+            format!("density {} x the reference, outside [0.5, 1.5]", bad.rho)
+        } else {
+            let speed = bad.u.iter().map(|v| v * v).sum::<f32>().sqrt();
+            format!("lattice speed {speed:.3} (Mach {:.2}) above the limit", speed * 3f32.sqrt())
+        };
+        let mut msg = format!(
+            "the fluid became unstable between steps {} and {step}: cell {} at ({}, {}, {}): {quantity}",
+            step.saturating_sub(check),
+            bad.cell,
+            bad.coords[0],
+            bad.coords[1],
+            bad.coords[2]
+        );
+        if let Some((good, fields)) = self.last_good.take() {
+            let (density, velocity) = self.si_fields(&fields);
+            let path = self.out.join("last_good.vti");
+            match write_vti(&path, &self.grid, &density, &velocity) {
+                Ok(()) => msg += &format!("; last good snapshot (step {good}) in {}", path.display()),
+                Err(e) => msg += &format!("; could not write the last good snapshot: {e}"),
+            }
+        }
+        let _ = self.flush();
+        Stop::Failed(msg)
+    }
+}

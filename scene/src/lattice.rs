@@ -1,0 +1,395 @@
+//! The `[lattice]` section: how the fluid is discretised, and the one place where SI units become
+//! lattice units (dx, dt, tau, lattice velocities and forces).
+
+use crate::{Scene, SceneError};
+use serde::Deserialize;
+
+/// `[lattice]` (SI units).
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Lattice {
+    /// Cell size [m]; give this or `resolution`.
+    pub dx: Option<f64>,
+    /// Cells along x; give this or `dx`.
+    pub resolution: Option<u64>,
+    /// Collision operator: "bgk", "trt" (default) or "mrt".
+    #[serde(default = "default_operator")]
+    pub operator: String,
+    /// Relaxation time; when given, it sets dt. Otherwise dt follows from `mach`.
+    pub tau: Option<f64>,
+    /// Characteristic (largest expected) fluid speed [m/s].
+    pub velocity_scale: f64,
+    /// Target Mach number of `velocity_scale` when `tau` is not given (default 0.1).
+    #[serde(default = "default_mach")]
+    pub mach: f64,
+    /// TRT magic parameter Lambda (default 3/16).
+    #[serde(default = "default_magic")]
+    pub magic: f64,
+    /// MRT relaxation rates of the non-hydrodynamic moments (d'Humieres 2002 defaults).
+    #[serde(default)]
+    pub mrt: MrtRates,
+    /// Acceleration driving the fluid, e.g. a pressure gradient / density [m/s^2].
+    #[serde(default)]
+    pub body_acceleration: [f64; 3],
+    /// Boundary type of each domain face.
+    #[serde(default)]
+    pub faces: Faces,
+    /// Solid boxes (no-slip obstacles) [m].
+    #[serde(default)]
+    pub solid_box: Vec<SolidBox>,
+    /// Steps between two health checks (non-finite values, density, speed).
+    #[serde(default = "default_check_interval")]
+    pub check_interval: u64,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MrtRates {
+    pub e: f64,
+    pub epsilon: f64,
+    pub q: f64,
+    pub pi: f64,
+    pub m: f64,
+}
+
+impl Default for MrtRates {
+    fn default() -> Self {
+        Self { e: 1.19, epsilon: 1.4, q: 1.2, pi: 1.4, m: 1.98 }
+    }
+}
+
+/// Face types: "periodic", "wall", or a table {type = "moving_wall", velocity = [..]},
+/// {type = "velocity_inlet", velocity = [..]}, {type = "pressure_outlet", pressure = Pa}.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Faces {
+    #[serde(default = "wall")]
+    pub x_min: FaceSpec,
+    #[serde(default = "wall")]
+    pub x_max: FaceSpec,
+    #[serde(default = "wall")]
+    pub y_min: FaceSpec,
+    #[serde(default = "wall")]
+    pub y_max: FaceSpec,
+    #[serde(default = "wall")]
+    pub z_min: FaceSpec,
+    #[serde(default = "wall")]
+    pub z_max: FaceSpec,
+}
+
+impl Default for Faces {
+    fn default() -> Self {
+        Self { x_min: wall(), x_max: wall(), y_min: wall(), y_max: wall(), z_min: wall(), z_max: wall() }
+    }
+}
+
+impl Faces {
+    /// (name, spec) of the six faces in the order x_min, x_max, y_min, y_max, z_min, z_max.
+    pub fn all(&self) -> [(&'static str, &FaceSpec); 6] {
+        [
+            ("x_min", &self.x_min),
+            ("x_max", &self.x_max),
+            ("y_min", &self.y_min),
+            ("y_max", &self.y_max),
+            ("z_min", &self.z_min),
+            ("z_max", &self.z_max),
+        ]
+    }
+}
+
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(untagged)]
+pub enum FaceSpec {
+    /// "periodic" or "wall".
+    Name(String),
+    Table(FaceTable),
+}
+
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FaceTable {
+    #[serde(rename = "type")]
+    pub kind: String,
+    /// [m/s] for moving walls and velocity inlets.
+    pub velocity: Option<[f64; 3]>,
+    /// Gauge pressure [Pa] for pressure outlets.
+    pub pressure: Option<f64>,
+}
+
+fn wall() -> FaceSpec {
+    FaceSpec::Name("wall".into())
+}
+
+/// A solid box [m]; cells whose centre lies inside are solid.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SolidBox {
+    pub min: [f64; 3],
+    pub max: [f64; 3],
+}
+
+fn default_operator() -> String {
+    "trt".into()
+}
+fn default_mach() -> f64 {
+    0.1
+}
+fn default_magic() -> f64 {
+    3.0 / 16.0
+}
+fn default_check_interval() -> u64 {
+    100
+}
+
+/// A face in lattice units.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum LatticeFace {
+    Periodic,
+    Wall,
+    MovingWall([f64; 3]),
+    VelocityInlet([f64; 3]),
+    PressureOutlet(f64),
+}
+
+/// The discretisation of a scene: everything the kernels need, in lattice units, and the scales
+/// to convert back.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LatticeUnits {
+    pub n: [usize; 3],
+    /// Cell size [m] and time step [s].
+    pub dx: f64,
+    pub dt: f64,
+    pub tau: f64,
+    /// Lattice viscosity (tau - 1/2) / 3.
+    pub nu: f64,
+    /// Mach number of the velocity scale: u_lattice / c_s.
+    pub mach: f64,
+    pub operator: String,
+    pub magic: f64,
+    pub mrt: MrtRates,
+    /// Body force density in lattice units.
+    pub force: [f64; 3],
+    pub faces: [LatticeFace; 6],
+    /// Solid cells, x fastest.
+    pub solid: Vec<bool>,
+    pub check_interval: u64,
+}
+
+/// Smallest tau - 1/2 each operator accepts.
+pub fn tau_margin(operator: &str) -> f64 {
+    if operator == "bgk" {
+        0.01
+    } else {
+        0.0005
+    }
+}
+
+/// Largest Mach number each operator accepts.
+pub fn mach_limit(operator: &str) -> f64 {
+    match operator {
+        "bgk" => 0.3,
+        "trt" => 0.35,
+        _ => 0.4,
+    }
+}
+
+fn fail(file: &str, field: &str, value: impl ToString, problem: impl Into<String>) -> SceneError {
+    SceneError { file: file.into(), field: field.into(), value: value.to_string(), problem: problem.into() }
+}
+
+impl LatticeUnits {
+    /// Derives and checks the lattice of `scene` (which has a `[lattice]` section).
+    pub fn derive(scene: &Scene, lattice: &Lattice, file: &str) -> Result<LatticeUnits, SceneError> {
+        let dx = cell_size(scene, lattice, file)?;
+        let n = cell_counts(scene, dx, file)?;
+        let op = lattice.operator.as_str();
+        if !["bgk", "trt", "mrt"].contains(&op) {
+            return Err(fail(file, "lattice.operator", format!("{op:?}"), "expected \"bgk\", \"trt\" or \"mrt\""));
+        }
+        let nu_si = scene.fluid.dynamic_viscosity / scene.fluid.density;
+        positive(file, "lattice.velocity_scale", lattice.velocity_scale, "m/s")?;
+        let dt = match lattice.tau {
+            Some(tau) => (tau - 0.5) * dx * dx / (3.0 * nu_si),
+            None => {
+                positive(file, "lattice.mach", lattice.mach, "")?;
+                lattice.mach / 3f64.sqrt() * dx / lattice.velocity_scale
+            }
+        };
+        let tau = 0.5 + 3.0 * nu_si * dt / (dx * dx);
+        let field = if lattice.tau.is_some() { "lattice.tau" } else { "lattice (derived tau)" };
+        if !(tau - 0.5 >= tau_margin(op)) {
+            return Err(fail(
+                file,
+                field,
+                format!("{tau:.5}"),
+                format!(
+                    "is below 0.5 + {} for {op}: unstable; refine dx, lower lattice.mach, or raise the viscosity",
+                    tau_margin(op)
+                ),
+            ));
+        }
+        let mach = lattice.velocity_scale * dt / dx * 3f64.sqrt();
+        if mach > mach_limit(op) {
+            return Err(fail(
+                file,
+                "lattice.velocity_scale",
+                format!("{} m/s", lattice.velocity_scale),
+                format!("gives lattice Mach {mach:.3}, above {} for {op}: lower tau or coarsen dx", mach_limit(op)),
+            ));
+        }
+        let faces = lattice_faces(scene, lattice, dx, dt, file)?;
+        let solid = solid_cells(scene, lattice, n, dx, file)?;
+        if lattice.check_interval == 0 {
+            return Err(fail(file, "lattice.check_interval", 0, "must be at least 1 step"));
+        }
+        let force = lattice.body_acceleration.map(|a| a * dt * dt / dx);
+        Ok(LatticeUnits {
+            n,
+            dx,
+            dt,
+            tau,
+            nu: (tau - 0.5) / 3.0,
+            mach,
+            operator: op.to_string(),
+            magic: lattice.magic,
+            mrt: lattice.mrt,
+            force,
+            faces,
+            solid,
+            check_interval: lattice.check_interval,
+        })
+    }
+
+    /// Lattice velocity of an SI velocity.
+    pub fn velocity(&self, u: [f64; 3]) -> [f64; 3] {
+        u.map(|v| v * self.dt / self.dx)
+    }
+}
+
+fn positive(file: &str, field: &str, v: f64, unit: &str) -> Result<(), SceneError> {
+    if v.is_finite() && v > 0.0 {
+        Ok(())
+    } else {
+        Err(fail(file, field, format!("{v} {unit}").trim_end(), "must be a finite number > 0"))
+    }
+}
+
+fn cell_size(scene: &Scene, lattice: &Lattice, file: &str) -> Result<f64, SceneError> {
+    let lx = scene.domain.max[0] - scene.domain.min[0];
+    match (lattice.dx, lattice.resolution) {
+        (Some(dx), None) => positive(file, "lattice.dx", dx, "m").map(|()| dx),
+        (None, Some(r)) if r > 0 => Ok(lx / r as f64),
+        (None, Some(r)) => Err(fail(file, "lattice.resolution", r, "must be at least 1 cell")),
+        _ => Err(fail(file, "lattice", "dx and resolution", "give exactly one of lattice.dx or lattice.resolution")),
+    }
+}
+
+fn cell_counts(scene: &Scene, dx: f64, file: &str) -> Result<[usize; 3], SceneError> {
+    let mut n = [0usize; 3];
+    for a in 0..3 {
+        let cells = (scene.domain.max[a] - scene.domain.min[a]) / dx;
+        if (cells - cells.round()).abs() > 1e-6 * cells.max(1.0) || cells.round() < 1.0 {
+            return Err(fail(
+                file,
+                "lattice.dx",
+                format!("{dx} m"),
+                format!("the domain's extent along axis {a} is {cells:.4} cells: it must be a whole number"),
+            ));
+        }
+        n[a] = cells.round() as usize;
+    }
+    let total = n.iter().map(|&v| v as u128).product::<u128>();
+    if total >= 1 << 31 {
+        return Err(fail(file, "lattice.dx", format!("{dx} m"), format!("gives {total} cells, above 2^31")));
+    }
+    Ok(n)
+}
+
+fn lattice_faces(
+    scene: &Scene,
+    lattice: &Lattice,
+    dx: f64,
+    dt: f64,
+    file: &str,
+) -> Result<[LatticeFace; 6], SceneError> {
+    let to_lattice = |u: [f64; 3]| u.map(|v| v * dt / dx);
+    let mut out = [LatticeFace::Wall; 6];
+    for (k, (name, spec)) in lattice.faces.all().into_iter().enumerate() {
+        let field = format!("lattice.faces.{name}");
+        out[k] = match spec {
+            FaceSpec::Name(s) if s == "periodic" => LatticeFace::Periodic,
+            FaceSpec::Name(s) if s == "wall" => LatticeFace::Wall,
+            FaceSpec::Table(t) => match (t.kind.as_str(), t.velocity, t.pressure) {
+                ("moving_wall", Some(u), None) => LatticeFace::MovingWall(to_lattice(u)),
+                ("velocity_inlet", Some(u), None) => LatticeFace::VelocityInlet(to_lattice(u)),
+                ("pressure_outlet", None, Some(p)) => {
+                    // rho_lattice = 1 + p / (rho c_s^2), c_s^2 = dx^2 / (3 dt^2)
+                    LatticeFace::PressureOutlet(1.0 + 3.0 * p * dt * dt / (scene.fluid.density * dx * dx))
+                }
+                (kind, ..) => {
+                    return Err(fail(
+                        file,
+                        &field,
+                        format!("{t:?}"),
+                        format!(
+                            "type {kind:?} needs: moving_wall or velocity_inlet with velocity, \
+                             pressure_outlet with pressure"
+                        ),
+                    ))
+                }
+            },
+            FaceSpec::Name(s) => {
+                return Err(fail(file, &field, format!("{s:?}"), "expected \"periodic\", \"wall\" or a table"))
+            }
+        };
+    }
+    let limit = mach_limit(&lattice.operator);
+    for (k, (name, _)) in lattice.faces.all().into_iter().enumerate() {
+        if let LatticeFace::MovingWall(u) | LatticeFace::VelocityInlet(u) = out[k] {
+            let mach = u.iter().map(|v| v * v).sum::<f64>().sqrt() * 3f64.sqrt();
+            if mach > limit {
+                let si = u.map(|v| v * dx / dt);
+                return Err(fail(
+                    file,
+                    &format!("lattice.faces.{name}.velocity"),
+                    format!("[{}, {}, {}] m/s", si[0], si[1], si[2]),
+                    format!("is lattice Mach {mach:.3}, above {limit} for {}", lattice.operator),
+                ));
+            }
+        }
+    }
+    for (a, axis) in ["x", "y", "z"].iter().enumerate() {
+        let (lo, hi) = (out[2 * a] == LatticeFace::Periodic, out[2 * a + 1] == LatticeFace::Periodic);
+        if lo != hi {
+            return Err(fail(
+                file,
+                &format!("lattice.faces.{axis}_min / {axis}_max"),
+                "one periodic",
+                "periodic faces come in pairs",
+            ));
+        }
+    }
+    Ok(out)
+}
+
+fn solid_cells(scene: &Scene, lattice: &Lattice, n: [usize; 3], dx: f64, file: &str) -> Result<Vec<bool>, SceneError> {
+    let mut solid = vec![false; n[0] * n[1] * n[2]];
+    for (b, boxed) in lattice.solid_box.iter().enumerate() {
+        if (0..3).any(|a| !(boxed.max[a] > boxed.min[a])) {
+            return Err(fail(
+                file,
+                &format!("lattice.solid_box[{b}]"),
+                format!("min {:?} max {:?}", boxed.min, boxed.max),
+                "max must exceed min on every axis",
+            ));
+        }
+        for (k, cell) in solid.iter_mut().enumerate() {
+            let idx = [k % n[0], (k / n[0]) % n[1], k / (n[0] * n[1])];
+            let centre: [f64; 3] = std::array::from_fn(|a| scene.domain.min[a] + (idx[a] as f64 + 0.5) * dx);
+            if (0..3).all(|a| centre[a] >= boxed.min[a] && centre[a] <= boxed.max[a]) {
+                *cell = true;
+            }
+        }
+    }
+    Ok(solid)
+}

@@ -1,0 +1,113 @@
+//! Fluid-only scenes in SI units through `lbm-server run`: the units path end to end, refusals
+//! of unstable parameters, the health check, and the VTK output.
+
+mod common;
+use common::*;
+use std::path::Path;
+
+const POISEUILLE: &str = include_str!("../validation/scenes/poiseuille.toml");
+const CAVITY: &str = include_str!("../validation/scenes/cavity-unstable.toml");
+
+fn run(tag: &str, text: &str) -> (Option<i32>, String, std::path::PathBuf) {
+    let dir = temp_dir(tag);
+    let scene = write_scene(&dir, text);
+    let out = dir.join("out");
+    let result = server(&scene, &out, &[]).output().unwrap();
+    (result.status.code(), String::from_utf8_lossy(&result.stderr).into_owned(), out)
+}
+
+/// Rows (s, ux) of the last step in a line probe.
+fn last_profile(path: &Path) -> Vec<(f64, f64)> {
+    let text = std::fs::read_to_string(path).unwrap();
+    let rows: Vec<Vec<f64>> =
+        text.lines().skip(1).map(|l| l.split(',').map(|v| v.parse().unwrap()).collect()).collect();
+    let last = rows.last().unwrap()[0];
+    rows.iter().filter(|r| r[0] == last).map(|r| (r[2], r[4])).collect()
+}
+
+#[test]
+fn poiseuille_in_si_units_matches_the_analytic_profile() {
+    let (code, err, out) = run("pois", POISEUILLE);
+    assert_eq!(code, Some(0), "{err}");
+    let profile = last_profile(&out.join("line0.csv"));
+    assert_eq!(profile.len(), 16);
+    // u(y) = a / (2 nu) y (H - y) with nu = 1e-6 m^2/s, a = 6.25e-6 m/s^2, H = 16 mm.
+    let (a, nu, h) = (6.25e-6, 1.0e-6, 0.016);
+    let u_max = a * h * h / (8.0 * nu);
+    for (y, u) in profile {
+        let exact = a / (2.0 * nu) * y * (h - y);
+        assert!((u - exact).abs() < 2e-3 * u_max, "u({y}) = {u}, analytic {exact}");
+    }
+    let pvd = std::fs::read_to_string(out.join("fields.pvd")).unwrap();
+    assert_eq!(pvd.matches("<DataSet").count(), 3, "{pvd}");
+    let vti = std::fs::read(out.join("fields/step000003000.vti")).unwrap();
+    let cells = 2 * 16 * 2;
+    assert!(vti.len() > 16 * cells, "density and velocity payload present");
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["steps_completed"], 3000);
+    assert_eq!(summary["lattice"]["tau"], 0.8);
+}
+
+#[test]
+fn tau_below_the_limit_is_refused() {
+    let text = POISEUILLE.replace("operator = \"trt\"", "operator = \"bgk\"").replace("tau = 0.8", "tau = 0.505");
+    let (code, err, out) = run("lowtau", &text);
+    assert_eq!(code, Some(2), "{err}");
+    assert!(err.contains("lattice.tau = 0.50500: is below 0.5 + 0.01 for bgk"), "{err}");
+    assert!(!out.exists());
+}
+
+#[test]
+fn too_high_a_lattice_mach_number_is_refused() {
+    let (code, err, _) = run("mach", &POISEUILLE.replace("velocity_scale = 2.0e-4", "velocity_scale = 0.01"));
+    assert_eq!(code, Some(2), "{err}");
+    assert!(err.contains("lattice.velocity_scale = 0.01 m/s: gives lattice Mach 1.732, above 0.35 for trt"), "{err}");
+}
+
+#[test]
+fn a_face_too_fast_for_the_lattice_is_refused() {
+    let text = CAVITY.replace("velocity = [0.05, 0.0, 0.0]", "velocity = [0.3, 0.0, 0.0]");
+    let (code, err, _) = run("fastlid", &text);
+    assert_eq!(code, Some(2), "{err}");
+    assert!(err.contains("lattice.faces.z_max.velocity = [0.3, 0, 0] m/s: is lattice Mach 1.732"), "{err}");
+}
+
+#[test]
+fn a_blow_up_is_caught_with_step_cell_and_quantity() {
+    let (code, err, out) = run("blowup", CAVITY);
+    assert_eq!(code, Some(1), "{err}");
+    assert!(err.contains("the fluid became unstable between steps"), "{err}");
+    assert!(err.contains("cell ") && err.contains(" at ("), "{err}");
+    assert!(err.contains("last good snapshot (step"), "{err}");
+    assert!(out.join("last_good.vti").is_file());
+    let summary = std::fs::read_to_string(out.join("summary.json")).unwrap();
+    assert!(summary.contains("\"exit_reason\": \"error: the fluid became unstable"), "{summary}");
+}
+
+#[test]
+fn lattice_scene_mistakes_name_the_field() {
+    let cases = [
+        ("dx = 0.001", "dx = 0.0015", "lattice.dx = 0.0015 m: the domain's extent along axis 0"),
+        ("operator = \"trt\"", "operator = \"lbgk\"", "lattice.operator = \"lbgk\""),
+        ("[time]\nsteps = 3000", "[time]\nsteps = 3000\ndt = 0.1", "time.dt = 0.1 s: the [lattice] section derives"),
+        ("x_max = \"periodic\"", "x_max = \"wall\"", "periodic faces come in pairs"),
+        ("y_max = \"wall\"", "y_max = \"slip\"", "lattice.faces.y_max = \"slip\""),
+        ("axis = \"y\"", "axis = \"w\"", "output.line[0].axis = \"w\""),
+    ];
+    for (from, to, expected) in cases {
+        assert!(POISEUILLE.contains(from), "{from}");
+        let (code, err, _) = run("latticebad", &POISEUILLE.replacen(from, to, 1));
+        assert_eq!(code, Some(2), "{to}: {err}");
+        assert!(err.contains(expected), "{to}: expected {expected:?} in {err}");
+    }
+}
+
+#[test]
+fn particles_with_a_lattice_are_refused_until_the_coupling_exists() {
+    let text = POISEUILLE.to_string()
+        + "\n[particles]\ndensity = 2500.0\n[[particles.sphere]]\nposition = [0.001, 0.008, 0.001]\nradius = 0.0005\n";
+    let (code, err, _) = run("lattice-particles", &text);
+    assert_eq!(code, Some(2), "{err}");
+    assert!(err.contains("particles with a [lattice]"), "{err}");
+}
