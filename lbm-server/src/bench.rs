@@ -123,7 +123,7 @@ fn naive_mlups(gpu: &Gpu, n: [usize; 3], steps: u64) -> Option<f64> {
     use wgpu::util::DeviceExt;
     let cells = n[0] * n[1] * n[2];
     let bytes = (19 * cells * 4) as u64;
-    if bytes > gpu.limits.max_storage_buffer_binding_size as u64 {
+    if bytes > gpu.limits.max_storage_buffer_binding_size {
         return None;
     }
     let d = &gpu.device;

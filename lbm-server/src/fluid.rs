@@ -185,7 +185,7 @@ impl<'a> FluidRun<'a> {
         let check = self.units.check_interval;
         let lines_every = self.scene.output.interval;
         let fields_every = self.scene.output.fields_interval;
-        let due = |s: u64, every: u64| every > 0 && s % every == 0;
+        let due = |s: u64, every: u64| every > 0 && s.is_multiple_of(every);
         let mut progress = Progress::new(steps);
         while lattice.time < steps {
             let now = lattice.time;

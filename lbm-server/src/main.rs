@@ -8,6 +8,7 @@ mod launch;
 mod output;
 mod run;
 mod standin;
+mod validate;
 mod vtk;
 
 use clap::{Parser, Subcommand};
@@ -26,6 +27,8 @@ enum Command {
     Run(run::RunArgs),
     /// Measure lattice updates per second (MLUPS) against this device's copy bandwidth.
     Bench(bench::BenchArgs),
+    /// Run the lattice's analytic validation cases and write validation/lbm/REPORT.md.
+    Validate(validate::ValidateArgs),
     /// Measure the round trip of one coupling step over iceoryx2 and over a Unix socket.
     BenchLink(bench_link::BenchArgs),
     /// Peer process of bench-link (internal).
@@ -38,6 +41,7 @@ fn main() -> ExitCode {
     match Cli::parse().command {
         Command::Run(args) => run::main(args),
         Command::Bench(args) => bench::main(args),
+        Command::Validate(args) => validate::main(args),
         Command::BenchLink(args) => bench_link::main(args),
         Command::BenchLinkPeer(args) => bench_link::peer(args),
     }

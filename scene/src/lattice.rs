@@ -217,7 +217,7 @@ impl LatticeUnits {
         };
         let tau = 0.5 + 3.0 * nu_si * dt / (dx * dx);
         let field = if lattice.tau.is_some() { "lattice.tau" } else { "lattice (derived tau)" };
-        if !(tau - 0.5 >= tau_margin(op)) {
+        if tau.is_nan() || tau - 0.5 < tau_margin(op) {
             return Err(fail(
                 file,
                 field,
@@ -284,6 +284,7 @@ fn cell_size(scene: &Scene, lattice: &Lattice, file: &str) -> Result<f64, SceneE
     }
 }
 
+#[allow(clippy::needless_range_loop)]
 fn cell_counts(scene: &Scene, dx: f64, file: &str) -> Result<[usize; 3], SceneError> {
     let mut n = [0usize; 3];
     for a in 0..3 {
@@ -375,7 +376,7 @@ fn lattice_faces(
 fn solid_cells(scene: &Scene, lattice: &Lattice, n: [usize; 3], dx: f64, file: &str) -> Result<Vec<bool>, SceneError> {
     let mut solid = vec![false; n[0] * n[1] * n[2]];
     for (b, boxed) in lattice.solid_box.iter().enumerate() {
-        if (0..3).any(|a| !(boxed.max[a] > boxed.min[a])) {
+        if (0..3).any(|a| boxed.max[a].is_nan() || boxed.max[a] <= boxed.min[a]) {
             return Err(fail(
                 file,
                 &format!("lattice.solid_box[{b}]"),

@@ -1,11 +1,7 @@
 //! What the lattice looks like: size, the boundary type of each domain face, solid cells, and the
 //! collision operator. Everything in lattice units.
 
-use super::lattice::{self, opposite, C, W};
 use super::mrt;
-
-/// The six faces, in this order: -x, +x, -y, +y, -z, +z.
-pub const FACE_NAMES: [&str; 6] = ["x_min", "x_max", "y_min", "y_max", "z_min", "z_max"];
 
 /// Boundary type of a domain face (the wall lies half-way between the last cell and the outside).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -156,59 +152,5 @@ impl Setup {
     }
 }
 
-/// The population f_ibar that comes back to a cell whose post-collision f*_i left through `face`.
-pub fn bounce(face: Face, i: usize, f_star: f64, rho: f64, u: [f64; 3]) -> f64 {
-    match face {
-        Face::Wall | Face::Periodic => f_star,
-        Face::MovingWall(uw) | Face::VelocityInlet(uw) => f_star - 6.0 * W[i] * rho * lattice::dot(i, uw),
-        Face::PressureOutlet(rho_w) => {
-            let cu = lattice::dot(i, u);
-            let uu = u[0] * u[0] + u[1] * u[1] + u[2] * u[2];
-            -f_star + 2.0 * W[i] * (rho_w * (1.0 + 4.5 * cu * cu - 1.5 * uu) - 1.0)
-        }
-    }
-}
-
 /// The 19 shifted populations (f_i - w_i) of one cell.
 pub type Cell = [f64; 19];
-
-/// Density and velocity (with the half-force correction of Guo forcing).
-pub fn moments(f: &Cell, force: [f64; 3]) -> (f64, [f64; 3]) {
-    let rho = 1.0 + f.iter().sum::<f64>();
-    let u = std::array::from_fn(|a| {
-        let j: f64 = (0..19).map(|i| f[i] * C[i][a] as f64).sum();
-        (j + 0.5 * force[a]) / rho
-    });
-    (rho, u)
-}
-
-/// Post-collision populations of one cell, with its density and velocity.
-pub fn collide(setup: &Setup, f: &Cell) -> (Cell, f64, [f64; 3]) {
-    let (rho, u) = moments(f, setup.force);
-    let neq: Cell = std::array::from_fn(|i| f[i] - lattice::equilibrium_shifted(i, rho, u));
-    let s: Cell = std::array::from_fn(|i| lattice::guo_source(i, u, setup.force));
-    let out = match setup.operator {
-        Operator::Bgk => {
-            let w = 1.0 / setup.tau;
-            std::array::from_fn(|i| f[i] - w * neq[i] + (1.0 - w / 2.0) * s[i])
-        }
-        Operator::Trt { .. } => {
-            let (wp, wm) = (1.0 / setup.tau, setup.omega_minus());
-            std::array::from_fn(|i| {
-                let o = opposite(i);
-                let (np, nm) = ((neq[i] + neq[o]) / 2.0, (neq[i] - neq[o]) / 2.0);
-                let (sp, sm) = ((s[i] + s[o]) / 2.0, (s[i] - s[o]) / 2.0);
-                f[i] - wp * np - wm * nm + (1.0 - wp / 2.0) * sp + (1.0 - wm / 2.0) * sm
-            })
-        }
-        Operator::Mrt { rates } => {
-            let (a, b) = mrt::collision_matrices(&rates);
-            std::array::from_fn(|i| {
-                let relax: f64 = (0..19).map(|j| a[i][j] * neq[j]).sum();
-                let source: f64 = (0..19).map(|j| b[i][j] * s[j]).sum();
-                f[i] - relax + source
-            })
-        }
-    };
-    (out, rho, u)
-}

@@ -131,7 +131,7 @@ impl Lattice {
     pub fn new(gpu: std::sync::Arc<Gpu>, setup: Setup, health: Health) -> Result<Lattice, String> {
         let cells = setup.cells();
         let bytes = (cells * 4) as u64;
-        let binding_limit = gpu.limits.max_storage_buffer_binding_size as u64;
+        let binding_limit = gpu.limits.max_storage_buffer_binding_size;
         if bytes > binding_limit.min(gpu.limits.max_buffer_size) || cells as u64 >= (1u64 << 31) {
             return Err(format!(
                 "grid {}x{}x{} needs {bytes} bytes per direction, above this device's limit of {binding_limit}",
@@ -222,10 +222,6 @@ impl Lattice {
         Ok(lattice)
     }
 
-    pub fn gpu(&self) -> &Gpu {
-        &self.gpu
-    }
-
     /// Replaces the populations (shifted, natural layout) and restarts the AA phase at even.
     pub fn upload(&self, f: &[Cell]) {
         for (i, buffer) in self.populations.iter().enumerate() {
@@ -289,7 +285,7 @@ impl Lattice {
         (0..self.setup.cells())
             .map(|k| {
                 std::array::from_fn(|i| {
-                    if self.time % 2 == 0 || self.setup.solid[k] {
+                    if self.time.is_multiple_of(2) || self.setup.solid[k] {
                         return columns[i][k] as f64;
                     }
                     // Odd phase: f_i(x) sits in slot opposite(i) of x - c_i, or in slot i of x

@@ -73,6 +73,7 @@ pub fn equilibrium_shifted(i: usize, rho: f64, u: [f64; 3]) -> f64 {
 }
 
 /// Guo forcing term S_i = w_i [3 (c_i - u) + 9 (c_i . u) c_i] . F (before the (1 - omega/2) factor).
+#[cfg(test)]
 pub fn guo_source(i: usize, u: [f64; 3], force: [f64; 3]) -> f64 {
     let cu = dot(i, u);
     (0..3)
@@ -82,6 +83,7 @@ pub fn guo_source(i: usize, u: [f64; 3], force: [f64; 3]) -> f64 {
 }
 
 #[cfg(test)]
+#[allow(clippy::needless_range_loop)]
 mod tests {
     use super::*;
 

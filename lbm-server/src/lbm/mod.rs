@@ -5,6 +5,7 @@ pub mod gpu;
 pub mod lattice;
 pub mod mrt;
 pub mod random;
+#[cfg(test)]
 pub mod reference;
 pub mod unroll;
 pub mod validation;

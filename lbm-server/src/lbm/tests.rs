@@ -105,7 +105,7 @@ mod validation_cases {
     fn poiseuille_plates_converge_at_second_order_with_bgk() {
         let g = gpu();
         let runs: Vec<Channel> =
-            [8, 16, 32].iter().map(|&n| poiseuille_plates(&g, n, 0.9, Operator::Bgk, 0.02)).collect();
+            [8, 16, 32].iter().map(|&n| poiseuille_plates(&g, n, 0.6, Operator::Bgk, 0.02)).collect();
         for pair in runs.windows(2) {
             let p = order(&pair[0], &pair[1]);
             assert!((1.8..2.3).contains(&p), "order {p:.2} between {:?} and {:?}", pair[0], pair[1]);
@@ -120,7 +120,7 @@ mod validation_cases {
         let trt_err: Vec<f64> = taus.iter().map(|&t| poiseuille_plates(&g, 16, t, trt, 0.02).l2_error).collect();
         let bgk_err: Vec<f64> =
             taus.iter().map(|&t| poiseuille_plates(&g, 16, t, Operator::Bgk, 0.02).l2_error).collect();
-        // TRT with Lambda = 3/16 is exact for Poiseuille flow up to round-off, at every tau.
+        // TRT with Lambda = 3/16 keeps the wall half-way at every tau: what remains is far below BGK.
         assert!(trt_err.iter().all(|e| *e < 2e-4), "TRT errors {trt_err:?}");
         // BGK's wall moves with tau: its error grows by far more than 10x from tau 0.6 to 2.
         assert!(bgk_err[2] > 10.0 * bgk_err[0], "BGK errors {bgk_err:?}");

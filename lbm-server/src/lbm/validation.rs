@@ -26,7 +26,7 @@ pub fn poiseuille_plates(gpu: &Arc<Gpu>, n: usize, tau: f64, operator: Operator,
         let y = y as f64 + 0.5;
         4.0 * u_max * y * (h - y) / (h * h)
     };
-    let steps = relaxation_steps(h, nu, 10.0);
+    let steps = relaxation_steps(h, nu, 20.0);
     let (fields, _) = run_steady(gpu, &setup, |p| (1.0, [exact(p[1]), 0.0, 0.0]), steps);
     let error = l2_relative((0..n).map(|y| (fields[y][1] as f64, exact(y))));
     Channel { cells: n, tau, l2_error: error, steps }
@@ -43,7 +43,7 @@ pub fn poiseuille_duct(gpu: &Arc<Gpu>, n: usize, tau: f64, operator: Operator, u
     let g = u_max / unit(a / 2.0, a / 2.0);
     setup.force = [g, 0.0, 0.0];
     let exact = |p: [usize; 3]| g * unit(p[1] as f64 + 0.5, p[2] as f64 + 0.5);
-    let steps = relaxation_steps(a, nu, 6.0);
+    let steps = relaxation_steps(a, nu, 12.0);
     let (fields, _) = run_steady(gpu, &setup, |p| (1.0, [exact(p), 0.0, 0.0]), steps);
     let error = l2_relative((0..setup.cells()).map(|k| (fields[k][1] as f64, exact(setup.coords(k)))));
     Channel { cells: n, tau, l2_error: error, steps }
