@@ -12,6 +12,16 @@ use super::V3;
 use rayon::prelude::*;
 use std::collections::HashMap;
 
+/// What the force-gathering pass does after the forces.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Finish {
+    Nothing,
+    /// v += dt/2 a: the end of a step.
+    HalfKick,
+    /// The end of a step and the start of the next: two half kicks and the drift.
+    KickDrift,
+}
+
 /// Fewest bodies per parallel task (tasks of a few microseconds at least).
 const CHUNK: usize = 256;
 
@@ -166,7 +176,7 @@ impl World {
             builds: 0,
             contacts: 0,
         };
-        world.forces(0.0, false);
+        world.forces(0.0, Finish::Nothing);
         world
     }
 
@@ -187,23 +197,35 @@ impl World {
     pub fn insert(&mut self, body: Body) {
         self.bodies.push(body);
         self.stale = true;
-        self.forces(0.0, false);
+        self.forces(0.0, Finish::Nothing);
     }
 
     /// Removes the last sphere.
     pub fn pop(&mut self) -> Option<Body> {
         let b = self.bodies.pop();
         self.stale = true;
-        self.forces(0.0, false);
+        self.forces(0.0, Finish::Nothing);
         b
     }
 
     /// `steps` velocity-Verlet steps, run on a worker of rayon's pool so that the parallel
     /// loops inside need no hand-off from (and wake-up of) the calling thread.
+    /// Between two steps of the run the closing half kick of one, the opening half kick and the
+    /// drift of the next share one pass over the bodies (the same as separate steps, bit for bit).
     pub fn advance(&mut self, steps: u64) {
+        if steps == 0 {
+            return;
+        }
         rayon::scope(|_| {
-            for _ in 0..steps {
-                self.step();
+            self.open_step();
+            for s in 0..steps {
+                let last = s + 1 == steps;
+                let finish = if last { Finish::HalfKick } else { Finish::KickDrift };
+                let moved = self.forces(self.dt, finish);
+                self.time += self.dt;
+                if moved > 0.25 * self.skin * self.skin {
+                    self.stale = true;
+                }
             }
         });
     }
@@ -211,7 +233,13 @@ impl World {
     /// One velocity-Verlet step of `dt`: half kick and drift (one pass, which also finds the
     /// largest displacement since the last neighbour-list build), forces, half kick (fused with
     /// the force gather).
+    #[cfg(test)]
     pub fn step(&mut self) {
+        self.advance(1);
+    }
+
+    /// Half kick and drift; marks the neighbour list stale when some sphere moved more than skin / 2.
+    fn open_step(&mut self) {
         let (dt, g) = (self.dt, self.gravity);
         let moved = if self.x_at_build.len() == self.bodies.len() {
             self.bodies
@@ -234,8 +262,6 @@ impl World {
         if moved > 0.25 * self.skin * self.skin {
             self.stale = true;
         }
-        self.forces(dt, true);
-        self.time += dt;
     }
 
     /// Has some sphere moved more than skin / 2 since the last build (or the set changed)?
@@ -314,14 +340,16 @@ impl World {
     }
 
     /// Contact forces and torques at the present positions; `dt` advances the contact histories;
-    /// `kick` ends the Verlet step (v += dt/2 a) in the same pass.
-    fn forces(&mut self, dt: f64, kick: bool) {
+    /// `finish` says what the same pass does next. Returns the largest squared displacement since
+    /// the last neighbour-list build after a drift (else 0).
+    fn forces(&mut self, dt: f64, finish: Finish) -> f64 {
         if self.needs_rebuild() {
             self.rebuild();
         }
         let pair_contacts = self.pair_forces(dt);
-        let wall_contacts = self.gather(dt, kick);
+        let (wall_contacts, moved) = self.gather(dt, finish);
         self.contacts = pair_contacts + wall_contacts;
+        moved
     }
 
     /// Sphere-sphere contacts, in parallel over the Verlet pairs; returns how many touch.
@@ -371,7 +399,7 @@ impl World {
 
     /// Sums the pair forces and adds the wall contacts, in parallel over the bodies; returns the
     /// number of wall contacts.
-    fn gather(&mut self, dt: f64, kick: bool) -> usize {
+    fn gather(&mut self, dt: f64, finish: Finish) -> (usize, f64) {
         let g = self.gravity;
         let w = self.walls.len();
         let (slots, adj, start) = (&self.slots, &self.adj, &self.adj_start);
@@ -383,8 +411,9 @@ impl World {
             .par_iter_mut()
             .with_min_len(CHUNK)
             .zip(self.wall_history.par_chunks_mut(w.max(1)))
+            .zip(&self.x_at_build)
             .enumerate()
-            .map(|(k, (b, hist))| {
+            .map(|(k, ((b, hist), x0))| {
                 let (mut f, mut t) = (V3::zeros(), V3::zeros());
                 for &(slot, sign) in &adj[start[k] as usize..start[k + 1] as usize] {
                     let out = &slots[slot as usize].out;
@@ -415,12 +444,21 @@ impl World {
                 }
                 b.f = f;
                 b.t = t;
-                if kick {
-                    b.kick(0.5 * dt, g);
+                match finish {
+                    Finish::Nothing => (touching, 0.0),
+                    Finish::HalfKick => {
+                        b.kick(0.5 * dt, g);
+                        (touching, 0.0)
+                    }
+                    Finish::KickDrift => {
+                        b.kick(0.5 * dt, g);
+                        b.kick(0.5 * dt, g);
+                        b.x += dt * b.v;
+                        (touching, (b.x - x0).norm_squared())
+                    }
                 }
-                touching
             })
-            .sum()
+            .reduce(|| (0, 0.0), |a, b| (a.0 + b.0, a.1.max(b.1)))
     }
 
     /// The pair material of two material indices (for the time-step rule).
