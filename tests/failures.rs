@@ -137,7 +137,7 @@ fn silent_live_dem_is_caught_by_the_timeout() {
 #[test]
 fn ctrl_c_stops_both_cleanly() {
     let (mut server, dem, out) = long_run("ctrl-c", 30.0);
-    // A terminal's Ctrl-C reaches the whole process group.
+    // A terminal's Ctrl-C reaches the foreground process group: lbm-server (the DEM has its own).
     assert_eq!(
         unsafe { libc::kill(-(server.child.id() as i32), libc::SIGINT) },
         0

@@ -18,8 +18,13 @@ pub fn find_dem_client() -> Option<PathBuf> {
 }
 
 /// Starts `dem-client connect` for run `run` with the scene copy at `scene`.
+///
+/// The DEM gets a process group of its own, so a terminal's Ctrl-C reaches only lbm-server, which
+/// then ends the run in order (STOP in its next reply) instead of racing the DEM's own handler.
 pub fn spawn_dem_client(exe: &Path, run: &str, scene: &Path, timeout_s: f64) -> std::io::Result<Child> {
+    use std::os::unix::process::CommandExt;
     Command::new(exe)
+        .process_group(0)
         .arg("connect")
         .arg("--service")
         .arg(run)
