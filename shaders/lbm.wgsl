@@ -30,6 +30,8 @@ struct Params {
 
 // Collision operator, fixed when the pipeline is made: 0 BGK, 1 TRT, 2 MRT.
 override OPERATOR: u32 = 0u;
+// Particles coupled through the immersed moving boundary (imb.wgsl): only scenes with particles.
+override IMB: bool = false;
 
 @group(0) @binding(0) var<uniform> params: Params;
 // One word per cell: bit i (0-18) set when link i leaves the fluid (a face that is not periodic,
@@ -248,7 +250,10 @@ fn stream_collide(
     if (flag & SOLID) != 0u { return; }
     let f = read_populations(k, flag);
     let m = moments(f);
-    let post = collide(f, m);
+    var post = collide(f, m);
+    if IMB {
+        post = immersed_boundary(k, f, m, post);
+    }
     let odd = params.n.w == 1u;
     //#for i
     if leaves(flag, {i}u) {

@@ -26,12 +26,18 @@ pub struct BenchArgs {
 
 /// Parses "NXxNYxNZ".
 pub fn parse_grid(text: &str) -> Result<[usize; 3], String> {
-    let parts: Vec<usize> = text.split('x').map(|p| p.trim().parse::<usize>()).collect::<Result<_, _>>().map_err(
-        |_| format!("--grid = {text:?}: expected NXxNYxNZ with positive integers, e.g. 128x128x128"),
-    )?;
+    let parts: Vec<usize> = text
+        .split('x')
+        .map(|p| p.trim().parse::<usize>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| {
+            format!("--grid = {text:?}: expected NXxNYxNZ with positive integers, e.g. 128x128x128")
+        })?;
     match parts[..] {
         [x, y, z] if x > 0 && y > 0 && z > 0 => Ok([x, y, z]),
-        _ => Err(format!("--grid = {text:?}: expected NXxNYxNZ with positive integers, e.g. 128x128x128")),
+        _ => Err(format!(
+            "--grid = {text:?}: expected NXxNYxNZ with positive integers, e.g. 128x128x128"
+        )),
     }
 }
 
@@ -40,7 +46,9 @@ pub fn parse_operator(name: &str, tau: f64) -> Result<Operator, String> {
     match name {
         "bgk" => Ok(Operator::Bgk),
         "trt" => Ok(Operator::Trt { magic: 3.0 / 16.0 }),
-        "mrt" => Ok(Operator::Mrt { rates: Rates::dhumieres(1.0 / tau) }),
+        "mrt" => Ok(Operator::Mrt {
+            rates: Rates::dhumieres(1.0 / tau),
+        }),
         other => Err(format!("--operator = {other:?}: expected bgk, trt or mrt")),
     }
 }
@@ -66,7 +74,7 @@ fn run(args: &BenchArgs) -> Result<(), String> {
     let bandwidth = copy_bandwidth(&gpu);
     let setup = Setup::new(n, [Face::Periodic; 6], tau, operator);
     let cells = setup.cells() as f64;
-    let mut lattice = Lattice::new(gpu.clone(), setup, Health::default())?;
+    let mut lattice = Lattice::new(gpu.clone(), setup, Health::default(), None)?;
     lattice.step(20);
     gpu.wait();
     let start = Instant::now();
@@ -76,13 +84,25 @@ fn run(args: &BenchArgs) -> Result<(), String> {
     let mlups = cells * args.steps as f64 / seconds / 1e6;
     let naive = naive_mlups(&gpu, n, args.steps);
     let roofline = bandwidth / BYTES_PER_CELL / 1e6;
-    println!("adapter:        {} ({:?}, {:?})", gpu.adapter.name, gpu.adapter.device_type, gpu.adapter.backend);
-    println!("grid:           {}x{}x{} ({} cells), operator {}", n[0], n[1], n[2], cells, args.operator);
+    println!(
+        "adapter:        {} ({:?}, {:?})",
+        gpu.adapter.name, gpu.adapter.device_type, gpu.adapter.backend
+    );
+    println!(
+        "grid:           {}x{}x{} ({} cells), operator {}",
+        n[0], n[1], n[2], cells, args.operator
+    );
     println!("steps:          {} in {:.3} s", args.steps, seconds);
     println!("MLUPS:          {mlups:.1}");
     println!("bytes/cell/step {BYTES_PER_CELL} (FP32 populations, AA pattern: 19 reads + 19 writes + a 4-byte flag word)");
-    println!("copy bandwidth: {:.1} GB/s (buffer-to-buffer copy, this run)", bandwidth / 1e9);
-    println!("roofline:       {roofline:.1} MLUPS; achieved {:.1}% of it", 100.0 * mlups / roofline);
+    println!(
+        "copy bandwidth: {:.1} GB/s (buffer-to-buffer copy, this run)",
+        bandwidth / 1e9
+    );
+    println!(
+        "roofline:       {roofline:.1} MLUPS; achieved {:.1}% of it",
+        100.0 * mlups / roofline
+    );
     match naive {
         Some(naive) => println!(
             "naive kernel:   {naive:.1} MLUPS (two lattices, pull, BGK, same grid, same run): ours is {:.2}x",
@@ -97,7 +117,12 @@ fn run(args: &BenchArgs) -> Result<(), String> {
 pub fn copy_bandwidth(gpu: &Gpu) -> f64 {
     let bytes = (gpu.limits.max_buffer_size / 4).min(256 << 20);
     let make = |usage| {
-        gpu.device.create_buffer(&wgpu::BufferDescriptor { label: Some("copy"), size: bytes, usage, mapped_at_creation: false })
+        gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("copy"),
+            size: bytes,
+            usage,
+            mapped_at_creation: false,
+        })
     };
     let src = make(wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST);
     let dst = make(wgpu::BufferUsages::COPY_DST);
@@ -127,7 +152,9 @@ fn naive_mlups(gpu: &Gpu, n: [usize; 3], steps: u64) -> Option<f64> {
         return None;
     }
     let d = &gpu.device;
-    let lattice: Vec<f32> = (0..19 * cells).map(|j| crate::lbm::lattice::W[j / cells] as f32).collect();
+    let lattice: Vec<f32> = (0..19 * cells)
+        .map(|j| crate::lbm::lattice::W[j / cells] as f32)
+        .collect();
     let buffers: Vec<wgpu::Buffer> = (0..2)
         .map(|_| {
             d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -137,7 +164,16 @@ fn naive_mlups(gpu: &Gpu, n: [usize; 3], steps: u64) -> Option<f64> {
             })
         })
         .collect();
-    let params: [u32; 8] = [n[0] as u32, n[1] as u32, n[2] as u32, 0, (1.0f32 / 0.6).to_bits(), 0, 0, 0];
+    let params: [u32; 8] = [
+        n[0] as u32,
+        n[1] as u32,
+        n[2] as u32,
+        0,
+        (1.0f32 / 0.6).to_bits(),
+        0,
+        0,
+        0,
+    ];
     let uniform = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
         label: Some("naive params"),
         contents: bytemuck::cast_slice(&params),
@@ -160,14 +196,26 @@ fn naive_mlups(gpu: &Gpu, n: [usize; 3], steps: u64) -> Option<f64> {
             label: None,
             layout: &pipeline.get_bind_group_layout(0),
             entries: &[
-                wgpu::BindGroupEntry { binding: 0, resource: uniform.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 1, resource: buffers[parity].as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 2, resource: buffers[1 - parity].as_entire_binding() },
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: uniform.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: buffers[parity].as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: buffers[1 - parity].as_entire_binding(),
+                },
             ],
         })
     });
     let workgroups = (cells as u32).div_ceil(64);
-    let (x, y) = (workgroups.min(65_535), workgroups.div_ceil(workgroups.min(65_535)));
+    let (x, y) = (
+        workgroups.min(65_535),
+        workgroups.div_ceil(workgroups.min(65_535)),
+    );
     let run = |count: u64| {
         let mut encoder = d.create_command_encoder(&Default::default());
         for step in 0..count {

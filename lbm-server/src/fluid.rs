@@ -29,7 +29,16 @@ pub fn setup_of(units: &LatticeUnits) -> Setup {
         "trt" => Operator::Trt { magic: units.magic },
         _ => {
             let r = units.mrt;
-            Operator::Mrt { rates: Rates { nu: 1.0 / units.tau, e: r.e, epsilon: r.epsilon, q: r.q, pi: r.pi, m: r.m } }
+            Operator::Mrt {
+                rates: Rates {
+                    nu: 1.0 / units.tau,
+                    e: r.e,
+                    epsilon: r.epsilon,
+                    q: r.q,
+                    pi: r.pi,
+                    m: r.m,
+                },
+            }
         }
     };
     let mut setup = Setup::new(units.n, units.faces.map(|f| face(&f)), units.tau, operator);
@@ -40,7 +49,10 @@ pub fn setup_of(units: &LatticeUnits) -> Setup {
 
 /// Health limits: twice the operator's Mach limit, and a density deviation of 50%.
 pub fn health_of(units: &LatticeUnits) -> Health {
-    Health { max_speed: 2.0 * mach_limit(&units.operator) / 3f64.sqrt(), max_density_deviation: 0.5 }
+    Health {
+        max_speed: 2.0 * mach_limit(&units.operator) / 3f64.sqrt(),
+        max_density_deviation: 0.5,
+    }
 }
 
 #[derive(Debug, Serialize)]
@@ -96,7 +108,7 @@ pub fn run(scene: &Scene, scene_file: &str, steps: u64, out: &Path, interrupted:
         units.operator,
         gpu.adapter.name
     );
-    let mut lattice = match Lattice::new(gpu.clone(), setup_of(units), health_of(units)) {
+    let mut lattice = match Lattice::new(gpu.clone(), setup_of(units), health_of(units), None) {
         Ok(l) => l,
         Err(e) => {
             protocol::say!("lbm-server: error: {e}");
@@ -104,7 +116,8 @@ pub fn run(scene: &Scene, scene_file: &str, steps: u64, out: &Path, interrupted:
         }
     };
     let started = Instant::now();
-    let result = FluidRun::new(scene, units, out).and_then(|mut r| r.steps(&mut lattice, steps, &interrupted));
+    let result =
+        FluidRun::new(scene, units, out).and_then(|mut r| r.steps(&mut lattice, steps, &interrupted));
     let wall = started.elapsed().as_secs_f64();
     let (reason, code) = match &result {
         Ok(()) => ("completed".to_string(), 0),
@@ -166,7 +179,8 @@ impl<'a> FluidRun<'a> {
         std::fs::create_dir_all(out.join("fields")).map_err(io)?;
         let mut lines = Vec::new();
         for i in 0..scene.output.line.len() {
-            let mut w = std::io::BufWriter::new(std::fs::File::create(out.join(format!("line{i}.csv"))).map_err(io)?);
+            let mut w =
+                std::io::BufWriter::new(std::fs::File::create(out.join(format!("line{i}.csv"))).map_err(io)?);
             writeln!(w, "step,time,s,density,ux,uy,uz").map_err(io)?;
             lines.push(w);
         }
@@ -174,7 +188,11 @@ impl<'a> FluidRun<'a> {
             scene,
             units,
             out,
-            grid: Grid { n: units.n, origin: scene.domain.min, dx: units.dx },
+            grid: Grid {
+                n: units.n,
+                origin: scene.domain.min,
+                dx: units.dx,
+            },
             series: Series::new(out.join("fields.pvd")),
             lines,
             last_good: None,
@@ -230,7 +248,10 @@ impl<'a> FluidRun<'a> {
     fn si_fields(&self, fields: &[[f32; 4]]) -> (Vec<f32>, Vec<[f32; 3]>) {
         let rho = self.scene.fluid.density as f32;
         let c = (self.units.dx / self.units.dt) as f32;
-        (fields.iter().map(|f| f[0] * rho).collect(), fields.iter().map(|f| [f[1] * c, f[2] * c, f[3] * c]).collect())
+        (
+            fields.iter().map(|f| f[0] * rho).collect(),
+            fields.iter().map(|f| [f[1] * c, f[2] * c, f[3] * c]).collect(),
+        )
     }
 
     fn write_snapshot(&mut self, step: u64, fields: &[[f32; 4]]) -> Result<(), Stop> {
@@ -245,7 +266,10 @@ impl<'a> FluidRun<'a> {
         let n = self.units.n;
         let (rho, c) = (self.scene.fluid.density, self.units.dx / self.units.dt);
         for (line, w) in self.scene.output.line.iter().zip(self.lines.iter_mut()) {
-            let axis = ["x", "y", "z"].iter().position(|a| *a == line.axis).expect("validated axis");
+            let axis = ["x", "y", "z"]
+                .iter()
+                .position(|a| *a == line.axis)
+                .expect("validated axis");
             let cell_of = |a: usize| {
                 let v = ((line.through[a] - self.scene.domain.min[a]) / self.units.dx).floor();
                 (v.max(0.0) as usize).min(n[a] - 1)
@@ -279,7 +303,10 @@ impl<'a> FluidRun<'a> {
             format!("density {} x the reference, outside [0.5, 1.5]", bad.rho)
         } else {
             let speed = bad.u.iter().map(|v| v * v).sum::<f32>().sqrt();
-            format!("lattice speed {speed:.3} (Mach {:.2}) above the limit", speed * 3f32.sqrt())
+            format!(
+                "lattice speed {speed:.3} (Mach {:.2}) above the limit",
+                speed * 3f32.sqrt()
+            )
         };
         let mut msg = format!(
             "the fluid became unstable between steps {} and {step}: cell {} at ({}, {}, {}): {quantity}",

@@ -3,8 +3,8 @@
 mod bench;
 mod bench_link;
 mod fluid;
-mod lbm;
 mod launch;
+mod lbm;
 mod output;
 mod run;
 mod standin;
@@ -15,7 +15,11 @@ use clap::{Parser, Subcommand};
 use std::process::ExitCode;
 
 #[derive(Parser)]
-#[command(name = "lbm-server", version, about = "GPU lattice-Boltzmann fluid of the LBM-DEM co-simulation")]
+#[command(
+    name = "lbm-server",
+    version,
+    about = "GPU lattice-Boltzmann fluid of the LBM-DEM co-simulation"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,

@@ -130,7 +130,13 @@ pub fn main(args: RunArgs) -> ExitCode {
     }
     if prepared.scene.lattice.is_some() {
         let p = &prepared;
-        return ExitCode::from(crate::fluid::run(&p.scene, &p.scene_file, p.steps, &p.out, interrupted));
+        return ExitCode::from(crate::fluid::run(
+            &p.scene,
+            &p.scene_file,
+            p.steps,
+            &p.out,
+            interrupted,
+        ));
     }
     protocol::cleanup::remove_stale_runs();
     let run = new_run_name();

@@ -36,7 +36,9 @@ pub fn main(args: ValidateArgs) -> ExitCode {
     report += &wall_location(&gpu);
     report += &taylor_green(&gpu);
     report += &mass(&gpu);
-    if let Err(e) = std::fs::create_dir_all(&args.out).and_then(|()| std::fs::write(args.out.join("REPORT.md"), &report)) {
+    if let Err(e) =
+        std::fs::create_dir_all(&args.out).and_then(|()| std::fs::write(args.out.join("REPORT.md"), &report))
+    {
         protocol::say!("lbm-server: error: {}: {e}", args.out.display());
         return ExitCode::FAILURE;
     }
@@ -45,19 +47,33 @@ pub fn main(args: ValidateArgs) -> ExitCode {
 }
 
 fn table_of(runs: &[Channel]) -> String {
-    let mut t = String::from("| cells across | tau | steps | L2 error | observed order |\n|---:|---:|---:|---:|---:|\n");
+    let mut t = String::from(
+        "| cells across | tau | steps | L2 error | observed order |\n|---:|---:|---:|---:|---:|\n",
+    );
     for (k, r) in runs.iter().enumerate() {
-        let order = if k == 0 { "".to_string() } else { format!("{:.2}", validation::order(&runs[k - 1], r)) };
-        let _ = writeln!(t, "| {} | {} | {} | {:.3e} | {order} |", r.cells, r.tau, r.steps, r.l2_error);
+        let order = if k == 0 {
+            "".to_string()
+        } else {
+            format!("{:.2}", validation::order(&runs[k - 1], r))
+        };
+        let _ = writeln!(
+            t,
+            "| {} | {} | {} | {:.3e} | {order} |",
+            r.cells, r.tau, r.steps, r.l2_error
+        );
     }
     t
 }
 
 fn channel_convergence(gpu: &Arc<Gpu>) -> String {
-    let plates: Vec<Channel> =
-        [8, 16, 32, 64].iter().map(|&n| validation::poiseuille_plates(gpu, n, 0.6, Operator::Bgk, 0.02)).collect();
-    let duct: Vec<Channel> =
-        [8, 16, 24, 32].iter().map(|&n| validation::poiseuille_duct(gpu, n, 0.8, Operator::Bgk, 0.02)).collect();
+    let plates: Vec<Channel> = [8, 16, 32, 64]
+        .iter()
+        .map(|&n| validation::poiseuille_plates(gpu, n, 0.6, Operator::Bgk, 0.02))
+        .collect();
+    let duct: Vec<Channel> = [8, 16, 24, 32]
+        .iter()
+        .map(|&n| validation::poiseuille_duct(gpu, n, 0.8, Operator::Bgk, 0.02))
+        .collect();
     format!(
         "\n## Poiseuille flow, BGK, half-way bounce-back\n\nBetween plates (body force, centre speed 0.02), \
          against u(y) = 4 u_max y (H - y) / H^2 with the walls half-way between cells:\n\n{}\n\
@@ -91,10 +107,23 @@ fn taylor_green(gpu: &Arc<Gpu>) -> String {
          energy decays as exp(-4 nu k^2 t); the viscosity fitted over 1000 steps against (tau - 1/2) / 3.\n\n\
          | operator | nu expected | nu measured | relative error |\n|---|---:|---:|---:|\n",
     );
-    let ops = [Operator::Bgk, TRT, Operator::Mrt { rates: Rates::dhumieres(1.0 / 0.8) }];
+    let ops = [
+        Operator::Bgk,
+        TRT,
+        Operator::Mrt {
+            rates: Rates::dhumieres(1.0 / 0.8),
+        },
+    ];
     for op in ops {
         let d = validation::taylor_green(gpu, 32, 0.8, op, 0.02, 1000);
-        let _ = writeln!(t, "| {} | {:.6} | {:.6} | {:.3e} |", op.name(), d.nu_expected, d.nu_measured, d.relative_error);
+        let _ = writeln!(
+            t,
+            "| {} | {:.6} | {:.6} | {:.3e} |",
+            op.name(),
+            d.nu_expected,
+            d.nu_measured,
+            d.relative_error
+        );
     }
     t
 }

@@ -19,13 +19,22 @@ pub fn write_vti(path: &Path, grid: &Grid, density: &[f32], velocity: &[[f32; 3]
     let mut w = BufWriter::new(File::create(path)?);
     let density_bytes = (cells * 4) as u64;
     writeln!(w, r#"<?xml version="1.0"?>"#)?;
-    writeln!(w, r#"<VTKFile type="ImageData" version="1.0" byte_order="LittleEndian" header_type="UInt64">"#)?;
+    writeln!(
+        w,
+        r#"<VTKFile type="ImageData" version="1.0" byte_order="LittleEndian" header_type="UInt64">"#
+    )?;
     let [ox, oy, oz] = grid.origin;
     let dx = grid.dx;
-    writeln!(w, r#"<ImageData WholeExtent="0 {nx} 0 {ny} 0 {nz}" Origin="{ox} {oy} {oz}" Spacing="{dx} {dx} {dx}">"#)?;
+    writeln!(
+        w,
+        r#"<ImageData WholeExtent="0 {nx} 0 {ny} 0 {nz}" Origin="{ox} {oy} {oz}" Spacing="{dx} {dx} {dx}">"#
+    )?;
     writeln!(w, r#"<Piece Extent="0 {nx} 0 {ny} 0 {nz}">"#)?;
     writeln!(w, r#"<CellData Scalars="density" Vectors="velocity">"#)?;
-    writeln!(w, r#"<DataArray type="Float32" Name="density" format="appended" offset="0"/>"#)?;
+    writeln!(
+        w,
+        r#"<DataArray type="Float32" Name="density" format="appended" offset="0"/>"#
+    )?;
     writeln!(
         w,
         r#"<DataArray type="Float32" Name="velocity" NumberOfComponents="3" format="appended" offset="{}"/>"#,
@@ -49,7 +58,10 @@ pub struct Series {
 
 impl Series {
     pub fn new(path: PathBuf) -> Self {
-        Self { path, entries: Vec::new() }
+        Self {
+            path,
+            entries: Vec::new(),
+        }
     }
 
     /// Adds `file` (relative to the .pvd) at simulation time `time` [s].
@@ -75,10 +87,15 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("vti-test-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let path = dir.join("a.vti");
-        let grid = Grid { n: [2, 3, 1], origin: [0.0; 3], dx: 0.5 };
+        let grid = Grid {
+            n: [2, 3, 1],
+            origin: [0.0; 3],
+            dx: 0.5,
+        };
         write_vti(&path, &grid, &[1.0; 6], &[[0.5, 0.0, -1.0]; 6]).unwrap();
         let bytes = std::fs::read(&path).unwrap();
-        let start = bytes.iter().position(|b| *b == b'_').unwrap() + 1;
+        let marker = b"encoding=\"raw\">_";
+        let start = bytes.windows(marker.len()).position(|w| w == marker).unwrap() + marker.len();
         let len = u64::from_le_bytes(bytes[start..start + 8].try_into().unwrap());
         assert_eq!(len, 24);
         let second = start + 8 + 24;

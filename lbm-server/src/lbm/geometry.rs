@@ -93,7 +93,14 @@ pub enum Link {
 
 impl Setup {
     pub fn new(n: [usize; 3], faces: [Face; 6], tau: f64, operator: Operator) -> Self {
-        Self { n, faces, solid: vec![false; n[0] * n[1] * n[2]], tau, operator, force: [0.0; 3] }
+        Self {
+            n,
+            faces,
+            solid: vec![false; n[0] * n[1] * n[2]],
+            tau,
+            operator,
+            force: [0.0; 3],
+        }
     }
 
     pub fn cells(&self) -> usize {
@@ -105,7 +112,11 @@ impl Setup {
     }
 
     pub fn coords(&self, cell: usize) -> [usize; 3] {
-        [cell % self.n[0], (cell / self.n[0]) % self.n[1], cell / (self.n[0] * self.n[1])]
+        [
+            cell % self.n[0],
+            (cell / self.n[0]) % self.n[1],
+            cell / (self.n[0] * self.n[1]),
+        ]
     }
 
     /// The neighbour of `cell` along `c` (periodic faces wrap). A link that crosses several

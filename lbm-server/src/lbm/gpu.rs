@@ -5,8 +5,9 @@ use super::lattice::{opposite, C, W};
 use super::mrt;
 use wgpu::util::DeviceExt;
 
-/// The kernels' source, kept in its own file.
+/// The kernels' source, kept in their own files: the lattice and the immersed moving boundary.
 pub const SHADER: &str = include_str!("../../../shaders/lbm.wgsl");
+pub const IMB_SHADER: &str = include_str!("../../../shaders/imb.wgsl");
 
 /// Invocations per workgroup (must match `@workgroup_size` in the shader).
 const WORKGROUP: u32 = 64;
@@ -14,6 +15,9 @@ const WORKGROUP: u32 = 64;
 const MAX_GROUPS: u32 = 65_535;
 /// Bindings before the 19 population buffers.
 const FIRST_POPULATION_BINDING: u32 = 5;
+/// The immersed-boundary bindings follow the populations: particles, pairs, covered, slots, info.
+pub(super) const FIRST_IMB_BINDING: u32 = FIRST_POPULATION_BINDING + 19;
+const BINDINGS: u32 = FIRST_IMB_BINDING + 5;
 
 /// The device and its queue.
 pub struct Gpu {
@@ -34,7 +38,7 @@ impl Gpu {
         }))
         .map_err(|e| format!("no GPU adapter found (on a machine without a GPU install Mesa lavapipe: mesa-vulkan-drivers): {e}"))?;
         let limits = adapter.limits();
-        let need = FIRST_POPULATION_BINDING + 19;
+        let need = BINDINGS;
         if limits.max_storage_buffers_per_shader_stage < need {
             return Err(format!(
                 "adapter {} allows {} storage buffers per shader stage, the lattice needs {need}",
@@ -48,7 +52,12 @@ impl Gpu {
             ..Default::default()
         }))
         .map_err(|e| format!("cannot open the GPU device: {e}"))?;
-        Ok(Gpu { device, queue, adapter: adapter.get_info(), limits })
+        Ok(Gpu {
+            device,
+            queue,
+            adapter: adapter.get_info(),
+            limits,
+        })
     }
 
     /// Waits until the queue is idle.
@@ -99,20 +108,29 @@ pub struct Health {
 
 impl Default for Health {
     fn default() -> Self {
-        Self { max_speed: 0.4, max_density_deviation: 0.5 }
+        Self {
+            max_speed: 0.4,
+            max_density_deviation: 0.5,
+        }
     }
 }
 
 /// A lattice living on the GPU.
 pub struct Lattice {
     pub setup: Setup,
-    gpu: std::sync::Arc<Gpu>,
+    pub(super) gpu: std::sync::Arc<Gpu>,
     populations: Vec<wgpu::Buffer>,
+    params: Vec<wgpu::Buffer>,
+    flags: wgpu::Buffer,
+    mrt: wgpu::Buffer,
     fields: wgpu::Buffer,
-    status: wgpu::Buffer,
-    bind_groups: [wgpu::BindGroup; 2],
-    stream_collide: wgpu::ComputePipeline,
+    pub(super) status: wgpu::Buffer,
+    layout: wgpu::BindGroupLayout,
+    pub(super) bind_groups: [wgpu::BindGroup; 2],
+    pub(super) stream_collide: wgpu::ComputePipeline,
     macroscopic: wgpu::ComputePipeline,
+    /// Particle coupling (immersed moving boundary), when the scene has particles.
+    pub(super) imb: Option<super::imb::Coupling>,
     /// Completed steps; its parity selects the AA phase.
     pub time: u64,
 }
@@ -127,8 +145,13 @@ pub struct Unhealthy {
 }
 
 impl Lattice {
-    /// Allocates the lattice, at rest (rho = 1, u = 0).
-    pub fn new(gpu: std::sync::Arc<Gpu>, setup: Setup, health: Health) -> Result<Lattice, String> {
+    /// Allocates the lattice, at rest (rho = 1, u = 0), with particle coupling when `imb` is given.
+    pub fn new(
+        gpu: std::sync::Arc<Gpu>,
+        setup: Setup,
+        health: Health,
+        imb: Option<super::imb::ImbOptions>,
+    ) -> Result<Lattice, String> {
         let cells = setup.cells();
         let bytes = (cells * 4) as u64;
         let binding_limit = gpu.limits.max_storage_buffer_binding_size;
@@ -139,50 +162,42 @@ impl Lattice {
             ));
         }
         let d = &gpu.device;
-        let storage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST;
         let populations: Vec<wgpu::Buffer> = (0..19)
-            .map(|i| {
-                d.create_buffer(&wgpu::BufferDescriptor {
-                    label: Some(&format!("f{i}")),
-                    size: bytes,
-                    usage: storage,
-                    mapped_at_creation: false,
-                })
-            })
+            .map(|i| storage_buffer(d, &format!("f{i}"), bytes))
             .collect();
-        let flags = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("flags"),
-            contents: bytemuck::cast_slice(&cell_flags(&setup)),
-            usage: wgpu::BufferUsages::STORAGE,
-        });
-        let mrt = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("mrt"),
-            contents: bytemuck::cast_slice(&mrt_matrices(&setup)),
-            usage: wgpu::BufferUsages::STORAGE,
-        });
-        let fields = d.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("fields"),
-            size: bytes * 4,
-            usage: storage,
-            mapped_at_creation: false,
-        });
-        let status = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("status"),
-            contents: bytemuck::cast_slice(&[u32::MAX; 4]),
-            usage: storage,
-        });
+        let init = |label: &str, contents: &[u8], usage| {
+            d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents,
+                usage,
+            })
+        };
+        let flags = init(
+            "flags",
+            bytemuck::cast_slice(&cell_flags(&setup)),
+            wgpu::BufferUsages::STORAGE,
+        );
+        let mrt = init(
+            "mrt",
+            bytemuck::cast_slice(&mrt_matrices(&setup)),
+            wgpu::BufferUsages::STORAGE,
+        );
+        let fields = storage_buffer(d, "fields", bytes * 4);
+        let status = init("status", bytemuck::cast_slice(&[u32::MAX, 0, 0, 0]), STORAGE);
         let params: Vec<wgpu::Buffer> = (0..2)
             .map(|parity| {
-                d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                    label: Some("params"),
-                    contents: bytemuck::bytes_of(&params(&setup, parity, health)),
-                    usage: wgpu::BufferUsages::UNIFORM,
-                })
+                init(
+                    "params",
+                    bytemuck::bytes_of(&params(&setup, parity, health)),
+                    wgpu::BufferUsages::UNIFORM,
+                )
             })
             .collect();
+        let coupling = super::imb::Coupling::new(d, imb, cells);
+        let source = format!("{SHADER}\n{IMB_SHADER}");
         let module = d.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("lbm.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(super::unroll::unroll(SHADER).into()),
+            label: Some("lbm.wgsl + imb.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(super::unroll::unroll(&source).into()),
         });
         let layout = bind_group_layout(d);
         let pipeline_layout = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -190,6 +205,15 @@ impl Lattice {
             bind_group_layouts: &[Some(&layout)],
             immediate_size: 0,
         });
+        let constants = [
+            ("OPERATOR", setup.operator.code() as f64),
+            ("IMB", f64::from(u8::from(imb.is_some()))),
+            ("SLOTS", imb.map_or(2, |o| o.slots) as f64),
+            (
+                "SEED_WEIGHTING",
+                f64::from(u8::from(imb.is_some_and(|o| o.seed_weighting))),
+            ),
+        ];
         let pipeline = |entry: &str| {
             d.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
                 label: Some(entry),
@@ -197,7 +221,7 @@ impl Lattice {
                 module: &module,
                 entry_point: Some(entry),
                 compilation_options: wgpu::PipelineCompilationOptions {
-                    constants: &[("OPERATOR", setup.operator.code() as f64)],
+                    constants: &constants,
                     ..Default::default()
                 },
                 cache: None,
@@ -205,28 +229,66 @@ impl Lattice {
         };
         let stream_collide = pipeline("stream_collide");
         let macroscopic = pipeline("macroscopic");
+        let coupling = coupling.with_pipelines(imb.is_some(), &pipeline);
         let bind_groups = [0, 1].map(|parity| {
-            let mut entries = vec![
-                entry(0, &params[parity]),
-                entry(1, &flags),
-                entry(2, &mrt),
-                entry(3, &fields),
-                entry(4, &status),
-            ];
-            entries.extend(populations.iter().enumerate().map(|(i, b)| entry(FIRST_POPULATION_BINDING + i as u32, b)));
-            d.create_bind_group(&wgpu::BindGroupDescriptor { label: Some("lattice"), layout: &layout, entries: &entries })
+            make_bind_group(
+                d,
+                &layout,
+                &params[parity],
+                &flags,
+                &mrt,
+                &fields,
+                &status,
+                &populations,
+                &coupling,
+            )
         });
-        let lattice =
-            Lattice { setup, gpu, populations, fields, status, bind_groups, stream_collide, macroscopic, time: 0 };
+        let lattice = Lattice {
+            setup,
+            gpu,
+            populations,
+            params,
+            flags,
+            mrt,
+            fields,
+            status,
+            layout,
+            bind_groups,
+            stream_collide,
+            macroscopic,
+            imb: Some(coupling),
+            time: 0,
+        };
         lattice.upload(&vec![[0.0; 19]; cells]);
         Ok(lattice)
+    }
+
+    /// Rebuilds the bind groups (after the coupling's buffers grew).
+    pub(super) fn rebind(&mut self) {
+        let d = &self.gpu.device;
+        let coupling = self.imb.as_ref().expect("coupling buffers");
+        self.bind_groups = [0, 1].map(|parity| {
+            make_bind_group(
+                d,
+                &self.layout,
+                &self.params[parity],
+                &self.flags,
+                &self.mrt,
+                &self.fields,
+                &self.status,
+                &self.populations,
+                coupling,
+            )
+        });
     }
 
     /// Replaces the populations (shifted, natural layout) and restarts the AA phase at even.
     pub fn upload(&self, f: &[Cell]) {
         for (i, buffer) in self.populations.iter().enumerate() {
             let column: Vec<f32> = f.iter().map(|c| c[i] as f32).collect();
-            self.gpu.queue.write_buffer(buffer, 0, bytemuck::cast_slice(&column));
+            self.gpu
+                .queue
+                .write_buffer(buffer, 0, bytemuck::cast_slice(&column));
         }
     }
 
@@ -243,7 +305,10 @@ impl Lattice {
             self.dispatch(&mut encoder, &self.stream_collide, self.time % 2);
             self.time += 1;
             if done % 64 == 63 {
-                let full = std::mem::replace(&mut encoder, self.gpu.device.create_command_encoder(&Default::default()));
+                let full = std::mem::replace(
+                    &mut encoder,
+                    self.gpu.device.create_command_encoder(&Default::default()),
+                );
                 self.gpu.queue.submit([full.finish()]);
             }
         }
@@ -251,7 +316,25 @@ impl Lattice {
     }
 
     fn dispatch(&self, encoder: &mut wgpu::CommandEncoder, pipeline: &wgpu::ComputePipeline, parity: u64) {
-        let groups = (self.setup.cells() as u32).div_ceil(WORKGROUP);
+        self.dispatch_groups(
+            encoder,
+            pipeline,
+            parity,
+            (self.setup.cells() as u32).div_ceil(WORKGROUP),
+        );
+    }
+
+    /// Dispatches `groups` workgroups (2D beyond the per-dimension limit).
+    pub(super) fn dispatch_groups(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        pipeline: &wgpu::ComputePipeline,
+        parity: u64,
+        groups: u32,
+    ) {
+        if groups == 0 {
+            return;
+        }
         let x = groups.min(MAX_GROUPS);
         let mut pass = encoder.begin_compute_pass(&Default::default());
         pass.set_pipeline(pipeline);
@@ -259,18 +342,31 @@ impl Lattice {
         pass.dispatch_workgroups(x, groups.div_ceil(x), 1);
     }
 
+    /// Adds one stream-collide step to `encoder`.
+    pub(super) fn encode_step(&mut self, encoder: &mut wgpu::CommandEncoder) {
+        self.dispatch(encoder, &self.stream_collide, self.time % 2);
+        self.time += 1;
+    }
+
     /// Density and velocity of every cell, and the first unhealthy cell if any.
     pub fn fields(&self) -> (Vec<[f32; 4]>, Option<Unhealthy>) {
         let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
         self.dispatch(&mut encoder, &self.macroscopic, self.time % 2);
         self.gpu.queue.submit([encoder.finish()]);
-        let bytes = self.gpu.read_buffer(&self.fields, (self.setup.cells() * 16) as u64);
+        let bytes = self
+            .gpu
+            .read_buffer(&self.fields, (self.setup.cells() * 16) as u64);
         let fields: Vec<[f32; 4]> = bytemuck::cast_slice(&bytes).to_vec();
         let status: Vec<u32> = bytemuck::cast_slice(&self.gpu.read_buffer(&self.status, 16)).to_vec();
         let bad = (status[0] != u32::MAX).then(|| {
             let cell = status[0] as usize;
             let v = fields[cell];
-            Unhealthy { cell, coords: self.setup.coords(cell), rho: v[0], u: [v[1], v[2], v[3]] }
+            Unhealthy {
+                cell,
+                coords: self.setup.coords(cell),
+                rho: v[0],
+                u: [v[1], v[2], v[3]],
+            }
         });
         (fields, bad)
     }
@@ -324,12 +420,72 @@ fn bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
         count: None,
     }];
     entries.extend([storage(1, true), storage(2, true)]);
-    entries.extend((3..FIRST_POPULATION_BINDING + 19).map(|b| storage(b, false)));
-    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some("lattice"), entries: &entries })
+    entries.extend((3..BINDINGS - 1).map(|b| storage(b, false)));
+    entries.push(storage(BINDINGS - 1, true));
+    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("lattice"),
+        entries: &entries,
+    })
+}
+
+const STORAGE: wgpu::BufferUsages = wgpu::BufferUsages::STORAGE
+    .union(wgpu::BufferUsages::COPY_SRC)
+    .union(wgpu::BufferUsages::COPY_DST);
+
+/// An uninitialised storage buffer that can be copied to and from.
+pub(super) fn storage_buffer(device: &wgpu::Device, label: &str, bytes: u64) -> wgpu::Buffer {
+    device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size: bytes,
+        usage: STORAGE,
+        mapped_at_creation: false,
+    })
+}
+
+#[allow(clippy::too_many_arguments)]
+fn make_bind_group(
+    d: &wgpu::Device,
+    layout: &wgpu::BindGroupLayout,
+    params: &wgpu::Buffer,
+    flags: &wgpu::Buffer,
+    mrt: &wgpu::Buffer,
+    fields: &wgpu::Buffer,
+    status: &wgpu::Buffer,
+    populations: &[wgpu::Buffer],
+    coupling: &super::imb::Coupling,
+) -> wgpu::BindGroup {
+    let mut entries = vec![
+        entry(0, params),
+        entry(1, flags),
+        entry(2, mrt),
+        entry(3, fields),
+        entry(4, status),
+    ];
+    entries.extend(
+        populations
+            .iter()
+            .enumerate()
+            .map(|(i, b)| entry(FIRST_POPULATION_BINDING + i as u32, b)),
+    );
+    entries.extend(
+        coupling
+            .buffers()
+            .iter()
+            .enumerate()
+            .map(|(i, b)| entry(FIRST_IMB_BINDING + i as u32, b)),
+    );
+    d.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("lattice"),
+        layout,
+        entries: &entries,
+    })
 }
 
 fn entry(binding: u32, buffer: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
-    wgpu::BindGroupEntry { binding, resource: buffer.as_entire_binding() }
+    wgpu::BindGroupEntry {
+        binding,
+        resource: buffer.as_entire_binding(),
+    }
 }
 
 /// Bit i set when link i of the cell leaves the fluid.
@@ -365,7 +521,12 @@ fn params(setup: &Setup, parity: usize, health: Health) -> Params {
         [u[0] as f32, u[1] as f32, u[2] as f32, rho as f32]
     };
     Params {
-        n: [setup.n[0] as u32, setup.n[1] as u32, setup.n[2] as u32, parity as u32],
+        n: [
+            setup.n[0] as u32,
+            setup.n[1] as u32,
+            setup.n[2] as u32,
+            parity as u32,
+        ],
         face_lo: [face(0), face(1), face(2), face(3)],
         face_hi: [face(4), face(5), 0, 0],
         relax: [
@@ -374,7 +535,12 @@ fn params(setup: &Setup, parity: usize, health: Health) -> Params {
             health.max_speed as f32,
             health.max_density_deviation as f32,
         ],
-        force: [setup.force[0] as f32, setup.force[1] as f32, setup.force[2] as f32, 0.0],
+        force: [
+            setup.force[0] as f32,
+            setup.force[1] as f32,
+            setup.force[2] as f32,
+            0.0,
+        ],
         face_value: std::array::from_fn(|f| values(&setup.faces[f])),
     }
 }
@@ -385,7 +551,10 @@ fn mrt_matrices(setup: &Setup) -> Vec<f32> {
         Operator::Mrt { rates } => mrt::collision_matrices(&rates),
         _ => ([[0.0; 19]; 19], [[0.0; 19]; 19]),
     };
-    a.iter().chain(b.iter()).flat_map(|row| row.iter().map(|v| *v as f32)).collect()
+    a.iter()
+        .chain(b.iter())
+        .flat_map(|row| row.iter().map(|v| *v as f32))
+        .collect()
 }
 
 /// Shifted equilibrium populations of a whole lattice for given density and velocity per cell.

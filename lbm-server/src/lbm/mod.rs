@@ -2,12 +2,13 @@
 
 pub mod geometry;
 pub mod gpu;
+pub mod imb;
 pub mod lattice;
 pub mod mrt;
 pub mod random;
 #[cfg(test)]
 pub mod reference;
-pub mod unroll;
-pub mod validation;
 #[cfg(test)]
 mod tests;
+pub mod unroll;
+pub mod validation;

@@ -56,7 +56,14 @@ pub struct Rates {
 impl Rates {
     /// d'Humieres et al. (2002) rates for the non-hydrodynamic moments.
     pub fn dhumieres(omega: f64) -> Self {
-        Self { nu: omega, e: 1.19, epsilon: 1.4, q: 1.2, pi: 1.4, m: 1.98 }
+        Self {
+            nu: omega,
+            e: 1.19,
+            epsilon: 1.4,
+            q: 1.2,
+            pi: 1.4,
+            m: 1.98,
+        }
     }
 
     /// Rate of moment k. Conserved moments (0, 3, 5, 7) get 1: irrelevant for them.
@@ -110,7 +117,14 @@ mod tests {
     #[test]
     fn equal_rates_reduce_to_bgk() {
         let omega = 1.3;
-        let rates = Rates { nu: omega, e: omega, epsilon: omega, q: omega, pi: omega, m: omega };
+        let rates = Rates {
+            nu: omega,
+            e: omega,
+            epsilon: omega,
+            q: omega,
+            pi: omega,
+            m: omega,
+        };
         let (a, _) = collision_matrices(&rates);
         let m = moment_matrix();
         // A non-equilibrium vector orthogonal to the conserved moments (rows 0, 3, 5, 7).

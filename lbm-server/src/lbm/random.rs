@@ -32,4 +32,3 @@ pub fn random_populations(setup: &Setup, seed: u64) -> Vec<Cell> {
         })
         .collect()
 }
-

@@ -2,14 +2,42 @@
 //! used by the tests to check every GPU kernel.
 
 use super::geometry::{Cell, Face, Link, Operator, Setup};
+use super::imb::{box_edge, ImbOptions, Load, SolidParticle};
 use super::lattice::{self, opposite, C, W};
 use super::mrt;
 
 /// One step: populations (shifted, natural layout) at t -> at t + 1.
 pub fn step(setup: &Setup, f: &[Cell]) -> Vec<Cell> {
+    step_with_particles(setup, f, &[], ImbOptions::default()).0
+}
+
+/// One step with particles coupled by the immersed moving boundary: the populations at t + 1 and
+/// each particle's force and torque (same solid fractions, weighting and order as imb.wgsl).
+pub fn step_with_particles(
+    setup: &Setup,
+    f: &[Cell],
+    particles: &[SolidParticle],
+    options: ImbOptions,
+) -> (Vec<Cell>, Vec<Load>) {
+    let covers = cover(setup, particles, options.slots as usize);
+    let mut loads = vec![Load::default(); particles.len()];
     let mut next = f.to_vec();
     for cell in (0..setup.cells()).filter(|&c| !setup.solid[c]) {
-        let (post, rho, u) = collide(setup, &f[cell]);
+        let (mut post, rho, u) = collide(setup, &f[cell]);
+        if !covers[cell].is_empty() {
+            post = solid_collision(
+                setup,
+                &f[cell],
+                &post,
+                rho,
+                u,
+                cell,
+                &covers[cell],
+                particles,
+                options,
+                &mut loads,
+            );
+        }
         for i in 0..19 {
             match setup.link(cell, C[i]) {
                 Link::Cell(t) => next[t][i] = post[i],
@@ -17,7 +45,7 @@ pub fn step(setup: &Setup, f: &[Cell]) -> Vec<Cell> {
             }
         }
     }
-    next
+    (next, loads)
 }
 
 /// The population f_ibar that comes back to a cell whose post-collision f*_i left through `face`.
@@ -72,4 +100,127 @@ pub fn collide(setup: &Setup, f: &Cell) -> (Cell, f64, [f64; 3]) {
         }
     };
     (out, rho, u)
+}
+
+/// Fraction of the cell centred at `x` inside the sphere, by the same 4^3 sub-cell samples as
+/// imb.wgsl (exact 0 or 1 away from the surface).
+pub fn solid_fraction(x: [f64; 3], centre: [f64; 3], r: f64) -> f64 {
+    const SAMPLES: usize = 4;
+    let d = (0..3).map(|a| (x[a] - centre[a]).powi(2)).sum::<f64>().sqrt();
+    if d >= r + 0.8660254 {
+        return 0.0;
+    }
+    if d <= r - 0.8660254 {
+        return 1.0;
+    }
+    let step = 1.0 / SAMPLES as f64;
+    let mut inside = 0;
+    for a in 0..SAMPLES {
+        for b in 0..SAMPLES {
+            for c in 0..SAMPLES {
+                let p = [a, b, c].map(|v| (v as f64 + 0.5) * step - 0.5);
+                let d2: f64 = (0..3).map(|k| (x[k] + p[k] - centre[k]).powi(2)).sum();
+                if d2 <= r * r {
+                    inside += 1;
+                }
+            }
+        }
+    }
+    inside as f64 / (SAMPLES * SAMPLES * SAMPLES) as f64
+}
+
+/// Per cell: (particle, solid fraction) of the particles covering it, in particle order, at most
+/// `slots` of them.
+fn cover(setup: &Setup, particles: &[SolidParticle], slots: usize) -> Vec<Vec<(usize, f64)>> {
+    let mut covers = vec![Vec::new(); setup.cells()];
+    for (j, p) in particles.iter().enumerate() {
+        for (cell, x) in box_cells(setup, p) {
+            let eps = solid_fraction(x, p.position, p.radius);
+            if eps > 0.0 && !setup.solid[cell] && covers[cell].len() < slots {
+                covers[cell].push((j, eps));
+            }
+        }
+    }
+    covers
+}
+
+/// The cells of a particle's bounding box inside the domain, in the order of imb.wgsl, with
+/// their centres.
+fn box_cells<'a>(setup: &'a Setup, p: &SolidParticle) -> impl Iterator<Item = (usize, [f64; 3])> + 'a {
+    let m = box_edge(p.radius) as i64;
+    let origin = p
+        .position
+        .map(|x| (x as f32 - p.radius as f32).floor() as i64 - 1);
+    (0..m * m * m).filter_map(move |t| {
+        let q = [
+            origin[0] + t % m,
+            origin[1] + (t / m) % m,
+            origin[2] + t / (m * m),
+        ];
+        let inside = (0..3).all(|a| q[a] >= 0 && q[a] < setup.n[a] as i64);
+        inside.then(|| (setup.index(q.map(|v| v as usize)), q.map(|v| v as f64 + 0.5)))
+    })
+}
+
+/// The collision of a covered cell (imb.wgsl `immersed_boundary`), adding each particle's load.
+#[allow(clippy::too_many_arguments)]
+fn solid_collision(
+    setup: &Setup,
+    f: &Cell,
+    post: &Cell,
+    rho: f64,
+    u: [f64; 3],
+    cell: usize,
+    covers: &[(usize, f64)],
+    particles: &[SolidParticle],
+    options: ImbOptions,
+    loads: &mut [Load],
+) -> Cell {
+    let eps_total: f64 = covers.iter().map(|c| c.1).sum();
+    let scale = if eps_total > 1.0 { 1.0 / eps_total } else { 1.0 };
+    let t = setup.tau - 0.5;
+    let weight = |eps: f64| {
+        if options.seed_weighting {
+            eps
+        } else {
+            eps * t / ((1.0 - eps) + t)
+        }
+    };
+    let b: Vec<f64> = covers.iter().map(|c| weight(c.1 * scale)).collect();
+    let b_total: f64 = b.iter().sum();
+    let mut out: Cell = std::array::from_fn(|i| f[i] - (1.0 - b_total) * (f[i] - post[i]));
+    let x = setup.coords(cell).map(|v| v as f64 + 0.5);
+    for (&(j, _), b) in covers.iter().zip(&b) {
+        let p = &particles[j];
+        let arm: [f64; 3] = std::array::from_fn(|a| x[a] - p.position[a]);
+        let w = p.angular_velocity;
+        let spin = [
+            w[1] * arm[2] - w[2] * arm[1],
+            w[2] * arm[0] - w[0] * arm[2],
+            w[0] * arm[1] - w[1] * arm[0],
+        ];
+        let us: [f64; 3] = std::array::from_fn(|a| p.velocity[a] + spin[a]);
+        let mut momentum = [0.0; 3];
+        for i in 0..19 {
+            let o = opposite(i);
+            let omega = b
+                * (f[o] - f[i] + lattice::equilibrium_shifted(i, rho, us)
+                    - lattice::equilibrium_shifted(o, rho, u));
+            out[i] += omega;
+            for a in 0..3 {
+                momentum[a] += omega * C[i][a] as f64;
+            }
+        }
+        let force = momentum.map(|m| -m);
+        let torque = [
+            arm[1] * force[2] - arm[2] * force[1],
+            arm[2] * force[0] - arm[0] * force[2],
+            arm[0] * force[1] - arm[1] * force[0],
+        ];
+        for a in 0..3 {
+            loads[j].force[a] += force[a];
+            loads[j].torque[a] += torque[a];
+        }
+    }
+    out
 }

@@ -2,8 +2,8 @@
 
 use super::geometry::{Cell, Face, Operator, Setup};
 use super::gpu::{Gpu, Health, Lattice};
-use super::random::{random_populations, Random};
 use super::mrt::Rates;
+use super::random::{random_populations, Random};
 use super::reference;
 use std::sync::Arc;
 
@@ -13,7 +13,10 @@ pub fn gpu() -> Arc<Gpu> {
 
 /// Largest |a - b| over all populations.
 fn max_difference(a: &[Cell], b: &[Cell]) -> f64 {
-    a.iter().zip(b).flat_map(|(x, y)| x.iter().zip(y).map(|(p, q)| (p - q).abs())).fold(0.0, f64::max)
+    a.iter()
+        .zip(b)
+        .flat_map(|(x, y)| x.iter().zip(y).map(|(p, q)| (p - q).abs()))
+        .fold(0.0, f64::max)
 }
 
 /// Single-precision round-off bound for populations of magnitude ~0.35 after one step.
@@ -22,18 +25,27 @@ const TOLERANCE: f64 = 64.0 * f32::EPSILON as f64 * 0.35;
 /// Runs 1 and 2 steps on the GPU and in f64 and compares (odd and even AA phases).
 fn check_against_reference(setup: Setup, seed: u64) {
     let f0 = random_populations(&setup, seed);
-    let mut lattice = Lattice::new(gpu(), setup.clone(), Health::default()).unwrap();
+    let mut lattice = Lattice::new(gpu(), setup.clone(), Health::default(), None).unwrap();
     lattice.set_populations(&f0);
     let f1 = reference::step(&setup, &f0);
     let f2 = reference::step(&setup, &f1);
-    assert!(max_difference(&f0, &f1) > 1e-3, "the step must change the populations");
+    assert!(
+        max_difference(&f0, &f1) > 1e-3,
+        "the step must change the populations"
+    );
     lattice.step(1);
     let err1 = max_difference(&lattice.populations(), &f1);
     lattice.step(1);
     let err2 = max_difference(&lattice.populations(), &f2);
     let op = setup.operator.name();
-    assert!(err1 < TOLERANCE, "{op}: step 1 differs by {err1:e} (tolerance {TOLERANCE:e})");
-    assert!(err2 < TOLERANCE, "{op}: step 2 differs by {err2:e} (tolerance {TOLERANCE:e})");
+    assert!(
+        err1 < TOLERANCE,
+        "{op}: step 1 differs by {err1:e} (tolerance {TOLERANCE:e})"
+    );
+    assert!(
+        err2 < TOLERANCE,
+        "{op}: step 2 differs by {err2:e} (tolerance {TOLERANCE:e})"
+    );
 }
 
 fn sprinkle_solids(setup: &mut Setup, seed: u64) {
@@ -76,7 +88,14 @@ fn mrt_inlet_outlet_and_solids_match_reference() {
         Face::Periodic,
         Face::Periodic,
     ];
-    let mut setup = Setup::new([6, 4, 5], faces, 0.7, Operator::Mrt { rates: Rates::dhumieres(1.0 / 0.7) });
+    let mut setup = Setup::new(
+        [6, 4, 5],
+        faces,
+        0.7,
+        Operator::Mrt {
+            rates: Rates::dhumieres(1.0 / 0.7),
+        },
+    );
     sprinkle_solids(&mut setup, 4);
     check_against_reference(setup, 5);
 }
@@ -104,11 +123,18 @@ mod validation_cases {
     #[test]
     fn poiseuille_plates_converge_at_second_order_with_bgk() {
         let g = gpu();
-        let runs: Vec<Channel> =
-            [8, 16, 32].iter().map(|&n| poiseuille_plates(&g, n, 0.6, Operator::Bgk, 0.02)).collect();
+        let runs: Vec<Channel> = [8, 16, 32]
+            .iter()
+            .map(|&n| poiseuille_plates(&g, n, 0.6, Operator::Bgk, 0.02))
+            .collect();
         for pair in runs.windows(2) {
             let p = order(&pair[0], &pair[1]);
-            assert!((1.8..2.3).contains(&p), "order {p:.2} between {:?} and {:?}", pair[0], pair[1]);
+            assert!(
+                (1.8..2.3).contains(&p),
+                "order {p:.2} between {:?} and {:?}",
+                pair[0],
+                pair[1]
+            );
         }
     }
 
@@ -117,31 +143,52 @@ mod validation_cases {
         let g = gpu();
         let trt = Operator::Trt { magic: MAGIC };
         let taus = [0.6, 1.0, 2.0];
-        let trt_err: Vec<f64> = taus.iter().map(|&t| poiseuille_plates(&g, 16, t, trt, 0.02).l2_error).collect();
-        let bgk_err: Vec<f64> =
-            taus.iter().map(|&t| poiseuille_plates(&g, 16, t, Operator::Bgk, 0.02).l2_error).collect();
+        let trt_err: Vec<f64> = taus
+            .iter()
+            .map(|&t| poiseuille_plates(&g, 16, t, trt, 0.02).l2_error)
+            .collect();
+        let bgk_err: Vec<f64> = taus
+            .iter()
+            .map(|&t| poiseuille_plates(&g, 16, t, Operator::Bgk, 0.02).l2_error)
+            .collect();
         // TRT with Lambda = 3/16 keeps the wall half-way at every tau: what remains is far below BGK.
         assert!(trt_err.iter().all(|e| *e < 2e-4), "TRT errors {trt_err:?}");
         // BGK's wall moves with tau: its error grows by far more than 10x from tau 0.6 to 2.
         assert!(bgk_err[2] > 10.0 * bgk_err[0], "BGK errors {bgk_err:?}");
-        assert!(bgk_err[2] > 100.0 * trt_err[2], "BGK {bgk_err:?} vs TRT {trt_err:?}");
+        assert!(
+            bgk_err[2] > 100.0 * trt_err[2],
+            "BGK {bgk_err:?} vs TRT {trt_err:?}"
+        );
     }
 
     #[test]
     fn square_duct_converges_at_second_order() {
         let g = gpu();
-        let runs: Vec<Channel> =
-            [8, 16, 24].iter().map(|&n| poiseuille_duct(&g, n, 0.8, Operator::Bgk, 0.02)).collect();
+        let runs: Vec<Channel> = [8, 16, 24]
+            .iter()
+            .map(|&n| poiseuille_duct(&g, n, 0.8, Operator::Bgk, 0.02))
+            .collect();
         for pair in runs.windows(2) {
             let p = order(&pair[0], &pair[1]);
-            assert!((1.7..2.4).contains(&p), "order {p:.2} between {:?} and {:?}", pair[0], pair[1]);
+            assert!(
+                (1.7..2.4).contains(&p),
+                "order {p:.2} between {:?} and {:?}",
+                pair[0],
+                pair[1]
+            );
         }
     }
 
     #[test]
     fn taylor_green_decay_gives_the_viscosity_within_one_percent() {
         let g = gpu();
-        for op in [Operator::Bgk, Operator::Trt { magic: MAGIC }, Operator::Mrt { rates: Rates::dhumieres(1.0 / 0.8) }] {
+        for op in [
+            Operator::Bgk,
+            Operator::Trt { magic: MAGIC },
+            Operator::Mrt {
+                rates: Rates::dhumieres(1.0 / 0.8),
+            },
+        ] {
             let d = taylor_green(&g, 32, 0.8, op, 0.02, 1000);
             assert!(d.relative_error < 0.01, "{}: {d:?}", op.name());
         }
@@ -151,5 +198,170 @@ mod validation_cases {
     fn mass_is_conserved_to_round_off_over_10000_steps() {
         let m = closed_box_mass(&gpu(), 12, 10_000, Operator::Trt { magic: MAGIC });
         assert!(m.relative_drift < 1e-6, "{m:?}");
+    }
+}
+
+mod immersed_boundary {
+    use super::super::imb::{ImbOptions, Load, SolidParticle};
+    use super::*;
+
+    fn two_particles(shift: f64) -> Vec<SolidParticle> {
+        vec![
+            SolidParticle {
+                position: [4.3 + shift, 4.6, 3.9],
+                radius: 2.4,
+                velocity: [0.02, -0.01, 0.005],
+                angular_velocity: [0.001, 0.002, -0.003],
+            },
+            SolidParticle {
+                position: [7.4, 5.1 - shift, 4.4],
+                radius: 1.7,
+                velocity: [-0.01, 0.015, 0.0],
+                angular_velocity: [0.0, -0.002, 0.004],
+            },
+        ]
+    }
+
+    fn max_load_difference(a: &[Load], b: &[Load]) -> f64 {
+        a.iter()
+            .zip(b)
+            .flat_map(|(x, y)| (0..3).flat_map(move |k| [x.force[k] - y.force[k], x.torque[k] - y.torque[k]]))
+            .fold(0.0, |m, d| m.max(d.abs()))
+    }
+
+    fn check(setup: Setup, options: ImbOptions, seed: u64) {
+        let f0 = random_populations(&setup, seed);
+        let mut lattice = Lattice::new(gpu(), setup.clone(), Health::default(), Some(options)).unwrap();
+        lattice.set_populations(&f0);
+        let mut f = f0;
+        for (step, shift) in [0.0, 0.37, 0.81].into_iter().enumerate() {
+            let particles = two_particles(shift);
+            let (next, want) = reference::step_with_particles(&setup, &f, &particles, options);
+            let got = lattice.step_coupled(&particles).unwrap();
+            let scale = want
+                .iter()
+                .flat_map(|l| l.force)
+                .fold(0.0, |m: f64, v| m.max(v.abs()));
+            let err = max_load_difference(&got, &want);
+            assert!(scale > 1e-3, "the particles feel a force: {want:?}");
+            assert!(
+                err < 1e-4 * scale.max(1.0),
+                "step {step}: loads differ by {err:e}: {got:?} vs {want:?}"
+            );
+            let pop_err = max_difference(&lattice.populations(), &next);
+            assert!(
+                pop_err < TOLERANCE,
+                "step {step}: populations differ by {pop_err:e}"
+            );
+            f = next;
+        }
+        assert_eq!(lattice.dropped_covers(), 0);
+    }
+
+    #[test]
+    fn trt_noble_torczynski_matches_reference_over_moving_steps() {
+        let faces = [
+            Face::Periodic,
+            Face::Periodic,
+            Face::Wall,
+            Face::Wall,
+            Face::Wall,
+            Face::MovingWall([0.01, 0.0, 0.0]),
+        ];
+        let setup = Setup::new([11, 10, 9], faces, 0.7, Operator::Trt { magic: 3.0 / 16.0 });
+        check(setup, ImbOptions::default(), 11);
+    }
+
+    #[test]
+    fn bgk_seed_weighting_matches_reference() {
+        let setup = Setup::new([11, 10, 9], [Face::Periodic; 6], 0.9, Operator::Bgk);
+        check(
+            setup,
+            ImbOptions {
+                slots: 2,
+                seed_weighting: true,
+            },
+            12,
+        );
+    }
+
+    #[test]
+    fn mrt_with_one_slot_matches_reference() {
+        let setup = Setup::new(
+            [11, 10, 9],
+            [Face::Wall; 6],
+            0.8,
+            Operator::Mrt {
+                rates: Rates::dhumieres(1.0 / 0.8),
+            },
+        );
+        let options = ImbOptions {
+            slots: 1,
+            seed_weighting: false,
+        };
+        let f0 = random_populations(&setup, 13);
+        let mut lattice = Lattice::new(gpu(), setup.clone(), Health::default(), Some(options)).unwrap();
+        lattice.set_populations(&f0);
+        // Particles apart: one slot suffices, nothing is dropped.
+        let particles = vec![
+            two_particles(0.0)[0],
+            SolidParticle {
+                position: [8.5, 6.0, 5.0],
+                radius: 1.2,
+                ..Default::default()
+            },
+        ];
+        let (next, want) = reference::step_with_particles(&setup, &f0, &particles, options);
+        let got = lattice.step_coupled(&particles).unwrap();
+        assert!(max_load_difference(&got, &want) < 1e-4);
+        assert!(max_difference(&lattice.populations(), &next) < TOLERANCE);
+        assert_eq!(lattice.dropped_covers(), 0);
+    }
+
+    #[test]
+    fn forces_are_identical_from_run_to_run() {
+        let setup = Setup::new(
+            [11, 10, 9],
+            [Face::Periodic; 6],
+            0.7,
+            Operator::Trt { magic: 3.0 / 16.0 },
+        );
+        let f0 = random_populations(&setup, 14);
+        let run = || {
+            let mut lattice = Lattice::new(
+                gpu(),
+                setup.clone(),
+                Health::default(),
+                Some(ImbOptions::default()),
+            )
+            .unwrap();
+            lattice.set_populations(&f0);
+            (0..5)
+                .map(|k| lattice.step_coupled(&two_particles(0.1 * k as f64)).unwrap())
+                .collect::<Vec<_>>()
+        };
+        let (a, b) = (run(), run());
+        assert_eq!(a, b, "bitwise identical loads");
+    }
+
+    #[test]
+    fn solid_fraction_sums_to_the_sphere_volume() {
+        for (r, tolerance) in [(2.0, 0.03), (4.0, 0.01), (8.0, 0.003)] {
+            let c = [10.3, 10.6, 10.1];
+            let mut volume = 0.0;
+            for x in 0..21 {
+                for y in 0..21 {
+                    for z in 0..21 {
+                        volume += reference::solid_fraction([x, y, z].map(|v| v as f64 + 0.5), c, r);
+                    }
+                }
+            }
+            let exact = 4.0 / 3.0 * std::f64::consts::PI * r * r * r;
+            let err = (volume - exact).abs() / exact;
+            assert!(
+                err < tolerance,
+                "r = {r}: covered volume {volume} vs {exact} ({err:.2e})"
+            );
+        }
     }
 }

@@ -17,7 +17,14 @@ pub struct Channel {
 /// Poiseuille flow between plates at y = -1/2 and y = n - 1/2 (half-way bounce-back), driven by a
 /// body force chosen for a centre-line speed `u_max`.
 pub fn poiseuille_plates(gpu: &Arc<Gpu>, n: usize, tau: f64, operator: Operator, u_max: f64) -> Channel {
-    let faces = [Face::Periodic, Face::Periodic, Face::Wall, Face::Wall, Face::Periodic, Face::Periodic];
+    let faces = [
+        Face::Periodic,
+        Face::Periodic,
+        Face::Wall,
+        Face::Wall,
+        Face::Periodic,
+        Face::Periodic,
+    ];
     let mut setup = Setup::new([1, n, 1], faces, tau, operator);
     let nu = setup.viscosity();
     let h = n as f64;
@@ -29,12 +36,24 @@ pub fn poiseuille_plates(gpu: &Arc<Gpu>, n: usize, tau: f64, operator: Operator,
     let steps = relaxation_steps(h, nu, 20.0);
     let (fields, _) = run_steady(gpu, &setup, |p| (1.0, [exact(p[1]), 0.0, 0.0]), steps);
     let error = l2_relative((0..n).map(|y| (fields[y][1] as f64, exact(y))));
-    Channel { cells: n, tau, l2_error: error, steps }
+    Channel {
+        cells: n,
+        tau,
+        l2_error: error,
+        steps,
+    }
 }
 
 /// Flow through a square duct of n x n cells (walls on y and z), against the series solution.
 pub fn poiseuille_duct(gpu: &Arc<Gpu>, n: usize, tau: f64, operator: Operator, u_max: f64) -> Channel {
-    let faces = [Face::Periodic, Face::Periodic, Face::Wall, Face::Wall, Face::Wall, Face::Wall];
+    let faces = [
+        Face::Periodic,
+        Face::Periodic,
+        Face::Wall,
+        Face::Wall,
+        Face::Wall,
+        Face::Wall,
+    ];
     let mut setup = Setup::new([1, n, n], faces, tau, operator);
     let nu = setup.viscosity();
     let a = n as f64;
@@ -46,7 +65,12 @@ pub fn poiseuille_duct(gpu: &Arc<Gpu>, n: usize, tau: f64, operator: Operator, u
     let steps = relaxation_steps(a, nu, 12.0);
     let (fields, _) = run_steady(gpu, &setup, |p| (1.0, [exact(p), 0.0, 0.0]), steps);
     let error = l2_relative((0..setup.cells()).map(|k| (fields[k][1] as f64, exact(setup.coords(k)))));
-    Channel { cells: n, tau, l2_error: error, steps }
+    Channel {
+        cells: n,
+        tau,
+        l2_error: error,
+        steps,
+    }
 }
 
 /// u(y, z) of unit force, unit viscosity in the unit square with no-slip walls (Fourier series).
@@ -73,7 +97,7 @@ fn run_steady(
     initial: impl Fn([usize; 3]) -> (f64, [f64; 3]),
     steps: u64,
 ) -> (Vec<[f32; 4]>, u64) {
-    let mut lattice = Lattice::new(gpu.clone(), setup.clone(), Health::default()).expect("lattice");
+    let mut lattice = Lattice::new(gpu.clone(), setup.clone(), Health::default(), None).expect("lattice");
     lattice.set_populations(&equilibrium_field(setup, initial));
     lattice.step(steps);
     let (fields, bad) = lattice.fields();
@@ -109,11 +133,15 @@ pub fn taylor_green(gpu: &Arc<Gpu>, n: usize, tau: f64, operator: Operator, u0: 
     let k = 2.0 * std::f64::consts::PI / n as f64;
     let state = |p: [usize; 3]| {
         let (x, y) = (p[0] as f64 + 0.5, p[1] as f64 + 0.5);
-        let u = [u0 * (k * x).sin() * (k * y).cos(), -u0 * (k * x).cos() * (k * y).sin(), 0.0];
+        let u = [
+            u0 * (k * x).sin() * (k * y).cos(),
+            -u0 * (k * x).cos() * (k * y).sin(),
+            0.0,
+        ];
         let pressure = -u0 * u0 / 4.0 * ((2.0 * k * x).cos() + (2.0 * k * y).cos());
         (1.0 + 3.0 * pressure, u)
     };
-    let mut lattice = Lattice::new(gpu.clone(), setup.clone(), Health::default()).expect("lattice");
+    let mut lattice = Lattice::new(gpu.clone(), setup.clone(), Health::default(), None).expect("lattice");
     lattice.set_populations(&equilibrium_field(&setup, state));
     // Skip the first steps (initial pressure transients), then fit between two times.
     let energy = |lattice: &Lattice| -> f64 {
@@ -126,7 +154,11 @@ pub fn taylor_green(gpu: &Arc<Gpu>, n: usize, tau: f64, operator: Operator, u0: 
     let e1 = energy(&lattice);
     let nu_measured = (e0 / e1).ln() / (4.0 * k * k * steps as f64);
     let nu_expected = setup.viscosity();
-    Decay { nu_expected, nu_measured, relative_error: (nu_measured - nu_expected).abs() / nu_expected }
+    Decay {
+        nu_expected,
+        nu_measured,
+        relative_error: (nu_measured - nu_expected).abs() / nu_expected,
+    }
 }
 
 /// Mass in a closed box with a moving lid, before and after `steps` steps.
@@ -141,11 +173,15 @@ pub fn closed_box_mass(gpu: &Arc<Gpu>, n: usize, steps: u64, operator: Operator)
     let mut faces = [Face::Wall; 6];
     faces[5] = Face::MovingWall([0.05, 0.0, 0.0]);
     let setup = Setup::new([n, n, n], faces, 0.6, operator);
-    let mut lattice = Lattice::new(gpu.clone(), setup.clone(), Health::default()).expect("lattice");
+    let mut lattice = Lattice::new(gpu.clone(), setup.clone(), Health::default(), None).expect("lattice");
     let start = super::random::random_populations(&setup, 7);
     lattice.set_populations(&start);
     let before = total_mass(&setup, &lattice.populations());
     lattice.step(steps);
     let after = total_mass(&setup, &lattice.populations());
-    Mass { before, after, relative_drift: (after - before).abs() / before }
+    Mass {
+        before,
+        after,
+        relative_drift: (after - before).abs() / before,
+    }
 }

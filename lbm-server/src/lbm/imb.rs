@@ -1,0 +1,258 @@
+//! Host side of the immersed moving boundary (shaders/imb.wgsl): particle and pair buffers, the
+//! bounding boxes, and the coupled step that returns each particle's force and torque.
+
+use super::gpu::{storage_buffer, Lattice};
+
+/// Settings of the coupling.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ImbOptions {
+    /// Particles one cell can hold (1-4); more are dropped and counted.
+    pub slots: u32,
+    /// B = eps (the seed's choice) instead of Noble & Torczynski's B(eps, tau).
+    pub seed_weighting: bool,
+}
+
+impl Default for ImbOptions {
+    fn default() -> Self {
+        Self {
+            slots: 2,
+            seed_weighting: false,
+        }
+    }
+}
+
+/// A particle in lattice units (cell i spans [i, i + 1] along each axis).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct SolidParticle {
+    pub position: [f64; 3],
+    pub radius: f64,
+    pub velocity: [f64; 3],
+    pub angular_velocity: [f64; 3],
+}
+
+/// Force and torque on a particle over one step, in lattice units.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Load {
+    pub force: [f64; 3],
+    pub torque: [f64; 3],
+}
+
+/// The shader's `Particle`.
+#[repr(C)]
+#[derive(Clone, Copy, Default, bytemuck::Pod, bytemuck::Zeroable)]
+struct GpuParticle {
+    pos_r: [f32; 4],
+    vel: [f32; 4],
+    omega: [f32; 4],
+    box_: [u32; 4],
+    force: [f32; 4],
+    torque: [f32; 4],
+}
+
+const PARTICLE_BYTES: u64 = std::mem::size_of::<GpuParticle>() as u64;
+const PAIR_BYTES: u64 = 32;
+
+/// Edge of the bounding box of a sphere of radius r, in cells (matches `cover` in imb.wgsl).
+pub fn box_edge(radius: f64) -> u32 {
+    (2.0 * radius).ceil() as u32 + 3
+}
+
+/// Buffers and pipelines of the coupling (tiny placeholders when the scene has no particles).
+pub struct Coupling {
+    particles: wgpu::Buffer,
+    pairs: wgpu::Buffer,
+    covered: wgpu::Buffer,
+    slots: wgpu::Buffer,
+    info: wgpu::Buffer,
+    readback: wgpu::Buffer,
+    particle_capacity: u64,
+    pair_capacity: u64,
+    previous_pairs: u32,
+    pipelines: Option<[wgpu::ComputePipeline; 3]>,
+}
+
+impl Coupling {
+    pub fn new(d: &wgpu::Device, options: Option<ImbOptions>, cells: usize) -> Coupling {
+        let per_cell = |bytes: u64| {
+            if options.is_some() {
+                bytes * cells as u64
+            } else {
+                256
+            }
+        };
+        let slots = options.map_or(1, |o| o.slots as u64);
+        Coupling {
+            particles: storage_buffer(d, "particles", PARTICLE_BYTES),
+            pairs: storage_buffer(d, "pairs", PAIR_BYTES),
+            covered: storage_buffer(d, "covered", per_cell(4)),
+            slots: storage_buffer(d, "slots", per_cell(4 * slots)),
+            info: storage_buffer(d, "imb info", 16),
+            readback: readback_buffer(d, PARTICLE_BYTES),
+            particle_capacity: 1,
+            pair_capacity: 1,
+            previous_pairs: 0,
+            pipelines: None,
+        }
+    }
+
+    /// Adds the uncover, cover and reduce pipelines when the coupling is on.
+    pub fn with_pipelines(mut self, on: bool, make: &dyn Fn(&str) -> wgpu::ComputePipeline) -> Coupling {
+        if on {
+            self.pipelines = Some([make("uncover"), make("cover"), make("reduce")]);
+        }
+        self
+    }
+
+    /// The buffers in binding order.
+    pub fn buffers(&self) -> [&wgpu::Buffer; 5] {
+        [
+            &self.particles,
+            &self.pairs,
+            &self.covered,
+            &self.slots,
+            &self.info,
+        ]
+    }
+}
+
+fn readback_buffer(d: &wgpu::Device, bytes: u64) -> wgpu::Buffer {
+    d.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("particle readback"),
+        size: bytes,
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    })
+}
+
+impl Lattice {
+    /// One coupled step: the particles cover the cells, the fluid streams and collides with the
+    /// solid term, and the force and torque on each particle over the step come back.
+    pub fn step_coupled(&mut self, particles: &[SolidParticle]) -> Result<Vec<Load>, String> {
+        let (gpu_particles, pairs) = layout(particles);
+        self.reserve(gpu_particles.len() as u64, pairs as u64)?;
+        let coupling = self.imb.as_mut().expect("coupling");
+        let pipelines = coupling
+            .pipelines
+            .as_ref()
+            .ok_or("this lattice was made without particle coupling")?;
+        let [uncover, cover, reduce] = [&pipelines[0], &pipelines[1], &pipelines[2]].map(|p| p.clone());
+        let previous = coupling.previous_pairs;
+        coupling.previous_pairs = pairs;
+        let gpu = self.gpu.clone();
+        gpu.queue
+            .write_buffer(&coupling.particles, 0, bytemuck::cast_slice(&gpu_particles));
+        gpu.queue.write_buffer(
+            &coupling.info,
+            0,
+            bytemuck::cast_slice(&[particles.len() as u32, pairs, previous, 0]),
+        );
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        let parity = self.time % 2;
+        let n = particles.len() as u32;
+        self.dispatch_groups(&mut encoder, &uncover, parity, previous.div_ceil(64));
+        self.dispatch_groups(&mut encoder, &cover, parity, n);
+        self.encode_step(&mut encoder);
+        self.dispatch_groups(&mut encoder, &reduce, parity, n.div_ceil(64));
+        let coupling = self.imb.as_ref().expect("coupling");
+        let bytes = n as u64 * PARTICLE_BYTES;
+        if bytes > 0 {
+            encoder.copy_buffer_to_buffer(&coupling.particles, 0, &coupling.readback, 0, bytes);
+        }
+        gpu.queue.submit([encoder.finish()]);
+        if bytes == 0 {
+            return Ok(Vec::new());
+        }
+        let slice = coupling.readback.slice(..bytes);
+        slice.map_async(wgpu::MapMode::Read, |_| {});
+        gpu.wait();
+        let loads = {
+            let data = slice
+                .get_mapped_range()
+                .map_err(|e| format!("particle readback: {e:?}"))?;
+            let out: &[GpuParticle] = bytemuck::cast_slice(&data);
+            out.iter()
+                .map(|p| Load {
+                    force: [p.force[0], p.force[1], p.force[2]].map(f64::from),
+                    torque: [p.torque[0], p.torque[1], p.torque[2]].map(f64::from),
+                })
+                .collect()
+        };
+        coupling.readback.unmap();
+        Ok(loads)
+    }
+
+    /// Particles that no longer fit one cell's slots since the last call (0 when none).
+    pub fn dropped_covers(&self) -> u32 {
+        let status: Vec<u32> = bytemuck::cast_slice(&self.gpu.read_buffer(&self.status, 16)).to_vec();
+        status[1]
+    }
+
+    /// Grows the particle and pair buffers to hold `particles` and `pairs`.
+    fn reserve(&mut self, particles: u64, pairs: u64) -> Result<(), String> {
+        let limit = self.gpu.limits.max_storage_buffer_binding_size;
+        if pairs * PAIR_BYTES > limit {
+            return Err(format!(
+                "{pairs} particle-cell pairs exceed this device's binding limit of {limit} bytes"
+            ));
+        }
+        let d = self.gpu.device.clone();
+        let coupling = self.imb.as_mut().expect("coupling");
+        let mut grew = false;
+        if particles > coupling.particle_capacity {
+            coupling.particle_capacity = particles.next_power_of_two();
+            coupling.particles = storage_buffer(&d, "particles", coupling.particle_capacity * PARTICLE_BYTES);
+            coupling.readback = readback_buffer(&d, coupling.particle_capacity * PARTICLE_BYTES);
+            grew = true;
+        }
+        if pairs > coupling.pair_capacity {
+            coupling.pair_capacity = pairs.next_power_of_two();
+            coupling.pairs = storage_buffer(&d, "pairs", coupling.pair_capacity * PAIR_BYTES);
+            // The old pairs are gone: clear every cell's cover count instead.
+            let mut encoder = d.create_command_encoder(&Default::default());
+            encoder.clear_buffer(&coupling.covered, 0, None);
+            self.gpu.queue.submit([encoder.finish()]);
+            coupling.previous_pairs = 0;
+            grew = true;
+        }
+        if grew {
+            self.rebind();
+        }
+        Ok(())
+    }
+}
+
+/// The GPU records of the particles (with their pair ranges) and the total number of pairs.
+fn layout(particles: &[SolidParticle]) -> (Vec<GpuParticle>, u32) {
+    let mut first = 0u32;
+    let records = particles
+        .iter()
+        .map(|p| {
+            let m = box_edge(p.radius);
+            let record = GpuParticle {
+                pos_r: [
+                    p.position[0] as f32,
+                    p.position[1] as f32,
+                    p.position[2] as f32,
+                    p.radius as f32,
+                ],
+                vel: [
+                    p.velocity[0] as f32,
+                    p.velocity[1] as f32,
+                    p.velocity[2] as f32,
+                    0.0,
+                ],
+                omega: [
+                    p.angular_velocity[0] as f32,
+                    p.angular_velocity[1] as f32,
+                    p.angular_velocity[2] as f32,
+                    0.0,
+                ],
+                box_: [first, m, 0, 0],
+                ..Default::default()
+            };
+            first += m * m * m;
+            record
+        })
+        .collect();
+    (records, first)
+}

@@ -1,0 +1,196 @@
+// Immersed moving boundary (partially saturated cells; Noble & Torczynski 1998, Owen et al. 2011;
+// seed eq. 7-11). Appended to lbm.wgsl when a scene couples particles.
+//
+// Per step: `uncover` clears the cells the particles covered last step, `cover` computes the solid
+// fraction of every cell in each particle's bounding box (work = particles x cells covered, never
+// cells x particles) and registers up to SLOTS particles per cell, `stream_collide` adds the solid
+// collision term, and `reduce` sums each particle's force and torque in a fixed order (no
+// floating-point atomics: the result is the same every run).
+
+// Particles a cell can hold (1-4).
+override SLOTS: u32 = 2u;
+// Solid weighting: false = Noble & Torczynski B(eps, tau), true = the seed's B = eps.
+override SEED_WEIGHTING: bool = false;
+
+struct Particle {
+    // centre in lattice units (cell i spans [i, i + 1]) and radius
+    pos_r: vec4<f32>,
+    vel: vec4<f32>,
+    omega: vec4<f32>,
+    // first pair index, bounding box edge m (cells), -, -
+    box_: vec4<u32>,
+    // out: hydrodynamic force and torque about the centre (lattice units)
+    force: vec4<f32>,
+    torque: vec4<f32>,
+}
+
+// One cell of a particle's bounding box.
+struct Pair {
+    cell: u32,
+    particle: u32,
+    eps: f32,
+    pad: f32,
+    // momentum the fluid gave the particle in this cell during the step
+    force: vec4<f32>,
+}
+
+@group(0) @binding(24) var<storage, read_write> particles: array<Particle>;
+@group(0) @binding(25) var<storage, read_write> pairs: array<Pair>;
+// Per cell: how many particles cover it this step.
+@group(0) @binding(26) var<storage, read_write> covered: array<atomic<u32>>;
+// Per cell: SLOTS pair indices.
+@group(0) @binding(27) var<storage, read_write> slots: array<u32>;
+// particles, pairs, pairs of the previous step, -
+@group(0) @binding(28) var<storage, read> imb_info: vec4<u32>;
+
+const NO_CELL: u32 = 0xffffffffu;
+// Sub-samples per cell edge for the solid fraction of cells cut by the surface.
+const SAMPLES: u32 = 4u;
+
+// Fraction of the cell centred at `x` inside the sphere: exact 0 or 1 away from the surface,
+// SAMPLES^3 sub-cell points where the surface cuts the cell.
+fn solid_fraction(x: vec3<f32>, centre: vec3<f32>, r: f32) -> f32 {
+    let d = length(x - centre);
+    if d >= r + 0.8660254 { return 0.0; }
+    if d <= r - 0.8660254 { return 1.0; }
+    var inside = 0u;
+    let step = 1.0 / f32(SAMPLES);
+    for (var a = 0u; a < SAMPLES; a++) {
+        for (var b = 0u; b < SAMPLES; b++) {
+            for (var c = 0u; c < SAMPLES; c++) {
+                let p = x - 0.5 + (vec3<f32>(f32(a), f32(b), f32(c)) + 0.5) * step;
+                let v = p - centre;
+                if dot(v, v) <= r * r { inside++; }
+            }
+        }
+    }
+    return f32(inside) / f32(SAMPLES * SAMPLES * SAMPLES);
+}
+
+// Weight of the solid collision for solid fraction eps.
+fn weighting(eps: f32) -> f32 {
+    if SEED_WEIGHTING { return eps; }
+    let t = 1.0 / params.relax.x - 0.5;
+    return eps * t / ((1.0 - eps) + t);
+}
+
+@compute @workgroup_size(64)
+fn uncover(
+    @builtin(workgroup_id) wg: vec3<u32>,
+    @builtin(num_workgroups) nwg: vec3<u32>,
+    @builtin(local_invocation_index) local: u32,
+) {
+    let t = cell_index(wg, nwg, local);
+    if t >= imb_info.z { return; }
+    let cell = pairs[t].cell;
+    if cell != NO_CELL { atomicStore(&covered[cell], 0u); }
+}
+
+// One workgroup per particle, its threads over the particle's bounding box.
+@compute @workgroup_size(64)
+fn cover(
+    @builtin(workgroup_id) wg: vec3<u32>,
+    @builtin(num_workgroups) nwg: vec3<u32>,
+    @builtin(local_invocation_index) local: u32,
+) {
+    let j = wg.y * nwg.x + wg.x;
+    if j >= imb_info.x { return; }
+    let p = particles[j];
+    let m = p.box_.y;
+    let origin = vec3<i32>(floor(p.pos_r.xyz - p.pos_r.w)) - vec3<i32>(1);
+    let n = vec3<i32>(params.n.xyz);
+    for (var t = local; t < m * m * m; t += 64u) {
+        let q = origin + vec3<i32>(i32(t % m), i32((t / m) % m), i32(t / (m * m)));
+        let index = p.box_.x + t;
+        var pair = Pair(NO_CELL, j, 0.0, 0.0, vec4<f32>(0.0));
+        if all(q >= vec3<i32>(0)) && all(q < n) {
+            let k = u32(q.x) + params.n.x * (u32(q.y) + params.n.y * u32(q.z));
+            let eps = solid_fraction(vec3<f32>(q) + 0.5, p.pos_r.xyz, p.pos_r.w);
+            if eps > 0.0 && (flags[k] & SOLID) == 0u {
+                let slot = atomicAdd(&covered[k], 1u);
+                if slot < SLOTS {
+                    slots[k * SLOTS + slot] = index;
+                    pair.cell = k;
+                    pair.eps = eps;
+                } else {
+                    atomicAdd(&status[1], 1u);
+                }
+            }
+        }
+        pairs[index] = pair;
+    }
+}
+
+// The collision of a cell covered by particles: the fluid part of `post` (the operator's
+// relaxation and source) is weighted by 1 - sum B, and each particle adds B_s Omega_s with
+// Omega_i = f_ibar - f_i + f_eq_i(rho, u_s) - f_eq_ibar(rho, u) (seed eq. 7-8).
+fn immersed_boundary(k: u32, f: array<f32, 19>, m: Moments, post: array<f32, 19>) -> array<f32, 19> {
+    let count = min(atomicLoad(&covered[k]), SLOTS);
+    if count == 0u { return post; }
+    // Pair indices in ascending order: sums do not depend on the order of insertion.
+    var ids: array<u32, 4>;
+    for (var s = 0u; s < count; s++) {
+        var id = slots[k * SLOTS + s];
+        var q = s;
+        while q > 0u && ids[q - 1u] > id {
+            ids[q] = ids[q - 1u];
+            q--;
+        }
+        ids[q] = id;
+    }
+    // Total solid fraction capped at 1.
+    var eps_total = 0.0;
+    for (var s = 0u; s < count; s++) { eps_total += pairs[ids[s]].eps; }
+    let scale = select(1.0, 1.0 / eps_total, eps_total > 1.0);
+    var b: array<f32, 4>;
+    var b_total = 0.0;
+    for (var s = 0u; s < count; s++) {
+        b[s] = weighting(pairs[ids[s]].eps * scale);
+        b_total += b[s];
+    }
+    var out: array<f32, 19>;
+    //#for i
+    out[{i}] = f[{i}] - (1.0 - b_total) * (f[{i}] - post[{i}]);
+    //#end
+    let x = vec3<f32>(coords(k)) + 0.5;
+    for (var s = 0u; s < count; s++) {
+        let p = particles[pairs[ids[s]].particle];
+        let solid = Moments(m.rho, p.vel.xyz + cross(p.omega.xyz, x - p.pos_r.xyz));
+        var momentum = vec3<f32>(0.0);
+        //#for i
+        {
+            let c = vec3<f32>({i.cx}.0, {i.cy}.0, {i.cz}.0);
+            let omega = b[s] * (f[{i.o}] - f[{i}] + equilibrium(c, {i.w}, solid) - equilibrium(-c, {i.w}, m));
+            out[{i}] += omega;
+            momentum += omega * c;
+        }
+        //#end
+        pairs[ids[s]].force = vec4<f32>(-momentum, 0.0);
+    }
+    return out;
+}
+
+// One thread per particle: force and torque summed over its bounding box in a fixed order.
+@compute @workgroup_size(64)
+fn reduce(
+    @builtin(workgroup_id) wg: vec3<u32>,
+    @builtin(num_workgroups) nwg: vec3<u32>,
+    @builtin(local_invocation_index) local: u32,
+) {
+    let j = cell_index(wg, nwg, local);
+    if j >= imb_info.x { return; }
+    let p = particles[j];
+    let m = p.box_.y;
+    var force = vec3<f32>(0.0);
+    var torque = vec3<f32>(0.0);
+    for (var t = 0u; t < m * m * m; t++) {
+        let pair = pairs[p.box_.x + t];
+        if pair.cell != NO_CELL {
+            let arm = vec3<f32>(coords(pair.cell)) + 0.5 - p.pos_r.xyz;
+            force += pair.force.xyz;
+            torque += cross(arm, pair.force.xyz);
+        }
+    }
+    particles[j].force = vec4<f32>(force, 0.0);
+    particles[j].torque = vec4<f32>(torque, 0.0);
+}
