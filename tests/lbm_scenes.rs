@@ -13,16 +13,26 @@ fn run(tag: &str, text: &str) -> (Option<i32>, String, std::path::PathBuf) {
     let scene = write_scene(&dir, text);
     let out = dir.join("out");
     let result = server(&scene, &out, &[]).output().unwrap();
-    (result.status.code(), String::from_utf8_lossy(&result.stderr).into_owned(), out)
+    (
+        result.status.code(),
+        String::from_utf8_lossy(&result.stderr).into_owned(),
+        out,
+    )
 }
 
 /// Rows (s, ux) of the last step in a line probe.
 fn last_profile(path: &Path) -> Vec<(f64, f64)> {
     let text = std::fs::read_to_string(path).unwrap();
-    let rows: Vec<Vec<f64>> =
-        text.lines().skip(1).map(|l| l.split(',').map(|v| v.parse().unwrap()).collect()).collect();
+    let rows: Vec<Vec<f64>> = text
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
+        .collect();
     let last = rows.last().unwrap()[0];
-    rows.iter().filter(|r| r[0] == last).map(|r| (r[2], r[4])).collect()
+    rows.iter()
+        .filter(|r| r[0] == last)
+        .map(|r| (r[2], r[4]))
+        .collect()
 }
 
 #[test]
@@ -51,18 +61,29 @@ fn poiseuille_in_si_units_matches_the_analytic_profile() {
 
 #[test]
 fn tau_below_the_limit_is_refused() {
-    let text = POISEUILLE.replace("operator = \"trt\"", "operator = \"bgk\"").replace("tau = 0.8", "tau = 0.505");
+    let text = POISEUILLE
+        .replace("operator = \"trt\"", "operator = \"bgk\"")
+        .replace("tau = 0.8", "tau = 0.505");
     let (code, err, out) = run("lowtau", &text);
     assert_eq!(code, Some(2), "{err}");
-    assert!(err.contains("lattice.tau = 0.50500: is below 0.5 + 0.01 for bgk"), "{err}");
+    assert!(
+        err.contains("lattice.tau = 0.50500: is below 0.5 + 0.01 for bgk"),
+        "{err}"
+    );
     assert!(!out.exists());
 }
 
 #[test]
 fn too_high_a_lattice_mach_number_is_refused() {
-    let (code, err, _) = run("mach", &POISEUILLE.replace("velocity_scale = 2.0e-4", "velocity_scale = 0.01"));
+    let (code, err, _) = run(
+        "mach",
+        &POISEUILLE.replace("velocity_scale = 2.0e-4", "velocity_scale = 0.01"),
+    );
     assert_eq!(code, Some(2), "{err}");
-    assert!(err.contains("lattice.velocity_scale = 0.01 m/s: gives lattice Mach 1.732, above 0.35 for trt"), "{err}");
+    assert!(
+        err.contains("lattice.velocity_scale = 0.01 m/s: gives lattice Mach 1.732, above 0.35 for trt"),
+        "{err}"
+    );
 }
 
 #[test]
@@ -70,7 +91,10 @@ fn a_face_too_fast_for_the_lattice_is_refused() {
     let text = CAVITY.replace("velocity = [0.05, 0.0, 0.0]", "velocity = [0.3, 0.0, 0.0]");
     let (code, err, _) = run("fastlid", &text);
     assert_eq!(code, Some(2), "{err}");
-    assert!(err.contains("lattice.faces.z_max.velocity = [0.3, 0, 0] m/s: is lattice Mach 1.732"), "{err}");
+    assert!(
+        err.contains("lattice.faces.z_max.velocity = [0.3, 0, 0] m/s: is lattice Mach 1.732"),
+        "{err}"
+    );
 }
 
 #[test]
@@ -82,17 +106,40 @@ fn a_blow_up_is_caught_with_step_cell_and_quantity() {
     assert!(err.contains("last good snapshot (step"), "{err}");
     assert!(out.join("last_good.vti").is_file());
     let summary = std::fs::read_to_string(out.join("summary.json")).unwrap();
-    assert!(summary.contains("\"exit_reason\": \"error: the fluid became unstable"), "{summary}");
+    assert!(
+        summary.contains("\"exit_reason\": \"error: the fluid became unstable"),
+        "{summary}"
+    );
 }
 
 #[test]
 fn lattice_scene_mistakes_name_the_field() {
     let cases = [
-        ("dx = 0.001", "dx = 0.0015", "lattice.dx = 0.0015 m: the domain's extent along axis 0"),
-        ("operator = \"trt\"", "operator = \"lbgk\"", "lattice.operator = \"lbgk\""),
-        ("[time]\nsteps = 3000", "[time]\nsteps = 3000\ndt = 0.1", "time.dt = 0.1 s: the [lattice] section derives"),
-        ("x_max = \"periodic\"", "x_max = \"wall\"", "periodic faces come in pairs"),
-        ("y_max = \"wall\"", "y_max = \"slip\"", "lattice.faces.y_max = \"slip\""),
+        (
+            "dx = 0.001",
+            "dx = 0.0015",
+            "lattice.dx = 0.0015 m: the domain's extent along axis 0",
+        ),
+        (
+            "operator = \"trt\"",
+            "operator = \"lbgk\"",
+            "lattice.operator = \"lbgk\"",
+        ),
+        (
+            "[time]\nsteps = 3000",
+            "[time]\nsteps = 3000\ndt = 0.1",
+            "time.dt = 0.1 s: the [lattice] section derives",
+        ),
+        (
+            "x_max = \"periodic\"",
+            "x_max = \"wall\"",
+            "periodic faces come in pairs",
+        ),
+        (
+            "y_max = \"wall\"",
+            "y_max = \"slip\"",
+            "lattice.faces.y_max = \"slip\"",
+        ),
         ("axis = \"y\"", "axis = \"w\"", "output.line[0].axis = \"w\""),
     ];
     for (from, to, expected) in cases {
@@ -103,11 +150,27 @@ fn lattice_scene_mistakes_name_the_field() {
     }
 }
 
+
+/// The coupled run: the GPU lattice, the immersed moving boundary and the DEM, through the
+/// protocol. Ten Cate E1 at 6 cells per diameter, 150 steps (0.57 s): the sphere accelerates from
+/// rest to near the terminal velocity of the experiment.
 #[test]
-fn particles_with_a_lattice_are_refused_until_the_coupling_exists() {
-    let text = POISEUILLE.to_string()
-        + "\n[particles]\ndensity = 2500.0\n[[particles.sphere]]\nposition = [0.001, 0.008, 0.001]\nradius = 0.0005\n";
-    let (code, err, _) = run("lattice-particles", &text);
-    assert_eq!(code, Some(2), "{err}");
-    assert!(err.contains("particles with a [lattice]"), "{err}");
+fn settling_sphere_approaches_ten_cates_terminal_velocity() {
+    const SCENE: &str = include_str!("../validation/scenes/ten-cate-e1.toml");
+    let (code, err, out) = run("tencate", &SCENE.replace("steps = 400", "steps = 150"));
+    assert_eq!(code, Some(0), "{err}");
+    assert!(err.contains("immersed moving boundary"), "{err}");
+    let text = std::fs::read_to_string(out.join("particles.csv")).unwrap();
+    let rows: Vec<Vec<f64>> =
+        text.lines().skip(1).map(|l| l.split(',').map(|v| v.parse().unwrap()).collect()).collect();
+    let vz: Vec<f64> = rows.iter().map(|r| r[8]).collect();
+    let fz: Vec<f64> = rows.iter().map(|r| r[14]).collect();
+    // Falls, faster and faster, with a growing upward fluid force (drag + buoyancy).
+    assert!(vz.windows(2).take(10).all(|w| w[1] < w[0]), "{vz:?}");
+    assert!(fz.last().unwrap() > &fz[1], "{fz:?}");
+    let u_inf = 0.038;
+    let last = -vz.last().unwrap();
+    assert!((last - u_inf).abs() < 0.1 * u_inf, "settling speed {last} m/s at t = 0.57 s vs u_inf {u_inf}");
+    let summary = std::fs::read_to_string(out.join("summary.json")).unwrap();
+    assert!(summary.contains("immersed-boundary") && summary.contains("lattice-boltzmann"), "{summary}");
 }

@@ -2,6 +2,7 @@
 
 mod bench;
 mod bench_link;
+mod coupled;
 mod fluid;
 mod launch;
 mod lbm;

@@ -2,7 +2,7 @@
 
 use crate::launch;
 use crate::output::{ParticleCsv, PeerInfo, Progress, Summary};
-use crate::standin::StokesFluid;
+use crate::coupled::FluidSide;
 use protocol::transport::{new_run_name, LinkOptions};
 use protocol::{
     FluidLink, Hello, LinkError, ParticleReply, ParticleState, Physics, StepFlags, StepHeader, Welcome,
@@ -39,8 +39,6 @@ enum DemMode {
     External,
 }
 
-/// Physics the fluid side applies while it is a stand-in.
-const FLUID_PHYSICS: u64 = Physics::STOKES_DRAG_STANDIN | Physics::BUOYANCY;
 
 /// Exit codes.
 const EXIT_FAILURE: u8 = 1;
@@ -77,13 +75,6 @@ fn prepare(args: &RunArgs) -> Result<Prepared, String> {
             scene::DEFAULT_SCENE.to_string(),
         ),
     };
-    if scene.lattice.is_some() && scene.particle_count() > 0 {
-        return Err(format!(
-            "{scene_file}: particles with a [lattice]: coupling the lattice to particles (immersed moving \
-             boundary) is not available yet; run the particles with the stand-in fluid (no [lattice]) \
-             or the fluid alone (no particles)"
-        ));
-    }
     let steps = args.steps.unwrap_or(scene.time.steps);
     if steps == 0 {
         return Err("--steps = 0: must be at least 1".into());
@@ -128,7 +119,7 @@ pub fn main(args: RunArgs) -> ExitCode {
     if let Err(e) = ctrlc::set_handler(move || flag.store(true, Ordering::SeqCst)) {
         protocol::say!("lbm-server: warning: cannot install the Ctrl-C handler: {e}");
     }
-    if prepared.scene.lattice.is_some() {
+    if prepared.scene.lattice.is_some() && prepared.scene.particle_count() == 0 {
         let p = &prepared;
         return ExitCode::from(crate::fluid::run(
             &p.scene,
@@ -151,7 +142,7 @@ struct Session {
     link: FluidLink,
     child: Option<Child>,
     csv: ParticleCsv,
-    fluid: StokesFluid,
+    fluid: FluidSide,
     interrupted: Arc<AtomicBool>,
     peer: Option<PeerInfo>,
     hello: Option<Hello>,
@@ -188,10 +179,12 @@ impl Session {
                 return EXIT_FAILURE;
             }
         };
-        let fluid = StokesFluid {
-            density: p.scene.fluid.density,
-            dynamic_viscosity: p.scene.fluid.dynamic_viscosity,
-            gravity: p.scene.gravity,
+        let fluid = match FluidSide::for_scene(&p.scene) {
+            Ok(f) => f,
+            Err(e) => {
+                protocol::say!("lbm-server: error: {e}");
+                return EXIT_FAILURE;
+            }
         };
         let mut session = Session {
             p,
@@ -236,6 +229,7 @@ impl Session {
             }
         };
         let (scene, steps) = (&self.p.scene, self.p.steps);
+        let (physics, fluid) = (self.fluid.physics(), self.fluid.describe());
         let interrupted = self.interrupted.clone();
         let hello = self
             .link
@@ -243,7 +237,7 @@ impl Session {
                 spawned,
                 self.p.connect_timeout,
                 &|| interrupted.load(Ordering::SeqCst),
-                |hello| welcome_for(scene, steps, hello),
+                |hello| welcome_for(scene, steps, hello, physics),
             )
             .map_err(|e| e.to_string())?;
         self.peer = Some(PeerInfo {
@@ -253,7 +247,7 @@ impl Session {
             physics: Physics::names(hello.physics),
         });
         protocol::say!(
-            "lbm-server: scene '{}', {} steps, DEM: {} (pid {}); stand-in fluid: Stokes drag + buoyancy",
+            "lbm-server: scene '{}', {} steps, DEM: {} (pid {}); {fluid}",
             scene.name,
             steps,
             protocol::handshake::field_text(&hello.software),
@@ -277,7 +271,7 @@ impl Session {
             drop(received);
             let bad = check_states(&si, step);
             replies.clear();
-            replies.extend(si.iter().map(|s| self.fluid.load(s)));
+            self.fluid.step(&si, &mut replies).map_err(|e| self.describe_fluid(e))?;
             let last = step + 1 == self.p.steps;
             let stop =
                 header.has(StepFlags::STOP) || self.interrupted.load(Ordering::SeqCst) || bad.is_some();
@@ -311,6 +305,11 @@ impl Session {
         }
         progress.finish();
         Ok(Ending::Completed)
+    }
+
+    fn describe_fluid(&self, e: String) -> String {
+        let last = self.last_completed.map_or("none".to_string(), |s| s.to_string());
+        format!("{e}; last completed step: {last}")
     }
 
     fn describe(&self, e: LinkError) -> String {
@@ -376,7 +375,7 @@ impl Session {
             wall_time_s: wall,
             steps_per_second: steps_completed as f64 / wall.max(1e-9),
             particle_steps_per_second: self.particle_steps as f64 / wall.max(1e-9),
-            fluid_physics: Physics::names(FLUID_PHYSICS),
+            fluid_physics: Physics::names(self.fluid.physics()),
             peer: self.peer.clone(),
             exit_reason,
             exit_code,
@@ -385,13 +384,11 @@ impl Session {
 }
 
 /// The fluid's answer to a DEM's Hello, in the DEM's units.
-fn welcome_for(scene: &Scene, steps: u64, hello: &Hello) -> Welcome {
+fn welcome_for(scene: &Scene, steps: u64, hello: &Hello, physics: u64) -> Welcome {
     let u = hello.units;
     let accel = u.length_m / (u.time_s * u.time_s);
-    let mut w = Welcome::accepted(&format!(
-        "lbm-server {} (stand-in: Stokes drag)",
-        env!("CARGO_PKG_VERSION")
-    ));
+    let what = if physics & Physics::LATTICE_BOLTZMANN != 0 { "lattice-Boltzmann" } else { "stand-in: Stokes drag" };
+    let mut w = Welcome::accepted(&format!("lbm-server {} ({what})", env!("CARGO_PKG_VERSION")));
     w.steps = steps;
     w.dt = scene.time.dt / u.time_s;
     w.domain_min = scene.domain.min.map(|x| x / u.length_m);
@@ -399,7 +396,7 @@ fn welcome_for(scene: &Scene, steps: u64, hello: &Hello) -> Welcome {
     w.gravity = scene.gravity.map(|g| g / accel);
     w.fluid_density = scene.fluid.density / (u.mass_kg / u.length_m.powi(3));
     w.fluid_viscosity = scene.fluid.dynamic_viscosity / (u.mass_kg / (u.length_m * u.time_s));
-    w.physics = FLUID_PHYSICS;
+    w.physics = physics;
     w
 }
 

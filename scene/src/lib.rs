@@ -85,7 +85,11 @@ pub struct Output {
 
 impl Default for Output {
     fn default() -> Self {
-        Self { interval: default_interval(), fields_interval: 0, line: Vec::new() }
+        Self {
+            interval: default_interval(),
+            fields_interval: 0,
+            line: Vec::new(),
+        }
     }
 }
 
@@ -105,14 +109,25 @@ pub struct Coupling {
     pub timeout: f64,
     /// Most particles one step may carry (default: the initial count).
     pub capacity: Option<u64>,
+    /// With a `[lattice]`: particles one cell can hold at once (1-4).
+    #[serde(default = "default_slots")]
+    pub slots: u32,
+    /// With a `[lattice]`: solid weighting B, "noble-torczynski" (B(eps, tau)) or "seed" (B = eps).
+    #[serde(default = "default_weighting")]
+    pub weighting: String,
+}
+
+fn default_slots() -> u32 {
+    2
+}
+
+fn default_weighting() -> String {
+    "noble-torczynski".into()
 }
 
 impl Default for Coupling {
     fn default() -> Self {
-        Self {
-            timeout: default_timeout(),
-            capacity: None,
-        }
+        Self { timeout: default_timeout(), capacity: None, slots: default_slots(), weighting: default_weighting() }
     }
 }
 
@@ -130,7 +145,11 @@ pub struct Particles {
 /// No `[particles]` section: no particles (a fluid-only scene).
 impl Default for Particles {
     fn default() -> Self {
-        Self { density: unset(), sphere: Vec::new(), block: Vec::new() }
+        Self {
+            density: unset(),
+            sphere: Vec::new(),
+            block: Vec::new(),
+        }
     }
 }
 
@@ -256,7 +275,8 @@ impl Scene {
                     file: file.into(),
                     field: "time.dt".into(),
                     value: "missing".into(),
-                    problem: "give the coupling time step [s] (or a [lattice] section, which derives it)".into(),
+                    problem: "give the coupling time step [s] (or a [lattice] section, which derives it)"
+                        .into(),
                 });
             }
             return Ok(());
@@ -352,6 +372,6 @@ fn block_centres(b: &Block) -> impl Iterator<Item = [f64; 3]> + '_ {
 }
 
 pub mod dem;
-mod overlap;
 pub mod lattice;
+mod overlap;
 mod validate;

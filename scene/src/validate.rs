@@ -103,16 +103,31 @@ impl Scene {
         for (i, line) in self.output.line.iter().enumerate() {
             if !["x", "y", "z"].contains(&line.axis.as_str()) {
                 let field = format!("output.line[{i}].axis");
-                return Err(c.fail(field, format!("{:?}", line.axis), "expected \"x\", \"y\" or \"z\""));
+                return Err(c.fail(
+                    field,
+                    format!("{:?}", line.axis),
+                    "expected \"x\", \"y\" or \"z\"",
+                ));
             }
-            let inside =
-                (0..3).all(|a| line.through[a] >= self.domain.min[a] && line.through[a] <= self.domain.max[a]);
+            let inside = (0..3)
+                .all(|a| line.through[a] >= self.domain.min[a] && line.through[a] <= self.domain.max[a]);
             if !inside {
                 let field = format!("output.line[{i}].through");
-                return Err(c.fail(field, format!("{} m", vec3(line.through)), "lies outside the domain"));
+                return Err(c.fail(
+                    field,
+                    format!("{} m", vec3(line.through)),
+                    "lies outside the domain",
+                ));
             }
         }
         c.positive("coupling.timeout", self.coupling.timeout, "s")?;
+        if !(1..=4).contains(&self.coupling.slots) {
+            return Err(c.fail("coupling.slots", self.coupling.slots, "must be 1, 2, 3 or 4 particles per cell"));
+        }
+        if !["noble-torczynski", "seed"].contains(&self.coupling.weighting.as_str()) {
+            let value = format!("{:?}", self.coupling.weighting);
+            return Err(c.fail("coupling.weighting", value, "expected \"noble-torczynski\" or \"seed\""));
+        }
         if self.coupling.timeout > 86_400.0 {
             return Err(c.fail(
                 "coupling.timeout",

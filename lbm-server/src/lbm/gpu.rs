@@ -263,6 +263,11 @@ impl Lattice {
         Ok(lattice)
     }
 
+    /// Name of the GPU adapter.
+    pub fn adapter(&self) -> &str {
+        &self.gpu.adapter.name
+    }
+
     /// Rebuilds the bind groups (after the coupling's buffers grew).
     pub(super) fn rebind(&mut self) {
         let d = &self.gpu.device;

@@ -68,6 +68,7 @@ pub struct Coupling {
     particle_capacity: u64,
     pair_capacity: u64,
     previous_pairs: u32,
+    slots_per_cell: u32,
     pipelines: Option<[wgpu::ComputePipeline; 3]>,
 }
 
@@ -91,6 +92,7 @@ impl Coupling {
             particle_capacity: 1,
             pair_capacity: 1,
             previous_pairs: 0,
+            slots_per_cell: slots as u32,
             pipelines: None,
         }
     }
@@ -179,6 +181,11 @@ impl Lattice {
         };
         coupling.readback.unmap();
         Ok(loads)
+    }
+
+    /// Particles one cell can hold.
+    pub fn slots(&self) -> u32 {
+        self.imb.as_ref().map_or(0, |c| c.slots_per_cell)
     }
 
     /// Particles that no longer fit one cell's slots since the last call (0 when none).

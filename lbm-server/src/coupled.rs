@@ -1,0 +1,148 @@
+//! The fluid side of a run with particles: the GPU lattice coupled by the immersed moving boundary
+//! when the scene has a `[lattice]`, otherwise the Stokes-drag stand-in.
+//!
+//! Gravity and buoyancy are each applied once: the DEM applies gravity to the particles; the fluid
+//! has no gravity (so no hydrostatic pressure gradient) and this side adds the buoyancy
+//! -rho_f V g to the hydrodynamic force computed on the lattice.
+
+use crate::fluid::{health_of, setup_of};
+use crate::lbm::gpu::{Gpu, Lattice};
+use crate::lbm::imb::{ImbOptions, SolidParticle};
+use crate::standin::StokesFluid;
+use protocol::{ParticleReply, ParticleState, Physics};
+use scene::lattice::LatticeUnits;
+use scene::Scene;
+use std::sync::Arc;
+
+/// What computes the particles' hydrodynamic loads.
+pub enum FluidSide {
+    /// STAND-IN: Stokes drag and buoyancy in a quiescent fluid.
+    Stokes(StokesFluid),
+    Lattice(Box<LatticeFluid>),
+}
+
+/// The lattice with its units and the buoyancy it adds.
+pub struct LatticeFluid {
+    lattice: Lattice,
+    units: LatticeUnits,
+    origin: [f64; 3],
+    fluid_density: f64,
+    gravity: [f64; 3],
+    steps: u64,
+}
+
+impl FluidSide {
+    /// The fluid a scene asks for.
+    pub fn for_scene(scene: &Scene) -> Result<FluidSide, String> {
+        let Some(units) = scene.lattice_units.clone() else {
+            return Ok(FluidSide::Stokes(StokesFluid {
+                density: scene.fluid.density,
+                dynamic_viscosity: scene.fluid.dynamic_viscosity,
+                gravity: scene.gravity,
+            }));
+        };
+        let gpu = Arc::new(Gpu::new()?);
+        let options =
+            ImbOptions { slots: scene.coupling.slots, seed_weighting: scene.coupling.weighting == "seed" };
+        let lattice = Lattice::new(gpu, setup_of(&units), health_of(&units), Some(options))?;
+        Ok(FluidSide::Lattice(Box::new(LatticeFluid {
+            lattice,
+            units,
+            origin: scene.domain.min,
+            fluid_density: scene.fluid.density,
+            gravity: scene.gravity,
+            steps: 0,
+        })))
+    }
+
+    /// The Physics bits this side applies.
+    pub fn physics(&self) -> u64 {
+        match self {
+            FluidSide::Stokes(_) => Physics::STOKES_DRAG_STANDIN | Physics::BUOYANCY,
+            FluidSide::Lattice(_) => Physics::LATTICE_BOLTZMANN | Physics::IMMERSED_BOUNDARY | Physics::BUOYANCY,
+        }
+    }
+
+    /// How the fluid is described in logs.
+    pub fn describe(&self) -> String {
+        match self {
+            FluidSide::Stokes(_) => "stand-in fluid: Stokes drag + buoyancy".into(),
+            FluidSide::Lattice(l) => {
+                let u = &l.units;
+                format!(
+                    "lattice {}x{}x{} ({}, tau {:.4}, dx {:e} m, dt {:e} s) on {}, immersed moving boundary",
+                    u.n[0],
+                    u.n[1],
+                    u.n[2],
+                    u.operator,
+                    u.tau,
+                    u.dx,
+                    u.dt,
+                    l.lattice.adapter()
+                )
+            }
+        }
+    }
+
+    /// Advances the fluid one step with the particles `states` (SI) and returns their loads (SI).
+    pub fn step(&mut self, states: &[ParticleState], out: &mut Vec<ParticleReply>) -> Result<(), String> {
+        out.clear();
+        match self {
+            FluidSide::Stokes(fluid) => out.extend(states.iter().map(|s| fluid.load(s))),
+            FluidSide::Lattice(l) => l.step(states, out)?,
+        }
+        Ok(())
+    }
+}
+
+impl LatticeFluid {
+    fn step(&mut self, states: &[ParticleState], out: &mut Vec<ParticleReply>) -> Result<(), String> {
+        let (dx, dt) = (self.units.dx, self.units.dt);
+        let solids: Vec<SolidParticle> = states
+            .iter()
+            .map(|s| SolidParticle {
+                position: std::array::from_fn(|a| (s.position[a] - self.origin[a]) / dx),
+                radius: s.radius / dx,
+                velocity: s.velocity.map(|v| v * dt / dx),
+                angular_velocity: s.angular_velocity.map(|w| w * dt),
+            })
+            .collect();
+        let loads = self.lattice.step_coupled(&solids)?;
+        let force_unit = self.fluid_density * dx.powi(4) / (dt * dt);
+        let torque_unit = force_unit * dx;
+        out.extend(states.iter().zip(&loads).map(|(s, l)| {
+            let volume = 4.0 / 3.0 * std::f64::consts::PI * s.radius.powi(3);
+            ParticleReply {
+                id: s.id,
+                force: std::array::from_fn(|a| l.force[a] * force_unit - self.fluid_density * volume * self.gravity[a]),
+                torque: l.torque.map(|t| t * torque_unit),
+            }
+        }));
+        self.steps += 1;
+        if self.steps % self.units.check_interval == 0 {
+            self.check()?;
+        }
+        Ok(())
+    }
+
+    /// The health check of the lattice, and a warning when cells had more particles than slots.
+    fn check(&self) -> Result<(), String> {
+        let (_, bad) = self.lattice.fields();
+        if let Some(bad) = bad {
+            return Err(format!(
+                "the fluid became unstable by step {}: cell {} at ({}, {}, {}): density {} x the reference, \
+                 lattice velocity {:?}",
+                self.steps, bad.cell, bad.coords[0], bad.coords[1], bad.coords[2], bad.rho, bad.u
+            ));
+        }
+        let dropped = self.lattice.dropped_covers();
+        if dropped > 0 {
+            protocol::say!(
+                "lbm-server: warning: by step {}, {dropped} particle-cell covers did not fit coupling.slots = {}",
+                self.steps,
+                self.lattice.slots()
+            );
+        }
+        Ok(())
+    }
+}
