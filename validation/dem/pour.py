@@ -16,7 +16,7 @@ import cases
 import run_references as rr
 
 PLAN = [("liggghts", 0, 1), ("liggghts", 1, 1), ("liggghts", 2, 1),
-        ("yade", 0, 2), ("yade", 1, 1), ("yade", 2, 1)]
+        ("yade", 0, 2), ("yade", 1, 1), ("yade", 2, 1), ("yade", 0, 1)]
 
 
 def run_one(code, k, threads=1, collect_only=False):
@@ -75,10 +75,10 @@ def report():
                 runs[fn[len("pour_result_"):-5]] = json.load(open(os.path.join(rr.WORK, fn)))
         if not runs:
             continue
-        prim = "liggghts_run0" if code == "liggghts" else "yade_j1_run1"
+        prim = "liggghts_run0" if code == "liggghts" else "yade_j1_run0"
         if prim not in runs:
             prim = sorted(runs)[0]
-        # packing-fraction runs: one per perturbation k (YADE: k = 0 with -j2, k = 1, 2 with -j1)
+        # packing-fraction runs: every run (YADE -j1 and -j2 runs of the same k are different trajectories too)
         if code == "liggghts":
             pf_keys = [f"liggghts_run{k}" for k in cases.POUR_RUNS if f"liggghts_run{k}" in runs]
         else:
