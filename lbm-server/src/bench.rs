@@ -22,6 +22,10 @@ pub struct BenchArgs {
     /// Collision operator: bgk, trt or mrt.
     #[arg(long, default_value = "bgk")]
     operator: String,
+    /// Also run coupled steps with these particle counts (e.g. 1,8,64,512,4096,32768): spheres of
+    /// 4 cells diameter on a regular lattice, immersed moving boundary; MLUPS and ratio to LBM-only.
+    #[arg(long, value_delimiter = ',')]
+    particles: Vec<usize>,
 }
 
 /// Parses "NXxNYxNZ".
@@ -103,6 +107,9 @@ fn run(args: &BenchArgs) -> Result<(), String> {
         "roofline:       {roofline:.1} MLUPS; achieved {:.1}% of it",
         100.0 * mlups / roofline
     );
+    if !args.particles.is_empty() {
+        coupled_sweep(&gpu, n, tau, operator, args.steps, &args.particles, mlups)?;
+    }
     match naive {
         Some(naive) => println!(
             "naive kernel:   {naive:.1} MLUPS (two lattices, pull, BGK, same grid, same run): ours is {:.2}x",
@@ -231,4 +238,56 @@ fn naive_mlups(gpu: &Gpu, n: [usize; 3], steps: u64) -> Option<f64> {
     let start = Instant::now();
     run(steps);
     Some(cells as f64 * steps as f64 / start.elapsed().as_secs_f64() / 1e6)
+}
+
+/// Coupled MLUPS for each particle count, against the LBM-only figure of the same run.
+fn coupled_sweep(
+    gpu: &Arc<Gpu>,
+    n: [usize; 3],
+    tau: f64,
+    operator: Operator,
+    steps: u64,
+    counts: &[usize],
+    lbm_only: f64,
+) -> Result<(), String> {
+    use crate::lbm::imb::{ImbOptions, SolidParticle};
+    println!("coupled (spheres of 4 cells diameter, immersed moving boundary, one readback per step):");
+    println!("| particles | MLUPS | ratio to LBM-only ({lbm_only:.1} MLUPS) |");
+    println!("|---:|---:|---:|");
+    for &count in counts {
+        let side = (count as f64).cbrt().round().max(1.0) as usize;
+        if side * side * side != count {
+            return Err(format!(
+                "--particles {count}: use cubes (1, 8, 64, 512, 4096, 32768)"
+            ));
+        }
+        let spacing: [f64; 3] = std::array::from_fn(|a| n[a] as f64 / side as f64);
+        if spacing.iter().any(|s| *s < 4.0) {
+            return Err(format!(
+                "--particles {count}: {side}^3 spheres of 4 cells do not fit the grid"
+            ));
+        }
+        let particles: Vec<SolidParticle> = (0..count)
+            .map(|k| {
+                let idx = [k % side, (k / side) % side, k / (side * side)];
+                SolidParticle {
+                    position: std::array::from_fn(|a| (idx[a] as f64 + 0.5) * spacing[a]),
+                    radius: 2.0,
+                    ..Default::default()
+                }
+            })
+            .collect();
+        let setup = Setup::new(n, [Face::Periodic; 6], tau, operator);
+        let mut lattice = Lattice::new(gpu.clone(), setup, Health::default(), Some(ImbOptions::default()))?;
+        for _ in 0..5 {
+            lattice.step_coupled(&particles)?;
+        }
+        let start = Instant::now();
+        for _ in 0..steps {
+            lattice.step_coupled(&particles)?;
+        }
+        let mlups = (n[0] * n[1] * n[2]) as f64 * steps as f64 / start.elapsed().as_secs_f64() / 1e6;
+        println!("| {count} | {mlups:.1} | {:.0}% |", 100.0 * mlups / lbm_only);
+    }
+    Ok(())
 }

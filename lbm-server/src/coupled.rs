@@ -42,8 +42,10 @@ impl FluidSide {
             }));
         };
         let gpu = Arc::new(Gpu::new()?);
-        let options =
-            ImbOptions { slots: scene.coupling.slots, seed_weighting: scene.coupling.weighting == "seed" };
+        let options = ImbOptions {
+            slots: scene.coupling.slots,
+            seed_weighting: scene.coupling.weighting == "seed",
+        };
         let lattice = Lattice::new(gpu, setup_of(&units), health_of(&units), Some(options))?;
         Ok(FluidSide::Lattice(Box::new(LatticeFluid {
             lattice,
@@ -59,7 +61,9 @@ impl FluidSide {
     pub fn physics(&self) -> u64 {
         match self {
             FluidSide::Stokes(_) => Physics::STOKES_DRAG_STANDIN | Physics::BUOYANCY,
-            FluidSide::Lattice(_) => Physics::LATTICE_BOLTZMANN | Physics::IMMERSED_BOUNDARY | Physics::BUOYANCY,
+            FluidSide::Lattice(_) => {
+                Physics::LATTICE_BOLTZMANN | Physics::IMMERSED_BOUNDARY | Physics::BUOYANCY
+            }
         }
     }
 
@@ -114,7 +118,9 @@ impl LatticeFluid {
             let volume = 4.0 / 3.0 * std::f64::consts::PI * s.radius.powi(3);
             ParticleReply {
                 id: s.id,
-                force: std::array::from_fn(|a| l.force[a] * force_unit - self.fluid_density * volume * self.gravity[a]),
+                force: std::array::from_fn(|a| {
+                    l.force[a] * force_unit - self.fluid_density * volume * self.gravity[a]
+                }),
                 torque: l.torque.map(|t| t * torque_unit),
             }
         }));

@@ -1,8 +1,8 @@
 //! `lbm-server run`: load a scene, start (or wait for) the DEM side, step in lockstep, write output.
 
+use crate::coupled::FluidSide;
 use crate::launch;
 use crate::output::{ParticleCsv, PeerInfo, Progress, Summary};
-use crate::coupled::FluidSide;
 use protocol::transport::{new_run_name, LinkOptions};
 use protocol::{
     FluidLink, Hello, LinkError, ParticleReply, ParticleState, Physics, StepFlags, StepHeader, Welcome,
@@ -38,7 +38,6 @@ enum DemMode {
     Spawn,
     External,
 }
-
 
 /// Exit codes.
 const EXIT_FAILURE: u8 = 1;
@@ -271,7 +270,9 @@ impl Session {
             drop(received);
             let bad = check_states(&si, step);
             replies.clear();
-            self.fluid.step(&si, &mut replies).map_err(|e| self.describe_fluid(e))?;
+            self.fluid
+                .step(&si, &mut replies)
+                .map_err(|e| self.describe_fluid(e))?;
             let last = step + 1 == self.p.steps;
             let stop =
                 header.has(StepFlags::STOP) || self.interrupted.load(Ordering::SeqCst) || bad.is_some();
@@ -387,7 +388,11 @@ impl Session {
 fn welcome_for(scene: &Scene, steps: u64, hello: &Hello, physics: u64) -> Welcome {
     let u = hello.units;
     let accel = u.length_m / (u.time_s * u.time_s);
-    let what = if physics & Physics::LATTICE_BOLTZMANN != 0 { "lattice-Boltzmann" } else { "stand-in: Stokes drag" };
+    let what = if physics & Physics::LATTICE_BOLTZMANN != 0 {
+        "lattice-Boltzmann"
+    } else {
+        "stand-in: Stokes drag"
+    };
     let mut w = Welcome::accepted(&format!("lbm-server {} ({what})", env!("CARGO_PKG_VERSION")));
     w.steps = steps;
     w.dt = scene.time.dt / u.time_s;

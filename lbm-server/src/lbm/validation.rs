@@ -185,3 +185,140 @@ pub fn closed_box_mass(gpu: &Arc<Gpu>, n: usize, steps: u64, operator: Operator)
         relative_drift: (after - before).abs() / before,
     }
 }
+
+/// Drag on a fixed sphere in a periodic cube (a simple cubic array), against Zick & Homsy (1982).
+#[derive(Debug, Clone, Copy)]
+pub struct ArrayDrag {
+    pub solid_fraction: f64,
+    pub radius: f64,
+    pub cells: usize,
+    /// K = F / (6 pi mu a U), measured.
+    pub k: f64,
+    pub steps: u64,
+}
+
+/// Stokes flow through a simple cubic array: one sphere of radius r (lattice units) fixed in a
+/// periodic n^3 box, flow driven by a body force; K from the force on the sphere and the mean
+/// velocity through a face of the box.
+pub fn zick_homsy(gpu: &Arc<Gpu>, n: usize, radius: f64, tau: f64, operator: Operator) -> ArrayDrag {
+    zick_homsy_with(gpu, n, radius, tau, operator, super::imb::ImbOptions::default())
+}
+
+/// [`zick_homsy`] with given coupling options.
+pub fn zick_homsy_with(
+    gpu: &Arc<Gpu>,
+    n: usize,
+    radius: f64,
+    tau: f64,
+    operator: Operator,
+    options: super::imb::ImbOptions,
+) -> ArrayDrag {
+    use super::imb::SolidParticle;
+    let mut setup = Setup::new([n, n, n], [Face::Periodic; 6], tau, operator);
+    let nu = setup.viscosity();
+    // A force small enough for Stokes flow (Re << 1).
+    setup.force = [1e-6, 0.0, 0.0];
+    let sphere = SolidParticle {
+        position: [n as f64 / 2.0; 3],
+        radius,
+        ..Default::default()
+    };
+    let mut lattice = Lattice::new(gpu.clone(), setup, Health::default(), Some(options)).expect("lattice");
+    let steps = relaxation_steps(n as f64, nu, 12.0);
+    let mut force = 0.0;
+    for _ in 0..steps {
+        force = lattice.step_coupled(&[sphere]).expect("coupled step")[0].force[0];
+    }
+    let (fields, bad) = lattice.fields();
+    assert!(bad.is_none(), "unhealthy: {bad:?}");
+    // The volumetric flux through the face x = 0 of the unit cell, which the sphere does not cut
+    // (the fluid inside an immersed boundary is not at rest, so a volume average would count it).
+    let face: Vec<f64> = (0..n * n).map(|k| fields[k * n][1] as f64).collect();
+    let u_mean = face.iter().sum::<f64>() / face.len() as f64;
+    let volume = 4.0 / 3.0 * std::f64::consts::PI * radius.powi(3);
+    ArrayDrag {
+        solid_fraction: volume / (n * n * n) as f64,
+        radius,
+        cells: n,
+        k: force / (6.0 * std::f64::consts::PI * nu * radius * u_mean),
+        steps,
+    }
+}
+
+/// Zick & Homsy (1982), Table 2: (solid fraction, K), from ../shared/reference/zick-homsy-1982.csv.
+pub const ZICK_HOMSY: [(f64, f64); 3] = [(0.027, 2.008), (0.125, 4.292), (0.343, 15.4)];
+
+/// Radius giving solid fraction phi in an n^3 box.
+pub fn radius_for(phi: f64, n: usize) -> f64 {
+    (phi * (n * n * n) as f64 * 3.0 / (4.0 * std::f64::consts::PI)).cbrt()
+}
+
+/// Total momentum (fluid + particle) in a closed periodic box with one free particle.
+#[derive(Debug, Clone, Copy)]
+pub struct Momentum {
+    pub initial: [f64; 3],
+    pub last: [f64; 3],
+    pub relative_change: f64,
+    pub particle_velocity: [f64; 3],
+}
+
+/// A fluid moving at u0 along x around a particle at rest (density ratio 2), periodic box: the
+/// particle is dragged along; fluid + particle momentum must not change.
+pub fn momentum_exchange(gpu: &Arc<Gpu>, n: usize, steps: u64) -> Momentum {
+    use super::imb::{ImbOptions, SolidParticle};
+    let setup = Setup::new(
+        [n, n, n],
+        [Face::Periodic; 6],
+        0.7,
+        Operator::Trt { magic: 3.0 / 16.0 },
+    );
+    let mut lattice = Lattice::new(
+        gpu.clone(),
+        setup.clone(),
+        Health::default(),
+        Some(ImbOptions::default()),
+    )
+    .expect("lattice");
+    let u0 = 0.02;
+    lattice.set_populations(&equilibrium_field(&setup, |_| (1.0, [u0, 0.0, 0.0])));
+    let radius = n as f64 / 6.0;
+    let mass = 2.0 * 4.0 / 3.0 * std::f64::consts::PI * radius.powi(3);
+    let mut p = SolidParticle {
+        position: [n as f64 / 2.0 + 0.3, n as f64 / 2.0 - 0.2, n as f64 / 2.0],
+        radius,
+        ..Default::default()
+    };
+    let fluid_momentum = |lattice: &Lattice| -> [f64; 3] {
+        let f = lattice.populations();
+        let mut j = [0.0; 3];
+        for cell in &f {
+            for (i, fi) in cell.iter().enumerate() {
+                for a in 0..3 {
+                    j[a] += fi * super::lattice::C[i][a] as f64;
+                }
+            }
+        }
+        j
+    };
+    let total = |lattice: &Lattice, p: &SolidParticle| -> [f64; 3] {
+        let j = fluid_momentum(lattice);
+        std::array::from_fn(|a| j[a] + mass * p.velocity[a])
+    };
+    let initial = total(&lattice, &p);
+    for _ in 0..steps {
+        let load = lattice.step_coupled(&[p]).expect("coupled step")[0];
+        for a in 0..3 {
+            p.velocity[a] += load.force[a] / mass;
+            p.position[a] += p.velocity[a];
+        }
+    }
+    let last = total(&lattice, &p);
+    let norm = |v: [f64; 3]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
+    let change = norm(std::array::from_fn(|a| last[a] - initial[a])) / norm(initial);
+    Momentum {
+        initial,
+        last,
+        relative_change: change,
+        particle_velocity: p.velocity,
+    }
+}
