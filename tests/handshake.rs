@@ -38,7 +38,11 @@ fn joining_a_run_that_does_not_exist_fails_clearly() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(1));
     assert!(err.contains("no run named 'lbmdem_1_nosuchrun' found"), "{err}");
-    assert!(leftover_files("lbmdem_1_nosuchrun").is_empty(), "{:?}", leftover_files("lbmdem_1_nosuchrun"));
+    assert!(
+        leftover_files("lbmdem_1_nosuchrun").is_empty(),
+        "{:?}",
+        leftover_files("lbmdem_1_nosuchrun")
+    );
 }
 
 #[test]

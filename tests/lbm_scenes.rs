@@ -150,7 +150,6 @@ fn lattice_scene_mistakes_name_the_field() {
     }
 }
 
-
 /// The coupled run: the GPU lattice, the immersed moving boundary and the DEM, through the
 /// protocol. Ten Cate E1 at 6 cells per diameter, 150 steps (0.57 s): the sphere accelerates from
 /// rest to near the terminal velocity of the experiment.
@@ -161,8 +160,11 @@ fn settling_sphere_approaches_ten_cates_terminal_velocity() {
     assert_eq!(code, Some(0), "{err}");
     assert!(err.contains("immersed moving boundary"), "{err}");
     let text = std::fs::read_to_string(out.join("particles.csv")).unwrap();
-    let rows: Vec<Vec<f64>> =
-        text.lines().skip(1).map(|l| l.split(',').map(|v| v.parse().unwrap()).collect()).collect();
+    let rows: Vec<Vec<f64>> = text
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
+        .collect();
     let vz: Vec<f64> = rows.iter().map(|r| r[8]).collect();
     let fz: Vec<f64> = rows.iter().map(|r| r[14]).collect();
     // Falls, faster and faster, with a growing upward fluid force (drag + buoyancy).
@@ -170,7 +172,13 @@ fn settling_sphere_approaches_ten_cates_terminal_velocity() {
     assert!(fz.last().unwrap() > &fz[1], "{fz:?}");
     let u_inf = 0.038;
     let last = -vz.last().unwrap();
-    assert!((last - u_inf).abs() < 0.1 * u_inf, "settling speed {last} m/s at t = 0.57 s vs u_inf {u_inf}");
+    assert!(
+        (last - u_inf).abs() < 0.1 * u_inf,
+        "settling speed {last} m/s at t = 0.57 s vs u_inf {u_inf}"
+    );
     let summary = std::fs::read_to_string(out.join("summary.json")).unwrap();
-    assert!(summary.contains("immersed-boundary") && summary.contains("lattice-boltzmann"), "{summary}");
+    assert!(
+        summary.contains("immersed-boundary") && summary.contains("lattice-boltzmann"),
+        "{summary}"
+    );
 }

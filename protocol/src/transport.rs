@@ -275,7 +275,11 @@ where
         .listener_builder()
         .create()
         .map_err(ipc_err(what))?;
-    Ok(Inbox { subscriber, listener, service })
+    Ok(Inbox {
+        subscriber,
+        listener,
+        service,
+    })
 }
 
 impl<T: Debug + ZeroCopySend + Copy + 'static, H: Debug + ZeroCopySend + Copy + Default + 'static>
@@ -534,7 +538,10 @@ impl FluidLink {
         let start = Instant::now();
         while start.elapsed() < max {
             let open = self.hello.has_publisher() || self.states.has_publisher();
-            let dead = self.watch.pid.is_some_and(|pid| process_state(pid) == ProcessState::Dead);
+            let dead = self
+                .watch
+                .pid
+                .is_some_and(|pid| process_state(pid) == ProcessState::Dead);
             if !open || dead {
                 return;
             }

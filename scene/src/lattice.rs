@@ -54,7 +54,13 @@ pub struct MrtRates {
 
 impl Default for MrtRates {
     fn default() -> Self {
-        Self { e: 1.19, epsilon: 1.4, q: 1.2, pi: 1.4, m: 1.98 }
+        Self {
+            e: 1.19,
+            epsilon: 1.4,
+            q: 1.2,
+            pi: 1.4,
+            m: 1.98,
+        }
     }
 }
 
@@ -79,7 +85,14 @@ pub struct Faces {
 
 impl Default for Faces {
     fn default() -> Self {
-        Self { x_min: wall(), x_max: wall(), y_min: wall(), y_max: wall(), z_min: wall(), z_max: wall() }
+        Self {
+            x_min: wall(),
+            x_max: wall(),
+            y_min: wall(),
+            y_max: wall(),
+            z_min: wall(),
+            z_max: wall(),
+        }
     }
 }
 
@@ -194,7 +207,12 @@ pub fn mach_limit(operator: &str) -> f64 {
 }
 
 fn fail(file: &str, field: &str, value: impl ToString, problem: impl Into<String>) -> SceneError {
-    SceneError { file: file.into(), field: field.into(), value: value.to_string(), problem: problem.into() }
+    SceneError {
+        file: file.into(),
+        field: field.into(),
+        value: value.to_string(),
+        problem: problem.into(),
+    }
 }
 
 impl LatticeUnits {
@@ -204,7 +222,12 @@ impl LatticeUnits {
         let n = cell_counts(scene, dx, file)?;
         let op = lattice.operator.as_str();
         if !["bgk", "trt", "mrt"].contains(&op) {
-            return Err(fail(file, "lattice.operator", format!("{op:?}"), "expected \"bgk\", \"trt\" or \"mrt\""));
+            return Err(fail(
+                file,
+                "lattice.operator",
+                format!("{op:?}"),
+                "expected \"bgk\", \"trt\" or \"mrt\"",
+            ));
         }
         let nu_si = scene.fluid.dynamic_viscosity / scene.fluid.density;
         positive(file, "lattice.velocity_scale", lattice.velocity_scale, "m/s")?;
@@ -216,7 +239,11 @@ impl LatticeUnits {
             }
         };
         let tau = 0.5 + 3.0 * nu_si * dt / (dx * dx);
-        let field = if lattice.tau.is_some() { "lattice.tau" } else { "lattice (derived tau)" };
+        let field = if lattice.tau.is_some() {
+            "lattice.tau"
+        } else {
+            "lattice (derived tau)"
+        };
         if tau.is_nan() || tau - 0.5 < tau_margin(op) {
             return Err(fail(
                 file,
@@ -234,7 +261,10 @@ impl LatticeUnits {
                 file,
                 "lattice.velocity_scale",
                 format!("{} m/s", lattice.velocity_scale),
-                format!("gives lattice Mach {mach:.3}, above {} for {op}: lower tau or coarsen dx", mach_limit(op)),
+                format!(
+                    "gives lattice Mach {mach:.3}, above {} for {op}: lower tau or coarsen dx",
+                    mach_limit(op)
+                ),
             ));
         }
         let faces = lattice_faces(scene, lattice, dx, dt, file)?;
@@ -270,7 +300,12 @@ fn positive(file: &str, field: &str, v: f64, unit: &str) -> Result<(), SceneErro
     if v.is_finite() && v > 0.0 {
         Ok(())
     } else {
-        Err(fail(file, field, format!("{v} {unit}").trim_end(), "must be a finite number > 0"))
+        Err(fail(
+            file,
+            field,
+            format!("{v} {unit}").trim_end(),
+            "must be a finite number > 0",
+        ))
     }
 }
 
@@ -280,7 +315,12 @@ fn cell_size(scene: &Scene, lattice: &Lattice, file: &str) -> Result<f64, SceneE
         (Some(dx), None) => positive(file, "lattice.dx", dx, "m").map(|()| dx),
         (None, Some(r)) if r > 0 => Ok(lx / r as f64),
         (None, Some(r)) => Err(fail(file, "lattice.resolution", r, "must be at least 1 cell")),
-        _ => Err(fail(file, "lattice", "dx and resolution", "give exactly one of lattice.dx or lattice.resolution")),
+        _ => Err(fail(
+            file,
+            "lattice",
+            "dx and resolution",
+            "give exactly one of lattice.dx or lattice.resolution",
+        )),
     }
 }
 
@@ -301,7 +341,12 @@ fn cell_counts(scene: &Scene, dx: f64, file: &str) -> Result<[usize; 3], SceneEr
     }
     let total = n.iter().map(|&v| v as u128).product::<u128>();
     if total >= 1 << 31 {
-        return Err(fail(file, "lattice.dx", format!("{dx} m"), format!("gives {total} cells, above 2^31")));
+        return Err(fail(
+            file,
+            "lattice.dx",
+            format!("{dx} m"),
+            format!("gives {total} cells, above 2^31"),
+        ));
     }
     Ok(n)
 }
@@ -340,7 +385,12 @@ fn lattice_faces(
                 }
             },
             FaceSpec::Name(s) => {
-                return Err(fail(file, &field, format!("{s:?}"), "expected \"periodic\", \"wall\" or a table"))
+                return Err(fail(
+                    file,
+                    &field,
+                    format!("{s:?}"),
+                    "expected \"periodic\", \"wall\" or a table",
+                ))
             }
         };
     }
@@ -354,13 +404,19 @@ fn lattice_faces(
                     file,
                     &format!("lattice.faces.{name}.velocity"),
                     format!("[{}, {}, {}] m/s", si[0], si[1], si[2]),
-                    format!("is lattice Mach {mach:.3}, above {limit} for {}", lattice.operator),
+                    format!(
+                        "is lattice Mach {mach:.3}, above {limit} for {}",
+                        lattice.operator
+                    ),
                 ));
             }
         }
     }
     for (a, axis) in ["x", "y", "z"].iter().enumerate() {
-        let (lo, hi) = (out[2 * a] == LatticeFace::Periodic, out[2 * a + 1] == LatticeFace::Periodic);
+        let (lo, hi) = (
+            out[2 * a] == LatticeFace::Periodic,
+            out[2 * a + 1] == LatticeFace::Periodic,
+        );
         if lo != hi {
             return Err(fail(
                 file,
@@ -373,7 +429,13 @@ fn lattice_faces(
     Ok(out)
 }
 
-fn solid_cells(scene: &Scene, lattice: &Lattice, n: [usize; 3], dx: f64, file: &str) -> Result<Vec<bool>, SceneError> {
+fn solid_cells(
+    scene: &Scene,
+    lattice: &Lattice,
+    n: [usize; 3],
+    dx: f64,
+    file: &str,
+) -> Result<Vec<bool>, SceneError> {
     let mut solid = vec![false; n[0] * n[1] * n[2]];
     for (b, boxed) in lattice.solid_box.iter().enumerate() {
         if (0..3).any(|a| boxed.max[a].is_nan() || boxed.max[a] <= boxed.min[a]) {

@@ -127,7 +127,12 @@ fn default_weighting() -> String {
 
 impl Default for Coupling {
     fn default() -> Self {
-        Self { timeout: default_timeout(), capacity: None, slots: default_slots(), weighting: default_weighting() }
+        Self {
+            timeout: default_timeout(),
+            capacity: None,
+            slots: default_slots(),
+            weighting: default_weighting(),
+        }
     }
 }
 

@@ -122,11 +122,19 @@ impl Scene {
         }
         c.positive("coupling.timeout", self.coupling.timeout, "s")?;
         if !(1..=4).contains(&self.coupling.slots) {
-            return Err(c.fail("coupling.slots", self.coupling.slots, "must be 1, 2, 3 or 4 particles per cell"));
+            return Err(c.fail(
+                "coupling.slots",
+                self.coupling.slots,
+                "must be 1, 2, 3 or 4 particles per cell",
+            ));
         }
         if !["noble-torczynski", "seed"].contains(&self.coupling.weighting.as_str()) {
             let value = format!("{:?}", self.coupling.weighting);
-            return Err(c.fail("coupling.weighting", value, "expected \"noble-torczynski\" or \"seed\""));
+            return Err(c.fail(
+                "coupling.weighting",
+                value,
+                "expected \"noble-torczynski\" or \"seed\"",
+            ));
         }
         if self.coupling.timeout > 86_400.0 {
             return Err(c.fail(
