@@ -8,9 +8,10 @@
 use crate::fluid::{health_of, setup_of};
 use crate::lbm::gpu::{Gpu, Lattice};
 use crate::lbm::imb::{ImbOptions, SolidParticle};
+use crate::lubrication::Lubrication;
 use crate::standin::StokesFluid;
 use protocol::{ParticleReply, ParticleState, Physics};
-use scene::lattice::LatticeUnits;
+use scene::lattice::{LatticeFace, LatticeUnits};
 use scene::Scene;
 use std::sync::Arc;
 
@@ -28,6 +29,7 @@ pub struct LatticeFluid {
     origin: [f64; 3],
     fluid_density: f64,
     gravity: [f64; 3],
+    lubrication: Option<Lubrication>,
     steps: u64,
 }
 
@@ -47,12 +49,14 @@ impl FluidSide {
             seed_weighting: scene.coupling.weighting == "seed",
         };
         let lattice = Lattice::new(gpu, setup_of(&units), health_of(&units), Some(options))?;
+        let lubrication = scene.coupling.lubrication.then(|| lubrication_of(scene, &units));
         Ok(FluidSide::Lattice(Box::new(LatticeFluid {
             lattice,
             units,
             origin: scene.domain.min,
             fluid_density: scene.fluid.density,
             gravity: scene.gravity,
+            lubrication,
             steps: 0,
         })))
     }
@@ -124,6 +128,9 @@ impl LatticeFluid {
                 torque: l.torque.map(|t| t * torque_unit),
             }
         }));
+        if let Some(lubrication) = &self.lubrication {
+            lubrication.apply(states, out);
+        }
         self.steps += 1;
         if self.steps % self.units.check_interval == 0 {
             self.check()?;
@@ -150,5 +157,28 @@ impl LatticeFluid {
             );
         }
         Ok(())
+    }
+}
+
+/// Lubrication with the lattice's cut-off (one cell) and the domain faces that are walls.
+fn lubrication_of(scene: &Scene, units: &LatticeUnits) -> Lubrication {
+    let walls = units
+        .faces
+        .iter()
+        .enumerate()
+        .filter(|(_, f)| matches!(f, LatticeFace::Wall | LatticeFace::MovingWall(_)))
+        .map(|(k, _)| {
+            let axis = k / 2;
+            if k % 2 == 0 {
+                (axis, scene.domain.min[axis], 1.0)
+            } else {
+                (axis, scene.domain.max[axis], -1.0)
+            }
+        })
+        .collect();
+    Lubrication {
+        viscosity: scene.fluid.dynamic_viscosity,
+        cutoff: units.dx,
+        walls,
     }
 }

@@ -6,6 +6,7 @@ mod coupled;
 mod fluid;
 mod launch;
 mod lbm;
+mod lubrication;
 mod output;
 mod run;
 mod standin;

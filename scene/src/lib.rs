@@ -115,6 +115,14 @@ pub struct Coupling {
     /// With a `[lattice]`: solid weighting B, "noble-torczynski" (B(eps, tau)) or "seed" (B = eps).
     #[serde(default = "default_weighting")]
     pub weighting: String,
+    /// With a `[lattice]`: lubrication correction for sphere-sphere and sphere-wall gaps below one
+    /// cell (default on).
+    #[serde(default = "default_lubrication")]
+    pub lubrication: bool,
+}
+
+fn default_lubrication() -> bool {
+    true
 }
 
 fn default_slots() -> u32 {
@@ -132,6 +140,7 @@ impl Default for Coupling {
             capacity: None,
             slots: default_slots(),
             weighting: default_weighting(),
+            lubrication: default_lubrication(),
         }
     }
 }

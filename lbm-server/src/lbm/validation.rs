@@ -189,9 +189,7 @@ pub fn closed_box_mass(gpu: &Arc<Gpu>, n: usize, steps: u64, operator: Operator)
 /// Drag on a fixed sphere in a periodic cube (a simple cubic array), against Zick & Homsy (1982).
 #[derive(Debug, Clone, Copy)]
 pub struct ArrayDrag {
-    pub solid_fraction: f64,
     pub radius: f64,
-    pub cells: usize,
     /// K = F / (6 pi mu a U), measured.
     pub k: f64,
     pub steps: u64,
@@ -235,11 +233,8 @@ pub fn zick_homsy_with(
     // (the fluid inside an immersed boundary is not at rest, so a volume average would count it).
     let face: Vec<f64> = (0..n * n).map(|k| fields[k * n][1] as f64).collect();
     let u_mean = face.iter().sum::<f64>() / face.len() as f64;
-    let volume = 4.0 / 3.0 * std::f64::consts::PI * radius.powi(3);
     ArrayDrag {
-        solid_fraction: volume / (n * n * n) as f64,
         radius,
-        cells: n,
         k: force / (6.0 * std::f64::consts::PI * nu * radius * u_mean),
         steps,
     }
