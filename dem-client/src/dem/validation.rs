@@ -250,3 +250,78 @@ fn oblique_hertz_30_yade() {
 fn oblique_hertz_60_yade() {
     oblique_case("oblique_hertz_60_yade.json");
 }
+
+/// Bed height H = 2 sum(r^3 z) / sum(r^3) (cases.py `bed_measures`).
+fn bed_height(bodies: &[Body]) -> f64 {
+    let v: f64 = bodies.iter().map(|b| b.r.powi(3)).sum();
+    2.0 * bodies.iter().map(|b| b.r.powi(3) * b.x.z).sum::<f64>() / v
+}
+
+/// Solid fraction of the cell-centred grid of spacing h in `region` (cases.py `packing_fraction`).
+fn packing_fraction(bodies: &[Body], region: [[f64; 2]; 3], h: f64) -> f64 {
+    let n: [usize; 3] = std::array::from_fn(|a| ((region[a][1] - region[a][0]) / h).round() as usize);
+    let step: [f64; 3] = std::array::from_fn(|a| (region[a][1] - region[a][0]) / n[a] as f64);
+    let centre = |a: usize, i: usize| region[a][0] + (i as f64 + 0.5) * step[a];
+    let mut occupied = vec![false; n[0] * n[1] * n[2]];
+    for b in bodies {
+        // Grid indices whose centres lie within [x - r, x + r] (empty when none does).
+        let range = |a: usize| {
+            let lo = ((b.x[a] - b.r - region[a][0]) / step[a] - 0.5).ceil().max(0.0) as usize;
+            let hi = ((b.x[a] + b.r - region[a][0]) / step[a] - 0.5).floor() + 1.0;
+            lo..(hi.clamp(0.0, n[a] as f64) as usize)
+        };
+        if (0..3).any(|a| b.x[a] + b.r < region[a][0] || b.x[a] - b.r > region[a][1]) {
+            continue;
+        }
+        for i in range(0) {
+            for j in range(1) {
+                for k in range(2) {
+                    let d = V3::new(centre(0, i), centre(1, j), centre(2, k)) - b.x;
+                    if d.norm_squared() < b.r * b.r {
+                        occupied[(i * n[1] + j) * n[2] + k] = true;
+                    }
+                }
+            }
+        }
+    }
+    occupied.iter().filter(|o| **o).count() as f64 / occupied.len() as f64
+}
+
+/// Case 3, the 2000-sphere pour (`validation/scenes/dem_pour.toml`, the inputs of
+/// `reference/pour_liggghts.json`): bed height within 0.5% of LIGGGHTS's mean over its three runs,
+/// packing fraction within its run-to-run spread (2 standard deviations, at least 0.5%).
+/// About 25 s of CPU in release: `cargo test --release -p dem-client -- --ignored pour`.
+#[test]
+#[ignore]
+fn pour_liggghts() {
+    let case = load("pour_liggghts.json");
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../validation/scenes/dem_pour.toml");
+    let scene = scene::Scene::load(&path).unwrap();
+    let mut setup = super::setup(&scene, &path.display().to_string()).unwrap();
+    let p = &case["params"];
+    assert_eq!(setup.dt_max, num(&p["dt_s"]));
+    let steps = (num(&p["t_end_s"]) / setup.dt_max).round() as u64;
+    setup.world.dt = setup.dt_max;
+    setup.world.advance(steps);
+    let bodies = &setup.world.bodies;
+    let h = bed_height(bodies);
+    let mean = |v: &Value| {
+        let v = v.as_array().unwrap();
+        v.iter().map(num).sum::<f64>() / v.len() as f64
+    };
+    close("pour bed height", h, mean(&case["bed_height_m_runs"]));
+    let d = 2.0 * num(&p["radius_mean_m"]);
+    let region = [
+        [2.0 * d, 0.04 - 2.0 * d],
+        [2.0 * d, 0.04 - 2.0 * d],
+        [2.0 * d, h - 2.0 * d],
+    ];
+    let phi = packing_fraction(bodies, region, 1e-4);
+    let reference = mean(&case["packing_fraction_runs"]);
+    let spread = (2.0 * num(&case["packing_fraction_std"])).max(TOLERANCE * reference);
+    eprintln!("pour: bed height {h} m, packing fraction {phi} (LIGGGHTS {reference} +- {spread})");
+    assert!(
+        (phi - reference).abs() <= spread,
+        "packing fraction {phi} vs LIGGGHTS {reference} +- {spread}"
+    );
+}
