@@ -117,9 +117,7 @@ fn silent_live_dem_is_caught_by_the_timeout() {
     let dir = temp_dir("stall");
     let scene = write_scene(&dir, &scene_text("stall", [2, 2, 2], 1000, 10, 0.5));
     let out = dir.join("out");
-    let mut server = start(server(&scene, &out, &["--dem", "external"]));
-    let line = Proc::wait_line(&server.stdout, "DEM service:", Duration::from_secs(20));
-    let run = line.split_whitespace().last().unwrap().to_string();
+    let (mut server, run) = start_external(&scene, &out);
     let mut client = std::process::Command::new(bin("dem-client"));
     client
         .args(["connect", "--service", &run, "--stall-at", "20", "--scene"])

@@ -9,9 +9,7 @@ fn protocol_version_mismatch_is_refused_naming_both_versions() {
     let dir = temp_dir("version");
     let scene = write_scene(&dir, &scene_text("version", [2, 2, 2], 50, 10, 10.0));
     let out = dir.join("out");
-    let mut server = start(server(&scene, &out, &["--dem", "external"]));
-    let line = Proc::wait_line(&server.stdout, "DEM service:", Duration::from_secs(20));
-    let run = line.split_whitespace().last().unwrap().to_string();
+    let (mut server, run) = start_external(&scene, &out);
     let client = std::process::Command::new(bin("dem-client"))
         .args(["connect", "--service", &run, "--protocol-version", "7", "--scene"])
         .arg(&scene)

@@ -61,9 +61,7 @@ fn particle_count_changes_between_steps() {
     let dir = temp_dir("churn");
     let scene = write_scene(&dir, &scene_text("churn", [3, 3, 3], 200, 1, 10.0));
     let out = dir.join("out");
-    let mut server = start(server(&scene, &out, &["--dem", "external"]));
-    let line = Proc::wait_line(&server.stdout, "DEM service:", Duration::from_secs(20));
-    let run = line.split_whitespace().last().unwrap().to_string();
+    let (mut server, run) = start_external(&scene, &out);
     let client = std::process::Command::new(bin("dem-client"))
         .args(["connect", "--service", &run, "--churn", "--scene"])
         .arg(&scene)
@@ -92,9 +90,7 @@ fn a_wrong_step_index_breaks_the_run_on_both_sides() {
     let dir = temp_dir("skip");
     let scene = write_scene(&dir, &scene_text("skip", [2, 2, 2], 100, 10, 10.0));
     let out = dir.join("out");
-    let mut server = start(server(&scene, &out, &["--dem", "external"]));
-    let line = Proc::wait_line(&server.stdout, "DEM service:", Duration::from_secs(20));
-    let run = line.split_whitespace().last().unwrap().to_string();
+    let (mut server, run) = start_external(&scene, &out);
     let mut client = std::process::Command::new(bin("dem-client"));
     client
         .args(["connect", "--service", &run, "--skip-step", "37", "--scene"])

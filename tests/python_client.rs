@@ -12,9 +12,7 @@ fn python_run(tag: &str, particles: u64, steps: u64) {
         scene_text(tag, [2, 2, 2], steps, 50, 10.0).replace("timeout = 10", "timeout = 10\ncapacity = 4096");
     let scene = write_scene(&dir, &text);
     let out = dir.join("out");
-    let mut server = start(server(&scene, &out, &["--dem", "external"]));
-    let line = Proc::wait_line(&server.stdout, "DEM service:", Duration::from_secs(20));
-    let run = line.split_whitespace().last().unwrap().to_string();
+    let (mut server, run) = start_external(&scene, &out);
     let script = concat!(env!("CARGO_MANIFEST_DIR"), "/clients/python/example_dem.py");
     let client = Command::new("python3")
         .arg(script)

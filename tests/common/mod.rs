@@ -156,6 +156,14 @@ pub fn server(scene: &Path, out: &Path, extra: &[&str]) -> Command {
     cmd
 }
 
+/// `lbm-server run SCENE --dem external`: the running server and the run name it printed.
+pub fn start_external(scene: &Path, out: &Path) -> (Proc, String) {
+    let server = start(server(scene, out, &["--dem", "external"]));
+    let line = Proc::wait_line(&server.stdout, "DEM service:", Duration::from_secs(20));
+    let run = line.split_whitespace().last().expect("a run name").to_string();
+    (server, run)
+}
+
 /// Reads OUT/summary.json.
 pub fn summary(out: &Path) -> serde_json::Value {
     let text = std::fs::read_to_string(out.join("summary.json")).expect("summary.json written");
