@@ -132,7 +132,7 @@ impl LatticeFluid {
             lubrication.apply(states, out);
         }
         self.steps += 1;
-        if self.steps % self.units.check_interval == 0 {
+        if self.steps.is_multiple_of(self.units.check_interval) {
             self.check()?;
         }
         Ok(())

@@ -46,9 +46,9 @@ impl Lubrication {
             let approach: f64 = (0..3).map(|k| (a.velocity[k] - b.velocity[k]) * n[k]).sum();
             let reduced = a.radius * b.radius / (a.radius + b.radius);
             let f = self.squeeze(reduced, dist - a.radius - b.radius, approach);
-            for k in 0..3 {
-                replies[i].force[k] -= f * n[k];
-                replies[j].force[k] += f * n[k];
+            for (k, nk) in n.iter().enumerate() {
+                replies[i].force[k] -= f * nk;
+                replies[j].force[k] += f * nk;
             }
         }
     }

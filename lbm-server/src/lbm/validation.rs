@@ -288,8 +288,8 @@ pub fn momentum_exchange(gpu: &Arc<Gpu>, n: usize, steps: u64) -> Momentum {
         let mut j = [0.0; 3];
         for cell in &f {
             for (i, fi) in cell.iter().enumerate() {
-                for a in 0..3 {
-                    j[a] += fi * super::lattice::C[i][a] as f64;
+                for (ja, c) in j.iter_mut().zip(super::lattice::C[i]) {
+                    *ja += fi * c as f64;
                 }
             }
         }
