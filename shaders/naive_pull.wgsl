@@ -21,6 +21,10 @@ const W = array<f32, 19>(
     1.0 / 36.0, 1.0 / 36.0, 1.0 / 36.0, 1.0 / 36.0, 1.0 / 36.0, 1.0 / 36.0,
 );
 
+fn wrap(q: i32, n: i32) -> u32 {
+    return u32(select(select(q, q - n, q >= n), q + n, q < 0));
+}
+
 @compute @workgroup_size(64)
 fn naive_pull(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>,
               @builtin(local_invocation_index) local: u32) {
@@ -35,9 +39,9 @@ fn naive_pull(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) nwg
     var rho = 0.0;
     var u = vec3<f32>(0.0);
     for (var i = 0u; i < 19u; i++) {
-        let sx = (x + n.x - u32(CX[i] + 1) + 1u) % n.x;
-        let sy = (y + n.y - u32(CY[i] + 1) + 1u) % n.y;
-        let sz = (z + n.z - u32(CZ[i] + 1) + 1u) % n.z;
+        let sx = wrap(i32(x) - CX[i], i32(n.x));
+        let sy = wrap(i32(y) - CY[i], i32(n.y));
+        let sz = wrap(i32(z) - CZ[i], i32(n.z));
         f[i] = src[i * cells + sx + n.x * (sy + n.y * sz)];
         rho += f[i];
         u += f[i] * vec3<f32>(f32(CX[i]), f32(CY[i]), f32(CZ[i]));
