@@ -147,6 +147,12 @@ fn read_populations(k: u32, flag: u32) -> array<f32, 19> {
         //#for i
         f[{i}] = f{i}[k];
         //#end
+    } else if interior(flag) {
+        let sx = i32(params.n.x);
+        let sxy = sx * i32(params.n.y);
+        //#for i
+        f[{i}] = f{i.o}[u32(i32(k) - ({i.cx} + sx * {i.cy} + sxy * {i.cz}))];
+        //#end
     } else {
         //#for i
         if leaves(flag, {i.o}u) {
@@ -157,6 +163,11 @@ fn read_populations(k: u32, flag: u32) -> array<f32, 19> {
         //#end
     }
     return f;
+}
+
+// No link of the cell leaves the fluid and none wraps: neighbours are fixed index offsets.
+fn interior(flag: u32) -> bool {
+    return (flag & (0x7ffffu | WRAPS)) == 0u;
 }
 
 struct Moments {
@@ -255,6 +266,20 @@ fn stream_collide(
         post = immersed_boundary(k, f, m, post);
     }
     let odd = params.n.w == 1u;
+    if interior(flag) {
+        let sx = i32(params.n.x);
+        let sxy = sx * i32(params.n.y);
+        if odd {
+            //#for i
+            f{i}[u32(i32(k) + {i.cx} + sx * {i.cy} + sxy * {i.cz})] = post[{i}];
+            //#end
+        } else {
+            //#for i
+            f{i.o}[k] = post[{i}];
+            //#end
+        }
+        return;
+    }
     //#for i
     if leaves(flag, {i}u) {
         let face = neighbour(coords(k), vec3<i32>({i.cx}, {i.cy}, {i.cz})) & 0xffu;
