@@ -126,7 +126,7 @@ fn neighbour(p: vec3<i32>, c: vec3<i32>) -> u32 {
 // The cell along c from cell k, for a link that stays in the fluid.
 fn next_cell(k: u32, c: vec3<i32>, flag: u32) -> u32 {
     if (flag & WRAPS) != 0u { return neighbour(coords(k), c); }
-    return u32(i32(k) + c.x + i32(params.n.x) * (c.y + i32(params.n.y) * c.z));
+    return u32(i32(k) + offset(c));
 }
 
 fn coords(k: u32) -> vec3<i32> {
@@ -148,10 +148,8 @@ fn read_populations(k: u32, flag: u32) -> array<f32, 19> {
         f[{i}] = f{i}[k];
         //#end
     } else if interior(flag) {
-        let sx = i32(params.n.x);
-        let sxy = sx * i32(params.n.y);
         //#for i
-        f[{i}] = f{i.o}[u32(i32(k) - ({i.cx} + sx * {i.cy} + sxy * {i.cz}))];
+        f[{i}] = f{i.o}[u32(i32(k) - offset(vec3<i32>({i.cx}, {i.cy}, {i.cz})))];
         //#end
     } else {
         //#for i
@@ -163,6 +161,11 @@ fn read_populations(k: u32, flag: u32) -> array<f32, 19> {
         //#end
     }
     return f;
+}
+
+// Index offset of the neighbour along c, for cells whose links neither leave the fluid nor wrap.
+fn offset(c: vec3<i32>) -> i32 {
+    return c.x + i32(params.n.x) * (c.y + i32(params.n.y) * c.z);
 }
 
 // No link of the cell leaves the fluid and none wraps: neighbours are fixed index offsets.
@@ -267,11 +270,9 @@ fn stream_collide(
     }
     let odd = params.n.w == 1u;
     if interior(flag) {
-        let sx = i32(params.n.x);
-        let sxy = sx * i32(params.n.y);
         if odd {
             //#for i
-            f{i}[u32(i32(k) + {i.cx} + sx * {i.cy} + sxy * {i.cz})] = post[{i}];
+            f{i}[u32(i32(k) + offset(vec3<i32>({i.cx}, {i.cy}, {i.cz})))] = post[{i}];
             //#end
         } else {
             //#for i

@@ -142,10 +142,10 @@ impl LatticeFluid {
     fn check(&self) -> Result<(), String> {
         let (_, bad) = self.lattice.fields();
         if let Some(bad) = bad {
+            let what = bad.describe(&health_of(&self.units));
             return Err(format!(
-                "the fluid became unstable by step {}: cell {} at ({}, {}, {}): density {} x the reference, \
-                 lattice velocity {:?}",
-                self.steps, bad.cell, bad.coords[0], bad.coords[1], bad.coords[2], bad.rho, bad.u
+                "the fluid became unstable by step {}: {what}",
+                self.steps
             ));
         }
         let dropped = self.lattice.dropped_covers();

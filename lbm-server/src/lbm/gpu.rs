@@ -144,6 +144,29 @@ pub struct Unhealthy {
     pub u: [f32; 3],
 }
 
+impl Unhealthy {
+    /// "cell K at (i, j, k): QUANTITY", naming the quantity that failed the check.
+    pub fn describe(&self, health: &Health) -> String {
+        let quantity = if !(self.rho.is_finite() && self.u.iter().all(|v| v.is_finite())) {
+            format!("non-finite values (density {}, velocity {:?})", self.rho, self.u)
+        } else if f64::from((self.rho - 1.0).abs()) > health.max_density_deviation {
+            let (lo, hi) = (
+                1.0 - health.max_density_deviation,
+                1.0 + health.max_density_deviation,
+            );
+            format!("density {} x the reference, outside [{lo}, {hi}]", self.rho)
+        } else {
+            let speed = self.u.iter().map(|v| v * v).sum::<f32>().sqrt();
+            format!(
+                "lattice speed {speed:.3} (Mach {:.2}) above the limit",
+                speed * 3f32.sqrt()
+            )
+        };
+        let [x, y, z] = self.coords;
+        format!("cell {} at ({x}, {y}, {z}): {quantity}", self.cell)
+    }
+}
+
 impl Lattice {
     /// Allocates the lattice, at rest (rho = 1, u = 0), with particle coupling when `imb` is given.
     pub fn new(
