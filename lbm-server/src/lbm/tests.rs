@@ -382,8 +382,8 @@ mod coupling_validation {
 
     #[test]
     fn simple_cubic_array_drag_approaches_zick_and_homsy_with_resolution() {
-        // Measured (validation/lbm/REPORT.md): the immersed boundary underestimates the drag at
-        // tau = 1, by ~22% at 5 cells radius and ~17% at 7.4; this guards that it converges.
+        // Measured (validation/lbm/REPORT.md, tau = 1): -18.8% at 3.7 cells radius, -10.9% at 5.0,
+        // -5.1% at 7.4, -2.5% at 9.9: second order. This guards the level and the order.
         let g = gpu();
         let (phi, k_ref) = ZICK_HOMSY[1];
         let errors: Vec<f64> = [12, 16]
@@ -396,13 +396,14 @@ mod coupling_validation {
                     1.0,
                     Operator::Trt { magic: 3.0 / 16.0 },
                 );
+                // The exchanged momentum and the unit cell's force balance agree (measured: 1.8%
+                // apart at n = 12, 1.3% at 16: the cut cells take part of the body force).
+                assert!((d.k - d.k_balance).abs() < 0.03 * d.k, "{d:?}");
                 (d.k - k_ref).abs() / k_ref
             })
             .collect();
-        assert!(
-            errors[1] < errors[0],
-            "error must shrink with resolution: {errors:?}"
-        );
-        assert!(errors[1] < 0.25, "{errors:?}");
+        let order = (errors[0] / errors[1]).ln() / (16.0f64 / 12.0).ln();
+        assert!(order > 1.5, "observed order {order}: {errors:?}");
+        assert!(errors[1] < 0.12, "{errors:?}");
     }
 }
