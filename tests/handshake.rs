@@ -45,7 +45,7 @@ fn joining_a_run_that_does_not_exist_fails_clearly() {
 
 #[test]
 fn two_runs_at_the_same_time_do_not_interfere() {
-    let runs: Vec<_> = [("left", [3, 3, 3], 700), ("right", [5, 4, 2], 900)]
+    let runs: Vec<_> = [("left", [3, 3, 3], 250), ("right", [5, 4, 2], 300)]
         .into_iter()
         .map(|(tag, count, steps)| {
             let dir = temp_dir(tag);

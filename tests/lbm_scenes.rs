@@ -177,8 +177,64 @@ fn settling_sphere_approaches_ten_cates_terminal_velocity() {
         "settling speed {last} m/s at t = 0.57 s vs u_inf {u_inf}"
     );
     let summary = std::fs::read_to_string(out.join("summary.json")).unwrap();
+    for p in [
+        "lattice-boltzmann",
+        "immersed-boundary",
+        "buoyancy",
+        "lubrication",
+    ] {
+        assert!(summary.contains(p), "{p} missing from {summary}");
+    }
+}
+
+/// The default scene (no file given) is a coupled run: the lattice, the immersed moving boundary
+/// and the DEM. Its first 60 steps (0.07 s, up to the first bead's peak speed): the beads fall
+/// faster and faster, the fluid pushes back harder and harder, and the first bead stays below the
+/// Stokes speed of a lone bead (0.055 m/s; it peaks near the Schiller-Naumann 0.047 m/s).
+#[test]
+fn the_default_scene_is_a_coupled_run() {
+    let dir = temp_dir("default");
+    let out = dir.join("out");
+    let result = std::process::Command::new(bin("lbm-server"))
+        .args(["run", "--steps", "60", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&result.stderr);
+    assert_eq!(result.status.code(), Some(0), "{err}");
     assert!(
-        summary.contains("immersed-boundary") && summary.contains("lattice-boltzmann"),
-        "{summary}"
+        err.contains("scene 'default'") && err.contains("immersed moving boundary"),
+        "{err}"
+    );
+    let s = summary(&out);
+    assert_eq!(s["particles_initial"], 36);
+    assert_eq!(s["lattice"]["cells"].to_string(), "[32,32,48]");
+    let physics = s["fluid_physics"].to_string();
+    for p in ["lattice-boltzmann", "immersed-boundary", "buoyancy"] {
+        assert!(physics.contains(p), "{p} missing from {physics}");
+    }
+    assert!(!physics.contains("stokes"), "{physics}");
+    let text = std::fs::read_to_string(out.join("particles.csv")).unwrap();
+    let first: Vec<Vec<f64>> = text
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect::<Vec<f64>>())
+        .filter(|r| r[2] == 0.0)
+        .collect();
+    assert_eq!(first.len(), 4, "steps 0, 20, 40 and 59");
+    let vz: Vec<f64> = first.iter().map(|r| r[8]).collect();
+    let fz: Vec<f64> = first.iter().map(|r| r[14]).collect();
+    assert!(
+        vz.windows(2).all(|w| w[1] < w[0]),
+        "falls faster and faster: {vz:?}"
+    );
+    assert!(
+        fz.windows(2).all(|w| w[1] > w[0]),
+        "the fluid pushes back harder: {fz:?}"
+    );
+    assert!(
+        -vz[3] > 0.03 && -vz[3] < 0.055,
+        "first bead at {} m/s: expected about 0.047 m/s",
+        -vz[3]
     );
 }

@@ -47,10 +47,10 @@ fn python_run(tag: &str, particles: u64, steps: u64) {
 
 #[test]
 fn python_client_completes_a_run() {
-    python_run("python", 64, 300);
+    python_run("python", 64, 150);
 }
 
 #[test]
 fn python_client_with_2000_particles() {
-    python_run("python2k", 2000, 200);
+    python_run("python2k", 2000, 60);
 }

@@ -72,7 +72,7 @@ class Physics(enum.IntFlag):
 
     GRAVITY = 1 << 0
     BUOYANCY = 1 << 1
-    STOKES_DRAG_STANDIN = 1 << 2
+    STOKES_DRAG_STANDIN = 1 << 2  # retired (the Stokes-drag stand-in fluid): reserved, never sent
     LATTICE_BOLTZMANN = 1 << 3
     IMMERSED_BOUNDARY = 1 << 4
     CONTACTS = 1 << 5

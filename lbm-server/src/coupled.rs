@@ -1,5 +1,5 @@
-//! The fluid side of a run with particles: the GPU lattice coupled by the immersed moving boundary
-//! when the scene has a `[lattice]`, otherwise the Stokes-drag stand-in.
+//! The fluid side of a run with particles: the GPU lattice coupled to them by the immersed moving
+//! boundary (a scene with particles must have a `[lattice]`; `run.rs` refuses one without).
 //!
 //! Gravity and buoyancy are each applied once: the DEM applies gravity to the particles; the fluid
 //! has no gravity (so no hydrostatic pressure gradient) and this side adds the buoyancy
@@ -9,21 +9,14 @@ use crate::fluid::{health_of, setup_of};
 use crate::lbm::gpu::{Gpu, Lattice};
 use crate::lbm::imb::{ImbOptions, SolidParticle};
 use crate::lubrication::Lubrication;
-use crate::standin::StokesFluid;
 use protocol::{ParticleReply, ParticleState, Physics};
 use scene::lattice::{LatticeFace, LatticeUnits};
 use scene::Scene;
 use std::sync::Arc;
 
-/// What computes the particles' hydrodynamic loads.
-pub enum FluidSide {
-    /// STAND-IN: Stokes drag and buoyancy in a quiescent fluid.
-    Stokes(StokesFluid),
-    Lattice(Box<LatticeFluid>),
-}
-
-/// The lattice with its units and the buoyancy it adds.
-pub struct LatticeFluid {
+/// What computes the particles' hydrodynamic loads: the lattice with its units, the buoyancy it
+/// adds and the lubrication correction.
+pub struct FluidSide {
     lattice: Lattice,
     units: LatticeUnits,
     origin: [f64; 3],
@@ -37,11 +30,10 @@ impl FluidSide {
     /// The fluid a scene asks for.
     pub fn for_scene(scene: &Scene) -> Result<FluidSide, String> {
         let Some(units) = scene.lattice_units.clone() else {
-            return Ok(FluidSide::Stokes(StokesFluid {
-                density: scene.fluid.density,
-                dynamic_viscosity: scene.fluid.dynamic_viscosity,
-                gravity: scene.gravity,
-            }));
+            return Err(format!(
+                "scene '{}' has particles but no [lattice]: the fluid needs one",
+                scene.name
+            ));
         };
         let gpu = Arc::new(Gpu::new()?);
         let options = ImbOptions {
@@ -50,7 +42,7 @@ impl FluidSide {
         };
         let lattice = Lattice::new(gpu, setup_of(&units), health_of(&units), Some(options))?;
         let lubrication = scene.coupling.lubrication.then(|| lubrication_of(scene, &units));
-        Ok(FluidSide::Lattice(Box::new(LatticeFluid {
+        Ok(FluidSide {
             lattice,
             units,
             origin: scene.domain.min,
@@ -58,53 +50,48 @@ impl FluidSide {
             gravity: scene.gravity,
             lubrication,
             steps: 0,
-        })))
+        })
     }
 
     /// The Physics bits this side applies.
     pub fn physics(&self) -> u64 {
-        match self {
-            FluidSide::Stokes(_) => Physics::STOKES_DRAG_STANDIN | Physics::BUOYANCY,
-            FluidSide::Lattice(_) => {
-                Physics::LATTICE_BOLTZMANN | Physics::IMMERSED_BOUNDARY | Physics::BUOYANCY
-            }
-        }
+        let lubrication = if self.lubrication.is_some() {
+            Physics::LUBRICATION
+        } else {
+            0
+        };
+        Physics::LATTICE_BOLTZMANN | Physics::IMMERSED_BOUNDARY | Physics::BUOYANCY | lubrication
     }
 
     /// How the fluid is described in logs.
     pub fn describe(&self) -> String {
-        match self {
-            FluidSide::Stokes(_) => "stand-in fluid: Stokes drag + buoyancy".into(),
-            FluidSide::Lattice(l) => {
-                let u = &l.units;
-                format!(
-                    "lattice {}x{}x{} ({}, tau {:.4}, dx {:e} m, dt {:e} s) on {}, immersed moving boundary",
-                    u.n[0],
-                    u.n[1],
-                    u.n[2],
-                    u.operator,
-                    u.tau,
-                    u.dx,
-                    u.dt,
-                    l.lattice.adapter()
-                )
+        let u = &self.units;
+        format!(
+            "lattice {}x{}x{} ({}, tau {:.4}, dx {:e} m, dt {:e} s) on {}, immersed moving boundary{}",
+            u.n[0],
+            u.n[1],
+            u.n[2],
+            u.operator,
+            u.tau,
+            u.dx,
+            u.dt,
+            self.lattice.adapter(),
+            if self.lubrication.is_some() {
+                ", lubrication"
+            } else {
+                ""
             }
-        }
+        )
+    }
+
+    /// The lattice, for summary.json.
+    pub fn units(&self) -> &LatticeUnits {
+        &self.units
     }
 
     /// Advances the fluid one step with the particles `states` (SI) and returns their loads (SI).
     pub fn step(&mut self, states: &[ParticleState], out: &mut Vec<ParticleReply>) -> Result<(), String> {
         out.clear();
-        match self {
-            FluidSide::Stokes(fluid) => out.extend(states.iter().map(|s| fluid.load(s))),
-            FluidSide::Lattice(l) => l.step(states, out)?,
-        }
-        Ok(())
-    }
-}
-
-impl LatticeFluid {
-    fn step(&mut self, states: &[ParticleState], out: &mut Vec<ParticleReply>) -> Result<(), String> {
         let (dx, dt) = (self.units.dx, self.units.dt);
         let solids: Vec<SolidParticle> = states
             .iter()

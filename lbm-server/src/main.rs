@@ -9,7 +9,6 @@ mod lbm;
 mod lubrication;
 mod output;
 mod run;
-mod standin;
 mod validate;
 mod vtk;
 

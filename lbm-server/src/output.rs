@@ -68,10 +68,36 @@ pub struct Summary {
     pub steps_per_second: f64,
     pub particle_steps_per_second: f64,
     pub fluid_physics: Vec<&'static str>,
+    /// The fluid's discretisation.
+    pub lattice: LatticeSummary,
     pub peer: Option<PeerInfo>,
     /// "completed", "interrupted", "stopped by the DEM client", or "error: ..."
     pub exit_reason: String,
     pub exit_code: u8,
+}
+
+/// The lattice of a coupled run, as summary.json reports it.
+#[derive(Debug, Clone, Serialize)]
+pub struct LatticeSummary {
+    pub cells: [usize; 3],
+    pub dx_m: f64,
+    pub dt_s: f64,
+    pub tau: f64,
+    pub mach: f64,
+    pub operator: String,
+}
+
+impl LatticeSummary {
+    pub fn of(u: &scene::lattice::LatticeUnits) -> Self {
+        Self {
+            cells: u.n,
+            dx_m: u.dx,
+            dt_s: u.dt,
+            tau: u.tau,
+            mach: u.mach,
+            operator: u.operator.clone(),
+        }
+    }
 }
 
 impl Summary {

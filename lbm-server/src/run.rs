@@ -2,7 +2,7 @@
 
 use crate::coupled::FluidSide;
 use crate::launch;
-use crate::output::{ParticleCsv, PeerInfo, Progress, Summary};
+use crate::output::{LatticeSummary, ParticleCsv, PeerInfo, Progress, Summary};
 use protocol::transport::{new_run_name, LinkOptions};
 use protocol::{
     FluidLink, Hello, LinkError, ParticleReply, ParticleState, Physics, StepFlags, StepHeader, Welcome,
@@ -74,6 +74,7 @@ fn prepare(args: &RunArgs) -> Result<Prepared, String> {
             scene::DEFAULT_SCENE.to_string(),
         ),
     };
+    require_lattice(&scene, &scene_file)?;
     let steps = args.steps.unwrap_or(scene.time.steps);
     if steps == 0 {
         return Err("--steps = 0: must be at least 1".into());
@@ -103,6 +104,24 @@ fn prepare(args: &RunArgs) -> Result<Prepared, String> {
         scene_copy,
         connect_timeout: Duration::try_from_secs_f64(connect_timeout).unwrap_or(Duration::MAX),
     })
+}
+
+/// A scene with particles runs coupled to the lattice: without a `[lattice]` it is refused.
+fn require_lattice(scene: &Scene, file: &str) -> Result<(), String> {
+    if scene.lattice.is_some() || scene.particle_count() == 0 {
+        return Ok(());
+    }
+    let error = scene::SceneError {
+        file: file.to_string(),
+        field: "lattice".into(),
+        value: "missing".into(),
+        problem: format!(
+            "lbm-server couples particles to a lattice-Boltzmann fluid: add a [lattice] section (dx or \
+             resolution, velocity_scale, ...; see validation/scenes/default.toml) and remove time.dt, \
+             which the lattice derives; or run a granular scene alone with `dem-client run {file}`"
+        ),
+    };
+    Err(error.to_string())
 }
 
 pub fn main(args: RunArgs) -> ExitCode {
@@ -377,6 +396,7 @@ impl Session {
             steps_per_second: steps_completed as f64 / wall.max(1e-9),
             particle_steps_per_second: self.particle_steps as f64 / wall.max(1e-9),
             fluid_physics: Physics::names(self.fluid.physics()),
+            lattice: LatticeSummary::of(self.fluid.units()),
             peer: self.peer.clone(),
             exit_reason,
             exit_code,
@@ -388,12 +408,10 @@ impl Session {
 fn welcome_for(scene: &Scene, steps: u64, hello: &Hello, physics: u64) -> Welcome {
     let u = hello.units;
     let accel = u.length_m / (u.time_s * u.time_s);
-    let what = if physics & Physics::LATTICE_BOLTZMANN != 0 {
-        "lattice-Boltzmann"
-    } else {
-        "stand-in: Stokes drag"
-    };
-    let mut w = Welcome::accepted(&format!("lbm-server {} ({what})", env!("CARGO_PKG_VERSION")));
+    let mut w = Welcome::accepted(&format!(
+        "lbm-server {} (lattice-Boltzmann + IMB)",
+        env!("CARGO_PKG_VERSION")
+    ));
     w.steps = steps;
     w.dt = scene.time.dt / u.time_s;
     w.domain_min = scene.domain.min.map(|x| x / u.length_m);

@@ -87,7 +87,8 @@ impl Physics {
     pub const GRAVITY: u64 = 1 << 0;
     /// Buoyancy (the fluid's hydrostatic pressure) on the particles.
     pub const BUOYANCY: u64 = 1 << 1;
-    /// Stand-in fluid: Stokes drag in a quiescent fluid, F = -6 pi mu r v (no lattice yet).
+    /// Retired, reserved: the Stokes-drag stand-in fluid of the first milestone (F = -6 pi mu r v in
+    /// a quiescent fluid). No side sends it now; the bit keeps its number and is never reused.
     pub const STOKES_DRAG_STANDIN: u64 = 1 << 2;
     /// Lattice-Boltzmann fluid.
     pub const LATTICE_BOLTZMANN: u64 = 1 << 3;

@@ -289,7 +289,9 @@ impl Scene {
                     file: file.into(),
                     field: "time.dt".into(),
                     value: "missing".into(),
-                    problem: "give the coupling time step [s] (or a [lattice] section, which derives it)"
+                    problem: "add a [lattice] section, which derives the time step (lbm-server runs the \
+                              particles coupled to it), or give time.dt [s] for a granular scene alone \
+                              (dem-client run)"
                         .into(),
                 });
             }
@@ -357,16 +359,6 @@ impl Scene {
     /// Most particles a step may carry.
     pub fn capacity(&self) -> u64 {
         self.coupling.capacity.unwrap_or(self.particle_count()).max(1)
-    }
-
-    /// Particle relaxation time in Stokes flow, 2 rho_p r^2 / (9 mu), of the smallest sphere [s].
-    pub fn particle_response_time(&self) -> Option<f64> {
-        let radii = self.particles.sphere.iter().map(|s| s.radius);
-        let r = radii
-            .chain(self.particles.block.iter().map(|b| b.radius))
-            .fold(f64::INFINITY, f64::min);
-        r.is_finite()
-            .then(|| 2.0 * self.particles.density * r * r / (9.0 * self.fluid.dynamic_viscosity))
     }
 }
 

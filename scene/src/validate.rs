@@ -47,8 +47,7 @@ impl Scene {
         let c = Checker { file };
         self.validate_header(&c)?;
         self.validate_fluid_and_time(&c)?;
-        self.validate_particles(&c)?;
-        self.validate_time_step(&c)
+        self.validate_particles(&c)
     }
 
     /// Name, domain and fluid: what the lattice needs before it can be derived.
@@ -258,21 +257,6 @@ impl Scene {
                     MAX_INITIAL_OVERLAP * 100.0
                 ),
             )),
-        }
-    }
-
-    /// The stand-in coupling (Stokes drag, explicit) is stable only while dt stays below the
-    /// particle response time; the lattice-Boltzmann issue replaces this rule with its own.
-    fn validate_time_step(&self, c: &Checker) -> Result<(), SceneError> {
-        match self.particle_response_time() {
-            Some(tau) if self.time.dt > tau => Err(c.fail(
-                "time.dt",
-                format!("{} s", self.time.dt),
-                format!(
-                    "is too large: above the response time 2 rho_p r^2 / (9 mu) = {tau:.3e} s of the smallest sphere"
-                ),
-            )),
-            _ => Ok(()),
         }
     }
 }
