@@ -4,6 +4,10 @@
 //! Gravity and buoyancy are each applied once: the DEM applies gravity to the particles; the fluid
 //! has no gravity (so no hydrostatic pressure gradient) and this side adds the buoyancy
 //! -rho_f V g to the hydrodynamic force computed on the lattice.
+//!
+//! A `lattice.body_acceleration` a drives the fluid like a mean pressure gradient -grad p = rho_f a
+//! that the lattice does not carry either; the particles feel its share rho_f V a, added here too
+//! (without it a fixed bed's drag is short by that share: the Zick-Homsy check in docs/imb.md).
 
 use crate::fluid::{health_of, setup_of};
 use crate::lbm::gpu::{Gpu, Lattice};
@@ -105,12 +109,16 @@ impl FluidSide {
         let loads = self.lattice.step_coupled(&solids)?;
         let force_unit = self.fluid_density * dx.powi(4) / (dt * dt);
         let torque_unit = force_unit * dx;
+        // What the lattice does not carry: the hydrostatic gradient (buoyancy) and the mean
+        // pressure gradient that the body acceleration stands for, as -grad p / rho_f.
+        let pressure_acceleration: [f64; 3] =
+            std::array::from_fn(|a| self.units.force[a] * dx / (dt * dt) - self.gravity[a]);
         out.extend(states.iter().zip(&loads).map(|(s, l)| {
             let volume = 4.0 / 3.0 * std::f64::consts::PI * s.radius.powi(3);
             ParticleReply {
                 id: s.id,
                 force: std::array::from_fn(|a| {
-                    l.force[a] * force_unit - self.fluid_density * volume * self.gravity[a]
+                    l.force[a] * force_unit + self.fluid_density * volume * pressure_acceleration[a]
                 }),
                 torque: l.torque.map(|t| t * torque_unit),
             }
@@ -167,5 +175,7 @@ fn lubrication_of(scene: &Scene, units: &LatticeUnits) -> Lubrication {
         viscosity: scene.fluid.dynamic_viscosity,
         cutoff: units.dx,
         walls,
+        density: scene.particles.density,
+        dt: units.dt,
     }
 }
