@@ -250,7 +250,7 @@ fn sphere_drag(gpu: &Arc<Gpu>) -> String {
          | Re | d | W | L | u0 | tau | steps | C_d measured | C_d Schiller-Naumann | error |\n\
          |---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
     );
-    for (re, d, w, l) in SPHERE_DRAG_CASES {
+    for &(re, d, w, l) in SPHERE_DRAG_CASES {
         let s = match validation::fixed_sphere(gpu, re, d, w, l) {
             Ok(s) => s,
             Err(e) => {
@@ -277,7 +277,7 @@ fn sphere_drag(gpu: &Arc<Gpu>) -> String {
 }
 
 /// (Re, diameter, width, length) of the fixed-sphere cases.
-const SPHERE_DRAG_CASES: [(f64, f64, usize, usize); 4] = [
+const SPHERE_DRAG_CASES: &[(f64, f64, usize, usize)] = &[
     (1.0, 8.0, 48, 80),
     (10.0, 8.0, 48, 80),
     (50.0, 8.0, 48, 80),
