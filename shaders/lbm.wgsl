@@ -26,12 +26,17 @@ struct Params {
     force: vec4<f32>,
     // per face: wall velocity xyz, density w
     face_value: array<vec4<f32>, 6>,
+    // cell list: interior, wrapping and boundary cell counts, -
+    ranges: vec4<u32>,
 }
 
 // Collision operator, fixed when the pipeline is made: 0 BGK, 1 TRT, 2 MRT.
 override OPERATOR: u32 = 0u;
 // Particles coupled through the immersed moving boundary (imb.wgsl): only scenes with particles.
 override IMB: bool = false;
+// The cells `stream_collide_fluid` updates, fixed when the pipeline is made: 0 the even step of the
+// interior and wrapping cells, 1 the odd step of the interior cells, 2 the odd step of the wrapping cells.
+override KIND: u32 = 0u;
 
 @group(0) @binding(0) var<uniform> params: Params;
 // One word per cell: bit i (0-18) set when link i leaves the fluid (a face that is not periodic,
@@ -62,6 +67,9 @@ override IMB: bool = false;
 @group(0) @binding(21) var<storage, read_write> f16: array<f32>;
 @group(0) @binding(22) var<storage, read_write> f17: array<f32>;
 @group(0) @binding(23) var<storage, read_write> f18: array<f32>;
+// (24-28: imb.wgsl.) The fluid cells by class, each class in increasing order: interior (no link
+// leaves the fluid or wraps), wrapping (no link leaves the fluid, some wrap), boundary (the rest).
+@group(0) @binding(29) var<storage, read> cell_list: array<u32>;
 
 // A link that leaves the fluid: BOUNDARY | face (0-5), or BOUNDARY | 6 for a solid cell.
 const BOUNDARY: u32 = 0x80000000u;
@@ -147,10 +155,6 @@ fn read_populations(k: u32, flag: u32) -> array<f32, 19> {
         //#for i
         f[{i}] = f{i}[k];
         //#end
-    } else if interior(flag) {
-        //#for i
-        f[{i}] = f{i.o}[u32(i32(k) - offset(vec3<i32>({i.cx}, {i.cy}, {i.cz})))];
-        //#end
     } else {
         //#for i
         if leaves(flag, {i.o}u) {
@@ -166,11 +170,6 @@ fn read_populations(k: u32, flag: u32) -> array<f32, 19> {
 // Index offset of the neighbour along c, for cells whose links neither leave the fluid nor wrap.
 fn offset(c: vec3<i32>) -> i32 {
     return c.x + i32(params.n.x) * (c.y + i32(params.n.y) * c.z);
-}
-
-// No link of the cell leaves the fluid and none wraps: neighbours are fixed index offsets.
-fn interior(flag: u32) -> bool {
-    return (flag & (0x7ffffu | WRAPS)) == 0u;
 }
 
 struct Moments {
@@ -252,16 +251,19 @@ fn bounce(face: u32, c: vec3<f32>, w: f32, f_star: f32, m: Moments) -> f32 {
     return f_star;
 }
 
+// The step of cells with a link that leaves the fluid (boundary part of the cell list), either
+// parity. llvmpipe (lavapipe) executes both sides of every branch: the fluid cells, far more, go
+// through the branch-free `stream_collide_fluid` instead.
 @compute @workgroup_size(64)
 fn stream_collide(
     @builtin(workgroup_id) wg: vec3<u32>,
     @builtin(num_workgroups) nwg: vec3<u32>,
     @builtin(local_invocation_index) local: u32,
 ) {
-    let k = cell_index(wg, nwg, local);
-    if k >= cell_count() { return; }
+    let j = cell_index(wg, nwg, local);
+    if j >= params.ranges.z { return; }
+    let k = cell_list[params.ranges.x + params.ranges.y + j];
     let flag = flags[k];
-    if (flag & SOLID) != 0u { return; }
     let f = read_populations(k, flag);
     let m = moments(f);
     var post = collide(f, m);
@@ -269,18 +271,6 @@ fn stream_collide(
         post = immersed_boundary(k, f, m, post);
     }
     let odd = params.n.w == 1u;
-    if interior(flag) {
-        if odd {
-            //#for i
-            f{i}[u32(i32(k) + offset(vec3<i32>({i.cx}, {i.cy}, {i.cz})))] = post[{i}];
-            //#end
-        } else {
-            //#for i
-            f{i.o}[k] = post[{i}];
-            //#end
-        }
-        return;
-    }
     //#for i
     if leaves(flag, {i}u) {
         let face = neighbour(coords(k), vec3<i32>({i.cx}, {i.cy}, {i.cz})) & 0xffu;
@@ -291,6 +281,67 @@ fn stream_collide(
         f{i.o}[k] = post[{i}];
     }
     //#end
+}
+
+// The step of the cells none of whose links leaves the fluid, from the cell list, without flags
+// or branches (KIND is a constant): the cell's own slots in the even step; in the odd step the
+// neighbours at fixed index offsets (interior cells) or through the periodic wrap (wrapping cells).
+@compute @workgroup_size(64)
+fn stream_collide_fluid(
+    @builtin(workgroup_id) wg: vec3<u32>,
+    @builtin(num_workgroups) nwg: vec3<u32>,
+    @builtin(local_invocation_index) local: u32,
+) {
+    let j = cell_index(wg, nwg, local);
+    var start = 0u;
+    var count = params.ranges.x + params.ranges.y;
+    if KIND == 1u {
+        count = params.ranges.x;
+    } else if KIND == 2u {
+        start = params.ranges.x;
+        count = params.ranges.y;
+    }
+    if j >= count { return; }
+    let k = cell_list[start + j];
+    let p = coords(k);
+    var f: array<f32, 19>;
+    if KIND == 0u {
+        //#for i
+        f[{i}] = f{i}[k];
+        //#end
+    } else if KIND == 1u {
+        //#for i
+        f[{i}] = f{i.o}[u32(i32(k) - offset(vec3<i32>({i.cx}, {i.cy}, {i.cz})))];
+        //#end
+    } else {
+        //#for i
+        f[{i}] = f{i.o}[wrapped(p - vec3<i32>({i.cx}, {i.cy}, {i.cz}))];
+        //#end
+    }
+    let m = moments(f);
+    var post = collide(f, m);
+    if IMB {
+        post = immersed_boundary(k, f, m, post);
+    }
+    if KIND == 0u {
+        //#for i
+        f{i.o}[k] = post[{i}];
+        //#end
+    } else if KIND == 1u {
+        //#for i
+        f{i}[u32(i32(k) + offset(vec3<i32>({i.cx}, {i.cy}, {i.cz})))] = post[{i}];
+        //#end
+    } else {
+        //#for i
+        f{i}[wrapped(p + vec3<i32>({i.cx}, {i.cy}, {i.cz}))] = post[{i}];
+        //#end
+    }
+}
+
+// The cell at q, at most one cell outside the grid along each axis, wrapped periodically.
+fn wrapped(q: vec3<i32>) -> u32 {
+    let n = vec3<i32>(params.n.xyz);
+    return wrap(q.x, n.x) + params.n.x * (wrap(q.y, n.y) + params.n.y * wrap(q.z, n.z));
 }
 
 // Density and velocity of every cell, and the health check: the smallest index of a cell with a

@@ -17,7 +17,9 @@ const MAX_GROUPS: u32 = 65_535;
 const FIRST_POPULATION_BINDING: u32 = 5;
 /// The immersed-boundary bindings follow the populations: particles, pairs, covered, slots, info.
 pub(super) const FIRST_IMB_BINDING: u32 = FIRST_POPULATION_BINDING + 19;
-const BINDINGS: u32 = FIRST_IMB_BINDING + 5;
+/// The cell list (read-only) follows them.
+const CELL_LIST_BINDING: u32 = FIRST_IMB_BINDING + 5;
+const BINDINGS: u32 = CELL_LIST_BINDING + 1;
 
 /// The device and its queue.
 pub struct Gpu {
@@ -95,6 +97,7 @@ struct Params {
     relax: [f32; 4],
     force: [f32; 4],
     face_value: [[f32; 4]; 6],
+    ranges: [u32; 4],
 }
 
 /// Limits of the health check, in lattice units.
@@ -125,9 +128,15 @@ pub struct Lattice {
     mrt: wgpu::Buffer,
     fields: wgpu::Buffer,
     pub(super) status: wgpu::Buffer,
+    cell_list: wgpu::Buffer,
+    /// Cells in the list: interior, wrapping, boundary (see `cell_list`).
+    classes: [u32; 3],
     layout: wgpu::BindGroupLayout,
     pub(super) bind_groups: [wgpu::BindGroup; 2],
+    /// The boundary cells, either parity.
     pub(super) stream_collide: wgpu::ComputePipeline,
+    /// The other fluid cells: even step of all, odd step of the interior, odd step of the wrapping.
+    stream_collide_fluid: [wgpu::ComputePipeline; 3],
     macroscopic: wgpu::ComputePipeline,
     /// Particle coupling (immersed moving boundary), when the scene has particles.
     pub(super) imb: Option<super::imb::Coupling>,
@@ -207,11 +216,17 @@ impl Lattice {
         );
         let fields = storage_buffer(d, "fields", bytes * 4);
         let status = init("status", bytemuck::cast_slice(&[u32::MAX, 0, 0, 0]), STORAGE);
+        let (list, classes) = cell_list(&setup);
+        let cell_list = init(
+            "cell list",
+            bytemuck::cast_slice(if list.is_empty() { &[0u32] } else { &list }),
+            wgpu::BufferUsages::STORAGE,
+        );
         let params: Vec<wgpu::Buffer> = (0..2)
             .map(|parity| {
                 init(
                     "params",
-                    bytemuck::bytes_of(&params(&setup, parity, health)),
+                    bytemuck::bytes_of(&params(&setup, parity, health, classes)),
                     wgpu::BufferUsages::UNIFORM,
                 )
             })
@@ -237,7 +252,9 @@ impl Lattice {
                 f64::from(u8::from(imb.is_some_and(|o| o.seed_weighting))),
             ),
         ];
-        let pipeline = |entry: &str| {
+        let pipeline_kind = |entry: &str, kind: u32| {
+            let mut constants = constants.to_vec();
+            constants.push(("KIND", f64::from(kind)));
             d.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
                 label: Some(entry),
                 layout: Some(&pipeline_layout),
@@ -250,7 +267,9 @@ impl Lattice {
                 cache: None,
             })
         };
+        let pipeline = |entry: &str| pipeline_kind(entry, 0);
         let stream_collide = pipeline("stream_collide");
+        let stream_collide_fluid = [0, 1, 2].map(|kind| pipeline_kind("stream_collide_fluid", kind));
         let macroscopic = pipeline("macroscopic");
         let coupling = coupling.with_pipelines(imb.is_some(), &pipeline);
         let bind_groups = [0, 1].map(|parity| {
@@ -264,6 +283,7 @@ impl Lattice {
                 &status,
                 &populations,
                 &coupling,
+                &cell_list,
             )
         });
         let lattice = Lattice {
@@ -275,9 +295,12 @@ impl Lattice {
             mrt,
             fields,
             status,
+            cell_list,
+            classes,
             layout,
             bind_groups,
             stream_collide,
+            stream_collide_fluid,
             macroscopic,
             imb: Some(coupling),
             time: 0,
@@ -306,6 +329,7 @@ impl Lattice {
                 &self.status,
                 &self.populations,
                 coupling,
+                &self.cell_list,
             )
         });
     }
@@ -330,8 +354,7 @@ impl Lattice {
     pub fn step(&mut self, steps: u64) {
         let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
         for done in 0..steps {
-            self.dispatch(&mut encoder, &self.stream_collide, self.time % 2);
-            self.time += 1;
+            self.encode_step(&mut encoder);
             if done % 64 == 63 {
                 let full = std::mem::replace(
                     &mut encoder,
@@ -370,9 +393,20 @@ impl Lattice {
         pass.dispatch_workgroups(x, groups.div_ceil(x), 1);
     }
 
-    /// Adds one stream-collide step to `encoder`.
+    /// Adds one stream-collide step to `encoder`: the fluid cells by class (one or two dispatches),
+    /// then the boundary cells.
     pub(super) fn encode_step(&mut self, encoder: &mut wgpu::CommandEncoder) {
-        self.dispatch(encoder, &self.stream_collide, self.time % 2);
+        let parity = self.time % 2;
+        let [interior, wrapping, boundary] = self.classes;
+        let groups = |cells: u32| cells.div_ceil(WORKGROUP);
+        let fluid = &self.stream_collide_fluid;
+        if parity == 0 {
+            self.dispatch_groups(encoder, &fluid[0], parity, groups(interior + wrapping));
+        } else {
+            self.dispatch_groups(encoder, &fluid[1], parity, groups(interior));
+            self.dispatch_groups(encoder, &fluid[2], parity, groups(wrapping));
+        }
+        self.dispatch_groups(encoder, &self.stream_collide, parity, groups(boundary));
         self.time += 1;
     }
 
@@ -448,8 +482,9 @@ fn bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
         count: None,
     }];
     entries.extend([storage(1, true), storage(2, true)]);
-    entries.extend((3..BINDINGS - 1).map(|b| storage(b, false)));
-    entries.push(storage(BINDINGS - 1, true));
+    entries.extend((3..CELL_LIST_BINDING - 1).map(|b| storage(b, false)));
+    entries.push(storage(CELL_LIST_BINDING - 1, true));
+    entries.push(storage(CELL_LIST_BINDING, true));
     device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
         label: Some("lattice"),
         entries: &entries,
@@ -481,6 +516,7 @@ fn make_bind_group(
     status: &wgpu::Buffer,
     populations: &[wgpu::Buffer],
     coupling: &super::imb::Coupling,
+    cell_list: &wgpu::Buffer,
 ) -> wgpu::BindGroup {
     let mut entries = vec![
         entry(0, params),
@@ -502,6 +538,7 @@ fn make_bind_group(
             .enumerate()
             .map(|(i, b)| entry(FIRST_IMB_BINDING + i as u32, b)),
     );
+    entries.push(entry(CELL_LIST_BINDING, cell_list));
     d.create_bind_group(&wgpu::BindGroupDescriptor {
         label: Some("lattice"),
         layout,
@@ -542,7 +579,33 @@ pub fn cell_flags(setup: &Setup) -> Vec<u32> {
         .collect()
 }
 
-fn params(setup: &Setup, parity: usize, health: Health) -> Params {
+/// The fluid cells by class, each class in increasing order, and the size of each class:
+/// interior (no link leaves the fluid or wraps: fixed neighbour offsets), wrapping (no link leaves
+/// the fluid, some cross a periodic face), boundary (some link leaves the fluid).
+pub fn cell_list(setup: &Setup) -> (Vec<u32>, [u32; 3]) {
+    let flags = cell_flags(setup);
+    let class = |flag: u32| {
+        if flag & SOLID_FLAG != 0 {
+            None
+        } else if flag & 0x7ffff != 0 {
+            Some(2)
+        } else if flag & WRAPS_FLAG != 0 {
+            Some(1)
+        } else {
+            Some(0)
+        }
+    };
+    let mut list = Vec::new();
+    let mut sizes = [0u32; 3];
+    for (c, size) in sizes.iter_mut().enumerate() {
+        let before = list.len();
+        list.extend((0..flags.len() as u32).filter(|&k| class(flags[k as usize]) == Some(c)));
+        *size = (list.len() - before) as u32;
+    }
+    (list, sizes)
+}
+
+fn params(setup: &Setup, parity: usize, health: Health, classes: [u32; 3]) -> Params {
     let face = |f: usize| setup.faces[f].code();
     let values = |f: &Face| {
         let (u, rho) = f.values();
@@ -570,6 +633,7 @@ fn params(setup: &Setup, parity: usize, health: Health) -> Params {
             0.0,
         ],
         face_value: std::array::from_fn(|f| values(&setup.faces[f])),
+        ranges: [classes[0], classes[1], classes[2], 0],
     }
 }
 
