@@ -246,6 +246,7 @@ impl Lattice {
         let constants = [
             ("OPERATOR", setup.operator.code() as f64),
             ("IMB", f64::from(u8::from(imb.is_some()))),
+            ("FORCE", f64::from(u8::from(setup.force != [0.0; 3]))),
             ("SLOTS", imb.map_or(2, |o| o.slots) as f64),
             (
                 "SEED_WEIGHTING",
