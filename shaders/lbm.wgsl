@@ -26,8 +26,11 @@ struct Params {
     force: vec4<f32>,
     // per face: wall velocity xyz, density w
     face_value: array<vec4<f32>, 6>,
-    // cell list: interior, wrapping and boundary cell counts, -
+    // cell list: interior, wrapping and boundary cell counts, quad count
     ranges: vec4<u32>,
+    // interior and wrapping cells that belong to a quad (first of the interior ones, last of the
+    // wrapping ones), -, -
+    quads: vec4<u32>,
 }
 
 // Collision operator, fixed when the pipeline is made: 0 BGK, 1 TRT, 2 MRT.
@@ -44,8 +47,10 @@ override FORCE: bool = true;
 // One word per cell: bit i (0-18) set when link i leaves the fluid (a face that is not periodic,
 // or a solid cell), SOLID for a solid cell, WRAPS for a cell on a periodic face.
 @group(0) @binding(1) var<storage, read> flags: array<u32>;
-// MRT: A = M^-1 S M (361 values) then B = M^-1 (I - S/2) M (361 values), row-major.
-@group(0) @binding(2) var<storage, read> mrt: array<f32>;
+// MRT: A = M^-1 S M (361 values) then B = M^-1 (I - S/2) M (361 values), row-major, four to a
+// vec4. A uniform buffer: a load at a constant offset is one scalar load, where a storage load is
+// a loop over the SIMD lanes on llvmpipe.
+@group(0) @binding(2) var<uniform> mrt: array<vec4<f32>, 181>;
 // Density and velocity per cell (written by `macroscopic`).
 @group(0) @binding(3) var<storage, read_write> fields: array<vec4<f32>>;
 // [0]: smallest index of a cell failing the health check (0xffffffff when none).
@@ -70,8 +75,29 @@ override FORCE: bool = true;
 @group(0) @binding(22) var<storage, read_write> f17: array<f32>;
 @group(0) @binding(23) var<storage, read_write> f18: array<f32>;
 // (24-28: imb.wgsl.) The fluid cells by class, each class in increasing order: interior (no link
-// leaves the fluid or wraps), wrapping (no link leaves the fluid, some wrap), boundary (the rest).
+// leaves the fluid or wraps), wrapping (no link leaves the fluid, some wrap), boundary (the rest);
+// then the quads: q such that cells 4q to 4q + 3 are interior or wrapping (without particles).
 @group(0) @binding(29) var<storage, read> cell_list: array<u32>;
+// The population buffers seen four cells at a time, for `stream_collide_quads`.
+@group(0) @binding(5) var<storage, read_write> q0: array<vec4<f32>>;
+@group(0) @binding(6) var<storage, read_write> q1: array<vec4<f32>>;
+@group(0) @binding(7) var<storage, read_write> q2: array<vec4<f32>>;
+@group(0) @binding(8) var<storage, read_write> q3: array<vec4<f32>>;
+@group(0) @binding(9) var<storage, read_write> q4: array<vec4<f32>>;
+@group(0) @binding(10) var<storage, read_write> q5: array<vec4<f32>>;
+@group(0) @binding(11) var<storage, read_write> q6: array<vec4<f32>>;
+@group(0) @binding(12) var<storage, read_write> q7: array<vec4<f32>>;
+@group(0) @binding(13) var<storage, read_write> q8: array<vec4<f32>>;
+@group(0) @binding(14) var<storage, read_write> q9: array<vec4<f32>>;
+@group(0) @binding(15) var<storage, read_write> q10: array<vec4<f32>>;
+@group(0) @binding(16) var<storage, read_write> q11: array<vec4<f32>>;
+@group(0) @binding(17) var<storage, read_write> q12: array<vec4<f32>>;
+@group(0) @binding(18) var<storage, read_write> q13: array<vec4<f32>>;
+@group(0) @binding(19) var<storage, read_write> q14: array<vec4<f32>>;
+@group(0) @binding(20) var<storage, read_write> q15: array<vec4<f32>>;
+@group(0) @binding(21) var<storage, read_write> q16: array<vec4<f32>>;
+@group(0) @binding(22) var<storage, read_write> q17: array<vec4<f32>>;
+@group(0) @binding(23) var<storage, read_write> q18: array<vec4<f32>>;
 
 // A link that leaves the fluid: BOUNDARY | face (0-5), or BOUNDARY | 6 for a solid cell.
 const BOUNDARY: u32 = 0x80000000u;
@@ -256,7 +282,7 @@ fn collide(f: array<f32, 19>, m: Moments) -> array<f32, 19> {
 fn mrt_row(r: u32, v: array<f32, 19>) -> f32 {
     var sum = 0.0;
     //#for j
-    sum += mrt[r * 19u + {j}u] * v[{j}];
+    sum += mrt[(r * 19u + {j}u) / 4u][(r * 19u + {j}u) % 4u] * v[{j}];
     //#end
     return sum;
 }
@@ -318,9 +344,10 @@ fn stream_collide_fluid(
     @builtin(local_invocation_index) local: u32,
 ) {
     let j = cell_index(wg, nwg, local);
-    var start = 0u;
-    var count = params.ranges.x + params.ranges.y;
+    var start = params.quads.x;
+    var count = params.ranges.x + params.ranges.y - params.quads.x - params.quads.y;
     if KIND == 1u {
+        start = 0u;
         count = params.ranges.x;
     } else if KIND == 2u {
         start = params.ranges.x;
@@ -361,6 +388,39 @@ fn stream_collide_fluid(
         f{i}[wrapped(p + vec3<i32>({i.cx}, {i.cy}, {i.cz}))] = post[{i}];
         //#end
     }
+}
+
+// The even step of four consecutive fluid cells none of whose links leaves the fluid: each vector
+// load or store moves four populations, where llvmpipe loops over the SIMD lanes per access.
+@compute @workgroup_size(64)
+fn stream_collide_quads(
+    @builtin(workgroup_id) wg: vec3<u32>,
+    @builtin(num_workgroups) nwg: vec3<u32>,
+    @builtin(local_invocation_index) local: u32,
+) {
+    let j = cell_index(wg, nwg, local);
+    if j >= params.ranges.w { return; }
+    let q = cell_list[params.ranges.x + params.ranges.y + params.ranges.z + j];
+    var a: array<f32, 19>;
+    var b: array<f32, 19>;
+    var c: array<f32, 19>;
+    var d: array<f32, 19>;
+    //#for i
+    {
+        let v = q{i}[q];
+        a[{i}] = v.x;
+        b[{i}] = v.y;
+        c[{i}] = v.z;
+        d[{i}] = v.w;
+    }
+    //#end
+    let pa = collide(a, moments(a));
+    let pb = collide(b, moments(b));
+    let pc = collide(c, moments(c));
+    let pd = collide(d, moments(d));
+    //#for i
+    q{i.o}[q] = vec4<f32>(pa[{i}], pb[{i}], pc[{i}], pd[{i}]);
+    //#end
 }
 
 // The cell at q, at most one cell outside the grid along each axis, wrapped periodically.

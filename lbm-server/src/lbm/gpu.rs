@@ -98,6 +98,7 @@ struct Params {
     force: [f32; 4],
     face_value: [[f32; 4]; 6],
     ranges: [u32; 4],
+    quads: [u32; 4],
 }
 
 /// Limits of the health check, in lattice units.
@@ -129,14 +130,16 @@ pub struct Lattice {
     fields: wgpu::Buffer,
     pub(super) status: wgpu::Buffer,
     cell_list: wgpu::Buffer,
-    /// Cells in the list: interior, wrapping, boundary (see `cell_list`).
-    classes: [u32; 3],
+    /// The classes of the cell list (see `CellList`).
+    classes: CellList,
     layout: wgpu::BindGroupLayout,
     pub(super) bind_groups: [wgpu::BindGroup; 2],
     /// The boundary cells, either parity.
     pub(super) stream_collide: wgpu::ComputePipeline,
     /// The other fluid cells: even step of all, odd step of the interior, odd step of the wrapping.
     stream_collide_fluid: [wgpu::ComputePipeline; 3],
+    /// The even step of quads (four consecutive cells) of interior or wrapping cells.
+    stream_collide_quads: Option<wgpu::ComputePipeline>,
     macroscopic: wgpu::ComputePipeline,
     /// Particle coupling (immersed moving boundary), when the scene has particles.
     pub(super) imb: Option<super::imb::Coupling>,
@@ -195,7 +198,7 @@ impl Lattice {
         }
         let d = &gpu.device;
         let populations: Vec<wgpu::Buffer> = (0..19)
-            .map(|i| storage_buffer(d, &format!("f{i}"), bytes))
+            .map(|i| storage_buffer(d, &format!("f{i}"), bytes.div_ceil(16) * 16))
             .collect();
         let init = |label: &str, contents: &[u8], usage| {
             d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -212,21 +215,25 @@ impl Lattice {
         let mrt = init(
             "mrt",
             bytemuck::cast_slice(&mrt_matrices(&setup)),
-            wgpu::BufferUsages::STORAGE,
+            wgpu::BufferUsages::UNIFORM,
         );
         let fields = storage_buffer(d, "fields", bytes * 4);
         let status = init("status", bytemuck::cast_slice(&[u32::MAX, 0, 0, 0]), STORAGE);
-        let (list, classes) = cell_list(&setup);
+        let classes = CellList::new(&setup, imb.is_none());
         let cell_list = init(
             "cell list",
-            bytemuck::cast_slice(if list.is_empty() { &[0u32] } else { &list }),
+            bytemuck::cast_slice(if classes.list.is_empty() {
+                &[0u32]
+            } else {
+                &classes.list
+            }),
             wgpu::BufferUsages::STORAGE,
         );
         let params: Vec<wgpu::Buffer> = (0..2)
             .map(|parity| {
                 init(
                     "params",
-                    bytemuck::bytes_of(&params(&setup, parity, health, classes)),
+                    bytemuck::bytes_of(&params(&setup, parity, health, &classes)),
                     wgpu::BufferUsages::UNIFORM,
                 )
             })
@@ -271,6 +278,7 @@ impl Lattice {
         let pipeline = |entry: &str| pipeline_kind(entry, 0);
         let stream_collide = pipeline("stream_collide");
         let stream_collide_fluid = [0, 1, 2].map(|kind| pipeline_kind("stream_collide_fluid", kind));
+        let stream_collide_quads = (classes.quads > 0).then(|| pipeline("stream_collide_quads"));
         let macroscopic = pipeline("macroscopic");
         let coupling = coupling.with_pipelines(imb.is_some(), &pipeline);
         let bind_groups = [0, 1].map(|parity| {
@@ -302,6 +310,7 @@ impl Lattice {
             bind_groups,
             stream_collide,
             stream_collide_fluid,
+            stream_collide_quads,
             macroscopic,
             imb: Some(coupling),
             time: 0,
@@ -398,11 +407,16 @@ impl Lattice {
     /// then the boundary cells.
     pub(super) fn encode_step(&mut self, encoder: &mut wgpu::CommandEncoder) {
         let parity = self.time % 2;
-        let [interior, wrapping, boundary] = self.classes;
+        let c = &self.classes;
+        let [interior, wrapping, boundary] = c.sizes;
         let groups = |cells: u32| cells.div_ceil(WORKGROUP);
         let fluid = &self.stream_collide_fluid;
         if parity == 0 {
-            self.dispatch_groups(encoder, &fluid[0], parity, groups(interior + wrapping));
+            if let Some(quads) = &self.stream_collide_quads {
+                self.dispatch_groups(encoder, quads, parity, groups(c.quads));
+            }
+            let rest = interior + wrapping - c.in_quads[0] - c.in_quads[1];
+            self.dispatch_groups(encoder, &fluid[0], parity, groups(rest));
         } else {
             self.dispatch_groups(encoder, &fluid[1], parity, groups(interior));
             self.dispatch_groups(encoder, &fluid[2], parity, groups(wrapping));
@@ -459,8 +473,9 @@ impl Lattice {
     }
 }
 
-/// Params (uniform), flags and MRT matrices (read-only), then fields, status and the 19
-/// population buffers (read-write): one layout for both kernels.
+/// Params (uniform), flags (read-only), MRT matrices (uniform), then fields, status, the 19
+/// population buffers and the coupling's (read-write), the cell list (read-only): one layout for
+/// all kernels.
 fn bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
     let storage = |binding: u32, read_only: bool| wgpu::BindGroupLayoutEntry {
         binding,
@@ -472,8 +487,8 @@ fn bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
         },
         count: None,
     };
-    let mut entries = vec![wgpu::BindGroupLayoutEntry {
-        binding: 0,
+    let uniform = |binding: u32| wgpu::BindGroupLayoutEntry {
+        binding,
         visibility: wgpu::ShaderStages::COMPUTE,
         ty: wgpu::BindingType::Buffer {
             ty: wgpu::BufferBindingType::Uniform,
@@ -481,8 +496,8 @@ fn bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
             min_binding_size: None,
         },
         count: None,
-    }];
-    entries.extend([storage(1, true), storage(2, true)]);
+    };
+    let mut entries = vec![uniform(0), storage(1, true), uniform(2)];
     entries.extend((3..CELL_LIST_BINDING - 1).map(|b| storage(b, false)));
     entries.push(storage(CELL_LIST_BINDING - 1, true));
     entries.push(storage(CELL_LIST_BINDING, true));
@@ -580,33 +595,76 @@ pub fn cell_flags(setup: &Setup) -> Vec<u32> {
         .collect()
 }
 
-/// The fluid cells by class, each class in increasing order, and the size of each class:
-/// interior (no link leaves the fluid or wraps: fixed neighbour offsets), wrapping (no link leaves
-/// the fluid, some cross a periodic face), boundary (some link leaves the fluid).
-pub fn cell_list(setup: &Setup) -> (Vec<u32>, [u32; 3]) {
-    let flags = cell_flags(setup);
-    let class = |flag: u32| {
-        if flag & SOLID_FLAG != 0 {
-            None
-        } else if flag & 0x7ffff != 0 {
-            Some(2)
-        } else if flag & WRAPS_FLAG != 0 {
-            Some(1)
-        } else {
-            Some(0)
-        }
-    };
-    let mut list = Vec::new();
-    let mut sizes = [0u32; 3];
-    for (c, size) in sizes.iter_mut().enumerate() {
-        let before = list.len();
-        list.extend((0..flags.len() as u32).filter(|&k| class(flags[k as usize]) == Some(c)));
-        *size = (list.len() - before) as u32;
-    }
-    (list, sizes)
+/// The fluid cells by class, and the quads. Classes: interior (no link leaves the fluid or wraps:
+/// fixed neighbour offsets), wrapping (no link leaves the fluid, some cross a periodic face),
+/// boundary (some link leaves the fluid). Quads: q such that cells 4q..4q+3 are all interior or
+/// wrapping, whose even step moves four cells per vector access (none with particles).
+pub struct CellList {
+    /// Interior cells (those of quads first), wrapping cells (those of quads last), boundary
+    /// cells, each group in increasing order, then the quads.
+    pub list: Vec<u32>,
+    /// Interior, wrapping, boundary cells.
+    pub sizes: [u32; 3],
+    /// Interior and wrapping cells that belong to a quad.
+    pub in_quads: [u32; 2],
+    pub quads: u32,
 }
 
-fn params(setup: &Setup, parity: usize, health: Health, classes: [u32; 3]) -> Params {
+impl CellList {
+    pub fn new(setup: &Setup, with_quads: bool) -> CellList {
+        let flags = cell_flags(setup);
+        let cells = flags.len();
+        let class = |flag: u32| {
+            if flag & SOLID_FLAG != 0 {
+                3
+            } else if flag & 0x7ffff != 0 {
+                2
+            } else if flag & WRAPS_FLAG != 0 {
+                1
+            } else {
+                0
+            }
+        };
+        let quads: Vec<u32> = if with_quads {
+            (0..cells / 4)
+                .filter(|q| (4 * q..4 * q + 4).all(|k| class(flags[k]) < 2))
+                .map(|q| q as u32)
+                .collect()
+        } else {
+            Vec::new()
+        };
+        let mut in_quad = vec![false; cells];
+        for q in &quads {
+            in_quad[4 * *q as usize..4 * *q as usize + 4].fill(true);
+        }
+        let (flags, in_quad) = (&flags, &in_quad);
+        let select = |c: usize, quad: bool| {
+            (0..cells)
+                .filter(move |&k| class(flags[k]) == c && in_quad[k] == quad)
+                .map(|k| k as u32)
+        };
+        let mut list: Vec<u32> = select(0, true).collect();
+        let interior_in_quads = list.len() as u32;
+        list.extend(select(0, false));
+        let interior = list.len() as u32;
+        list.extend(select(1, false));
+        let before = list.len() as u32;
+        list.extend(select(1, true));
+        let wrapping_in_quads = list.len() as u32 - before;
+        let wrapping = list.len() as u32 - interior;
+        list.extend(select(2, false));
+        let boundary = list.len() as u32 - interior - wrapping;
+        list.extend(&quads);
+        CellList {
+            list,
+            sizes: [interior, wrapping, boundary],
+            in_quads: [interior_in_quads, wrapping_in_quads],
+            quads: quads.len() as u32,
+        }
+    }
+}
+
+fn params(setup: &Setup, parity: usize, health: Health, classes: &CellList) -> Params {
     let face = |f: usize| setup.faces[f].code();
     let values = |f: &Face| {
         let (u, rho) = f.values();
@@ -634,20 +692,30 @@ fn params(setup: &Setup, parity: usize, health: Health, classes: [u32; 3]) -> Pa
             0.0,
         ],
         face_value: std::array::from_fn(|f| values(&setup.faces[f])),
-        ranges: [classes[0], classes[1], classes[2], 0],
+        ranges: [
+            classes.sizes[0],
+            classes.sizes[1],
+            classes.sizes[2],
+            classes.quads,
+        ],
+        quads: [classes.in_quads[0], classes.in_quads[1], 0, 0],
     }
 }
 
-/// The MRT matrices A and B (zeros for other operators: the buffer must exist anyway).
+/// The MRT matrices A and B, padded to 181 vec4 (zeros for other operators: the buffer must
+/// exist anyway).
 fn mrt_matrices(setup: &Setup) -> Vec<f32> {
     let (a, b) = match setup.operator {
         Operator::Mrt { rates } => mrt::collision_matrices(&rates),
         _ => ([[0.0; 19]; 19], [[0.0; 19]; 19]),
     };
-    a.iter()
+    let mut values: Vec<f32> = a
+        .iter()
         .chain(b.iter())
         .flat_map(|row| row.iter().map(|v| *v as f32))
-        .collect()
+        .collect();
+    values.resize(181 * 4, 0.0);
+    values
 }
 
 /// Shifted equilibrium populations of a whole lattice for given density and velocity per cell.
