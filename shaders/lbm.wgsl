@@ -29,7 +29,7 @@ struct Params {
     // cell list: interior, wrapping and boundary cell counts, quad count
     ranges: vec4<u32>,
     // interior and wrapping cells that belong to a quad (first of the interior ones, last of the
-    // wrapping ones), -, -
+    // wrapping ones), interior cells that belong to an interior quad (first of all), interior quads
     quads: vec4<u32>,
 }
 
@@ -76,7 +76,8 @@ override FORCE: bool = true;
 @group(0) @binding(23) var<storage, read_write> f18: array<f32>;
 // (24-28: imb.wgsl.) The fluid cells by class, each class in increasing order: interior (no link
 // leaves the fluid or wraps), wrapping (no link leaves the fluid, some wrap), boundary (the rest);
-// then the quads: q such that cells 4q to 4q + 3 are interior or wrapping (without particles).
+// then the quads: q such that cells 4q to 4q + 3 are interior or wrapping (without particles);
+// then the interior quads, whose four cells are interior (when nx is a multiple of 4).
 @group(0) @binding(29) var<storage, read> cell_list: array<u32>;
 // The population buffers seen four cells at a time, for `stream_collide_quads`.
 @group(0) @binding(5) var<storage, read_write> q0: array<vec4<f32>>;
@@ -347,8 +348,8 @@ fn stream_collide_fluid(
     var start = params.quads.x;
     var count = params.ranges.x + params.ranges.y - params.quads.x - params.quads.y;
     if KIND == 1u {
-        start = 0u;
-        count = params.ranges.x;
+        start = params.quads.z;
+        count = params.ranges.x - params.quads.z;
     } else if KIND == 2u {
         start = params.ranges.x;
         count = params.ranges.y;
@@ -420,6 +421,73 @@ fn stream_collide_quads(
     let pd = collide(d, moments(d));
     //#for i
     q{i.o}[q] = vec4<f32>(pa[{i}], pb[{i}], pc[{i}], pd[{i}]);
+    //#end
+}
+
+// The odd step of four consecutive interior cells (nx a multiple of 4, so that a row offset is a
+// whole number of vectors): populations along y and z move as vectors; those along x as one vector
+// and one scalar load, and four scalar stores (a vector store would overwrite slots of the
+// neighbouring quads).
+@compute @workgroup_size(64)
+fn stream_collide_quads_odd(
+    @builtin(workgroup_id) wg: vec3<u32>,
+    @builtin(num_workgroups) nwg: vec3<u32>,
+    @builtin(local_invocation_index) local: u32,
+) {
+    let j = cell_index(wg, nwg, local);
+    if j >= params.quads.w { return; }
+    let q = i32(cell_list[params.ranges.x + params.ranges.y + params.ranges.z + params.ranges.w + j]);
+    let row = i32(params.n.x / 4u);
+    let ny = i32(params.n.y);
+    var a: array<f32, 19>;
+    var b: array<f32, 19>;
+    var c: array<f32, 19>;
+    var d: array<f32, 19>;
+    //#for i
+    {
+        // f_i of cell 4q + t comes from slot i.o of cell 4q + t - c_i.
+        let e = q - row * ({i.cy} + ny * {i.cz});
+        let v = q{i.o}[u32(e)];
+        if {i.cx} == 0 {
+            a[{i}] = v.x;
+            b[{i}] = v.y;
+            c[{i}] = v.z;
+            d[{i}] = v.w;
+        } else if {i.cx} == 1 {
+            a[{i}] = q{i.o}[u32(e - 1)].w;
+            b[{i}] = v.x;
+            c[{i}] = v.y;
+            d[{i}] = v.z;
+        } else {
+            a[{i}] = v.y;
+            b[{i}] = v.z;
+            c[{i}] = v.w;
+            d[{i}] = q{i.o}[u32(e + 1)].x;
+        }
+    }
+    //#end
+    let pa = collide(a, moments(a));
+    let pb = collide(b, moments(b));
+    let pc = collide(c, moments(c));
+    let pd = collide(d, moments(d));
+    //#for i
+    {
+        // post_i of cell 4q + t goes to slot i of cell 4q + t + c_i.
+        let e = q + row * ({i.cy} + ny * {i.cz});
+        if {i.cx} == 0 {
+            q{i}[u32(e)] = vec4<f32>(pa[{i}], pb[{i}], pc[{i}], pd[{i}]);
+        } else if {i.cx} == 1 {
+            q{i}[u32(e)].y = pa[{i}];
+            q{i}[u32(e)].z = pb[{i}];
+            q{i}[u32(e)].w = pc[{i}];
+            q{i}[u32(e + 1)].x = pd[{i}];
+        } else {
+            q{i}[u32(e - 1)].w = pa[{i}];
+            q{i}[u32(e)].x = pb[{i}];
+            q{i}[u32(e)].y = pc[{i}];
+            q{i}[u32(e)].z = pd[{i}];
+        }
+    }
     //#end
 }
 

@@ -140,6 +140,8 @@ pub struct Lattice {
     stream_collide_fluid: [wgpu::ComputePipeline; 3],
     /// The even step of quads (four consecutive cells) of interior or wrapping cells.
     stream_collide_quads: Option<wgpu::ComputePipeline>,
+    /// The odd step of quads of interior cells.
+    stream_collide_quads_odd: Option<wgpu::ComputePipeline>,
     macroscopic: wgpu::ComputePipeline,
     /// Particle coupling (immersed moving boundary), when the scene has particles.
     pub(super) imb: Option<super::imb::Coupling>,
@@ -279,6 +281,8 @@ impl Lattice {
         let stream_collide = pipeline("stream_collide");
         let stream_collide_fluid = [0, 1, 2].map(|kind| pipeline_kind("stream_collide_fluid", kind));
         let stream_collide_quads = (classes.quads > 0).then(|| pipeline("stream_collide_quads"));
+        let stream_collide_quads_odd =
+            (classes.interior_quads > 0).then(|| pipeline("stream_collide_quads_odd"));
         let macroscopic = pipeline("macroscopic");
         let coupling = coupling.with_pipelines(imb.is_some(), &pipeline);
         let bind_groups = [0, 1].map(|parity| {
@@ -311,6 +315,7 @@ impl Lattice {
             stream_collide,
             stream_collide_fluid,
             stream_collide_quads,
+            stream_collide_quads_odd,
             macroscopic,
             imb: Some(coupling),
             time: 0,
@@ -418,7 +423,10 @@ impl Lattice {
             let rest = interior + wrapping - c.in_quads[0] - c.in_quads[1];
             self.dispatch_groups(encoder, &fluid[0], parity, groups(rest));
         } else {
-            self.dispatch_groups(encoder, &fluid[1], parity, groups(interior));
+            if let Some(quads) = &self.stream_collide_quads_odd {
+                self.dispatch_groups(encoder, quads, parity, groups(c.interior_quads));
+            }
+            self.dispatch_groups(encoder, &fluid[1], parity, groups(interior - c.in_interior_quads));
             self.dispatch_groups(encoder, &fluid[2], parity, groups(wrapping));
         }
         self.dispatch_groups(encoder, &self.stream_collide, parity, groups(boundary));
@@ -598,16 +606,21 @@ pub fn cell_flags(setup: &Setup) -> Vec<u32> {
 /// The fluid cells by class, and the quads. Classes: interior (no link leaves the fluid or wraps:
 /// fixed neighbour offsets), wrapping (no link leaves the fluid, some cross a periodic face),
 /// boundary (some link leaves the fluid). Quads: q such that cells 4q..4q+3 are all interior or
-/// wrapping, whose even step moves four cells per vector access (none with particles).
+/// wrapping, whose even step moves four cells per vector access; interior quads, of four interior
+/// cells, do so in the odd step too when nx is a multiple of 4 (no quads with particles).
 pub struct CellList {
-    /// Interior cells (those of quads first), wrapping cells (those of quads last), boundary
-    /// cells, each group in increasing order, then the quads.
+    /// Interior cells (those of interior quads first, then those of other quads), wrapping cells
+    /// (those of quads last), boundary cells, each group in increasing order, then the quads, then
+    /// the interior quads.
     pub list: Vec<u32>,
     /// Interior, wrapping, boundary cells.
     pub sizes: [u32; 3],
     /// Interior and wrapping cells that belong to a quad.
     pub in_quads: [u32; 2],
+    /// Interior cells that belong to an interior quad.
+    pub in_interior_quads: u32,
     pub quads: u32,
+    pub interior_quads: u32,
 }
 
 impl CellList {
@@ -625,41 +638,51 @@ impl CellList {
                 0
             }
         };
-        let quads: Vec<u32> = if with_quads {
-            (0..cells / 4)
-                .filter(|q| (4 * q..4 * q + 4).all(|k| class(flags[k]) < 2))
-                .map(|q| q as u32)
-                .collect()
-        } else {
-            Vec::new()
-        };
-        let mut in_quad = vec![false; cells];
-        for q in &quads {
-            in_quad[4 * *q as usize..4 * *q as usize + 4].fill(true);
+        let all = |q: usize, most: u32| (4 * q..4 * q + 4).all(|k| class(flags[k]) <= most);
+        let quads: Vec<u32> = (0..cells / 4)
+            .filter(|&q| with_quads && all(q, 1))
+            .map(|q| q as u32)
+            .collect();
+        let interior_quads: Vec<u32> = quads
+            .iter()
+            .copied()
+            .filter(|&q| setup.n[0] % 4 == 0 && all(q as usize, 0))
+            .collect();
+        // 0: in no quad, 1: in a quad, 2: in an interior quad.
+        let mut membership = vec![0u8; cells];
+        for (quads, value) in [(&quads, 1), (&interior_quads, 2)] {
+            for q in quads {
+                membership[4 * *q as usize..4 * *q as usize + 4].fill(value);
+            }
         }
-        let (flags, in_quad) = (&flags, &in_quad);
-        let select = |c: usize, quad: bool| {
+        let (flags, membership) = (&flags, &membership);
+        let select = |c: u32, m: u8| {
             (0..cells)
-                .filter(move |&k| class(flags[k]) == c && in_quad[k] == quad)
+                .filter(move |&k| class(flags[k]) == c && membership[k] == m)
                 .map(|k| k as u32)
         };
-        let mut list: Vec<u32> = select(0, true).collect();
+        let mut list: Vec<u32> = select(0, 2).collect();
+        let in_interior_quads = list.len() as u32;
+        list.extend(select(0, 1));
         let interior_in_quads = list.len() as u32;
-        list.extend(select(0, false));
+        list.extend(select(0, 0));
         let interior = list.len() as u32;
-        list.extend(select(1, false));
+        list.extend(select(1, 0));
         let before = list.len() as u32;
-        list.extend(select(1, true));
+        list.extend(select(1, 1));
         let wrapping_in_quads = list.len() as u32 - before;
         let wrapping = list.len() as u32 - interior;
-        list.extend(select(2, false));
+        list.extend(select(2, 0));
         let boundary = list.len() as u32 - interior - wrapping;
         list.extend(&quads);
+        list.extend(&interior_quads);
         CellList {
             list,
             sizes: [interior, wrapping, boundary],
             in_quads: [interior_in_quads, wrapping_in_quads],
+            in_interior_quads,
             quads: quads.len() as u32,
+            interior_quads: interior_quads.len() as u32,
         }
     }
 }
@@ -698,7 +721,12 @@ fn params(setup: &Setup, parity: usize, health: Health, classes: &CellList) -> P
             classes.sizes[2],
             classes.quads,
         ],
-        quads: [classes.in_quads[0], classes.in_quads[1], 0, 0],
+        quads: [
+            classes.in_quads[0],
+            classes.in_quads[1],
+            classes.in_interior_quads,
+            classes.interior_quads,
+        ],
     }
 }
 
@@ -734,4 +762,76 @@ pub fn total_mass(setup: &Setup, f: &[Cell]) -> f64 {
         .filter(|k| !setup.solid[*k])
         .map(|k| f[k].iter().zip(W.iter()).map(|(fi, wi)| fi + wi).sum::<f64>())
         .sum()
+}
+
+/// The quad kernels (four cells per invocation) against the f64 reference step: the other tests'
+/// grids have no interior quads (nx not a multiple of 4).
+#[cfg(test)]
+mod quad_tests {
+    use super::super::geometry::{Face, Operator, Setup};
+    use super::super::mrt::Rates;
+    use super::super::random::{random_populations, Random};
+    use super::super::reference;
+    use super::*;
+
+    fn check(setup: Setup, seed: u64) {
+        let classes = CellList::new(&setup, true);
+        assert!(
+            classes.quads > 0 && classes.interior_quads > 0,
+            "the grid has quads"
+        );
+        let mut f = random_populations(&setup, seed);
+        let gpu = std::sync::Arc::new(Gpu::new().expect("a wgpu adapter (lavapipe in CI)"));
+        let mut lattice = Lattice::new(gpu, setup.clone(), Health::default(), None).unwrap();
+        lattice.set_populations(&f);
+        let tolerance = 64.0 * f32::EPSILON as f64 * 0.35;
+        for step in 1..=4 {
+            f = reference::step(&setup, &f);
+            lattice.step(1);
+            let err = lattice
+                .populations()
+                .iter()
+                .zip(&f)
+                .flat_map(|(a, b)| a.iter().zip(b).map(|(p, q)| (p - q).abs()))
+                .fold(0.0, f64::max);
+            assert!(err < tolerance, "step {step} differs by {err:e}");
+        }
+    }
+
+    #[test]
+    fn bgk_periodic_quads_match_reference() {
+        let setup = Setup::new([16, 6, 5], [Face::Periodic; 6], 0.8, Operator::Bgk);
+        check(setup, 11);
+    }
+
+    #[test]
+    fn mrt_walls_solids_force_quads_match_reference() {
+        let faces = [
+            Face::Periodic,
+            Face::Periodic,
+            Face::Wall,
+            Face::MovingWall([0.02, 0.0, 0.01]),
+            Face::Periodic,
+            Face::Periodic,
+        ];
+        let rates = Rates::dhumieres(1.0 / 0.7);
+        let mut setup = Setup::new([12, 7, 6], faces, 0.7, Operator::Mrt { rates });
+        setup.force = [1e-4, -2e-4, 3e-5];
+        let mut r = Random::new(12);
+        for s in setup.solid.iter_mut() {
+            *s = r.next() > 0.95;
+        }
+        check(setup, 13);
+    }
+
+    #[test]
+    fn trt_periodic_quads_match_reference() {
+        let setup = Setup::new(
+            [12, 6, 6],
+            [Face::Periodic; 6],
+            0.6,
+            Operator::Trt { magic: 3.0 / 16.0 },
+        );
+        check(setup, 14);
+    }
 }
