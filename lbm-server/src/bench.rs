@@ -7,8 +7,8 @@ use std::process::ExitCode;
 use std::sync::Arc;
 use std::time::Instant;
 
-/// Bytes moved per cell per step: 19 populations read and written in f32, plus the 4-byte cell
-/// flags (which links leave the fluid: no neighbour lookups in the kernel).
+/// Bytes moved per cell per step: 19 populations read and written in f32, plus at most one 4-byte
+/// cell-list entry (one per four cells for quads).
 pub const BYTES_PER_CELL: f64 = 19.0 * 4.0 * 2.0 + 4.0;
 
 #[derive(clap::Args)]
@@ -129,7 +129,7 @@ fn run(args: &BenchArgs) -> Result<(), String> {
     let mlups = best(&ours);
     if time_ours {
         println!("MLUPS:          {mlups:.1} (best round; rounds: {})", list(&ours));
-        println!("bytes/cell/step {BYTES_PER_CELL} (FP32 populations, AA pattern: 19 reads + 19 writes + a 4-byte flag word)");
+        println!("bytes/cell/step {BYTES_PER_CELL} (FP32 populations, AA pattern: 19 reads + 19 writes + a 4-byte cell-list entry at most)");
         println!(
             "copy bandwidth: {:.1} GB/s (buffer-to-buffer copy, this run)",
             bandwidth / 1e9
