@@ -31,6 +31,9 @@ struct Params {
     // interior and wrapping cells that belong to a quad (first of the interior ones, last of the
     // wrapping ones), interior cells that belong to an interior quad (first of all), interior quads
     quads: vec4<u32>,
+    // the cells of the odd step through the periodic wrap: first, count (with interior quads, also
+    // the interior cells outside them: one dispatch fewer), -, -
+    wrapped: vec4<u32>,
 }
 
 // Collision operator, fixed when the pipeline is made: 0 BGK, 1 TRT, 2 MRT.
@@ -351,8 +354,8 @@ fn stream_collide_fluid(
         start = params.quads.z;
         count = params.ranges.x - params.quads.z;
     } else if KIND == 2u {
-        start = params.ranges.x;
-        count = params.ranges.y;
+        start = params.wrapped.x;
+        count = params.wrapped.y;
     }
     if j >= count { return; }
     let k = cell_list[start + j];

@@ -99,6 +99,7 @@ struct Params {
     face_value: [[f32; 4]; 6],
     ranges: [u32; 4],
     quads: [u32; 4],
+    wrapped: [u32; 4],
 }
 
 /// Limits of the health check, in lattice units.
@@ -426,8 +427,10 @@ impl Lattice {
             if let Some(quads) = &self.stream_collide_quads_odd {
                 self.dispatch_groups(encoder, quads, parity, groups(c.interior_quads));
             }
-            self.dispatch_groups(encoder, &fluid[1], parity, groups(interior - c.in_interior_quads));
-            self.dispatch_groups(encoder, &fluid[2], parity, groups(wrapping));
+            if c.interior_quads == 0 {
+                self.dispatch_groups(encoder, &fluid[1], parity, groups(interior));
+            }
+            self.dispatch_groups(encoder, &fluid[2], parity, groups(c.wrapped().1));
         }
         self.dispatch_groups(encoder, &self.stream_collide, parity, groups(boundary));
         self.time += 1;
@@ -624,6 +627,20 @@ pub struct CellList {
 }
 
 impl CellList {
+    /// The cells of the odd step through the periodic wrap (first, count): the wrapping cells and,
+    /// when there are interior quads, the interior cells outside them too (one dispatch fewer).
+    pub fn wrapped(&self) -> (u32, u32) {
+        let [interior, wrapping, _] = self.sizes;
+        if self.interior_quads > 0 {
+            (
+                self.in_interior_quads,
+                interior + wrapping - self.in_interior_quads,
+            )
+        } else {
+            (interior, wrapping)
+        }
+    }
+
     pub fn new(setup: &Setup, with_quads: bool) -> CellList {
         let flags = cell_flags(setup);
         let cells = flags.len();
@@ -727,6 +744,7 @@ fn params(setup: &Setup, parity: usize, health: Health, classes: &CellList) -> P
             classes.in_interior_quads,
             classes.interior_quads,
         ],
+        wrapped: [classes.wrapped().0, classes.wrapped().1, 0, 0],
     }
 }
 
