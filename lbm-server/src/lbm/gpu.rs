@@ -663,7 +663,7 @@ impl CellList {
         let interior_quads: Vec<u32> = quads
             .iter()
             .copied()
-            .filter(|&q| setup.n[0] % 4 == 0 && all(q as usize, 0))
+            .filter(|&q| setup.n[0].is_multiple_of(4) && all(q as usize, 0))
             .collect();
         // 0: in no quad, 1: in a quad, 2: in an interior quad.
         let mut membership = vec![0u8; cells];
