@@ -26,19 +26,34 @@ struct Params {
     force: vec4<f32>,
     // per face: wall velocity xyz, density w
     face_value: array<vec4<f32>, 6>,
+    // cell list: interior, wrapping and boundary cell counts, quad count
+    ranges: vec4<u32>,
+    // interior and wrapping cells that belong to a quad (first of the interior ones, last of the
+    // wrapping ones), interior cells that belong to an interior quad (first of all), interior quads
+    quads: vec4<u32>,
+    // the cells of the odd step through the periodic wrap: first, count (with interior quads, also
+    // the interior cells outside them: one dispatch fewer), -, -
+    wrapped: vec4<u32>,
 }
 
 // Collision operator, fixed when the pipeline is made: 0 BGK, 1 TRT, 2 MRT.
 override OPERATOR: u32 = 0u;
 // Particles coupled through the immersed moving boundary (imb.wgsl): only scenes with particles.
 override IMB: bool = false;
+// The cells `stream_collide_fluid` updates, fixed when the pipeline is made: 0 the even step of the
+// interior and wrapping cells, 1 the odd step of the interior cells, 2 the odd step of the wrapping cells.
+override KIND: u32 = 0u;
+// A body force (Guo forcing): false when it is zero, which saves its source term.
+override FORCE: bool = true;
 
 @group(0) @binding(0) var<uniform> params: Params;
 // One word per cell: bit i (0-18) set when link i leaves the fluid (a face that is not periodic,
 // or a solid cell), SOLID for a solid cell, WRAPS for a cell on a periodic face.
 @group(0) @binding(1) var<storage, read> flags: array<u32>;
-// MRT: A = M^-1 S M (361 values) then B = M^-1 (I - S/2) M (361 values), row-major.
-@group(0) @binding(2) var<storage, read> mrt: array<f32>;
+// MRT: A = M^-1 S M (361 values) then B = M^-1 (I - S/2) M (361 values), row-major, four to a
+// vec4. A uniform buffer: a load at a constant offset is one scalar load, where a storage load is
+// a loop over the SIMD lanes on llvmpipe.
+@group(0) @binding(2) var<uniform> mrt: array<vec4<f32>, 181>;
 // Density and velocity per cell (written by `macroscopic`).
 @group(0) @binding(3) var<storage, read_write> fields: array<vec4<f32>>;
 // [0]: smallest index of a cell failing the health check (0xffffffff when none).
@@ -62,6 +77,31 @@ override IMB: bool = false;
 @group(0) @binding(21) var<storage, read_write> f16: array<f32>;
 @group(0) @binding(22) var<storage, read_write> f17: array<f32>;
 @group(0) @binding(23) var<storage, read_write> f18: array<f32>;
+// (24-28: imb.wgsl.) The fluid cells by class, each class in increasing order: interior (no link
+// leaves the fluid or wraps), wrapping (no link leaves the fluid, some wrap), boundary (the rest);
+// then the quads: q such that cells 4q to 4q + 3 are interior or wrapping (without particles);
+// then the interior quads, whose four cells are interior (when nx is a multiple of 4).
+@group(0) @binding(29) var<storage, read> cell_list: array<u32>;
+// The population buffers seen four cells at a time, for `stream_collide_quads`.
+@group(0) @binding(5) var<storage, read_write> q0: array<vec4<f32>>;
+@group(0) @binding(6) var<storage, read_write> q1: array<vec4<f32>>;
+@group(0) @binding(7) var<storage, read_write> q2: array<vec4<f32>>;
+@group(0) @binding(8) var<storage, read_write> q3: array<vec4<f32>>;
+@group(0) @binding(9) var<storage, read_write> q4: array<vec4<f32>>;
+@group(0) @binding(10) var<storage, read_write> q5: array<vec4<f32>>;
+@group(0) @binding(11) var<storage, read_write> q6: array<vec4<f32>>;
+@group(0) @binding(12) var<storage, read_write> q7: array<vec4<f32>>;
+@group(0) @binding(13) var<storage, read_write> q8: array<vec4<f32>>;
+@group(0) @binding(14) var<storage, read_write> q9: array<vec4<f32>>;
+@group(0) @binding(15) var<storage, read_write> q10: array<vec4<f32>>;
+@group(0) @binding(16) var<storage, read_write> q11: array<vec4<f32>>;
+@group(0) @binding(17) var<storage, read_write> q12: array<vec4<f32>>;
+@group(0) @binding(18) var<storage, read_write> q13: array<vec4<f32>>;
+@group(0) @binding(19) var<storage, read_write> q14: array<vec4<f32>>;
+@group(0) @binding(20) var<storage, read_write> q15: array<vec4<f32>>;
+@group(0) @binding(21) var<storage, read_write> q16: array<vec4<f32>>;
+@group(0) @binding(22) var<storage, read_write> q17: array<vec4<f32>>;
+@group(0) @binding(23) var<storage, read_write> q18: array<vec4<f32>>;
 
 // A link that leaves the fluid: BOUNDARY | face (0-5), or BOUNDARY | 6 for a solid cell.
 const BOUNDARY: u32 = 0x80000000u;
@@ -147,10 +187,6 @@ fn read_populations(k: u32, flag: u32) -> array<f32, 19> {
         //#for i
         f[{i}] = f{i}[k];
         //#end
-    } else if interior(flag) {
-        //#for i
-        f[{i}] = f{i.o}[u32(i32(k) - offset(vec3<i32>({i.cx}, {i.cy}, {i.cz})))];
-        //#end
     } else {
         //#for i
         if leaves(flag, {i.o}u) {
@@ -166,11 +202,6 @@ fn read_populations(k: u32, flag: u32) -> array<f32, 19> {
 // Index offset of the neighbour along c, for cells whose links neither leave the fluid nor wrap.
 fn offset(c: vec3<i32>) -> i32 {
     return c.x + i32(params.n.x) * (c.y + i32(params.n.y) * c.z);
-}
-
-// No link of the cell leaves the fluid and none wraps: neighbours are fixed index offsets.
-fn interior(flag: u32) -> bool {
-    return (flag & (0x7ffffu | WRAPS)) == 0u;
 }
 
 struct Moments {
@@ -202,28 +233,51 @@ fn guo_source(c: vec3<f32>, w: f32, m: Moments) -> f32 {
 }
 
 fn collide(f: array<f32, 19>, m: Moments) -> array<f32, 19> {
+    // f_eq_i - w_i = w_i (a + cu (b + d cu)) with cu = c_i . u: per-cell factors computed once.
+    let a = (m.rho - 1.0) - 1.5 * m.rho * dot(m.u, m.u);
+    let b = 3.0 * m.rho;
+    let d = 4.5 * m.rho;
     var neq: array<f32, 19>;
-    var src: array<f32, 19>;
     //#for i
-    neq[{i}] = f[{i}] - equilibrium(vec3<f32>({i.cx}.0, {i.cy}.0, {i.cz}.0), {i.w}, m);
-    src[{i}] = guo_source(vec3<f32>({i.cx}.0, {i.cy}.0, {i.cz}.0), {i.w}, m);
+    {
+        let cu = dot(vec3<f32>({i.cx}.0, {i.cy}.0, {i.cz}.0), m.u);
+        neq[{i}] = f[{i}] - {i.w} * (a + cu * (b + d * cu));
+    }
     //#end
     var out: array<f32, 19>;
     let wp = params.relax.x;
     let wm = params.relax.y;
     if OPERATOR == 0u {
         //#for i
-        out[{i}] = f[{i}] - wp * neq[{i}] + (1.0 - 0.5 * wp) * src[{i}];
+        out[{i}] = f[{i}] - wp * neq[{i}];
         //#end
     } else if OPERATOR == 1u {
         //#for i
-        out[{i}] = f[{i}] - 0.5 * (wp * (neq[{i}] + neq[{i.o}]) + wm * (neq[{i}] - neq[{i.o}]))
-            + 0.5 * ((1.0 - 0.5 * wp) * (src[{i}] + src[{i.o}]) + (1.0 - 0.5 * wm) * (src[{i}] - src[{i.o}]));
+        out[{i}] = f[{i}] - 0.5 * (wp * (neq[{i}] + neq[{i.o}]) + wm * (neq[{i}] - neq[{i.o}]));
         //#end
     } else {
         //#for i
-        out[{i}] = f[{i}] - mrt_row({i}u, neq) + mrt_row(19u + {i}u, src);
+        out[{i}] = f[{i}] - mrt_row({i}u, neq);
         //#end
+    }
+    if FORCE {
+        var src: array<f32, 19>;
+        //#for i
+        src[{i}] = guo_source(vec3<f32>({i.cx}.0, {i.cy}.0, {i.cz}.0), {i.w}, m);
+        //#end
+        if OPERATOR == 0u {
+            //#for i
+            out[{i}] += (1.0 - 0.5 * wp) * src[{i}];
+            //#end
+        } else if OPERATOR == 1u {
+            //#for i
+            out[{i}] += 0.5 * ((1.0 - 0.5 * wp) * (src[{i}] + src[{i.o}]) + (1.0 - 0.5 * wm) * (src[{i}] - src[{i.o}]));
+            //#end
+        } else {
+            //#for i
+            out[{i}] += mrt_row(19u + {i}u, src);
+            //#end
+        }
     }
     return out;
 }
@@ -232,7 +286,7 @@ fn collide(f: array<f32, 19>, m: Moments) -> array<f32, 19> {
 fn mrt_row(r: u32, v: array<f32, 19>) -> f32 {
     var sum = 0.0;
     //#for j
-    sum += mrt[r * 19u + {j}u] * v[{j}];
+    sum += mrt[(r * 19u + {j}u) / 4u][(r * 19u + {j}u) % 4u] * v[{j}];
     //#end
     return sum;
 }
@@ -252,16 +306,19 @@ fn bounce(face: u32, c: vec3<f32>, w: f32, f_star: f32, m: Moments) -> f32 {
     return f_star;
 }
 
+// The step of cells with a link that leaves the fluid (boundary part of the cell list), either
+// parity. llvmpipe (lavapipe) executes both sides of every branch: the fluid cells, far more, go
+// through the branch-free `stream_collide_fluid` instead.
 @compute @workgroup_size(64)
 fn stream_collide(
     @builtin(workgroup_id) wg: vec3<u32>,
     @builtin(num_workgroups) nwg: vec3<u32>,
     @builtin(local_invocation_index) local: u32,
 ) {
-    let k = cell_index(wg, nwg, local);
-    if k >= cell_count() { return; }
+    let j = cell_index(wg, nwg, local);
+    if j >= params.ranges.z { return; }
+    let k = cell_list[params.ranges.x + params.ranges.y + j];
     let flag = flags[k];
-    if (flag & SOLID) != 0u { return; }
     let f = read_populations(k, flag);
     let m = moments(f);
     var post = collide(f, m);
@@ -269,18 +326,6 @@ fn stream_collide(
         post = immersed_boundary(k, f, m, post);
     }
     let odd = params.n.w == 1u;
-    if interior(flag) {
-        if odd {
-            //#for i
-            f{i}[u32(i32(k) + offset(vec3<i32>({i.cx}, {i.cy}, {i.cz})))] = post[{i}];
-            //#end
-        } else {
-            //#for i
-            f{i.o}[k] = post[{i}];
-            //#end
-        }
-        return;
-    }
     //#for i
     if leaves(flag, {i}u) {
         let face = neighbour(coords(k), vec3<i32>({i.cx}, {i.cy}, {i.cz})) & 0xffu;
@@ -291,6 +336,168 @@ fn stream_collide(
         f{i.o}[k] = post[{i}];
     }
     //#end
+}
+
+// The step of the cells none of whose links leaves the fluid, from the cell list, without flags
+// or branches (KIND is a constant): the cell's own slots in the even step; in the odd step the
+// neighbours at fixed index offsets (interior cells) or through the periodic wrap (wrapping cells).
+@compute @workgroup_size(64)
+fn stream_collide_fluid(
+    @builtin(workgroup_id) wg: vec3<u32>,
+    @builtin(num_workgroups) nwg: vec3<u32>,
+    @builtin(local_invocation_index) local: u32,
+) {
+    let j = cell_index(wg, nwg, local);
+    var start = params.quads.x;
+    var count = params.ranges.x + params.ranges.y - params.quads.x - params.quads.y;
+    if KIND == 1u {
+        start = params.quads.z;
+        count = params.ranges.x - params.quads.z;
+    } else if KIND == 2u {
+        start = params.wrapped.x;
+        count = params.wrapped.y;
+    }
+    if j >= count { return; }
+    let k = cell_list[start + j];
+    let p = coords(k);
+    var f: array<f32, 19>;
+    if KIND == 0u {
+        //#for i
+        f[{i}] = f{i}[k];
+        //#end
+    } else if KIND == 1u {
+        //#for i
+        f[{i}] = f{i.o}[u32(i32(k) - offset(vec3<i32>({i.cx}, {i.cy}, {i.cz})))];
+        //#end
+    } else {
+        //#for i
+        f[{i}] = f{i.o}[wrapped(p - vec3<i32>({i.cx}, {i.cy}, {i.cz}))];
+        //#end
+    }
+    let m = moments(f);
+    var post = collide(f, m);
+    if IMB {
+        post = immersed_boundary(k, f, m, post);
+    }
+    if KIND == 0u {
+        //#for i
+        f{i.o}[k] = post[{i}];
+        //#end
+    } else if KIND == 1u {
+        //#for i
+        f{i}[u32(i32(k) + offset(vec3<i32>({i.cx}, {i.cy}, {i.cz})))] = post[{i}];
+        //#end
+    } else {
+        //#for i
+        f{i}[wrapped(p + vec3<i32>({i.cx}, {i.cy}, {i.cz}))] = post[{i}];
+        //#end
+    }
+}
+
+// The even step of four consecutive fluid cells none of whose links leaves the fluid: each vector
+// load or store moves four populations, where llvmpipe loops over the SIMD lanes per access.
+@compute @workgroup_size(64)
+fn stream_collide_quads(
+    @builtin(workgroup_id) wg: vec3<u32>,
+    @builtin(num_workgroups) nwg: vec3<u32>,
+    @builtin(local_invocation_index) local: u32,
+) {
+    let j = cell_index(wg, nwg, local);
+    if j >= params.ranges.w { return; }
+    let q = cell_list[params.ranges.x + params.ranges.y + params.ranges.z + j];
+    var a: array<f32, 19>;
+    var b: array<f32, 19>;
+    var c: array<f32, 19>;
+    var d: array<f32, 19>;
+    //#for i
+    {
+        let v = q{i}[q];
+        a[{i}] = v.x;
+        b[{i}] = v.y;
+        c[{i}] = v.z;
+        d[{i}] = v.w;
+    }
+    //#end
+    let pa = collide(a, moments(a));
+    let pb = collide(b, moments(b));
+    let pc = collide(c, moments(c));
+    let pd = collide(d, moments(d));
+    //#for i
+    q{i.o}[q] = vec4<f32>(pa[{i}], pb[{i}], pc[{i}], pd[{i}]);
+    //#end
+}
+
+// The odd step of four consecutive interior cells (nx a multiple of 4, so that a row offset is a
+// whole number of vectors): populations along y and z move as vectors; those along x as one vector
+// and one scalar load, and four scalar stores (a vector store would overwrite slots of the
+// neighbouring quads).
+@compute @workgroup_size(64)
+fn stream_collide_quads_odd(
+    @builtin(workgroup_id) wg: vec3<u32>,
+    @builtin(num_workgroups) nwg: vec3<u32>,
+    @builtin(local_invocation_index) local: u32,
+) {
+    let j = cell_index(wg, nwg, local);
+    if j >= params.quads.w { return; }
+    let q = i32(cell_list[params.ranges.x + params.ranges.y + params.ranges.z + params.ranges.w + j]);
+    let row = i32(params.n.x / 4u);
+    let ny = i32(params.n.y);
+    var a: array<f32, 19>;
+    var b: array<f32, 19>;
+    var c: array<f32, 19>;
+    var d: array<f32, 19>;
+    //#for i
+    {
+        // f_i of cell 4q + t comes from slot i.o of cell 4q + t - c_i.
+        let e = q - row * ({i.cy} + ny * {i.cz});
+        let v = q{i.o}[u32(e)];
+        if {i.cx} == 0 {
+            a[{i}] = v.x;
+            b[{i}] = v.y;
+            c[{i}] = v.z;
+            d[{i}] = v.w;
+        } else if {i.cx} == 1 {
+            a[{i}] = q{i.o}[u32(e - 1)].w;
+            b[{i}] = v.x;
+            c[{i}] = v.y;
+            d[{i}] = v.z;
+        } else {
+            a[{i}] = v.y;
+            b[{i}] = v.z;
+            c[{i}] = v.w;
+            d[{i}] = q{i.o}[u32(e + 1)].x;
+        }
+    }
+    //#end
+    let pa = collide(a, moments(a));
+    let pb = collide(b, moments(b));
+    let pc = collide(c, moments(c));
+    let pd = collide(d, moments(d));
+    //#for i
+    {
+        // post_i of cell 4q + t goes to slot i of cell 4q + t + c_i.
+        let e = q + row * ({i.cy} + ny * {i.cz});
+        if {i.cx} == 0 {
+            q{i}[u32(e)] = vec4<f32>(pa[{i}], pb[{i}], pc[{i}], pd[{i}]);
+        } else if {i.cx} == 1 {
+            q{i}[u32(e)].y = pa[{i}];
+            q{i}[u32(e)].z = pb[{i}];
+            q{i}[u32(e)].w = pc[{i}];
+            q{i}[u32(e + 1)].x = pd[{i}];
+        } else {
+            q{i}[u32(e - 1)].w = pa[{i}];
+            q{i}[u32(e)].x = pb[{i}];
+            q{i}[u32(e)].y = pc[{i}];
+            q{i}[u32(e)].z = pd[{i}];
+        }
+    }
+    //#end
+}
+
+// The cell at q, at most one cell outside the grid along each axis, wrapped periodically.
+fn wrapped(q: vec3<i32>) -> u32 {
+    let n = vec3<i32>(params.n.xyz);
+    return wrap(q.x, n.x) + params.n.x * (wrap(q.y, n.y) + params.n.y * wrap(q.z, n.z));
 }
 
 // Density and velocity of every cell, and the health check: the smallest index of a cell with a

@@ -7,8 +7,8 @@ use std::process::ExitCode;
 use std::sync::Arc;
 use std::time::Instant;
 
-/// Bytes moved per cell per step: 19 populations read and written in f32, plus the 4-byte cell
-/// flags (which links leave the fluid: no neighbour lookups in the kernel).
+/// Bytes moved per cell per step: 19 populations read and written in f32, plus at most one 4-byte
+/// cell-list entry (one per four cells for quads).
 pub const BYTES_PER_CELL: f64 = 19.0 * 4.0 * 2.0 + 4.0;
 
 #[derive(clap::Args)]
@@ -26,6 +26,12 @@ pub struct BenchArgs {
     /// 4 cells diameter on a regular lattice, immersed moving boundary; MLUPS and ratio to LBM-only.
     #[arg(long, value_delimiter = ',')]
     particles: Vec<usize>,
+    /// Timed rounds, ours and the naive kernel alternating (best round reported).
+    #[arg(long, default_value_t = 3)]
+    rounds: u32,
+    /// Which kernels to time: both, ours or naive (for instruction counts under a profiler).
+    #[arg(long, default_value = "both", hide = true)]
+    kernel: String,
 }
 
 /// Parses "NXxNYxNZ".
@@ -74,19 +80,42 @@ fn run(args: &BenchArgs) -> Result<(), String> {
     if args.steps == 0 {
         return Err("--steps = 0: must be at least 1".into());
     }
+    let (time_ours, time_naive) = match args.kernel.as_str() {
+        "both" => (true, true),
+        "ours" => (true, false),
+        "naive" => (false, true),
+        other => return Err(format!("--kernel = {other:?}: expected both, ours or naive")),
+    };
+    let rounds = args.rounds.max(1);
     let gpu = Arc::new(Gpu::new()?);
     let bandwidth = copy_bandwidth(&gpu);
     let setup = Setup::new(n, [Face::Periodic; 6], tau, operator);
     let cells = setup.cells() as f64;
     let mut lattice = Lattice::new(gpu.clone(), setup, Health::default(), None)?;
+    let naive = if time_naive { Naive::new(&gpu, n) } else { None };
+    // Warm-up, then rounds alternating ours and the naive kernel, so that both see the same load.
     lattice.step(20);
     gpu.wait();
-    let start = Instant::now();
-    lattice.step(args.steps);
-    gpu.wait();
-    let seconds = start.elapsed().as_secs_f64();
-    let mlups = cells * args.steps as f64 / seconds / 1e6;
-    let naive = naive_mlups(&gpu, n, args.steps);
+    if let Some(naive) = &naive {
+        naive.run(&gpu, 20);
+    }
+    let mlups = |seconds: f64| cells * args.steps as f64 / seconds / 1e6;
+    let (mut ours, mut theirs) = (Vec::new(), Vec::new());
+    for _ in 0..rounds {
+        if time_ours {
+            let start = Instant::now();
+            lattice.step(args.steps);
+            gpu.wait();
+            ours.push(mlups(start.elapsed().as_secs_f64()));
+        }
+        if let Some(naive) = &naive {
+            let start = Instant::now();
+            naive.run(&gpu, args.steps);
+            theirs.push(mlups(start.elapsed().as_secs_f64()));
+        }
+    }
+    let best = |v: &[f64]| v.iter().cloned().fold(0.0, f64::max);
+    let list = |v: &[f64]| v.iter().map(|m| format!("{m:.2}")).collect::<Vec<_>>().join(" ");
     let roofline = bandwidth / BYTES_PER_CELL / 1e6;
     println!(
         "adapter:        {} ({:?}, {:?})",
@@ -96,26 +125,42 @@ fn run(args: &BenchArgs) -> Result<(), String> {
         "grid:           {}x{}x{} ({} cells), operator {}",
         n[0], n[1], n[2], cells, args.operator
     );
-    println!("steps:          {} in {:.3} s", args.steps, seconds);
-    println!("MLUPS:          {mlups:.1}");
-    println!("bytes/cell/step {BYTES_PER_CELL} (FP32 populations, AA pattern: 19 reads + 19 writes + a 4-byte flag word)");
-    println!(
-        "copy bandwidth: {:.1} GB/s (buffer-to-buffer copy, this run)",
-        bandwidth / 1e9
-    );
-    println!(
-        "roofline:       {roofline:.1} MLUPS; achieved {:.1}% of it",
-        100.0 * mlups / roofline
-    );
+    println!("steps:          {} per round, {rounds} rounds", args.steps);
+    let mlups = best(&ours);
+    if time_ours {
+        println!("MLUPS:          {mlups:.1} (best round; rounds: {})", list(&ours));
+        println!("bytes/cell/step {BYTES_PER_CELL} (FP32 populations, AA pattern: 19 reads + 19 writes + a 4-byte cell-list entry at most)");
+        println!(
+            "copy bandwidth: {:.1} GB/s (buffer-to-buffer copy, this run)",
+            bandwidth / 1e9
+        );
+        println!(
+            "roofline:       {roofline:.1} MLUPS; achieved {:.1}% of it",
+            100.0 * mlups / roofline
+        );
+    }
     if !args.particles.is_empty() {
         coupled_sweep(&gpu, n, tau, operator, args.steps, &args.particles, mlups)?;
     }
-    match naive {
-        Some(naive) => println!(
-            "naive kernel:   {naive:.1} MLUPS (two lattices, pull, BGK, same grid, same run): ours is {:.2}x",
-            mlups / naive
-        ),
-        None => println!("naive kernel:   skipped (grid too large for one binding)"),
+    if time_naive {
+        match naive {
+            Some(_) => {
+                let naive = best(&theirs);
+                println!(
+                    "naive kernel:   {naive:.1} MLUPS (best round; rounds: {}; two lattices, pull, BGK, same grid, same run)",
+                    list(&theirs)
+                );
+                if time_ours {
+                    let ratios: Vec<f64> = ours.iter().zip(&theirs).map(|(a, b)| a / b).collect();
+                    println!(
+                        "ours / naive:   {:.2}x (best rounds; per round: {})",
+                        mlups / naive,
+                        list(&ratios)
+                    );
+                }
+            }
+            None => println!("naive kernel:   skipped (a lattice exceeds this device's buffer limits)"),
+        }
     }
     Ok(())
 }
@@ -149,95 +194,124 @@ pub fn copy_bandwidth(gpu: &Gpu) -> f64 {
         .fold(0.0, f64::max)
 }
 
-/// MLUPS of the textbook two-lattice pull kernel (shaders/naive_pull.wgsl), or None when its
-/// single-array lattice exceeds the binding limit.
-fn naive_mlups(gpu: &Gpu, n: [usize; 3], steps: u64) -> Option<f64> {
-    use wgpu::util::DeviceExt;
-    let cells = n[0] * n[1] * n[2];
-    let bytes = (19 * cells * 4) as u64;
-    if bytes > gpu.limits.max_storage_buffer_binding_size {
-        return None;
-    }
-    let d = &gpu.device;
-    let lattice: Vec<f32> = (0..19 * cells)
-        .map(|j| crate::lbm::lattice::W[j / cells] as f32)
-        .collect();
-    let buffers: Vec<wgpu::Buffer> = (0..2)
-        .map(|_| {
-            d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("naive"),
-                contents: bytemuck::cast_slice(&lattice),
-                usage: wgpu::BufferUsages::STORAGE,
+/// The textbook two-lattice pull kernel (shaders/naive_pull.wgsl), ready to run on a periodic grid.
+struct Naive {
+    pipeline: wgpu::ComputePipeline,
+    groups: [wgpu::BindGroup; 2],
+    workgroups: (u32, u32),
+}
+
+impl Naive {
+    /// None when a lattice (two binding ranges, directions 0-9 and 10-18) exceeds the limits.
+    fn new(gpu: &Gpu, n: [usize; 3]) -> Option<Naive> {
+        use wgpu::util::DeviceExt;
+        let cells = n[0] * n[1] * n[2];
+        let align = u64::from(gpu.limits.min_storage_buffer_offset_alignment);
+        let lo_bytes = (10 * cells * 4) as u64;
+        let hi_offset = lo_bytes.div_ceil(align) * align;
+        let hi_bytes = (9 * cells * 4) as u64;
+        let total = hi_offset + hi_bytes;
+        if lo_bytes > gpu.limits.max_storage_buffer_binding_size || total > gpu.limits.max_buffer_size {
+            return None;
+        }
+        let d = &gpu.device;
+        let mut lattice = vec![0f32; (total / 4) as usize];
+        for i in 0..19 {
+            let start = if i < 10 {
+                i * cells
+            } else {
+                hi_offset as usize / 4 + (i - 10) * cells
+            };
+            lattice[start..start + cells].fill(crate::lbm::lattice::W[i] as f32);
+        }
+        let buffers: Vec<wgpu::Buffer> = (0..2)
+            .map(|_| {
+                d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some("naive"),
+                    contents: bytemuck::cast_slice(&lattice),
+                    usage: wgpu::BufferUsages::STORAGE,
+                })
             })
+            .collect();
+        let params: [u32; 8] = [
+            n[0] as u32,
+            n[1] as u32,
+            n[2] as u32,
+            0,
+            (1.0f32 / 0.6).to_bits(),
+            0,
+            0,
+            0,
+        ];
+        let uniform = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("naive params"),
+            contents: bytemuck::cast_slice(&params),
+            usage: wgpu::BufferUsages::UNIFORM,
+        });
+        let source = crate::lbm::unroll::unroll(include_str!("../../shaders/naive_pull.wgsl"));
+        let module = d.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("naive_pull.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(source.into()),
+        });
+        let pipeline = d.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some("naive_pull"),
+            layout: None,
+            module: &module,
+            entry_point: Some("naive_pull"),
+            compilation_options: Default::default(),
+            cache: None,
+        });
+        fn range(buffer: &wgpu::Buffer, offset: u64, size: u64) -> wgpu::BindingResource<'_> {
+            wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                buffer,
+                offset,
+                size: std::num::NonZeroU64::new(size),
+            })
+        }
+        let groups = [0, 1].map(|parity| {
+            let (src, dst) = (&buffers[parity], &buffers[1 - parity]);
+            let resources = [
+                uniform.as_entire_binding(),
+                range(src, 0, lo_bytes),
+                range(src, hi_offset, hi_bytes),
+                range(dst, 0, lo_bytes),
+                range(dst, hi_offset, hi_bytes),
+            ];
+            let entries: Vec<wgpu::BindGroupEntry> = resources
+                .into_iter()
+                .enumerate()
+                .map(|(binding, resource)| wgpu::BindGroupEntry {
+                    binding: binding as u32,
+                    resource,
+                })
+                .collect();
+            d.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: None,
+                layout: &pipeline.get_bind_group_layout(0),
+                entries: &entries,
+            })
+        });
+        let workgroups = (cells as u32).div_ceil(64);
+        let x = workgroups.min(65_535);
+        Some(Naive {
+            pipeline,
+            groups,
+            workgroups: (x, workgroups.div_ceil(x)),
         })
-        .collect();
-    let params: [u32; 8] = [
-        n[0] as u32,
-        n[1] as u32,
-        n[2] as u32,
-        0,
-        (1.0f32 / 0.6).to_bits(),
-        0,
-        0,
-        0,
-    ];
-    let uniform = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-        label: Some("naive params"),
-        contents: bytemuck::cast_slice(&params),
-        usage: wgpu::BufferUsages::UNIFORM,
-    });
-    let module = d.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: Some("naive_pull.wgsl"),
-        source: wgpu::ShaderSource::Wgsl(include_str!("../../shaders/naive_pull.wgsl").into()),
-    });
-    let pipeline = d.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-        label: Some("naive_pull"),
-        layout: None,
-        module: &module,
-        entry_point: Some("naive_pull"),
-        compilation_options: Default::default(),
-        cache: None,
-    });
-    let groups = [0, 1].map(|parity| {
-        d.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: None,
-            layout: &pipeline.get_bind_group_layout(0),
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: uniform.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: buffers[parity].as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 2,
-                    resource: buffers[1 - parity].as_entire_binding(),
-                },
-            ],
-        })
-    });
-    let workgroups = (cells as u32).div_ceil(64);
-    let (x, y) = (
-        workgroups.min(65_535),
-        workgroups.div_ceil(workgroups.min(65_535)),
-    );
-    let run = |count: u64| {
-        let mut encoder = d.create_command_encoder(&Default::default());
-        for step in 0..count {
+    }
+
+    /// Runs `steps` steps (one submit) and waits for them.
+    fn run(&self, gpu: &Gpu, steps: u64) {
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        for step in 0..steps {
             let mut pass = encoder.begin_compute_pass(&Default::default());
-            pass.set_pipeline(&pipeline);
-            pass.set_bind_group(0, &groups[(step % 2) as usize], &[]);
-            pass.dispatch_workgroups(x, y, 1);
+            pass.set_pipeline(&self.pipeline);
+            pass.set_bind_group(0, &self.groups[(step % 2) as usize], &[]);
+            pass.dispatch_workgroups(self.workgroups.0, self.workgroups.1, 1);
         }
         gpu.queue.submit([encoder.finish()]);
         gpu.wait();
-    };
-    run(10);
-    let start = Instant::now();
-    run(steps);
-    Some(cells as f64 * steps as f64 / start.elapsed().as_secs_f64() / 1e6)
+    }
 }
 
 /// Coupled MLUPS for each particle count, against the LBM-only figure of the same run.

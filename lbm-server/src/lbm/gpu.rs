@@ -17,7 +17,9 @@ const MAX_GROUPS: u32 = 65_535;
 const FIRST_POPULATION_BINDING: u32 = 5;
 /// The immersed-boundary bindings follow the populations: particles, pairs, covered, slots, info.
 pub(super) const FIRST_IMB_BINDING: u32 = FIRST_POPULATION_BINDING + 19;
-const BINDINGS: u32 = FIRST_IMB_BINDING + 5;
+/// The cell list (read-only) follows them.
+const CELL_LIST_BINDING: u32 = FIRST_IMB_BINDING + 5;
+const BINDINGS: u32 = CELL_LIST_BINDING + 1;
 
 /// The device and its queue.
 pub struct Gpu {
@@ -95,6 +97,9 @@ struct Params {
     relax: [f32; 4],
     force: [f32; 4],
     face_value: [[f32; 4]; 6],
+    ranges: [u32; 4],
+    quads: [u32; 4],
+    wrapped: [u32; 4],
 }
 
 /// Limits of the health check, in lattice units.
@@ -125,9 +130,19 @@ pub struct Lattice {
     mrt: wgpu::Buffer,
     fields: wgpu::Buffer,
     pub(super) status: wgpu::Buffer,
+    cell_list: wgpu::Buffer,
+    /// The classes of the cell list (see `CellList`).
+    classes: CellList,
     layout: wgpu::BindGroupLayout,
     pub(super) bind_groups: [wgpu::BindGroup; 2],
+    /// The boundary cells, either parity.
     pub(super) stream_collide: wgpu::ComputePipeline,
+    /// The other fluid cells: even step of all, odd step of the interior, odd step of the wrapping.
+    stream_collide_fluid: [wgpu::ComputePipeline; 3],
+    /// The even step of quads (four consecutive cells) of interior or wrapping cells.
+    stream_collide_quads: Option<wgpu::ComputePipeline>,
+    /// The odd step of quads of interior cells.
+    stream_collide_quads_odd: Option<wgpu::ComputePipeline>,
     macroscopic: wgpu::ComputePipeline,
     /// Particle coupling (immersed moving boundary), when the scene has particles.
     pub(super) imb: Option<super::imb::Coupling>,
@@ -186,7 +201,7 @@ impl Lattice {
         }
         let d = &gpu.device;
         let populations: Vec<wgpu::Buffer> = (0..19)
-            .map(|i| storage_buffer(d, &format!("f{i}"), bytes))
+            .map(|i| storage_buffer(d, &format!("f{i}"), bytes.div_ceil(16) * 16))
             .collect();
         let init = |label: &str, contents: &[u8], usage| {
             d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -203,15 +218,25 @@ impl Lattice {
         let mrt = init(
             "mrt",
             bytemuck::cast_slice(&mrt_matrices(&setup)),
-            wgpu::BufferUsages::STORAGE,
+            wgpu::BufferUsages::UNIFORM,
         );
         let fields = storage_buffer(d, "fields", bytes * 4);
         let status = init("status", bytemuck::cast_slice(&[u32::MAX, 0, 0, 0]), STORAGE);
+        let classes = CellList::new(&setup, imb.is_none());
+        let cell_list = init(
+            "cell list",
+            bytemuck::cast_slice(if classes.list.is_empty() {
+                &[0u32]
+            } else {
+                &classes.list
+            }),
+            wgpu::BufferUsages::STORAGE,
+        );
         let params: Vec<wgpu::Buffer> = (0..2)
             .map(|parity| {
                 init(
                     "params",
-                    bytemuck::bytes_of(&params(&setup, parity, health)),
+                    bytemuck::bytes_of(&params(&setup, parity, health, &classes)),
                     wgpu::BufferUsages::UNIFORM,
                 )
             })
@@ -231,13 +256,16 @@ impl Lattice {
         let constants = [
             ("OPERATOR", setup.operator.code() as f64),
             ("IMB", f64::from(u8::from(imb.is_some()))),
+            ("FORCE", f64::from(u8::from(setup.force != [0.0; 3]))),
             ("SLOTS", imb.map_or(2, |o| o.slots) as f64),
             (
                 "SEED_WEIGHTING",
                 f64::from(u8::from(imb.is_some_and(|o| o.seed_weighting))),
             ),
         ];
-        let pipeline = |entry: &str| {
+        let pipeline_kind = |entry: &str, kind: u32| {
+            let mut constants = constants.to_vec();
+            constants.push(("KIND", f64::from(kind)));
             d.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
                 label: Some(entry),
                 layout: Some(&pipeline_layout),
@@ -250,7 +278,12 @@ impl Lattice {
                 cache: None,
             })
         };
+        let pipeline = |entry: &str| pipeline_kind(entry, 0);
         let stream_collide = pipeline("stream_collide");
+        let stream_collide_fluid = [0, 1, 2].map(|kind| pipeline_kind("stream_collide_fluid", kind));
+        let stream_collide_quads = (classes.quads > 0).then(|| pipeline("stream_collide_quads"));
+        let stream_collide_quads_odd =
+            (classes.interior_quads > 0).then(|| pipeline("stream_collide_quads_odd"));
         let macroscopic = pipeline("macroscopic");
         let coupling = coupling.with_pipelines(imb.is_some(), &pipeline);
         let bind_groups = [0, 1].map(|parity| {
@@ -264,6 +297,7 @@ impl Lattice {
                 &status,
                 &populations,
                 &coupling,
+                &cell_list,
             )
         });
         let lattice = Lattice {
@@ -275,9 +309,14 @@ impl Lattice {
             mrt,
             fields,
             status,
+            cell_list,
+            classes,
             layout,
             bind_groups,
             stream_collide,
+            stream_collide_fluid,
+            stream_collide_quads,
+            stream_collide_quads_odd,
             macroscopic,
             imb: Some(coupling),
             time: 0,
@@ -306,6 +345,7 @@ impl Lattice {
                 &self.status,
                 &self.populations,
                 coupling,
+                &self.cell_list,
             )
         });
     }
@@ -330,8 +370,7 @@ impl Lattice {
     pub fn step(&mut self, steps: u64) {
         let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
         for done in 0..steps {
-            self.dispatch(&mut encoder, &self.stream_collide, self.time % 2);
-            self.time += 1;
+            self.encode_step(&mut encoder);
             if done % 64 == 63 {
                 let full = std::mem::replace(
                     &mut encoder,
@@ -370,9 +409,30 @@ impl Lattice {
         pass.dispatch_workgroups(x, groups.div_ceil(x), 1);
     }
 
-    /// Adds one stream-collide step to `encoder`.
+    /// Adds one stream-collide step to `encoder`: the fluid cells by class (one or two dispatches),
+    /// then the boundary cells.
     pub(super) fn encode_step(&mut self, encoder: &mut wgpu::CommandEncoder) {
-        self.dispatch(encoder, &self.stream_collide, self.time % 2);
+        let parity = self.time % 2;
+        let c = &self.classes;
+        let [interior, wrapping, boundary] = c.sizes;
+        let groups = |cells: u32| cells.div_ceil(WORKGROUP);
+        let fluid = &self.stream_collide_fluid;
+        if parity == 0 {
+            if let Some(quads) = &self.stream_collide_quads {
+                self.dispatch_groups(encoder, quads, parity, groups(c.quads));
+            }
+            let rest = interior + wrapping - c.in_quads[0] - c.in_quads[1];
+            self.dispatch_groups(encoder, &fluid[0], parity, groups(rest));
+        } else {
+            if let Some(quads) = &self.stream_collide_quads_odd {
+                self.dispatch_groups(encoder, quads, parity, groups(c.interior_quads));
+            }
+            if c.interior_quads == 0 {
+                self.dispatch_groups(encoder, &fluid[1], parity, groups(interior));
+            }
+            self.dispatch_groups(encoder, &fluid[2], parity, groups(c.wrapped().1));
+        }
+        self.dispatch_groups(encoder, &self.stream_collide, parity, groups(boundary));
         self.time += 1;
     }
 
@@ -424,8 +484,9 @@ impl Lattice {
     }
 }
 
-/// Params (uniform), flags and MRT matrices (read-only), then fields, status and the 19
-/// population buffers (read-write): one layout for both kernels.
+/// Params (uniform), flags (read-only), MRT matrices (uniform), then fields, status, the 19
+/// population buffers and the coupling's (read-write), the cell list (read-only): one layout for
+/// all kernels.
 fn bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
     let storage = |binding: u32, read_only: bool| wgpu::BindGroupLayoutEntry {
         binding,
@@ -437,8 +498,8 @@ fn bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
         },
         count: None,
     };
-    let mut entries = vec![wgpu::BindGroupLayoutEntry {
-        binding: 0,
+    let uniform = |binding: u32| wgpu::BindGroupLayoutEntry {
+        binding,
         visibility: wgpu::ShaderStages::COMPUTE,
         ty: wgpu::BindingType::Buffer {
             ty: wgpu::BufferBindingType::Uniform,
@@ -446,10 +507,11 @@ fn bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
             min_binding_size: None,
         },
         count: None,
-    }];
-    entries.extend([storage(1, true), storage(2, true)]);
-    entries.extend((3..BINDINGS - 1).map(|b| storage(b, false)));
-    entries.push(storage(BINDINGS - 1, true));
+    };
+    let mut entries = vec![uniform(0), storage(1, true), uniform(2)];
+    entries.extend((3..CELL_LIST_BINDING - 1).map(|b| storage(b, false)));
+    entries.push(storage(CELL_LIST_BINDING - 1, true));
+    entries.push(storage(CELL_LIST_BINDING, true));
     device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
         label: Some("lattice"),
         entries: &entries,
@@ -481,6 +543,7 @@ fn make_bind_group(
     status: &wgpu::Buffer,
     populations: &[wgpu::Buffer],
     coupling: &super::imb::Coupling,
+    cell_list: &wgpu::Buffer,
 ) -> wgpu::BindGroup {
     let mut entries = vec![
         entry(0, params),
@@ -502,6 +565,7 @@ fn make_bind_group(
             .enumerate()
             .map(|(i, b)| entry(FIRST_IMB_BINDING + i as u32, b)),
     );
+    entries.push(entry(CELL_LIST_BINDING, cell_list));
     d.create_bind_group(&wgpu::BindGroupDescriptor {
         label: Some("lattice"),
         layout,
@@ -542,7 +606,105 @@ pub fn cell_flags(setup: &Setup) -> Vec<u32> {
         .collect()
 }
 
-fn params(setup: &Setup, parity: usize, health: Health) -> Params {
+/// The fluid cells by class, and the quads. Classes: interior (no link leaves the fluid or wraps:
+/// fixed neighbour offsets), wrapping (no link leaves the fluid, some cross a periodic face),
+/// boundary (some link leaves the fluid). Quads: q such that cells 4q..4q+3 are all interior or
+/// wrapping, whose even step moves four cells per vector access; interior quads, of four interior
+/// cells, do so in the odd step too when nx is a multiple of 4 (no quads with particles).
+pub struct CellList {
+    /// Interior cells (those of interior quads first, then those of other quads), wrapping cells
+    /// (those of quads last), boundary cells, each group in increasing order, then the quads, then
+    /// the interior quads.
+    pub list: Vec<u32>,
+    /// Interior, wrapping, boundary cells.
+    pub sizes: [u32; 3],
+    /// Interior and wrapping cells that belong to a quad.
+    pub in_quads: [u32; 2],
+    /// Interior cells that belong to an interior quad.
+    pub in_interior_quads: u32,
+    pub quads: u32,
+    pub interior_quads: u32,
+}
+
+impl CellList {
+    /// The cells of the odd step through the periodic wrap (first, count): the wrapping cells and,
+    /// when there are interior quads, the interior cells outside them too (one dispatch fewer).
+    pub fn wrapped(&self) -> (u32, u32) {
+        let [interior, wrapping, _] = self.sizes;
+        if self.interior_quads > 0 {
+            (
+                self.in_interior_quads,
+                interior + wrapping - self.in_interior_quads,
+            )
+        } else {
+            (interior, wrapping)
+        }
+    }
+
+    pub fn new(setup: &Setup, with_quads: bool) -> CellList {
+        let flags = cell_flags(setup);
+        let cells = flags.len();
+        let class = |flag: u32| {
+            if flag & SOLID_FLAG != 0 {
+                3
+            } else if flag & 0x7ffff != 0 {
+                2
+            } else if flag & WRAPS_FLAG != 0 {
+                1
+            } else {
+                0
+            }
+        };
+        let all = |q: usize, most: u32| (4 * q..4 * q + 4).all(|k| class(flags[k]) <= most);
+        let quads: Vec<u32> = (0..cells / 4)
+            .filter(|&q| with_quads && all(q, 1))
+            .map(|q| q as u32)
+            .collect();
+        let interior_quads: Vec<u32> = quads
+            .iter()
+            .copied()
+            .filter(|&q| setup.n[0].is_multiple_of(4) && all(q as usize, 0))
+            .collect();
+        // 0: in no quad, 1: in a quad, 2: in an interior quad.
+        let mut membership = vec![0u8; cells];
+        for (quads, value) in [(&quads, 1), (&interior_quads, 2)] {
+            for q in quads {
+                membership[4 * *q as usize..4 * *q as usize + 4].fill(value);
+            }
+        }
+        let (flags, membership) = (&flags, &membership);
+        let select = |c: u32, m: u8| {
+            (0..cells)
+                .filter(move |&k| class(flags[k]) == c && membership[k] == m)
+                .map(|k| k as u32)
+        };
+        let mut list: Vec<u32> = select(0, 2).collect();
+        let in_interior_quads = list.len() as u32;
+        list.extend(select(0, 1));
+        let interior_in_quads = list.len() as u32;
+        list.extend(select(0, 0));
+        let interior = list.len() as u32;
+        list.extend(select(1, 0));
+        let before = list.len() as u32;
+        list.extend(select(1, 1));
+        let wrapping_in_quads = list.len() as u32 - before;
+        let wrapping = list.len() as u32 - interior;
+        list.extend(select(2, 0));
+        let boundary = list.len() as u32 - interior - wrapping;
+        list.extend(&quads);
+        list.extend(&interior_quads);
+        CellList {
+            list,
+            sizes: [interior, wrapping, boundary],
+            in_quads: [interior_in_quads, wrapping_in_quads],
+            in_interior_quads,
+            quads: quads.len() as u32,
+            interior_quads: interior_quads.len() as u32,
+        }
+    }
+}
+
+fn params(setup: &Setup, parity: usize, health: Health, classes: &CellList) -> Params {
     let face = |f: usize| setup.faces[f].code();
     let values = |f: &Face| {
         let (u, rho) = f.values();
@@ -570,19 +732,36 @@ fn params(setup: &Setup, parity: usize, health: Health) -> Params {
             0.0,
         ],
         face_value: std::array::from_fn(|f| values(&setup.faces[f])),
+        ranges: [
+            classes.sizes[0],
+            classes.sizes[1],
+            classes.sizes[2],
+            classes.quads,
+        ],
+        quads: [
+            classes.in_quads[0],
+            classes.in_quads[1],
+            classes.in_interior_quads,
+            classes.interior_quads,
+        ],
+        wrapped: [classes.wrapped().0, classes.wrapped().1, 0, 0],
     }
 }
 
-/// The MRT matrices A and B (zeros for other operators: the buffer must exist anyway).
+/// The MRT matrices A and B, padded to 181 vec4 (zeros for other operators: the buffer must
+/// exist anyway).
 fn mrt_matrices(setup: &Setup) -> Vec<f32> {
     let (a, b) = match setup.operator {
         Operator::Mrt { rates } => mrt::collision_matrices(&rates),
         _ => ([[0.0; 19]; 19], [[0.0; 19]; 19]),
     };
-    a.iter()
+    let mut values: Vec<f32> = a
+        .iter()
         .chain(b.iter())
         .flat_map(|row| row.iter().map(|v| *v as f32))
-        .collect()
+        .collect();
+    values.resize(181 * 4, 0.0);
+    values
 }
 
 /// Shifted equilibrium populations of a whole lattice for given density and velocity per cell.
@@ -601,4 +780,76 @@ pub fn total_mass(setup: &Setup, f: &[Cell]) -> f64 {
         .filter(|k| !setup.solid[*k])
         .map(|k| f[k].iter().zip(W.iter()).map(|(fi, wi)| fi + wi).sum::<f64>())
         .sum()
+}
+
+/// The quad kernels (four cells per invocation) against the f64 reference step: the other tests'
+/// grids have no interior quads (nx not a multiple of 4).
+#[cfg(test)]
+mod quad_tests {
+    use super::super::geometry::{Face, Operator, Setup};
+    use super::super::mrt::Rates;
+    use super::super::random::{random_populations, Random};
+    use super::super::reference;
+    use super::*;
+
+    fn check(setup: Setup, seed: u64) {
+        let classes = CellList::new(&setup, true);
+        assert!(
+            classes.quads > 0 && classes.interior_quads > 0,
+            "the grid has quads"
+        );
+        let mut f = random_populations(&setup, seed);
+        let gpu = std::sync::Arc::new(Gpu::new().expect("a wgpu adapter (lavapipe in CI)"));
+        let mut lattice = Lattice::new(gpu, setup.clone(), Health::default(), None).unwrap();
+        lattice.set_populations(&f);
+        let tolerance = 64.0 * f32::EPSILON as f64 * 0.35;
+        for step in 1..=4 {
+            f = reference::step(&setup, &f);
+            lattice.step(1);
+            let err = lattice
+                .populations()
+                .iter()
+                .zip(&f)
+                .flat_map(|(a, b)| a.iter().zip(b).map(|(p, q)| (p - q).abs()))
+                .fold(0.0, f64::max);
+            assert!(err < tolerance, "step {step} differs by {err:e}");
+        }
+    }
+
+    #[test]
+    fn bgk_periodic_quads_match_reference() {
+        let setup = Setup::new([16, 6, 5], [Face::Periodic; 6], 0.8, Operator::Bgk);
+        check(setup, 11);
+    }
+
+    #[test]
+    fn mrt_walls_solids_force_quads_match_reference() {
+        let faces = [
+            Face::Periodic,
+            Face::Periodic,
+            Face::Wall,
+            Face::MovingWall([0.02, 0.0, 0.01]),
+            Face::Periodic,
+            Face::Periodic,
+        ];
+        let rates = Rates::dhumieres(1.0 / 0.7);
+        let mut setup = Setup::new([12, 7, 6], faces, 0.7, Operator::Mrt { rates });
+        setup.force = [1e-4, -2e-4, 3e-5];
+        let mut r = Random::new(12);
+        for s in setup.solid.iter_mut() {
+            *s = r.next() > 0.95;
+        }
+        check(setup, 13);
+    }
+
+    #[test]
+    fn trt_periodic_quads_match_reference() {
+        let setup = Setup::new(
+            [12, 6, 6],
+            [Face::Periodic; 6],
+            0.6,
+            Operator::Trt { magic: 3.0 / 16.0 },
+        );
+        check(setup, 14);
+    }
 }
