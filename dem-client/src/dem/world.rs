@@ -108,14 +108,29 @@ impl Wall {
     }
 }
 
-/// A pair of the Verlet list with its contact history.
+/// A pair of the Verlet list with its contact history. Not touching implies a zero history and a
+/// zero force in `World::out` (so a pair that stays apart costs no writes).
 #[derive(Debug, Clone, Copy)]
 struct Slot {
     i: u32,
     j: u32,
     touching: bool,
     history: V3,
-    out: ContactForce,
+}
+
+/// The constants of a listed pair, computed once per neighbour-list build with the same
+/// expressions as in the contact loop (so the same bits).
+#[derive(Debug, Clone, Copy)]
+struct PairConst {
+    /// (r_i + r_j)^2.
+    cut2: f64,
+    /// r_i + r_j.
+    r_sum: f64,
+    /// R* = r_i r_j / (r_i + r_j), m* = m_i m_j / (m_i + m_j).
+    r_eff: f64,
+    m_eff: f64,
+    /// Index into the pair materials.
+    material: u32,
 }
 
 /// The particles, the walls and the contact model.
@@ -130,10 +145,16 @@ pub struct World {
     pub dt: f64,
     pub skin: f64,
     pub time: f64,
+    /// The Verlet pairs (i < j), sorted by i then j.
     slots: Vec<Slot>,
-    /// Per body, the slots it belongs to: (slot, +1 for i / -1 for j), CSR.
-    adj_start: Vec<u32>,
-    adj: Vec<(u32, f64)>,
+    pair_const: Vec<PairConst>,
+    /// Force on i and torques of each pair at the last evaluation (zero when not touching).
+    out: Vec<ContactForce>,
+    /// Per body, its first slot as i (CSR: the slots with i = k are `first_i[k]..first_i[k + 1]`).
+    first_i: Vec<u32>,
+    /// Per body, the slots in which it is j, in slot order (CSR over `as_j`).
+    as_j_start: Vec<u32>,
+    as_j: Vec<u32>,
     /// Per body and wall: contact history.
     wall_history: Vec<V3>,
     x_at_build: Vec<V3>,
@@ -168,8 +189,11 @@ impl World {
             skin,
             time: 0.0,
             slots: Vec::new(),
-            adj_start: Vec::new(),
-            adj: Vec::new(),
+            pair_const: Vec::new(),
+            out: Vec::new(),
+            first_i: Vec::new(),
+            as_j_start: Vec::new(),
+            as_j: Vec::new(),
             wall_history: Vec::new(),
             x_at_build: Vec::new(),
             stale: true,
@@ -304,10 +328,26 @@ impl World {
                     j,
                     touching: history != V3::zeros(),
                     history,
-                    out: ContactForce::default(),
                 }
             })
             .collect();
+        let nm = self.n_materials;
+        self.pair_const = self
+            .slots
+            .iter()
+            .map(|s| {
+                let (a, b) = (&self.bodies[s.i as usize], &self.bodies[s.j as usize]);
+                PairConst {
+                    cut2: (a.r + b.r) * (a.r + b.r),
+                    r_sum: a.r + b.r,
+                    r_eff: a.r * b.r / (a.r + b.r),
+                    m_eff: a.m * b.m / (a.m + b.m),
+                    material: (a.material * nm + b.material) as u32,
+                }
+            })
+            .collect();
+        self.out.clear();
+        self.out.resize(self.slots.len(), ContactForce::default());
         self.build_adjacency();
         let w = self.walls.len();
         self.wall_history
@@ -317,26 +357,28 @@ impl World {
         self.builds += 1;
     }
 
+    /// The slots of each body: as i a contiguous range (the slots are sorted by i), as j a list.
     fn build_adjacency(&mut self) {
         let n = self.bodies.len();
+        let mut first_i = vec![0u32; n + 1];
         let mut start = vec![0u32; n + 1];
         for s in &self.slots {
-            start[s.i as usize + 1] += 1;
+            first_i[s.i as usize + 1] += 1;
             start[s.j as usize + 1] += 1;
         }
         for k in 0..n {
+            first_i[k + 1] += first_i[k];
             start[k + 1] += start[k];
         }
         let mut fill = start.clone();
-        let mut adj = vec![(0u32, 0.0); 2 * self.slots.len()];
+        let mut as_j = vec![0u32; self.slots.len()];
         for (k, s) in self.slots.iter().enumerate() {
-            for (body, sign) in [(s.i, 1.0), (s.j, -1.0)] {
-                adj[fill[body as usize] as usize] = (k as u32, sign);
-                fill[body as usize] += 1;
-            }
+            as_j[fill[s.j as usize] as usize] = k as u32;
+            fill[s.j as usize] += 1;
         }
-        self.adj_start = start;
-        self.adj = adj;
+        self.first_i = first_i;
+        self.as_j_start = start;
+        self.as_j = as_j;
     }
 
     /// Contact forces and torques at the present positions; `dt` advances the contact histories;
@@ -356,27 +398,31 @@ impl World {
     fn pair_forces(&mut self, dt: f64) -> usize {
         let bodies = &self.bodies;
         let law = &self.law;
-        let (pm, nm) = (&self.pair_materials, self.n_materials);
+        let pm = &self.pair_materials;
         self.slots
             .par_iter_mut()
             .with_min_len(4 * CHUNK)
-            .map(|s| {
+            .zip(&self.pair_const)
+            .zip(&mut self.out)
+            .map(|((s, p), out)| {
                 let (a, b) = (&bodies[s.i as usize], &bodies[s.j as usize]);
                 let d = a.x - b.x;
                 let dist2 = d.norm_squared();
-                if dist2 >= (a.r + b.r) * (a.r + b.r) {
-                    s.touching = false;
-                    s.history = V3::zeros();
-                    s.out = ContactForce::default();
-                    return 0;
+                let apart = |s: &mut Slot, out: &mut ContactForce| {
+                    if s.touching {
+                        s.touching = false;
+                        s.history = V3::zeros();
+                        *out = ContactForce::default();
+                    }
+                    0
+                };
+                if dist2 >= p.cut2 {
+                    return apart(s, out);
                 }
                 let dist = dist2.sqrt();
-                let overlap = a.r + b.r - dist;
+                let overlap = p.r_sum - dist;
                 if overlap <= 0.0 {
-                    s.touching = false;
-                    s.history = V3::zeros();
-                    s.out = ContactForce::default();
-                    return 0;
+                    return apart(s, out);
                 }
                 let n = if dist > 0.0 { d / dist } else { V3::z() };
                 let c = Contact {
@@ -384,25 +430,26 @@ impl World {
                     overlap,
                     r_i: a.r,
                     r_j: b.r,
-                    r_eff: a.r * b.r / (a.r + b.r),
-                    m_eff: a.m * b.m / (a.m + b.m),
+                    r_eff: p.r_eff,
+                    m_eff: p.m_eff,
                     dv: a.v - b.v,
                     w_i: a.w,
                     w_j: b.w,
                 };
                 s.touching = true;
-                s.out = contact_force(law, &pm[a.material * nm + b.material], &c, &mut s.history, dt);
+                *out = contact_force(law, &pm[p.material as usize], &c, &mut s.history, dt);
                 1
             })
             .sum()
     }
 
     /// Sums the pair forces and adds the wall contacts, in parallel over the bodies; returns the
-    /// number of wall contacts.
+    /// number of wall contacts. Each body sums its pairs in slot order (first as j, then as i),
+    /// then its walls.
     fn gather(&mut self, dt: f64, finish: Finish) -> (usize, f64) {
         let g = self.gravity;
         let w = self.walls.len();
-        let (slots, adj, start) = (&self.slots, &self.adj, &self.adj_start);
+        let (out, first_i, as_j, as_j_start) = (&self.out, &self.first_i, &self.as_j, &self.as_j_start);
         let walls = &self.walls;
         let law = &self.law;
         let (pm, nm) = (&self.pair_materials, self.n_materials);
@@ -415,10 +462,14 @@ impl World {
             .enumerate()
             .map(|(k, ((b, hist), x0))| {
                 let (mut f, mut t) = (V3::zeros(), V3::zeros());
-                for &(slot, sign) in &adj[start[k] as usize..start[k + 1] as usize] {
-                    let out = &slots[slot as usize].out;
-                    f += sign * out.force;
-                    t += if sign > 0.0 { out.torque_i } else { out.torque_j };
+                for &slot in &as_j[as_j_start[k] as usize..as_j_start[k + 1] as usize] {
+                    let o = &out[slot as usize];
+                    f += -o.force;
+                    t += o.torque_j;
+                }
+                for o in &out[first_i[k] as usize..first_i[k + 1] as usize] {
+                    f += o.force;
+                    t += o.torque_i;
                 }
                 let mut touching = 0;
                 for (wall, h) in walls.iter().zip(hist.iter_mut()) {
