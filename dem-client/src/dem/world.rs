@@ -106,6 +106,15 @@ impl Wall {
             }
         }
     }
+
+    /// Can a sphere at `x` touch the wall after moving less than `margin`? (Both distances are
+    /// 1-Lipschitz in `x`.)
+    fn near(&self, x: V3, r: f64, margin: f64) -> bool {
+        match self.shape {
+            Shape::Plane { point, normal } => (x - point).dot(&normal) < r + margin,
+            Shape::Solid { min, max } => (x - x.sup(&min).inf(&max)).norm() < r + margin,
+        }
+    }
 }
 
 /// A pair of the Verlet list with its contact history. Not touching implies a zero history and a
@@ -157,6 +166,9 @@ pub struct World {
     as_j: Vec<u32>,
     /// Per body and wall: contact history.
     wall_history: Vec<V3>,
+    /// Per body, the walls it can touch before the next neighbour-list build (CSR, in wall order).
+    near_start: Vec<u32>,
+    near: Vec<u32>,
     x_at_build: Vec<V3>,
     stale: bool,
     /// Number of neighbour-list builds so far.
@@ -195,6 +207,8 @@ impl World {
             as_j_start: Vec::new(),
             as_j: Vec::new(),
             wall_history: Vec::new(),
+            near_start: Vec::new(),
+            near: Vec::new(),
             x_at_build: Vec::new(),
             stale: true,
             builds: 0,
@@ -352,6 +366,21 @@ impl World {
         let w = self.walls.len();
         self.wall_history
             .resize(self.bodies.len() * w.max(1), V3::zeros());
+        // Walls out of reach until the next build are apart now: their history is zero, as the
+        // contact loop would set it.
+        self.near_start.clear();
+        self.near_start.push(0);
+        self.near.clear();
+        for (k, b) in self.bodies.iter().enumerate() {
+            for (l, wall) in self.walls.iter().enumerate() {
+                if wall.near(b.x, b.r, self.skin) {
+                    self.near.push(l as u32);
+                } else {
+                    self.wall_history[k * w + l] = V3::zeros();
+                }
+            }
+            self.near_start.push(self.near.len() as u32);
+        }
         self.x_at_build = x;
         self.stale = false;
         self.builds += 1;
@@ -450,6 +479,7 @@ impl World {
         let g = self.gravity;
         let w = self.walls.len();
         let (out, first_i, as_j, as_j_start) = (&self.out, &self.first_i, &self.as_j, &self.as_j_start);
+        let (near, near_start) = (&self.near, &self.near_start);
         let walls = &self.walls;
         let law = &self.law;
         let (pm, nm) = (&self.pair_materials, self.n_materials);
@@ -472,7 +502,8 @@ impl World {
                     t += o.torque_i;
                 }
                 let mut touching = 0;
-                for (wall, h) in walls.iter().zip(hist.iter_mut()) {
+                for &l in &near[near_start[k] as usize..near_start[k + 1] as usize] {
+                    let (wall, h) = (&walls[l as usize], &mut hist[l as usize]);
                     let Some((n, overlap)) = wall.touch(b.x, b.r) else {
                         *h = V3::zeros();
                         continue;
