@@ -24,6 +24,8 @@ enum Finish {
 
 /// Fewest bodies per parallel task (tasks of a few microseconds at least).
 const CHUNK: usize = 256;
+/// Verlet pairs per parallel task.
+const PAIR_CHUNK: usize = 1024;
 
 /// One sphere.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -423,122 +425,59 @@ impl World {
         moved
     }
 
-    /// Sphere-sphere contacts, in parallel over the Verlet pairs; returns how many touch.
+    /// Sphere-sphere contacts, in parallel over chunks of the Verlet pairs (a plain loop in each
+    /// chunk); returns how many touch.
     fn pair_forces(&mut self, dt: f64) -> usize {
         let bodies = &self.bodies;
         let law = &self.law;
         let pm = &self.pair_materials;
         self.slots
-            .par_iter_mut()
-            .with_min_len(4 * CHUNK)
-            .zip(&self.pair_const)
-            .zip(&mut self.out)
-            .map(|((s, p), out)| {
-                let (a, b) = (&bodies[s.i as usize], &bodies[s.j as usize]);
-                let d = a.x - b.x;
-                let dist2 = d.norm_squared();
-                let apart = |s: &mut Slot, out: &mut ContactForce| {
-                    if s.touching {
-                        s.touching = false;
-                        s.history = V3::zeros();
-                        *out = ContactForce::default();
-                    }
-                    0
-                };
-                if dist2 >= p.cut2 {
-                    return apart(s, out);
+            .par_chunks_mut(PAIR_CHUNK)
+            .zip(self.pair_const.par_chunks(PAIR_CHUNK))
+            .zip(self.out.par_chunks_mut(PAIR_CHUNK))
+            .map(|((slots, consts), outs)| {
+                let mut touching = 0;
+                for ((s, p), out) in slots.iter_mut().zip(consts).zip(outs) {
+                    touching += pair_force(bodies, law, pm, s, p, out, dt);
                 }
-                let dist = dist2.sqrt();
-                let overlap = p.r_sum - dist;
-                if overlap <= 0.0 {
-                    return apart(s, out);
-                }
-                let n = if dist > 0.0 { d / dist } else { V3::z() };
-                let c = Contact {
-                    n,
-                    overlap,
-                    r_i: a.r,
-                    r_j: b.r,
-                    r_eff: p.r_eff,
-                    m_eff: p.m_eff,
-                    dv: a.v - b.v,
-                    w_i: a.w,
-                    w_j: b.w,
-                };
-                s.touching = true;
-                *out = contact_force(law, &pm[p.material as usize], &c, &mut s.history, dt);
-                1
+                touching
             })
             .sum()
     }
 
-    /// Sums the pair forces and adds the wall contacts, in parallel over the bodies; returns the
-    /// number of wall contacts. Each body sums its pairs in slot order (first as j, then as i),
-    /// then its walls.
+    /// Sums the pair forces and adds the wall contacts, in parallel over chunks of the bodies;
+    /// returns the number of wall contacts and the largest squared displacement since the last
+    /// build (after a drift). Each body sums its pairs in slot order (first as j, then as i), then
+    /// its walls.
     fn gather(&mut self, dt: f64, finish: Finish) -> (usize, f64) {
-        let g = self.gravity;
-        let w = self.walls.len();
-        let (out, first_i, as_j, as_j_start) = (&self.out, &self.first_i, &self.as_j, &self.as_j_start);
-        let (near, near_start) = (&self.near, &self.near_start);
-        let walls = &self.walls;
-        let law = &self.law;
-        let (pm, nm) = (&self.pair_materials, self.n_materials);
-        let factor = law.switches.wall_radius_factor;
+        let w = self.walls.len().max(1);
+        let ctx = Gather {
+            dt,
+            finish,
+            g: self.gravity,
+            out: &self.out,
+            first_i: &self.first_i,
+            as_j: &self.as_j,
+            as_j_start: &self.as_j_start,
+            near: &self.near,
+            near_start: &self.near_start,
+            walls: &self.walls,
+            law: &self.law,
+            pm: &self.pair_materials,
+            nm: self.n_materials,
+        };
         self.bodies
-            .par_iter_mut()
-            .with_min_len(CHUNK)
-            .zip(self.wall_history.par_chunks_mut(w.max(1)))
-            .zip(&self.x_at_build)
+            .par_chunks_mut(CHUNK)
+            .zip(self.wall_history.par_chunks_mut(CHUNK * w))
+            .zip(self.x_at_build.par_chunks(CHUNK))
             .enumerate()
-            .map(|(k, ((b, hist), x0))| {
-                let (mut f, mut t) = (V3::zeros(), V3::zeros());
-                for &slot in &as_j[as_j_start[k] as usize..as_j_start[k + 1] as usize] {
-                    let o = &out[slot as usize];
-                    f += -o.force;
-                    t += o.torque_j;
+            .map(|(c, ((bodies, hist), x0))| {
+                let mut acc = (0, 0.0f64);
+                for (m, ((b, h), x0)) in bodies.iter_mut().zip(hist.chunks_mut(w)).zip(x0).enumerate() {
+                    let (touching, moved) = ctx.body(c * CHUNK + m, b, h, x0);
+                    acc = (acc.0 + touching, acc.1.max(moved));
                 }
-                for o in &out[first_i[k] as usize..first_i[k + 1] as usize] {
-                    f += o.force;
-                    t += o.torque_i;
-                }
-                let mut touching = 0;
-                for &l in &near[near_start[k] as usize..near_start[k + 1] as usize] {
-                    let (wall, h) = (&walls[l as usize], &mut hist[l as usize]);
-                    let Some((n, overlap)) = wall.touch(b.x, b.r) else {
-                        *h = V3::zeros();
-                        continue;
-                    };
-                    let c = Contact {
-                        n,
-                        overlap,
-                        r_i: b.r,
-                        r_j: 0.0,
-                        r_eff: factor * b.r,
-                        m_eff: b.m,
-                        dv: b.v,
-                        w_i: b.w,
-                        w_j: V3::zeros(),
-                    };
-                    let out = contact_force(law, &pm[b.material * nm + wall.material], &c, h, dt);
-                    f += out.force;
-                    t += out.torque_i;
-                    touching += 1;
-                }
-                b.f = f;
-                b.t = t;
-                match finish {
-                    Finish::Nothing => (touching, 0.0),
-                    Finish::HalfKick => {
-                        b.kick(0.5 * dt, g);
-                        (touching, 0.0)
-                    }
-                    Finish::KickDrift => {
-                        b.kick(0.5 * dt, g);
-                        b.kick(0.5 * dt, g);
-                        b.x += dt * b.v;
-                        (touching, (b.x - x0).norm_squared())
-                    }
-                }
+                acc
             })
             .reduce(|| (0, 0.0), |a, b| (a.0 + b.0, a.1.max(b.1)))
     }
@@ -546,5 +485,132 @@ impl World {
     /// The pair material of two material indices (for the time-step rule).
     pub fn pair(&self, a: usize, b: usize) -> PairMaterial {
         *self.pair_material(a, b)
+    }
+}
+
+/// One Verlet pair: its contact force into `out` (zero when apart); 1 when touching.
+#[inline(always)]
+fn pair_force(
+    bodies: &[Body],
+    law: &ContactLaw,
+    pm: &[PairMaterial],
+    s: &mut Slot,
+    p: &PairConst,
+    out: &mut ContactForce,
+    dt: f64,
+) -> usize {
+    let (a, b) = (&bodies[s.i as usize], &bodies[s.j as usize]);
+    let d = a.x - b.x;
+    let dist2 = d.norm_squared();
+    let apart = |s: &mut Slot, out: &mut ContactForce| {
+        if s.touching {
+            s.touching = false;
+            s.history = V3::zeros();
+            *out = ContactForce::default();
+        }
+        0
+    };
+    if dist2 >= p.cut2 {
+        return apart(s, out);
+    }
+    let dist = dist2.sqrt();
+    let overlap = p.r_sum - dist;
+    if overlap <= 0.0 {
+        return apart(s, out);
+    }
+    let n = if dist > 0.0 { d / dist } else { V3::z() };
+    let c = Contact {
+        n,
+        overlap,
+        r_i: a.r,
+        r_j: b.r,
+        r_eff: p.r_eff,
+        m_eff: p.m_eff,
+        dv: a.v - b.v,
+        w_i: a.w,
+        w_j: b.w,
+    };
+    s.touching = true;
+    *out = contact_force(law, &pm[p.material as usize], &c, &mut s.history, dt);
+    1
+}
+
+/// What the gather pass reads.
+struct Gather<'a> {
+    dt: f64,
+    finish: Finish,
+    g: V3,
+    out: &'a [ContactForce],
+    first_i: &'a [u32],
+    as_j: &'a [u32],
+    as_j_start: &'a [u32],
+    near: &'a [u32],
+    near_start: &'a [u32],
+    walls: &'a [Wall],
+    law: &'a ContactLaw,
+    pm: &'a [PairMaterial],
+    nm: usize,
+}
+
+impl Gather<'_> {
+    /// Body k: pair forces, wall contacts, then `finish`; returns (wall contacts, squared
+    /// displacement since the last build after a drift, else 0).
+    #[inline(always)]
+    fn body(&self, k: usize, b: &mut Body, hist: &mut [V3], x0: &V3) -> (usize, f64) {
+        let (dt, g, out) = (self.dt, self.g, self.out);
+        let (mut f, mut t) = (V3::zeros(), V3::zeros());
+        for &slot in &self.as_j[self.as_j_start[k] as usize..self.as_j_start[k + 1] as usize] {
+            let o = &out[slot as usize];
+            f += -o.force;
+            t += o.torque_j;
+        }
+        for o in &out[self.first_i[k] as usize..self.first_i[k + 1] as usize] {
+            f += o.force;
+            t += o.torque_i;
+        }
+        let mut touching = 0;
+        for &l in &self.near[self.near_start[k] as usize..self.near_start[k + 1] as usize] {
+            let (wall, h) = (&self.walls[l as usize], &mut hist[l as usize]);
+            let Some((n, overlap)) = wall.touch(b.x, b.r) else {
+                *h = V3::zeros();
+                continue;
+            };
+            let c = Contact {
+                n,
+                overlap,
+                r_i: b.r,
+                r_j: 0.0,
+                r_eff: self.law.switches.wall_radius_factor * b.r,
+                m_eff: b.m,
+                dv: b.v,
+                w_i: b.w,
+                w_j: V3::zeros(),
+            };
+            let out = contact_force(
+                self.law,
+                &self.pm[b.material * self.nm + wall.material],
+                &c,
+                h,
+                dt,
+            );
+            f += out.force;
+            t += out.torque_i;
+            touching += 1;
+        }
+        b.f = f;
+        b.t = t;
+        match self.finish {
+            Finish::Nothing => (touching, 0.0),
+            Finish::HalfKick => {
+                b.kick(0.5 * dt, g);
+                (touching, 0.0)
+            }
+            Finish::KickDrift => {
+                b.kick(0.5 * dt, g);
+                b.kick(0.5 * dt, g);
+                b.x += dt * b.v;
+                (touching, (b.x - x0).norm_squared())
+            }
+        }
     }
 }
