@@ -76,6 +76,22 @@ pub struct ContactLaw {
 }
 
 impl ContactLaw {
+    /// LIGGGHTS's `pair_style gran model hertz tangential history` (the `liggghts` preset's
+    /// default): a constant, so that the contact loops specialised to it fold every switch.
+    pub const LIGGGHTS_HERTZ: ContactLaw = ContactLaw {
+        normal: NormalLaw::Hertz,
+        tangential: TangentialLaw::History,
+        rolling: RollingLaw::None,
+        linear: Linear {
+            normal_stiffness: None,
+            normal_damping: None,
+            tangential_stiffness: None,
+            tangential_damping: None,
+            contact_time: None,
+        },
+        switches: Switches::LIGGGHTS,
+    };
+
     pub fn from_scene(c: &scene::dem::Contact) -> ContactLaw {
         let p = Switches::preset(c.preset);
         ContactLaw {

@@ -22,6 +22,32 @@ enum Finish {
     KickDrift,
 }
 
+/// Where the contact loops read the law from: the world's, or a constant whose switches the
+/// compiler folds (the loops are compiled once for each).
+trait LawRef: Copy + Send + Sync {
+    fn law(&self) -> &ContactLaw;
+}
+
+#[derive(Clone, Copy)]
+struct AnyLaw<'a>(&'a ContactLaw);
+
+impl LawRef for AnyLaw<'_> {
+    #[inline(always)]
+    fn law(&self) -> &ContactLaw {
+        self.0
+    }
+}
+
+#[derive(Clone, Copy)]
+struct LiggghtsHertz;
+
+impl LawRef for LiggghtsHertz {
+    #[inline(always)]
+    fn law(&self) -> &ContactLaw {
+        &ContactLaw::LIGGGHTS_HERTZ
+    }
+}
+
 /// Fewest bodies per parallel task (tasks of a few microseconds at least).
 const CHUNK: usize = 256;
 /// Verlet pairs per parallel task.
@@ -419,17 +445,26 @@ impl World {
         if self.needs_rebuild() {
             self.rebuild();
         }
-        let pair_contacts = self.pair_forces(dt);
-        let (wall_contacts, moved) = self.gather(dt, finish);
+        let law = self.law;
+        let (pair_contacts, (wall_contacts, moved)) = if law == ContactLaw::LIGGGHTS_HERTZ {
+            (
+                self.pair_forces(LiggghtsHertz, dt),
+                self.gather(LiggghtsHertz, dt, finish),
+            )
+        } else {
+            (
+                self.pair_forces(AnyLaw(&law), dt),
+                self.gather(AnyLaw(&law), dt, finish),
+            )
+        };
         self.contacts = pair_contacts + wall_contacts;
         moved
     }
 
     /// Sphere-sphere contacts, in parallel over chunks of the Verlet pairs (a plain loop in each
     /// chunk); returns how many touch.
-    fn pair_forces(&mut self, dt: f64) -> usize {
+    fn pair_forces(&mut self, law: impl LawRef, dt: f64) -> usize {
         let bodies = &self.bodies;
-        let law = &self.law;
         let pm = &self.pair_materials;
         self.slots
             .par_chunks_mut(PAIR_CHUNK)
@@ -449,7 +484,7 @@ impl World {
     /// returns the number of wall contacts and the largest squared displacement since the last
     /// build (after a drift). Each body sums its pairs in slot order (first as j, then as i), then
     /// its walls.
-    fn gather(&mut self, dt: f64, finish: Finish) -> (usize, f64) {
+    fn gather<L: LawRef>(&mut self, law: L, dt: f64, finish: Finish) -> (usize, f64) {
         let w = self.walls.len().max(1);
         let ctx = Gather {
             dt,
@@ -462,7 +497,7 @@ impl World {
             near: &self.near,
             near_start: &self.near_start,
             walls: &self.walls,
-            law: &self.law,
+            law,
             pm: &self.pair_materials,
             nm: self.n_materials,
         };
@@ -492,7 +527,7 @@ impl World {
 #[inline(always)]
 fn pair_force(
     bodies: &[Body],
-    law: &ContactLaw,
+    law: impl LawRef,
     pm: &[PairMaterial],
     s: &mut Slot,
     p: &PairConst,
@@ -531,12 +566,12 @@ fn pair_force(
         w_j: b.w,
     };
     s.touching = true;
-    *out = contact_force(law, &pm[p.material as usize], &c, &mut s.history, dt);
+    *out = contact_force(law.law(), &pm[p.material as usize], &c, &mut s.history, dt);
     1
 }
 
 /// What the gather pass reads.
-struct Gather<'a> {
+struct Gather<'a, L> {
     dt: f64,
     finish: Finish,
     g: V3,
@@ -547,12 +582,12 @@ struct Gather<'a> {
     near: &'a [u32],
     near_start: &'a [u32],
     walls: &'a [Wall],
-    law: &'a ContactLaw,
+    law: L,
     pm: &'a [PairMaterial],
     nm: usize,
 }
 
-impl Gather<'_> {
+impl<L: LawRef> Gather<'_, L> {
     /// Body k: pair forces, wall contacts, then `finish`; returns (wall contacts, squared
     /// displacement since the last build after a drift, else 0).
     #[inline(always)]
@@ -580,14 +615,14 @@ impl Gather<'_> {
                 overlap,
                 r_i: b.r,
                 r_j: 0.0,
-                r_eff: self.law.switches.wall_radius_factor * b.r,
+                r_eff: self.law.law().switches.wall_radius_factor * b.r,
                 m_eff: b.m,
                 dv: b.v,
                 w_i: b.w,
                 w_j: V3::zeros(),
             };
             let out = contact_force(
-                self.law,
+                self.law.law(),
                 &self.pm[b.material * self.nm + wall.material],
                 &c,
                 h,
