@@ -6,6 +6,7 @@
 //! F_ext, T_ext the fluid's force and torque (held constant over a fluid step when coupled).
 //! Integrated by velocity Verlet (LIGGGHTS's scheme): half kick, drift, forces, half kick.
 
+use super::batch::{Batch, LANES};
 use super::contact::{contact_force, Contact, ContactForce, ContactLaw, PairMaterial};
 use super::neighbor::verlet_pairs;
 use super::V3;
@@ -25,6 +26,8 @@ enum Finish {
 /// Where the contact loops read the law from: the world's, or a constant whose switches the
 /// compiler folds (the loops are compiled once for each).
 trait LawRef: Copy + Send + Sync {
+    /// Sphere-sphere contacts by `batch::Batch` (only for `ContactLaw::LIGGGHTS_HERTZ`).
+    const BATCHED: bool = false;
     fn law(&self) -> &ContactLaw;
 }
 
@@ -42,6 +45,7 @@ impl LawRef for AnyLaw<'_> {
 struct LiggghtsHertz;
 
 impl LawRef for LiggghtsHertz {
+    const BATCHED: bool = true;
     #[inline(always)]
     fn law(&self) -> &ContactLaw {
         &ContactLaw::LIGGGHTS_HERTZ
@@ -458,7 +462,7 @@ impl World {
 
     /// Sphere-sphere contacts, in parallel over chunks of the Verlet pairs (a plain loop in each
     /// chunk); returns how many touch.
-    fn pair_forces(&mut self, law: impl LawRef, dt: f64) -> usize {
+    fn pair_forces<L: LawRef>(&mut self, law: L, dt: f64) -> usize {
         let bodies = &self.bodies;
         let pm = &self.pair_materials;
         self.slots
@@ -466,6 +470,9 @@ impl World {
             .zip(self.pair_const.par_chunks(PAIR_CHUNK))
             .zip(self.out.par_chunks_mut(PAIR_CHUNK))
             .map(|((slots, consts), outs)| {
+                if L::BATCHED {
+                    return pair_forces_batched(bodies, pm, slots, consts, outs, dt);
+                }
                 let mut touching = 0;
                 for ((s, p), out) in slots.iter_mut().zip(consts).zip(outs) {
                     touching += pair_force(bodies, law, pm, s, p, out, dt);
@@ -563,6 +570,86 @@ fn pair_force(
     s.touching = true;
     *out = contact_force(law.law(), &pm[p.material as usize], &c, &mut s.history, dt);
     1
+}
+
+/// The pairs of a chunk with `ContactLaw::LIGGGHTS_HERTZ`: the geometry per pair, the law in
+/// batches of touching pairs (`batch.rs`, the same bits as `pair_force`); returns how many touch.
+fn pair_forces_batched(
+    bodies: &[Body],
+    pm: &[PairMaterial],
+    slots: &mut [Slot],
+    consts: &[PairConst],
+    outs: &mut [ContactForce],
+    dt: f64,
+) -> usize {
+    let damping = ContactLaw::LIGGGHTS_HERTZ.switches.damping as usize;
+    let mut batch = Batch::default();
+    let flush = |batch: &mut Batch, slots: &mut [Slot], outs: &mut [ContactForce]| {
+        batch.run(dt);
+        for k in 0..batch.len {
+            let m = batch.slot[k] as usize;
+            let (force, torque_i, torque_j, history) = batch.result(k);
+            outs[m] = ContactForce {
+                force,
+                torque_i,
+                torque_j,
+            };
+            slots[m].history = history;
+        }
+        batch.len = 0;
+    };
+    let mut touching = 0;
+    for m in 0..slots.len() {
+        let (s, p) = (&mut slots[m], &consts[m]);
+        let (a, b) = (&bodies[s.i as usize], &bodies[s.j as usize]);
+        let d = a.x - b.x;
+        let dist2 = d.norm_squared();
+        let apart = |s: &mut Slot, out: &mut ContactForce| {
+            if s.touching {
+                s.touching = false;
+                s.history = V3::zeros();
+                *out = ContactForce::default();
+            }
+        };
+        if dist2 >= p.cut2 {
+            apart(s, &mut outs[m]);
+            continue;
+        }
+        let dist = dist2.sqrt();
+        let overlap = p.r_sum - dist;
+        if overlap <= 0.0 {
+            apart(s, &mut outs[m]);
+            continue;
+        }
+        let n = if dist > 0.0 { d / dist } else { V3::z() };
+        let dv = a.v - b.v;
+        let mat = &pm[p.material as usize];
+        let k = batch.len;
+        batch.slot[k] = m as u32;
+        (batch.nx[k], batch.ny[k], batch.nz[k]) = (n.x, n.y, n.z);
+        batch.overlap[k] = overlap;
+        (batch.r_i[k], batch.r_j[k]) = (a.r, b.r);
+        (batch.r_eff[k], batch.m_eff[k]) = (p.r_eff, p.m_eff);
+        (batch.dvx[k], batch.dvy[k], batch.dvz[k]) = (dv.x, dv.y, dv.z);
+        (batch.wix[k], batch.wiy[k], batch.wiz[k]) = (a.w.x, a.w.y, a.w.z);
+        (batch.wjx[k], batch.wjy[k], batch.wjz[k]) = (b.w.x, b.w.y, b.w.z);
+        (batch.hx[k], batch.hy[k], batch.hz[k]) = (s.history.x, s.history.y, s.history.z);
+        batch.y_star[k] = mat.y_star;
+        batch.g_star[k] = mat.g_star;
+        batch.damping[k] = mat.damping_factor[damping];
+        batch.shear_to_normal[k] = mat.shear_to_normal_sqrt;
+        batch.friction[k] = mat.friction;
+        s.touching = true;
+        touching += 1;
+        batch.len += 1;
+        if batch.len == LANES {
+            flush(&mut batch, slots, outs);
+        }
+    }
+    if batch.len > 0 {
+        flush(&mut batch, slots, outs);
+    }
+    touching
 }
 
 /// What the gather pass reads.
