@@ -238,3 +238,113 @@ impl Batch {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::dem::contact::{contact_force, Contact, ContactLaw, PairMaterial};
+    use scene::dem::Material;
+
+    /// Every lane, on every instruction set, gives the bits of `contact_force` (sticking and
+    /// sliding contacts, fresh and loaded histories, both spheres spinning).
+    #[test]
+    fn batches_equal_the_scalar_law_bit_for_bit() {
+        let mut seed = 12345u64;
+        let mut unit = move || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let material = |e: f64, mu: f64| Material {
+            name: "m".into(),
+            young_modulus: 5e7,
+            poisson_ratio: 0.3,
+            restitution: e,
+            friction: mu,
+            ..Default::default()
+        };
+        let law = ContactLaw::LIGGGHTS_HERTZ;
+        let dt = 5e-6;
+        let mut batch = Batch::default();
+        let mut expected = Vec::new();
+        let mut slips = 0;
+        for k in 0..LANES {
+            let pm = PairMaterial::mix(&material(0.3 + 0.6 * unit(), unit()), &material(0.5, 0.4));
+            let n = V3::new(unit() - 0.5, unit() - 0.5, unit() - 0.5).normalize();
+            let v =
+                |s: f64, unit: &mut dyn FnMut() -> f64| V3::new(unit() - 0.5, unit() - 0.5, unit() - 0.5) * s;
+            let (r_i, r_j) = (0.0018 + 0.0004 * unit(), 0.0018 + 0.0004 * unit());
+            let c = Contact {
+                n,
+                overlap: 1e-5 * unit(),
+                r_i,
+                r_j,
+                r_eff: r_i * r_j / (r_i + r_j),
+                m_eff: 4e-5 * (0.5 + unit()),
+                dv: v(if k % 3 == 0 { 2.0 } else { 0.05 }, &mut unit),
+                w_i: v(50.0, &mut unit),
+                w_j: v(50.0, &mut unit),
+            };
+            let history = if k % 4 == 0 {
+                V3::zeros()
+            } else {
+                v(2e-5, &mut unit)
+            };
+            let mut h = history;
+            let out = contact_force(&law, &pm, &c, &mut h, dt);
+            expected.push((out.force, out.torque_i, out.torque_j, h));
+            // Sliding: the tangential force sits on the Coulomb limit mu |F_n|.
+            let f_n = out.force.dot(&n);
+            let f_t = (out.force - f_n * n).norm();
+            slips += usize::from((f_t - pm.friction * f_n.abs()).abs() <= 1e-9 * f_t);
+            batch.slot[k] = k as u32;
+            (batch.nx[k], batch.ny[k], batch.nz[k]) = (n.x, n.y, n.z);
+            batch.overlap[k] = c.overlap;
+            (batch.r_i[k], batch.r_j[k], batch.r_eff[k], batch.m_eff[k]) = (r_i, r_j, c.r_eff, c.m_eff);
+            (batch.dvx[k], batch.dvy[k], batch.dvz[k]) = (c.dv.x, c.dv.y, c.dv.z);
+            (batch.wix[k], batch.wiy[k], batch.wiz[k]) = (c.w_i.x, c.w_i.y, c.w_i.z);
+            (batch.wjx[k], batch.wjy[k], batch.wjz[k]) = (c.w_j.x, c.w_j.y, c.w_j.z);
+            (batch.hx[k], batch.hy[k], batch.hz[k]) = (history.x, history.y, history.z);
+            batch.y_star[k] = pm.y_star;
+            batch.g_star[k] = pm.g_star;
+            batch.damping[k] = pm.damping_factor[law.switches.damping as usize];
+            batch.shear_to_normal[k] = pm.shear_to_normal_sqrt;
+            batch.friction[k] = pm.friction;
+        }
+        batch.len = LANES;
+        assert!(slips > 0 && slips < LANES, "{slips} of {LANES} sliding");
+        let inputs = batch.clone();
+        let check = |b: &Batch, what: &str| {
+            for (k, e) in expected.iter().enumerate() {
+                let r = b.result(k);
+                let same = |a: V3, b: V3| (0..3).all(|i| a[i].to_bits() == b[i].to_bits());
+                assert!(
+                    same(r.0, e.0) && same(r.1, e.1) && same(r.2, e.2) && same(r.3, e.3),
+                    "{what} lane {k}: {r:?} vs {e:?}"
+                );
+            }
+        };
+        let mut b = inputs.clone();
+        b.run(dt);
+        check(&b, "dispatched");
+        let mut b = inputs.clone();
+        b.run_any(dt);
+        check(&b, "portable");
+        #[cfg(target_arch = "x86_64")]
+        {
+            if std::arch::is_x86_feature_detected!("avx2") {
+                let mut b = inputs.clone();
+                // SAFETY: AVX2 present (checked above).
+                unsafe { b.run_avx2(dt) };
+                check(&b, "avx2");
+            }
+            if std::arch::is_x86_feature_detected!("avx512f") {
+                let mut b = inputs.clone();
+                // SAFETY: AVX-512F present (checked above).
+                unsafe { b.run_avx512(dt) };
+                check(&b, "avx512");
+            }
+        }
+    }
+}
