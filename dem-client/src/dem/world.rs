@@ -176,6 +176,10 @@ struct PairConst {
 
 /// The particles, the walls and the contact model.
 pub struct World {
+    /// The spheres. Between steps their state (x, v, w) and external loads may be changed freely;
+    /// radius, mass and material are read into the pair constants at each neighbour-list build, so
+    /// a sphere changes those only by `pop` and `insert`. The walls are fixed: each build lists per
+    /// sphere those within its reach (a change in their number forces a build).
     pub bodies: Vec<Body>,
     pub walls: Vec<Wall>,
     pub law: ContactLaw,
@@ -338,7 +342,9 @@ impl World {
     /// drift (`open_step`, the gather's `KickDrift`) measures the largest displacement since the
     /// build and marks the list stale beyond skin / 2, so no scan is needed here.
     fn needs_rebuild(&self) -> bool {
-        self.stale || self.x_at_build.len() != self.bodies.len()
+        self.stale
+            || self.x_at_build.len() != self.bodies.len()
+            || self.wall_history.len() != self.bodies.len() * self.walls.len().max(1)
     }
 
     /// Rebuilds the Verlet list, carrying the history of the pairs still listed.
