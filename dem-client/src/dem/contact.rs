@@ -76,6 +76,22 @@ pub struct ContactLaw {
 }
 
 impl ContactLaw {
+    /// LIGGGHTS's `pair_style gran model hertz tangential history` (the `liggghts` preset's
+    /// default): a constant, so that the contact loops specialised to it fold every switch.
+    pub const LIGGGHTS_HERTZ: ContactLaw = ContactLaw {
+        normal: NormalLaw::Hertz,
+        tangential: TangentialLaw::History,
+        rolling: RollingLaw::None,
+        linear: Linear {
+            normal_stiffness: None,
+            normal_damping: None,
+            tangential_stiffness: None,
+            tangential_damping: None,
+            contact_time: None,
+        },
+        switches: Switches::LIGGGHTS,
+    };
+
     pub fn from_scene(c: &scene::dem::Contact) -> ContactLaw {
         let p = Switches::preset(c.preset);
         ContactLaw {
@@ -214,6 +230,7 @@ pub struct Coefficients {
 }
 
 /// Normal elastic force, tangential stiffness and both dampings.
+#[inline(always)]
 pub fn coefficients(law: &ContactLaw, m: &PairMaterial, c: &Contact) -> Coefficients {
     match law.normal {
         NormalLaw::Hertz => {
@@ -260,6 +277,7 @@ pub struct ContactForce {
 
 /// Normal force magnitude F_n = F_el - gamma_n v_n (v_n = dv . n < 0 approaching), clamped to
 /// >= 0 when the switch says so. Returns (F_n, F_n for the Coulomb limit).
+#[inline(always)]
 pub fn normal_force(law: &ContactLaw, k: &Coefficients, v_n: f64) -> (f64, f64) {
     let f = k.f_elastic - k.gamma_n * v_n;
     let f = if law.switches.clamp_normal { f.max(0.0) } else { f };
@@ -275,6 +293,7 @@ pub fn normal_force(law: &ContactLaw, k: &Coefficients, v_n: f64) -> (f64, f64) 
 /// Total: xi += v_t dt, projected on the tangent plane, F_t = -k_t xi - gamma_t v_t.
 /// Incremental: F_s rotated into the tangent plane, F_s -= k_t v_t dt, F_t = F_s - gamma_t v_t.
 /// Slip when |elastic part| > mu F_n: the elastic part is scaled to mu F_n, no damping.
+#[inline(always)]
 pub fn tangential_force(
     law: &ContactLaw,
     k: &Coefficients,
@@ -321,6 +340,7 @@ pub fn tangential_force(
 }
 
 /// Constant directional rolling torque on i: M_r = -mu_r R* |F_n| w_rel / |w_rel|, w_rel = w_i - w_j.
+#[inline(always)]
 pub fn rolling_torque(mu_r: f64, r_eff: f64, f_n: f64, w_rel: V3) -> V3 {
     let w = w_rel.norm();
     if w > 0.0 {
@@ -331,6 +351,7 @@ pub fn rolling_torque(mu_r: f64, r_eff: f64, f_n: f64, w_rel: V3) -> V3 {
 }
 
 /// Lever arms (l_i, l_j): r - d/2 or r.
+#[inline(always)]
 pub fn lever_arms(law: &ContactLaw, c: &Contact) -> (f64, f64) {
     match law.switches.lever {
         LeverArm::ContactPoint => (c.r_i - 0.5 * c.overlap, (c.r_j - 0.5 * c.overlap).max(0.0)),
@@ -340,6 +361,7 @@ pub fn lever_arms(law: &ContactLaw, c: &Contact) -> (f64, f64) {
 
 /// Full contact: F_i = F_n n + F_t, torques -l_i n x F_t and -l_j n x F_t, plus rolling.
 /// The relative velocity at the contact point is v_rel = dv - (l_i w_i + l_j w_j) x n.
+#[inline(always)]
 pub fn contact_force(
     law: &ContactLaw,
     m: &PairMaterial,

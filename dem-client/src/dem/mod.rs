@@ -1,6 +1,7 @@
 //! Soft-sphere DEM in f64: contact laws, broad phase, walls, velocity-Verlet integration, and the
 //! set-up of a world from a scene.
 
+pub mod batch;
 pub mod contact;
 pub mod neighbor;
 pub mod timestep;

@@ -6,6 +6,7 @@
 //! F_ext, T_ext the fluid's force and torque (held constant over a fluid step when coupled).
 //! Integrated by velocity Verlet (LIGGGHTS's scheme): half kick, drift, forces, half kick.
 
+use super::batch::{Batch, LANES};
 use super::contact::{contact_force, Contact, ContactForce, ContactLaw, PairMaterial};
 use super::neighbor::verlet_pairs;
 use super::V3;
@@ -22,8 +23,39 @@ enum Finish {
     KickDrift,
 }
 
+/// Where the contact loops read the law from: the world's, or a constant whose switches the
+/// compiler folds (the loops are compiled once for each).
+trait LawRef: Copy + Send + Sync {
+    /// Sphere-sphere contacts by `batch::Batch` (only for `ContactLaw::LIGGGHTS_HERTZ`).
+    const BATCHED: bool = false;
+    fn law(&self) -> &ContactLaw;
+}
+
+#[derive(Clone, Copy)]
+struct AnyLaw<'a>(&'a ContactLaw);
+
+impl LawRef for AnyLaw<'_> {
+    #[inline(always)]
+    fn law(&self) -> &ContactLaw {
+        self.0
+    }
+}
+
+#[derive(Clone, Copy)]
+struct LiggghtsHertz;
+
+impl LawRef for LiggghtsHertz {
+    const BATCHED: bool = true;
+    #[inline(always)]
+    fn law(&self) -> &ContactLaw {
+        &ContactLaw::LIGGGHTS_HERTZ
+    }
+}
+
 /// Fewest bodies per parallel task (tasks of a few microseconds at least).
 const CHUNK: usize = 256;
+/// Verlet pairs per parallel task.
+const PAIR_CHUNK: usize = 1024;
 
 /// One sphere.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -106,20 +138,48 @@ impl Wall {
             }
         }
     }
+
+    /// Can a sphere at `x` touch the wall after moving less than `margin`? (Both distances are
+    /// 1-Lipschitz in `x`.)
+    fn near(&self, x: V3, r: f64, margin: f64) -> bool {
+        match self.shape {
+            Shape::Plane { point, normal } => (x - point).dot(&normal) < r + margin,
+            Shape::Solid { min, max } => (x - x.sup(&min).inf(&max)).norm() < r + margin,
+        }
+    }
 }
 
-/// A pair of the Verlet list with its contact history.
+/// A pair of the Verlet list with its contact history. Not touching implies a zero history and a
+/// zero force in `World::out` (so a pair that stays apart costs no writes).
 #[derive(Debug, Clone, Copy)]
 struct Slot {
     i: u32,
     j: u32,
     touching: bool,
     history: V3,
-    out: ContactForce,
+}
+
+/// The constants of a listed pair, computed once per neighbour-list build with the same
+/// expressions as in the contact loop (so the same bits).
+#[derive(Debug, Clone, Copy)]
+struct PairConst {
+    /// (r_i + r_j)^2.
+    cut2: f64,
+    /// r_i + r_j.
+    r_sum: f64,
+    /// R* = r_i r_j / (r_i + r_j), m* = m_i m_j / (m_i + m_j).
+    r_eff: f64,
+    m_eff: f64,
+    /// Index into the pair materials.
+    material: u32,
 }
 
 /// The particles, the walls and the contact model.
 pub struct World {
+    /// The spheres. Between steps their state (x, v, w) and external loads may be changed freely;
+    /// radius, mass and material are read into the pair constants at each neighbour-list build, so
+    /// a sphere changes those only by `pop` and `insert`. The walls are fixed: each build lists per
+    /// sphere those within its reach (a change in their number forces a build).
     pub bodies: Vec<Body>,
     pub walls: Vec<Wall>,
     pub law: ContactLaw,
@@ -130,12 +190,21 @@ pub struct World {
     pub dt: f64,
     pub skin: f64,
     pub time: f64,
+    /// The Verlet pairs (i < j), sorted by i then j.
     slots: Vec<Slot>,
-    /// Per body, the slots it belongs to: (slot, +1 for i / -1 for j), CSR.
-    adj_start: Vec<u32>,
-    adj: Vec<(u32, f64)>,
+    pair_const: Vec<PairConst>,
+    /// Force on i and torques of each pair at the last evaluation (zero when not touching).
+    out: Vec<ContactForce>,
+    /// Per body, its first slot as i (CSR: the slots with i = k are `first_i[k]..first_i[k + 1]`).
+    first_i: Vec<u32>,
+    /// Per body, the slots in which it is j, in slot order (CSR over `as_j`).
+    as_j_start: Vec<u32>,
+    as_j: Vec<u32>,
     /// Per body and wall: contact history.
     wall_history: Vec<V3>,
+    /// Per body, the walls it can touch before the next neighbour-list build (CSR, in wall order).
+    near_start: Vec<u32>,
+    near: Vec<u32>,
     x_at_build: Vec<V3>,
     stale: bool,
     /// Number of neighbour-list builds so far.
@@ -168,9 +237,14 @@ impl World {
             skin,
             time: 0.0,
             slots: Vec::new(),
-            adj_start: Vec::new(),
-            adj: Vec::new(),
+            pair_const: Vec::new(),
+            out: Vec::new(),
+            first_i: Vec::new(),
+            as_j_start: Vec::new(),
+            as_j: Vec::new(),
             wall_history: Vec::new(),
+            near_start: Vec::new(),
+            near: Vec::new(),
             x_at_build: Vec::new(),
             stale: true,
             builds: 0,
@@ -264,16 +338,13 @@ impl World {
         }
     }
 
-    /// Has some sphere moved more than skin / 2 since the last build (or the set changed)?
+    /// Has some sphere moved more than skin / 2 since the last build (or the set changed)? Every
+    /// drift (`open_step`, the gather's `KickDrift`) measures the largest displacement since the
+    /// build and marks the list stale beyond skin / 2, so no scan is needed here.
     fn needs_rebuild(&self) -> bool {
-        if self.stale || self.x_at_build.len() != self.bodies.len() {
-            return true;
-        }
-        let limit = 0.25 * self.skin * self.skin;
-        self.bodies
-            .iter()
-            .zip(&self.x_at_build)
-            .any(|(b, x0)| (b.x - x0).norm_squared() > limit)
+        self.stale
+            || self.x_at_build.len() != self.bodies.len()
+            || self.wall_history.len() != self.bodies.len() * self.walls.len().max(1)
     }
 
     /// Rebuilds the Verlet list, carrying the history of the pairs still listed.
@@ -304,39 +375,72 @@ impl World {
                     j,
                     touching: history != V3::zeros(),
                     history,
-                    out: ContactForce::default(),
                 }
             })
             .collect();
+        let nm = self.n_materials;
+        self.pair_const = self
+            .slots
+            .iter()
+            .map(|s| {
+                let (a, b) = (&self.bodies[s.i as usize], &self.bodies[s.j as usize]);
+                PairConst {
+                    cut2: (a.r + b.r) * (a.r + b.r),
+                    r_sum: a.r + b.r,
+                    r_eff: a.r * b.r / (a.r + b.r),
+                    m_eff: a.m * b.m / (a.m + b.m),
+                    material: (a.material * nm + b.material) as u32,
+                }
+            })
+            .collect();
+        self.out.clear();
+        self.out.resize(self.slots.len(), ContactForce::default());
         self.build_adjacency();
         let w = self.walls.len();
         self.wall_history
             .resize(self.bodies.len() * w.max(1), V3::zeros());
+        // Walls out of reach until the next build are apart now: their history is zero, as the
+        // contact loop would set it.
+        self.near_start.clear();
+        self.near_start.push(0);
+        self.near.clear();
+        for (k, b) in self.bodies.iter().enumerate() {
+            for (l, wall) in self.walls.iter().enumerate() {
+                if wall.near(b.x, b.r, self.skin) {
+                    self.near.push(l as u32);
+                } else {
+                    self.wall_history[k * w + l] = V3::zeros();
+                }
+            }
+            self.near_start.push(self.near.len() as u32);
+        }
         self.x_at_build = x;
         self.stale = false;
         self.builds += 1;
     }
 
+    /// The slots of each body: as i a contiguous range (the slots are sorted by i), as j a list.
     fn build_adjacency(&mut self) {
         let n = self.bodies.len();
+        let mut first_i = vec![0u32; n + 1];
         let mut start = vec![0u32; n + 1];
         for s in &self.slots {
-            start[s.i as usize + 1] += 1;
+            first_i[s.i as usize + 1] += 1;
             start[s.j as usize + 1] += 1;
         }
         for k in 0..n {
+            first_i[k + 1] += first_i[k];
             start[k + 1] += start[k];
         }
         let mut fill = start.clone();
-        let mut adj = vec![(0u32, 0.0); 2 * self.slots.len()];
+        let mut as_j = vec![0u32; self.slots.len()];
         for (k, s) in self.slots.iter().enumerate() {
-            for (body, sign) in [(s.i, 1.0), (s.j, -1.0)] {
-                adj[fill[body as usize] as usize] = (k as u32, sign);
-                fill[body as usize] += 1;
-            }
+            as_j[fill[s.j as usize] as usize] = k as u32;
+            fill[s.j as usize] += 1;
         }
-        self.adj_start = start;
-        self.adj = adj;
+        self.first_i = first_i;
+        self.as_j_start = start;
+        self.as_j = as_j;
     }
 
     /// Contact forces and torques at the present positions; `dt` advances the contact histories;
@@ -346,117 +450,77 @@ impl World {
         if self.needs_rebuild() {
             self.rebuild();
         }
-        let pair_contacts = self.pair_forces(dt);
-        let (wall_contacts, moved) = self.gather(dt, finish);
+        let law = self.law;
+        let (pair_contacts, (wall_contacts, moved)) = if law == ContactLaw::LIGGGHTS_HERTZ {
+            (
+                self.pair_forces(LiggghtsHertz, dt),
+                self.gather(LiggghtsHertz, dt, finish),
+            )
+        } else {
+            (
+                self.pair_forces(AnyLaw(&law), dt),
+                self.gather(AnyLaw(&law), dt, finish),
+            )
+        };
         self.contacts = pair_contacts + wall_contacts;
         moved
     }
 
-    /// Sphere-sphere contacts, in parallel over the Verlet pairs; returns how many touch.
-    fn pair_forces(&mut self, dt: f64) -> usize {
+    /// Sphere-sphere contacts, in parallel over chunks of the Verlet pairs (a plain loop in each
+    /// chunk); returns how many touch.
+    fn pair_forces<L: LawRef>(&mut self, law: L, dt: f64) -> usize {
         let bodies = &self.bodies;
-        let law = &self.law;
-        let (pm, nm) = (&self.pair_materials, self.n_materials);
+        let pm = &self.pair_materials;
         self.slots
-            .par_iter_mut()
-            .with_min_len(4 * CHUNK)
-            .map(|s| {
-                let (a, b) = (&bodies[s.i as usize], &bodies[s.j as usize]);
-                let d = a.x - b.x;
-                let dist2 = d.norm_squared();
-                if dist2 >= (a.r + b.r) * (a.r + b.r) {
-                    s.touching = false;
-                    s.history = V3::zeros();
-                    s.out = ContactForce::default();
-                    return 0;
+            .par_chunks_mut(PAIR_CHUNK)
+            .zip(self.pair_const.par_chunks(PAIR_CHUNK))
+            .zip(self.out.par_chunks_mut(PAIR_CHUNK))
+            .map(|((slots, consts), outs)| {
+                if L::BATCHED {
+                    return pair_forces_batched(bodies, pm, slots, consts, outs, dt);
                 }
-                let dist = dist2.sqrt();
-                let overlap = a.r + b.r - dist;
-                if overlap <= 0.0 {
-                    s.touching = false;
-                    s.history = V3::zeros();
-                    s.out = ContactForce::default();
-                    return 0;
+                let mut touching = 0;
+                for ((s, p), out) in slots.iter_mut().zip(consts).zip(outs) {
+                    touching += pair_force(bodies, law, pm, s, p, out, dt);
                 }
-                let n = if dist > 0.0 { d / dist } else { V3::z() };
-                let c = Contact {
-                    n,
-                    overlap,
-                    r_i: a.r,
-                    r_j: b.r,
-                    r_eff: a.r * b.r / (a.r + b.r),
-                    m_eff: a.m * b.m / (a.m + b.m),
-                    dv: a.v - b.v,
-                    w_i: a.w,
-                    w_j: b.w,
-                };
-                s.touching = true;
-                s.out = contact_force(law, &pm[a.material * nm + b.material], &c, &mut s.history, dt);
-                1
+                touching
             })
             .sum()
     }
 
-    /// Sums the pair forces and adds the wall contacts, in parallel over the bodies; returns the
-    /// number of wall contacts.
-    fn gather(&mut self, dt: f64, finish: Finish) -> (usize, f64) {
-        let g = self.gravity;
-        let w = self.walls.len();
-        let (slots, adj, start) = (&self.slots, &self.adj, &self.adj_start);
-        let walls = &self.walls;
-        let law = &self.law;
-        let (pm, nm) = (&self.pair_materials, self.n_materials);
-        let factor = law.switches.wall_radius_factor;
+    /// Sums the pair forces and adds the wall contacts, in parallel over chunks of the bodies;
+    /// returns the number of wall contacts and the largest squared displacement since the last
+    /// build (after a drift). Each body sums its pairs in slot order (first as j, then as i), then
+    /// its walls.
+    fn gather<L: LawRef>(&mut self, law: L, dt: f64, finish: Finish) -> (usize, f64) {
+        let w = self.walls.len().max(1);
+        let ctx = Gather {
+            dt,
+            finish,
+            g: self.gravity,
+            out: &self.out,
+            first_i: &self.first_i,
+            as_j: &self.as_j,
+            as_j_start: &self.as_j_start,
+            near: &self.near,
+            near_start: &self.near_start,
+            walls: &self.walls,
+            law,
+            pm: &self.pair_materials,
+            nm: self.n_materials,
+        };
         self.bodies
-            .par_iter_mut()
-            .with_min_len(CHUNK)
-            .zip(self.wall_history.par_chunks_mut(w.max(1)))
-            .zip(&self.x_at_build)
+            .par_chunks_mut(CHUNK)
+            .zip(self.wall_history.par_chunks_mut(CHUNK * w))
+            .zip(self.x_at_build.par_chunks(CHUNK))
             .enumerate()
-            .map(|(k, ((b, hist), x0))| {
-                let (mut f, mut t) = (V3::zeros(), V3::zeros());
-                for &(slot, sign) in &adj[start[k] as usize..start[k + 1] as usize] {
-                    let out = &slots[slot as usize].out;
-                    f += sign * out.force;
-                    t += if sign > 0.0 { out.torque_i } else { out.torque_j };
+            .map(|(c, ((bodies, hist), x0))| {
+                let mut acc = (0, 0.0f64);
+                for (m, ((b, h), x0)) in bodies.iter_mut().zip(hist.chunks_mut(w)).zip(x0).enumerate() {
+                    let (touching, moved) = ctx.body(c * CHUNK + m, b, h, x0);
+                    acc = (acc.0 + touching, acc.1.max(moved));
                 }
-                let mut touching = 0;
-                for (wall, h) in walls.iter().zip(hist.iter_mut()) {
-                    let Some((n, overlap)) = wall.touch(b.x, b.r) else {
-                        *h = V3::zeros();
-                        continue;
-                    };
-                    let c = Contact {
-                        n,
-                        overlap,
-                        r_i: b.r,
-                        r_j: 0.0,
-                        r_eff: factor * b.r,
-                        m_eff: b.m,
-                        dv: b.v,
-                        w_i: b.w,
-                        w_j: V3::zeros(),
-                    };
-                    let out = contact_force(law, &pm[b.material * nm + wall.material], &c, h, dt);
-                    f += out.force;
-                    t += out.torque_i;
-                    touching += 1;
-                }
-                b.f = f;
-                b.t = t;
-                match finish {
-                    Finish::Nothing => (touching, 0.0),
-                    Finish::HalfKick => {
-                        b.kick(0.5 * dt, g);
-                        (touching, 0.0)
-                    }
-                    Finish::KickDrift => {
-                        b.kick(0.5 * dt, g);
-                        b.kick(0.5 * dt, g);
-                        b.x += dt * b.v;
-                        (touching, (b.x - x0).norm_squared())
-                    }
-                }
+                acc
             })
             .reduce(|| (0, 0.0), |a, b| (a.0 + b.0, a.1.max(b.1)))
     }
@@ -464,5 +528,218 @@ impl World {
     /// The pair material of two material indices (for the time-step rule).
     pub fn pair(&self, a: usize, b: usize) -> PairMaterial {
         *self.pair_material(a, b)
+    }
+}
+
+/// One Verlet pair: its contact force into `out` (zero when apart); 1 when touching.
+#[inline(always)]
+fn pair_force(
+    bodies: &[Body],
+    law: impl LawRef,
+    pm: &[PairMaterial],
+    s: &mut Slot,
+    p: &PairConst,
+    out: &mut ContactForce,
+    dt: f64,
+) -> usize {
+    let (a, b) = (&bodies[s.i as usize], &bodies[s.j as usize]);
+    let d = a.x - b.x;
+    let dist2 = d.norm_squared();
+    let apart = |s: &mut Slot, out: &mut ContactForce| {
+        if s.touching {
+            s.touching = false;
+            s.history = V3::zeros();
+            *out = ContactForce::default();
+        }
+        0
+    };
+    if dist2 >= p.cut2 {
+        return apart(s, out);
+    }
+    let dist = dist2.sqrt();
+    let overlap = p.r_sum - dist;
+    if overlap <= 0.0 {
+        return apart(s, out);
+    }
+    let n = if dist > 0.0 { d / dist } else { V3::z() };
+    let c = Contact {
+        n,
+        overlap,
+        r_i: a.r,
+        r_j: b.r,
+        r_eff: p.r_eff,
+        m_eff: p.m_eff,
+        dv: a.v - b.v,
+        w_i: a.w,
+        w_j: b.w,
+    };
+    s.touching = true;
+    *out = contact_force(law.law(), &pm[p.material as usize], &c, &mut s.history, dt);
+    1
+}
+
+/// The pairs of a chunk with `ContactLaw::LIGGGHTS_HERTZ`: the geometry per pair, the law in
+/// batches of touching pairs (`batch.rs`, the same bits as `pair_force`); returns how many touch.
+fn pair_forces_batched(
+    bodies: &[Body],
+    pm: &[PairMaterial],
+    slots: &mut [Slot],
+    consts: &[PairConst],
+    outs: &mut [ContactForce],
+    dt: f64,
+) -> usize {
+    let damping = ContactLaw::LIGGGHTS_HERTZ.switches.damping as usize;
+    let mut batch = Batch::default();
+    let flush = |batch: &mut Batch, slots: &mut [Slot], outs: &mut [ContactForce]| {
+        batch.run(dt);
+        for k in 0..batch.len {
+            let m = batch.slot[k] as usize;
+            let (force, torque_i, torque_j, history) = batch.result(k);
+            outs[m] = ContactForce {
+                force,
+                torque_i,
+                torque_j,
+            };
+            slots[m].history = history;
+        }
+        batch.len = 0;
+    };
+    let mut touching = 0;
+    for m in 0..slots.len() {
+        let (s, p) = (&mut slots[m], &consts[m]);
+        let (a, b) = (&bodies[s.i as usize], &bodies[s.j as usize]);
+        let d = a.x - b.x;
+        let dist2 = d.norm_squared();
+        let apart = |s: &mut Slot, out: &mut ContactForce| {
+            if s.touching {
+                s.touching = false;
+                s.history = V3::zeros();
+                *out = ContactForce::default();
+            }
+        };
+        if dist2 >= p.cut2 {
+            apart(s, &mut outs[m]);
+            continue;
+        }
+        let dist = dist2.sqrt();
+        let overlap = p.r_sum - dist;
+        if overlap <= 0.0 {
+            apart(s, &mut outs[m]);
+            continue;
+        }
+        let n = if dist > 0.0 { d / dist } else { V3::z() };
+        let dv = a.v - b.v;
+        let mat = &pm[p.material as usize];
+        let k = batch.len;
+        batch.slot[k] = m as u32;
+        (batch.nx[k], batch.ny[k], batch.nz[k]) = (n.x, n.y, n.z);
+        batch.overlap[k] = overlap;
+        (batch.r_i[k], batch.r_j[k]) = (a.r, b.r);
+        (batch.r_eff[k], batch.m_eff[k]) = (p.r_eff, p.m_eff);
+        (batch.dvx[k], batch.dvy[k], batch.dvz[k]) = (dv.x, dv.y, dv.z);
+        (batch.wix[k], batch.wiy[k], batch.wiz[k]) = (a.w.x, a.w.y, a.w.z);
+        (batch.wjx[k], batch.wjy[k], batch.wjz[k]) = (b.w.x, b.w.y, b.w.z);
+        (batch.hx[k], batch.hy[k], batch.hz[k]) = (s.history.x, s.history.y, s.history.z);
+        batch.y_star[k] = mat.y_star;
+        batch.g_star[k] = mat.g_star;
+        batch.damping[k] = mat.damping_factor[damping];
+        batch.shear_to_normal[k] = mat.shear_to_normal_sqrt;
+        batch.friction[k] = mat.friction;
+        s.touching = true;
+        touching += 1;
+        batch.len += 1;
+        if batch.len == LANES {
+            flush(&mut batch, slots, outs);
+        }
+    }
+    if batch.len > 0 {
+        flush(&mut batch, slots, outs);
+    }
+    touching
+}
+
+/// What the gather pass reads.
+struct Gather<'a, L> {
+    dt: f64,
+    finish: Finish,
+    g: V3,
+    out: &'a [ContactForce],
+    first_i: &'a [u32],
+    as_j: &'a [u32],
+    as_j_start: &'a [u32],
+    near: &'a [u32],
+    near_start: &'a [u32],
+    walls: &'a [Wall],
+    law: L,
+    pm: &'a [PairMaterial],
+    nm: usize,
+}
+
+impl<L: LawRef> Gather<'_, L> {
+    /// Body k: pair forces, wall contacts, then `finish`; returns (wall contacts, squared
+    /// displacement since the last build after a drift, else 0).
+    #[inline(always)]
+    fn body(&self, k: usize, b: &mut Body, hist: &mut [V3], x0: &V3) -> (usize, f64) {
+        let (dt, g, out) = (self.dt, self.g, self.out);
+        let (mut f, mut t) = (V3::zeros(), V3::zeros());
+        for &slot in &self.as_j[self.as_j_start[k] as usize..self.as_j_start[k + 1] as usize] {
+            let o = &out[slot as usize];
+            f += -o.force;
+            t += o.torque_j;
+        }
+        for o in &out[self.first_i[k] as usize..self.first_i[k + 1] as usize] {
+            f += o.force;
+            t += o.torque_i;
+        }
+        let mut touching = 0;
+        for &l in &self.near[self.near_start[k] as usize..self.near_start[k + 1] as usize] {
+            let (wall, h) = (&self.walls[l as usize], &mut hist[l as usize]);
+            let Some((n, overlap)) = wall.touch(b.x, b.r) else {
+                *h = V3::zeros();
+                continue;
+            };
+            let c = Contact {
+                n,
+                overlap,
+                r_i: b.r,
+                r_j: 0.0,
+                r_eff: self.law.law().switches.wall_radius_factor * b.r,
+                m_eff: b.m,
+                dv: b.v,
+                w_i: b.w,
+                w_j: V3::zeros(),
+            };
+            let out = contact_force(
+                self.law.law(),
+                &self.pm[b.material * self.nm + wall.material],
+                &c,
+                h,
+                dt,
+            );
+            f += out.force;
+            t += out.torque_i;
+            touching += 1;
+        }
+        b.f = f;
+        b.t = t;
+        match self.finish {
+            Finish::Nothing => (touching, 0.0),
+            Finish::HalfKick => {
+                b.kick(0.5 * dt, g);
+                (touching, 0.0)
+            }
+            Finish::KickDrift => {
+                // Two half kicks with the same acceleration (computed once: the same bits).
+                let half_dt = 0.5 * dt;
+                let dv = half_dt * ((b.f + b.f_ext) / b.m + g);
+                let dw = half_dt * (b.t + b.t_ext) / b.inertia;
+                b.v += dv;
+                b.w += dw;
+                b.v += dv;
+                b.w += dw;
+                b.x += dt * b.v;
+                (touching, (b.x - x0).norm_squared())
+            }
+        }
     }
 }
