@@ -531,6 +531,15 @@ impl World {
     }
 }
 
+/// A pair that stopped touching forgets its tangential history and its force.
+fn apart(s: &mut Slot, out: &mut ContactForce) {
+    if s.touching {
+        s.touching = false;
+        s.history = V3::zeros();
+        *out = ContactForce::default();
+    }
+}
+
 /// One Verlet pair: its contact force into `out` (zero when apart); 1 when touching.
 #[inline(always)]
 fn pair_force(
@@ -545,21 +554,15 @@ fn pair_force(
     let (a, b) = (&bodies[s.i as usize], &bodies[s.j as usize]);
     let d = a.x - b.x;
     let dist2 = d.norm_squared();
-    let apart = |s: &mut Slot, out: &mut ContactForce| {
-        if s.touching {
-            s.touching = false;
-            s.history = V3::zeros();
-            *out = ContactForce::default();
-        }
-        0
-    };
     if dist2 >= p.cut2 {
-        return apart(s, out);
+        apart(s, out);
+        return 0;
     }
     let dist = dist2.sqrt();
     let overlap = p.r_sum - dist;
     if overlap <= 0.0 {
-        return apart(s, out);
+        apart(s, out);
+        return 0;
     }
     let n = if dist > 0.0 { d / dist } else { V3::z() };
     let c = Contact {
@@ -610,13 +613,6 @@ fn pair_forces_batched(
         let (a, b) = (&bodies[s.i as usize], &bodies[s.j as usize]);
         let d = a.x - b.x;
         let dist2 = d.norm_squared();
-        let apart = |s: &mut Slot, out: &mut ContactForce| {
-            if s.touching {
-                s.touching = false;
-                s.history = V3::zeros();
-                *out = ContactForce::default();
-            }
-        };
         if dist2 >= p.cut2 {
             apart(s, &mut outs[m]);
             continue;
