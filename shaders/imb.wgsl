@@ -3,9 +3,13 @@
 //
 // Per step: `uncover` clears the cells the particles covered last step, `cover` computes the solid
 // fraction of every cell in each particle's bounding box (work = particles x cells covered, never
-// cells x particles) and registers up to SLOTS particles per cell, `stream_collide` adds the solid
-// collision term, and `reduce` sums each particle's force and torque in a fixed order (no
-// floating-point atomics: the result is the same every run).
+// cells x particles) and registers up to SLOTS particles per cell, `save` keeps the pre-collision
+// populations of the covered cells, the fluid kernels of lbm.wgsl update every cell as without
+// particles, `stream_collide_covered` redoes each covered cell from its saved populations with the
+// solid collision term (the AA pattern: a cell reads and writes the same 19 slots, which no other
+// cell touches in that step, so the second write simply replaces the first), and `reduce` sums each
+// particle's force and torque in a fixed order (no floating-point atomics: the result is the same
+// every run).
 
 // Particles a cell can hold (1-4).
 override SLOTS: u32 = 2u;
@@ -32,6 +36,8 @@ struct Pair {
     pad: f32,
     // momentum the fluid gave the particle in this cell during the step
     force: vec4<f32>,
+    // pre-collision populations of the cell (`save`)
+    f: array<f32, 19>,
 }
 
 @group(0) @binding(24) var<storage, read_write> particles: array<Particle>;
@@ -102,7 +108,8 @@ fn cover(
     for (var t = local; t < m * m * m; t += 64u) {
         let q = origin + vec3<i32>(i32(t % m), i32((t / m) % m), i32(t / (m * m)));
         let index = p.box_.x + t;
-        var pair = Pair(NO_CELL, j, 0.0, 0.0, vec4<f32>(0.0));
+        var cell = NO_CELL;
+        var fraction = 0.0;
         if all(q >= vec3<i32>(0)) && all(q < n) {
             let k = u32(q.x) + params.n.x * (u32(q.y) + params.n.y * u32(q.z));
             let eps = solid_fraction(vec3<f32>(q) + 0.5, p.pos_r.xyz, p.pos_r.w);
@@ -110,15 +117,63 @@ fn cover(
                 let slot = atomicAdd(&covered[k], 1u);
                 if slot < SLOTS {
                     slots[k * SLOTS + slot] = index;
-                    pair.cell = k;
-                    pair.eps = eps;
+                    cell = k;
+                    fraction = eps;
                 } else {
                     atomicAdd(&status[1], 1u);
                 }
             }
         }
-        pairs[index] = pair;
+        // Field by field: the populations are written by `save`.
+        pairs[index].cell = cell;
+        pairs[index].particle = j;
+        pairs[index].eps = fraction;
+        pairs[index].force = vec4<f32>(0.0);
     }
+}
+
+// Before the fluid step: each registered pair keeps the pre-collision populations of its cell.
+@compute @workgroup_size(64)
+fn save(
+    @builtin(workgroup_id) wg: vec3<u32>,
+    @builtin(num_workgroups) nwg: vec3<u32>,
+    @builtin(local_invocation_index) local: u32,
+) {
+    let t = cell_index(wg, nwg, local);
+    if t >= imb_info.y { return; }
+    let k = pairs[t].cell;
+    if k == NO_CELL { return; }
+    let f = read_populations(k, flags[k]);
+    //#for i
+    pairs[t].f[{i}] = f[{i}];
+    //#end
+}
+
+// After the fluid step, which updated the covered cells without the solid term: the owner of each
+// covered cell (the lowest of its registered pairs) redoes the cell's step from the saved
+// populations, with the solid term, and stores it over the fluid kernels' result.
+@compute @workgroup_size(64)
+fn stream_collide_covered(
+    @builtin(workgroup_id) wg: vec3<u32>,
+    @builtin(num_workgroups) nwg: vec3<u32>,
+    @builtin(local_invocation_index) local: u32,
+) {
+    let t = cell_index(wg, nwg, local);
+    if t >= imb_info.y { return; }
+    let k = pairs[t].cell;
+    if k == NO_CELL { return; }
+    let count = min(atomicLoad(&covered[k]), SLOTS);
+    var owner = t;
+    for (var s = 0u; s < count; s++) {
+        owner = min(owner, slots[k * SLOTS + s]);
+    }
+    if owner != t { return; }
+    var f: array<f32, 19>;
+    //#for i
+    f[{i}] = pairs[t].f[{i}];
+    //#end
+    let m = moments(f);
+    write_populations(k, flags[k], immersed_boundary(k, f, m, collide(f, m)), m);
 }
 
 // The collision of a cell covered by particles: the fluid part of `post` (the operator's
@@ -184,11 +239,12 @@ fn reduce(
     var force = vec3<f32>(0.0);
     var torque = vec3<f32>(0.0);
     for (var t = 0u; t < m * m * m; t++) {
-        let pair = pairs[p.box_.x + t];
-        if pair.cell != NO_CELL {
-            let arm = vec3<f32>(coords(pair.cell)) + 0.5 - p.pos_r.xyz;
-            force += pair.force.xyz;
-            torque += cross(arm, pair.force.xyz);
+        let cell = pairs[p.box_.x + t].cell;
+        if cell != NO_CELL {
+            let pair_force = pairs[p.box_.x + t].force.xyz;
+            let arm = vec3<f32>(coords(cell)) + 0.5 - p.pos_r.xyz;
+            force += pair_force;
+            torque += cross(arm, pair_force);
         }
     }
     particles[j].force = vec4<f32>(force, 0.0);

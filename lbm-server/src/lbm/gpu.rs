@@ -222,7 +222,7 @@ impl Lattice {
         );
         let fields = storage_buffer(d, "fields", bytes * 4);
         let status = init("status", bytemuck::cast_slice(&[u32::MAX, 0, 0, 0]), STORAGE);
-        let classes = CellList::new(&setup, imb.is_none());
+        let classes = CellList::new(&setup, true);
         let cell_list = init(
             "cell list",
             bytemuck::cast_slice(if classes.list.is_empty() {
@@ -255,7 +255,6 @@ impl Lattice {
         });
         let constants = [
             ("OPERATOR", setup.operator.code() as f64),
-            ("IMB", f64::from(u8::from(imb.is_some()))),
             ("FORCE", f64::from(u8::from(setup.force != [0.0; 3]))),
             ("SLOTS", imb.map_or(2, |o| o.slots) as f64),
             (
@@ -610,7 +609,7 @@ pub fn cell_flags(setup: &Setup) -> Vec<u32> {
 /// fixed neighbour offsets), wrapping (no link leaves the fluid, some cross a periodic face),
 /// boundary (some link leaves the fluid). Quads: q such that cells 4q..4q+3 are all interior or
 /// wrapping, whose even step moves four cells per vector access; interior quads, of four interior
-/// cells, do so in the odd step too when nx is a multiple of 4 (no quads with particles).
+/// cells, do so in the odd step too when nx is a multiple of 4 (with or without particles).
 pub struct CellList {
     /// Interior cells (those of interior quads first, then those of other quads), wrapping cells
     /// (those of quads last), boundary cells, each group in increasing order, then the quads, then
