@@ -3,8 +3,8 @@
 //
 // Per step: `uncover` clears the cells the particles covered last step, `cover` computes the solid
 // fraction of every cell in each particle's bounding box (work = particles x cells covered, never
-// cells x particles) and registers up to SLOTS particles per cell, `save` keeps the pre-collision
-// populations of the covered cells, the fluid kernels of lbm.wgsl update every cell as without
+// cells x particles), registers up to SLOTS particles per cell and lists the covered cells, `save`
+// keeps the pre-collision populations of the covered cells, the fluid kernels of lbm.wgsl update every cell as without
 // particles, `stream_collide_covered` redoes each covered cell from its saved populations with the
 // solid collision term (the AA pattern: a cell reads and writes the same 19 slots, which no other
 // cell touches in that step, so the second write simply replaces the first), and `reduce` sums each
@@ -36,7 +36,11 @@ struct Pair {
     pad: f32,
     // momentum the fluid gave the particle in this cell during the step
     force: vec4<f32>,
-    // pre-collision populations of the cell (`save`)
+}
+
+// A covered cell and its pre-collision populations (`save`).
+struct Saved {
+    cell: u32,
     f: array<f32, 19>,
 }
 
@@ -46,8 +50,11 @@ struct Pair {
 @group(0) @binding(26) var<storage, read_write> covered: array<atomic<u32>>;
 // Per cell: SLOTS pair indices.
 @group(0) @binding(27) var<storage, read_write> slots: array<u32>;
-// particles, pairs, pairs of the previous step, -
+// particles, pairs, pairs of the previous step, capacity of `saved`
 @group(0) @binding(28) var<storage, read> imb_info: vec4<u32>;
+// The covered cells of this step, each once, in the order `cover` found them (status[4] of them),
+// over the `fields` buffer (binding 3), which only `macroscopic` uses and which it rewrites.
+@group(0) @binding(3) var<storage, read_write> saved: array<Saved>;
 
 const NO_CELL: u32 = 0xffffffffu;
 // Sub-samples per cell edge for the solid fraction of cells cut by the surface.
@@ -115,6 +122,15 @@ fn cover(
             let eps = solid_fraction(vec3<f32>(q) + 0.5, p.pos_r.xyz, p.pos_r.w);
             if eps > 0.0 && (flags[k] & SOLID) == 0u {
                 let slot = atomicAdd(&covered[k], 1u);
+                if slot == 0u {
+                    // First to cover the cell: it joins the list of covered cells.
+                    let e = atomicAdd(&status[4], 1u);
+                    if e < imb_info.w {
+                        saved[e].cell = k;
+                    } else {
+                        atomicAdd(&status[1], 1u);
+                    }
+                }
                 if slot < SLOTS {
                     slots[k * SLOTS + slot] = index;
                     cell = k;
@@ -132,45 +148,48 @@ fn cover(
     }
 }
 
-// Before the fluid step: each registered pair keeps the pre-collision populations of its cell.
+// The covered cells' workgroups for the indirect dispatch of `save` and `stream_collide_covered`
+// (status[5..8]: x, y, z; 2D beyond 65535 workgroups). One invocation.
+@compute @workgroup_size(1)
+fn covered_groups() {
+    let count = min(atomicLoad(&status[4]), imb_info.w);
+    let groups = (count + 63u) / 64u;
+    let x = min(groups, 65535u);
+    atomicStore(&status[5], x);
+    atomicStore(&status[6], select(1u, (groups + x - 1u) / x, x > 0u));
+    atomicStore(&status[7], 1u);
+}
+
+// Before the fluid step: the pre-collision populations of each covered cell.
 @compute @workgroup_size(64)
 fn save(
     @builtin(workgroup_id) wg: vec3<u32>,
     @builtin(num_workgroups) nwg: vec3<u32>,
     @builtin(local_invocation_index) local: u32,
 ) {
-    let t = cell_index(wg, nwg, local);
-    if t >= imb_info.y { return; }
-    let k = pairs[t].cell;
-    if k == NO_CELL { return; }
+    let e = cell_index(wg, nwg, local);
+    if e >= min(atomicLoad(&status[4]), imb_info.w) { return; }
+    let k = saved[e].cell;
     let f = read_populations(k, flags[k]);
     //#for i
-    pairs[t].f[{i}] = f[{i}];
+    saved[e].f[{i}] = f[{i}];
     //#end
 }
 
-// After the fluid step, which updated the covered cells without the solid term: the owner of each
-// covered cell (the lowest of its registered pairs) redoes the cell's step from the saved
-// populations, with the solid term, and stores it over the fluid kernels' result.
+// After the fluid step, which updated the covered cells without the solid term: each covered cell
+// is redone from its saved populations, with the solid term, over the fluid kernels' result.
 @compute @workgroup_size(64)
 fn stream_collide_covered(
     @builtin(workgroup_id) wg: vec3<u32>,
     @builtin(num_workgroups) nwg: vec3<u32>,
     @builtin(local_invocation_index) local: u32,
 ) {
-    let t = cell_index(wg, nwg, local);
-    if t >= imb_info.y { return; }
-    let k = pairs[t].cell;
-    if k == NO_CELL { return; }
-    let count = min(atomicLoad(&covered[k]), SLOTS);
-    var owner = t;
-    for (var s = 0u; s < count; s++) {
-        owner = min(owner, slots[k * SLOTS + s]);
-    }
-    if owner != t { return; }
+    let e = cell_index(wg, nwg, local);
+    if e >= min(atomicLoad(&status[4]), imb_info.w) { return; }
+    let k = saved[e].cell;
     var f: array<f32, 19>;
     //#for i
-    f[{i}] = pairs[t].f[{i}];
+    f[{i}] = saved[e].f[{i}];
     //#end
     let m = moments(f);
     write_populations(k, flags[k], immersed_boundary(k, f, m, collide(f, m)), m);

@@ -128,7 +128,7 @@ pub struct Lattice {
     params: Vec<wgpu::Buffer>,
     flags: wgpu::Buffer,
     mrt: wgpu::Buffer,
-    fields: wgpu::Buffer,
+    pub(super) fields: wgpu::Buffer,
     pub(super) status: wgpu::Buffer,
     cell_list: wgpu::Buffer,
     /// The classes of the cell list (see `CellList`).
@@ -221,7 +221,12 @@ impl Lattice {
             wgpu::BufferUsages::UNIFORM,
         );
         let fields = storage_buffer(d, "fields", bytes * 4);
-        let status = init("status", bytemuck::cast_slice(&[u32::MAX, 0, 0, 0]), STORAGE);
+        // [0] first unhealthy cell, [1] dropped covers, [4] covered cells, [5..8] their workgroups.
+        let status = init(
+            "status",
+            bytemuck::cast_slice(&[u32::MAX, 0, 0, 0, 0, 0, 0, 0]),
+            STORAGE,
+        );
         let classes = CellList::new(&setup, true);
         let cell_list = init(
             "cell list",

@@ -50,8 +50,9 @@ struct GpuParticle {
 }
 
 const PARTICLE_BYTES: u64 = std::mem::size_of::<GpuParticle>() as u64;
-/// The shader's `Pair`: cell, particle, eps, pad, force (vec4), 19 populations, padding to 16 bytes.
-const PAIR_BYTES: u64 = 112;
+const PAIR_BYTES: u64 = 32;
+/// The shader's `Saved`: a covered cell and its 19 populations (over the `fields` buffer).
+const SAVED_BYTES: u64 = 80;
 
 /// Edge of the bounding box of a sphere of radius r, in cells (matches `cover` in imb.wgsl).
 pub fn box_edge(radius: f64) -> u32 {
@@ -66,11 +67,16 @@ pub struct Coupling {
     slots: wgpu::Buffer,
     info: wgpu::Buffer,
     readback: wgpu::Buffer,
+    /// The workgroups of the covered cells (copied from status[5..8]: a buffer bound as storage
+    /// cannot be the indirect argument of the same dispatch).
+    indirect: wgpu::Buffer,
     particle_capacity: u64,
     pair_capacity: u64,
     previous_pairs: u32,
     slots_per_cell: u32,
-    pipelines: Option<[wgpu::ComputePipeline; 5]>,
+    pipelines: Option<[wgpu::ComputePipeline; 6]>,
+    /// Covered cells the `fields` buffer can hold (`Saved` records).
+    saved_capacity: u32,
 }
 
 impl Coupling {
@@ -90,11 +96,18 @@ impl Coupling {
             slots: storage_buffer(d, "slots", per_cell(4 * slots)),
             info: storage_buffer(d, "imb info", 16),
             readback: readback_buffer(d, PARTICLE_BYTES),
+            indirect: d.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("covered cells' workgroups"),
+                size: 16,
+                usage: wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            }),
             particle_capacity: 1,
             pair_capacity: 1,
             previous_pairs: 0,
             slots_per_cell: slots as u32,
             pipelines: None,
+            saved_capacity: 0,
         }
     }
 
@@ -102,7 +115,15 @@ impl Coupling {
     pub fn with_pipelines(mut self, on: bool, make: &dyn Fn(&str) -> wgpu::ComputePipeline) -> Coupling {
         if on {
             self.pipelines = Some(
-                ["uncover", "cover", "save", "stream_collide_covered", "reduce"].map(|entry| make(entry)),
+                [
+                    "uncover",
+                    "cover",
+                    "covered_groups",
+                    "save",
+                    "stream_collide_covered",
+                    "reduce",
+                ]
+                .map(|entry| make(entry)),
             );
         }
         self
@@ -140,7 +161,8 @@ impl Lattice {
             .pipelines
             .as_ref()
             .ok_or("this lattice was made without particle coupling")?;
-        let [uncover, cover, save, covered, reduce] = pipelines.clone();
+        let [uncover, cover, groups, save, covered, reduce] = pipelines.clone();
+        let capacity = coupling.saved_capacity;
         let previous = coupling.previous_pairs;
         coupling.previous_pairs = pairs;
         let gpu = self.gpu.clone();
@@ -149,18 +171,23 @@ impl Lattice {
         gpu.queue.write_buffer(
             &coupling.info,
             0,
-            bytemuck::cast_slice(&[particles.len() as u32, pairs, previous, 0]),
+            bytemuck::cast_slice(&[particles.len() as u32, pairs, previous, capacity]),
         );
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
         let parity = self.time % 2;
         let n = particles.len() as u32;
         self.dispatch_groups(&mut encoder, &uncover, parity, previous.div_ceil(64));
+        // The covered cells are listed by `cover` (status[4]) and dispatched indirectly (status[5..8]).
+        encoder.clear_buffer(&self.status, 16, Some(16));
         self.dispatch_groups(&mut encoder, &cover, parity, n);
+        self.dispatch_groups(&mut encoder, &groups, parity, 1);
+        let indirect = &self.imb.as_ref().expect("coupling").indirect;
+        encoder.copy_buffer_to_buffer(&self.status, 20, indirect, 0, 12);
         // The fluid kernels update every cell without the solid term; the covered cells are then
         // redone from their saved populations (shaders/imb.wgsl).
-        self.dispatch_groups(&mut encoder, &save, parity, pairs.div_ceil(64));
+        self.dispatch_indirect(&mut encoder, &save, parity);
         self.encode_step(&mut encoder);
-        self.dispatch_groups(&mut encoder, &covered, parity, pairs.div_ceil(64));
+        self.dispatch_indirect(&mut encoder, &covered, parity);
         self.dispatch_groups(&mut encoder, &reduce, parity, n.div_ceil(64));
         let coupling = self.imb.as_ref().expect("coupling");
         let bytes = n as u64 * PARTICLE_BYTES;
@@ -188,6 +215,19 @@ impl Lattice {
         };
         coupling.readback.unmap();
         Ok(loads)
+    }
+
+    /// Dispatches as many workgroups as `covered_groups` wrote to status[5..8].
+    fn dispatch_indirect(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        pipeline: &wgpu::ComputePipeline,
+        parity: u64,
+    ) {
+        let mut pass = encoder.begin_compute_pass(&Default::default());
+        pass.set_pipeline(pipeline);
+        pass.set_bind_group(0, &self.bind_groups[parity as usize], &[]);
+        pass.dispatch_workgroups_indirect(&self.imb.as_ref().expect("coupling").indirect, 0);
     }
 
     /// Particles one cell can hold.
@@ -226,6 +266,16 @@ impl Lattice {
             encoder.clear_buffer(&coupling.covered, 0, None);
             self.gpu.queue.submit([encoder.finish()]);
             coupling.previous_pairs = 0;
+            grew = true;
+        }
+        // The covered cells, at most min(cells, pairs), over the `fields` buffer.
+        let cells = self.setup.cells() as u64;
+        let most = (limit.min(self.gpu.limits.max_buffer_size) / SAVED_BYTES).min(cells);
+        let want = pairs.min(cells).next_power_of_two().min(most);
+        if want > coupling.saved_capacity as u64 {
+            let bytes = (want * SAVED_BYTES).max(cells * 16);
+            self.fields = storage_buffer(&d, "fields", bytes);
+            coupling.saved_capacity = (bytes / SAVED_BYTES).min(most) as u32;
             grew = true;
         }
         if grew {
