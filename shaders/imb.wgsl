@@ -160,7 +160,7 @@ fn covered_groups() {
     atomicStore(&status[7], 1u);
 }
 
-// Before the fluid step: the pre-collision populations of each covered cell.
+// Before the fluid step: the pre-collision populations of each covered cell (KIND the parity).
 @compute @workgroup_size(64)
 fn save(
     @builtin(workgroup_id) wg: vec3<u32>,
@@ -170,14 +170,34 @@ fn save(
     let e = cell_index(wg, nwg, local);
     if e >= min(atomicLoad(&status[4]), imb_info.w) { return; }
     let k = saved[e].cell;
-    let f = read_populations(k, flags[k]);
+    let flag = flags[k];
+    let p = coords(k);
+    // KIND is the parity. Without branches (llvmpipe would run both sides): in the odd step, both
+    // candidate slots are read and the right one kept.
     //#for i
-    saved[e].f[{i}] = f[{i}];
+    if KIND == 0u {
+        saved[e].f[{i}] = f{i}[k];
+    } else {
+        let c = vec3<i32>({i.cx}, {i.cy}, {i.cz});
+        saved[e].f[{i}] = select(f{i.o}[wrapped(p - c)], f{i}[k], leaves(flag, {i.o}u));
+    }
     //#end
 }
 
+// The face (or SOLID_LINK) a link from p along c leaves through, for a link that leaves the fluid:
+// `neighbour` without its load of the neighbour's flags.
+fn link_face(p: vec3<i32>, c: vec3<i32>) -> u32 {
+    let n = vec3<i32>(params.n.xyz);
+    let q = p + c;
+    var face = crossed(0xffu, q.x, n.x, 0u);
+    face = crossed(face, q.y, n.y, 1u);
+    face = crossed(face, q.z, n.z, 2u);
+    return select(face, SOLID_LINK, face == 0xffu);
+}
+
 // After the fluid step, which updated the covered cells without the solid term: each covered cell
-// is redone from its saved populations, with the solid term, over the fluid kernels' result.
+// is redone from its saved populations, with the solid term, over the fluid kernels' result
+// (KIND the parity).
 @compute @workgroup_size(64)
 fn stream_collide_covered(
     @builtin(workgroup_id) wg: vec3<u32>,
@@ -192,7 +212,22 @@ fn stream_collide_covered(
     f[{i}] = saved[e].f[{i}];
     //#end
     let m = moments(f);
-    write_populations(k, flags[k], immersed_boundary(k, f, m, collide(f, m)), m);
+    let post = immersed_boundary(k, f, m, collide(f, m));
+    let flag = flags[k];
+    let p = coords(k);
+    // As `write_populations`, KIND the parity, without the flag loads of `neighbour`.
+    //#for i
+    {
+        let c = vec3<i32>({i.cx}, {i.cy}, {i.cz});
+        if leaves(flag, {i}u) {
+            f{i.o}[k] = bounce(link_face(p, c), vec3<f32>(c), {i.w}, post[{i}], m);
+        } else if KIND == 1u {
+            f{i}[wrapped(p + c)] = post[{i}];
+        } else {
+            f{i.o}[k] = post[{i}];
+        }
+    }
+    //#end
 }
 
 // The collision of a cell covered by particles: the fluid part of `post` (the operator's

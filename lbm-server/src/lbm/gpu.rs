@@ -289,7 +289,7 @@ impl Lattice {
         let stream_collide_quads_odd =
             (classes.interior_quads > 0).then(|| pipeline("stream_collide_quads_odd"));
         let macroscopic = pipeline("macroscopic");
-        let coupling = coupling.with_pipelines(imb.is_some(), &pipeline);
+        let coupling = coupling.with_pipelines(imb.is_some(), &pipeline_kind);
         let bind_groups = [0, 1].map(|parity| {
             make_bind_group(
                 d,

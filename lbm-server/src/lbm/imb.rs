@@ -74,7 +74,9 @@ pub struct Coupling {
     pair_capacity: u64,
     previous_pairs: u32,
     slots_per_cell: u32,
-    pipelines: Option<[wgpu::ComputePipeline; 6]>,
+    /// uncover, cover, covered_groups, reduce, then save and stream_collide_covered for the even
+    /// and the odd step.
+    pipelines: Option<[wgpu::ComputePipeline; 8]>,
     /// Covered cells the `fields` buffer can hold (`Saved` records).
     saved_capacity: u32,
 }
@@ -112,19 +114,22 @@ impl Coupling {
     }
 
     /// Adds the uncover, cover, save, covered-cell and reduce pipelines when the coupling is on.
-    pub fn with_pipelines(mut self, on: bool, make: &dyn Fn(&str) -> wgpu::ComputePipeline) -> Coupling {
+    pub fn with_pipelines(
+        mut self,
+        on: bool,
+        make: &dyn Fn(&str, u32) -> wgpu::ComputePipeline,
+    ) -> Coupling {
         if on {
-            self.pipelines = Some(
-                [
-                    "uncover",
-                    "cover",
-                    "covered_groups",
-                    "save",
-                    "stream_collide_covered",
-                    "reduce",
-                ]
-                .map(|entry| make(entry)),
-            );
+            self.pipelines = Some([
+                make("uncover", 0),
+                make("cover", 0),
+                make("covered_groups", 0),
+                make("reduce", 0),
+                make("save", 0),
+                make("save", 1),
+                make("stream_collide_covered", 0),
+                make("stream_collide_covered", 1),
+            ]);
         }
         self
     }
@@ -161,7 +166,13 @@ impl Lattice {
             .pipelines
             .as_ref()
             .ok_or("this lattice was made without particle coupling")?;
-        let [uncover, cover, groups, save, covered, reduce] = pipelines.clone();
+        let parity = self.time % 2;
+        let [uncover, cover, groups, reduce, save_even, save_odd, covered_even, covered_odd] = pipelines.clone();
+        let (save, covered) = if parity == 0 {
+            (save_even, covered_even)
+        } else {
+            (save_odd, covered_odd)
+        };
         let capacity = coupling.saved_capacity;
         let previous = coupling.previous_pairs;
         coupling.previous_pairs = pairs;
@@ -174,7 +185,6 @@ impl Lattice {
             bytemuck::cast_slice(&[particles.len() as u32, pairs, previous, capacity]),
         );
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
-        let parity = self.time % 2;
         let n = particles.len() as u32;
         self.dispatch_groups(&mut encoder, &uncover, parity, previous.div_ceil(64));
         // The covered cells are listed by `cover` (status[4]) and dispatched indirectly (status[5..8]).
