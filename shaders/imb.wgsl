@@ -52,8 +52,9 @@ struct Saved {
 @group(0) @binding(27) var<storage, read_write> slots: array<u32>;
 // particles, pairs, pairs of the previous step, capacity of `saved`
 @group(0) @binding(28) var<storage, read> imb_info: vec4<u32>;
-// The covered cells of this step, each once, in the order `cover` found them (status[4] of them),
-// over the `fields` buffer (binding 3), which only `macroscopic` uses and which it rewrites.
+// The covered cells of this step, each once, in the order `cover` found them, over the `fields`
+// buffer (binding 3), which only `macroscopic` uses and which it rewrites: from the front those
+// none of whose links leaves the fluid (status[4] of them), from the back the others (status[8]).
 @group(0) @binding(3) var<storage, read_write> saved: array<Saved>;
 
 const NO_CELL: u32 = 0xffffffffu;
@@ -123,12 +124,14 @@ fn cover(
             if eps > 0.0 && (flags[k] & SOLID) == 0u {
                 let slot = atomicAdd(&covered[k], 1u);
                 if slot == 0u {
-                    // First to cover the cell: it joins the list of covered cells.
-                    let e = atomicAdd(&status[4], 1u);
-                    if e < imb_info.w {
-                        saved[e].cell = k;
+                    // First to cover the cell: it joins the list of covered cells (a cell that
+                    // would not fit is counted by `covered_groups`).
+                    if (flags[k] & 0x7ffffu) == 0u {
+                        let e = atomicAdd(&status[4], 1u);
+                        if e < imb_info.w { saved[e].cell = k; }
                     } else {
-                        atomicAdd(&status[1], 1u);
+                        let e = atomicAdd(&status[8], 1u);
+                        if e < imb_info.w { saved[imb_info.w - 1u - e].cell = k; }
                     }
                 }
                 if slot < SLOTS {
@@ -148,40 +151,69 @@ fn cover(
     }
 }
 
-// The covered cells' workgroups for the indirect dispatch of `save` and `stream_collide_covered`
-// (status[5..8]: x, y, z; 2D beyond 65535 workgroups). One invocation.
+// The covered cells' workgroups for the indirect dispatches of `save` and `stream_collide_covered`:
+// status[5..8] (x, y, z; 2D beyond 65535 workgroups) for the front of the list, status[9..12] for
+// the back. One invocation; cells beyond the capacity count as dropped covers.
 @compute @workgroup_size(1)
 fn covered_groups() {
-    let count = min(atomicLoad(&status[4]), imb_info.w);
-    let groups = (count + 63u) / 64u;
-    let x = min(groups, 65535u);
-    atomicStore(&status[5], x);
-    atomicStore(&status[6], select(1u, (groups + x - 1u) / x, x > 0u));
-    atomicStore(&status[7], 1u);
+    let front = atomicLoad(&status[4]);
+    let back = atomicLoad(&status[8]);
+    let capacity = imb_info.w;
+    if front + back > capacity {
+        atomicAdd(&status[1], front + back - capacity);
+    }
+    let counts = vec2<u32>(min(front, capacity), min(back, capacity - min(front, capacity)));
+    for (var list = 0u; list < 2u; list++) {
+        let groups = (counts[list] + 63u) / 64u;
+        let x = min(groups, 65535u);
+        atomicStore(&status[5u + 4u * list], x);
+        atomicStore(&status[6u + 4u * list], select(1u, (groups + x - 1u) / x, x > 0u));
+        atomicStore(&status[7u + 4u * list], 1u);
+    }
 }
 
-// Before the fluid step: the pre-collision populations of each covered cell (KIND the parity).
+// The entry of `saved` of invocation j, or NO_CELL past the end of its list. KIND: bit 0 the
+// parity, bit 1 the back of the list (cells with a link that leaves the fluid).
+fn saved_entry(j: u32) -> u32 {
+    let capacity = imb_info.w;
+    let front = min(atomicLoad(&status[4]), capacity);
+    if KIND < 2u {
+        return select(NO_CELL, j, j < front);
+    }
+    let back = min(atomicLoad(&status[8]), capacity - front);
+    return select(NO_CELL, capacity - 1u - j, j < back);
+}
+
+// Before the fluid step: the pre-collision populations of each covered cell.
 @compute @workgroup_size(64)
 fn save(
     @builtin(workgroup_id) wg: vec3<u32>,
     @builtin(num_workgroups) nwg: vec3<u32>,
     @builtin(local_invocation_index) local: u32,
 ) {
-    let e = cell_index(wg, nwg, local);
-    if e >= min(atomicLoad(&status[4]), imb_info.w) { return; }
+    let e = saved_entry(cell_index(wg, nwg, local));
+    if e == NO_CELL { return; }
     let k = saved[e].cell;
-    let flag = flags[k];
     let p = coords(k);
-    // KIND is the parity. Without branches (llvmpipe would run both sides): in the odd step, both
-    // candidate slots are read and the right one kept.
-    //#for i
-    if KIND == 0u {
+    // Without branches (llvmpipe would run both sides): in the odd step of a cell with a link that
+    // leaves the fluid, both candidate slots are read and the right one kept.
+    if KIND == 0u || KIND == 2u {
+        //#for i
         saved[e].f[{i}] = f{i}[k];
+        //#end
+    } else if KIND == 1u {
+        //#for i
+        saved[e].f[{i}] = f{i.o}[wrapped(p - vec3<i32>({i.cx}, {i.cy}, {i.cz}))];
+        //#end
     } else {
-        let c = vec3<i32>({i.cx}, {i.cy}, {i.cz});
-        saved[e].f[{i}] = select(f{i.o}[wrapped(p - c)], f{i}[k], leaves(flag, {i.o}u));
+        let flag = flags[k];
+        //#for i
+        {
+            let c = vec3<i32>({i.cx}, {i.cy}, {i.cz});
+            saved[e].f[{i}] = select(f{i.o}[wrapped(p - c)], f{i}[k], leaves(flag, {i.o}u));
+        }
+        //#end
     }
-    //#end
 }
 
 // The face (or SOLID_LINK) a link from p along c leaves through, for a link that leaves the fluid:
@@ -196,16 +228,15 @@ fn link_face(p: vec3<i32>, c: vec3<i32>) -> u32 {
 }
 
 // After the fluid step, which updated the covered cells without the solid term: each covered cell
-// is redone from its saved populations, with the solid term, over the fluid kernels' result
-// (KIND the parity).
+// is redone from its saved populations, with the solid term, over the fluid kernels' result.
 @compute @workgroup_size(64)
 fn stream_collide_covered(
     @builtin(workgroup_id) wg: vec3<u32>,
     @builtin(num_workgroups) nwg: vec3<u32>,
     @builtin(local_invocation_index) local: u32,
 ) {
-    let e = cell_index(wg, nwg, local);
-    if e >= min(atomicLoad(&status[4]), imb_info.w) { return; }
+    let e = saved_entry(cell_index(wg, nwg, local));
+    if e == NO_CELL { return; }
     let k = saved[e].cell;
     var f: array<f32, 19>;
     //#for i
@@ -213,21 +244,31 @@ fn stream_collide_covered(
     //#end
     let m = moments(f);
     let post = immersed_boundary(k, f, m, collide(f, m));
-    let flag = flags[k];
     let p = coords(k);
-    // As `write_populations`, KIND the parity, without the flag loads of `neighbour`.
-    //#for i
-    {
-        let c = vec3<i32>({i.cx}, {i.cy}, {i.cz});
-        if leaves(flag, {i}u) {
-            f{i.o}[k] = bounce(link_face(p, c), vec3<f32>(c), {i.w}, post[{i}], m);
-        } else if KIND == 1u {
-            f{i}[wrapped(p + c)] = post[{i}];
-        } else {
-            f{i.o}[k] = post[{i}];
+    if KIND == 0u {
+        //#for i
+        f{i.o}[k] = post[{i}];
+        //#end
+    } else if KIND == 1u {
+        //#for i
+        f{i}[wrapped(p + vec3<i32>({i.cx}, {i.cy}, {i.cz}))] = post[{i}];
+        //#end
+    } else {
+        // As `write_populations`, without the flag loads of `neighbour`.
+        let flag = flags[k];
+        //#for i
+        {
+            let c = vec3<i32>({i.cx}, {i.cy}, {i.cz});
+            if leaves(flag, {i}u) {
+                f{i.o}[k] = bounce(link_face(p, c), vec3<f32>(c), {i.w}, post[{i}], m);
+            } else if KIND == 3u {
+                f{i}[wrapped(p + c)] = post[{i}];
+            } else {
+                f{i.o}[k] = post[{i}];
+            }
         }
+        //#end
     }
-    //#end
 }
 
 // The collision of a cell covered by particles: the fluid part of `post` (the operator's

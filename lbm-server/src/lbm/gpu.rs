@@ -221,10 +221,11 @@ impl Lattice {
             wgpu::BufferUsages::UNIFORM,
         );
         let fields = storage_buffer(d, "fields", bytes * 4);
-        // [0] first unhealthy cell, [1] dropped covers, [4] covered cells, [5..8] their workgroups.
+        // [0] first unhealthy cell, [1] dropped covers, [4] and [8] covered cells (two lists),
+        // [5..8] and [9..12] their workgroups.
         let status = init(
             "status",
-            bytemuck::cast_slice(&[u32::MAX, 0, 0, 0, 0, 0, 0, 0]),
+            bytemuck::cast_slice(&[u32::MAX, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0]),
             STORAGE,
         );
         let classes = CellList::new(&setup, true);

@@ -74,9 +74,9 @@ pub struct Coupling {
     pair_capacity: u64,
     previous_pairs: u32,
     slots_per_cell: u32,
-    /// uncover, cover, covered_groups, reduce, then save and stream_collide_covered for the even
-    /// and the odd step.
-    pipelines: Option<[wgpu::ComputePipeline; 8]>,
+    /// uncover, cover, covered_groups, reduce, then save and stream_collide_covered for each KIND
+    /// (bit 0 the parity, bit 1 the covered cells with a link that leaves the fluid).
+    pipelines: Option<[wgpu::ComputePipeline; 12]>,
     /// Covered cells the `fields` buffer can hold (`Saved` records).
     saved_capacity: u32,
 }
@@ -100,7 +100,7 @@ impl Coupling {
             readback: readback_buffer(d, PARTICLE_BYTES),
             indirect: d.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("covered cells' workgroups"),
-                size: 16,
+                size: 32,
                 usage: wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::COPY_DST,
                 mapped_at_creation: false,
             }),
@@ -114,11 +114,7 @@ impl Coupling {
     }
 
     /// Adds the uncover, cover, save, covered-cell and reduce pipelines when the coupling is on.
-    pub fn with_pipelines(
-        mut self,
-        on: bool,
-        make: &dyn Fn(&str, u32) -> wgpu::ComputePipeline,
-    ) -> Coupling {
+    pub fn with_pipelines(mut self, on: bool, make: &dyn Fn(&str, u32) -> wgpu::ComputePipeline) -> Coupling {
         if on {
             self.pipelines = Some([
                 make("uncover", 0),
@@ -127,8 +123,12 @@ impl Coupling {
                 make("reduce", 0),
                 make("save", 0),
                 make("save", 1),
+                make("save", 2),
+                make("save", 3),
                 make("stream_collide_covered", 0),
                 make("stream_collide_covered", 1),
+                make("stream_collide_covered", 2),
+                make("stream_collide_covered", 3),
             ]);
         }
         self
@@ -167,12 +167,11 @@ impl Lattice {
             .as_ref()
             .ok_or("this lattice was made without particle coupling")?;
         let parity = self.time % 2;
-        let [uncover, cover, groups, reduce, save_even, save_odd, covered_even, covered_odd] = pipelines.clone();
-        let (save, covered) = if parity == 0 {
-            (save_even, covered_even)
-        } else {
-            (save_odd, covered_odd)
-        };
+        let [uncover, cover, groups, reduce] = std::array::from_fn(|i| pipelines[i].clone());
+        // KIND = parity + 2 * (list of the cells with a link that leaves the fluid).
+        let kind = |list: usize| parity as usize + 2 * list;
+        let save = [0, 1].map(|list| pipelines[4 + kind(list)].clone());
+        let covered = [0, 1].map(|list| pipelines[8 + kind(list)].clone());
         let capacity = coupling.saved_capacity;
         let previous = coupling.previous_pairs;
         coupling.previous_pairs = pairs;
@@ -188,16 +187,20 @@ impl Lattice {
         let n = particles.len() as u32;
         self.dispatch_groups(&mut encoder, &uncover, parity, previous.div_ceil(64));
         // The covered cells are listed by `cover` (status[4]) and dispatched indirectly (status[5..8]).
-        encoder.clear_buffer(&self.status, 16, Some(16));
+        encoder.clear_buffer(&self.status, 16, Some(32));
         self.dispatch_groups(&mut encoder, &cover, parity, n);
         self.dispatch_groups(&mut encoder, &groups, parity, 1);
         let indirect = &self.imb.as_ref().expect("coupling").indirect;
-        encoder.copy_buffer_to_buffer(&self.status, 20, indirect, 0, 12);
+        encoder.copy_buffer_to_buffer(&self.status, 20, indirect, 0, 28);
         // The fluid kernels update every cell without the solid term; the covered cells are then
         // redone from their saved populations (shaders/imb.wgsl).
-        self.dispatch_indirect(&mut encoder, &save, parity);
+        for list in 0..2 {
+            self.dispatch_indirect(&mut encoder, &save[list], parity, 16 * list as u64);
+        }
         self.encode_step(&mut encoder);
-        self.dispatch_indirect(&mut encoder, &covered, parity);
+        for list in 0..2 {
+            self.dispatch_indirect(&mut encoder, &covered[list], parity, 16 * list as u64);
+        }
         self.dispatch_groups(&mut encoder, &reduce, parity, n.div_ceil(64));
         let coupling = self.imb.as_ref().expect("coupling");
         let bytes = n as u64 * PARTICLE_BYTES;
@@ -227,17 +230,19 @@ impl Lattice {
         Ok(loads)
     }
 
-    /// Dispatches as many workgroups as `covered_groups` wrote to status[5..8].
+    /// Dispatches as many workgroups as `covered_groups` wrote to status[5..8] (offset 0) or
+    /// status[9..12] (offset 16).
     fn dispatch_indirect(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         pipeline: &wgpu::ComputePipeline,
         parity: u64,
+        offset: u64,
     ) {
         let mut pass = encoder.begin_compute_pass(&Default::default());
         pass.set_pipeline(pipeline);
         pass.set_bind_group(0, &self.bind_groups[parity as usize], &[]);
-        pass.dispatch_workgroups_indirect(&self.imb.as_ref().expect("coupling").indirect, 0);
+        pass.dispatch_workgroups_indirect(&self.imb.as_ref().expect("coupling").indirect, offset);
     }
 
     /// Particles one cell can hold.
