@@ -194,12 +194,12 @@ impl Lattice {
         encoder.copy_buffer_to_buffer(&self.status, 20, indirect, 0, 28);
         // The fluid kernels update every cell without the solid term; the covered cells are then
         // redone from their saved populations (shaders/imb.wgsl).
-        for list in 0..2 {
-            self.dispatch_indirect(&mut encoder, &save[list], parity, 16 * list as u64);
+        for (offset, pipeline) in [0, 16].into_iter().zip(&save) {
+            self.dispatch_indirect(&mut encoder, pipeline, parity, offset);
         }
         self.encode_step(&mut encoder);
-        for list in 0..2 {
-            self.dispatch_indirect(&mut encoder, &covered[list], parity, 16 * list as u64);
+        for (offset, pipeline) in [0, 16].into_iter().zip(&covered) {
+            self.dispatch_indirect(&mut encoder, pipeline, parity, offset);
         }
         self.dispatch_groups(&mut encoder, &reduce, parity, n.div_ceil(64));
         let coupling = self.imb.as_ref().expect("coupling");
