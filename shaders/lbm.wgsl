@@ -38,8 +38,6 @@ struct Params {
 
 // Collision operator, fixed when the pipeline is made: 0 BGK, 1 TRT, 2 MRT.
 override OPERATOR: u32 = 0u;
-// Particles coupled through the immersed moving boundary (imb.wgsl): only scenes with particles.
-override IMB: bool = false;
 // The cells `stream_collide_fluid` updates, fixed when the pipeline is made: 0 the even step of the
 // interior and wrapping cells, 1 the odd step of the interior cells, 2 the odd step of the wrapping cells.
 override KIND: u32 = 0u;
@@ -308,7 +306,10 @@ fn bounce(face: u32, c: vec3<f32>, w: f32, f_star: f32, m: Moments) -> f32 {
 
 // The step of cells with a link that leaves the fluid (boundary part of the cell list), either
 // parity. llvmpipe (lavapipe) executes both sides of every branch: the fluid cells, far more, go
-// through the branch-free `stream_collide_fluid` instead.
+// through the branch-free `stream_collide_fluid` instead. With particles, these kernels update
+// every cell without the solid term, and `stream_collide_covered` (imb.wgsl) then redoes the
+// covered cells from their saved populations: the cost of the coupling is paid by the covered
+// cells only.
 @compute @workgroup_size(64)
 fn stream_collide(
     @builtin(workgroup_id) wg: vec3<u32>,
@@ -321,10 +322,12 @@ fn stream_collide(
     let flag = flags[k];
     let f = read_populations(k, flag);
     let m = moments(f);
-    var post = collide(f, m);
-    if IMB {
-        post = immersed_boundary(k, f, m, post);
-    }
+    write_populations(k, flag, collide(f, m), m);
+}
+
+// Stores the post-collision populations of cell k where the next step reads them, either parity,
+// with the boundaries of links that leave the fluid.
+fn write_populations(k: u32, flag: u32, post: array<f32, 19>, m: Moments) {
     let odd = params.n.w == 1u;
     //#for i
     if leaves(flag, {i}u) {
@@ -375,10 +378,7 @@ fn stream_collide_fluid(
         //#end
     }
     let m = moments(f);
-    var post = collide(f, m);
-    if IMB {
-        post = immersed_boundary(k, f, m, post);
-    }
+    let post = collide(f, m);
     if KIND == 0u {
         //#for i
         f{i.o}[k] = post[{i}];

@@ -128,7 +128,7 @@ pub struct Lattice {
     params: Vec<wgpu::Buffer>,
     flags: wgpu::Buffer,
     mrt: wgpu::Buffer,
-    fields: wgpu::Buffer,
+    pub(super) fields: wgpu::Buffer,
     pub(super) status: wgpu::Buffer,
     cell_list: wgpu::Buffer,
     /// The classes of the cell list (see `CellList`).
@@ -221,8 +221,14 @@ impl Lattice {
             wgpu::BufferUsages::UNIFORM,
         );
         let fields = storage_buffer(d, "fields", bytes * 4);
-        let status = init("status", bytemuck::cast_slice(&[u32::MAX, 0, 0, 0]), STORAGE);
-        let classes = CellList::new(&setup, imb.is_none());
+        // [0] first unhealthy cell, [1] dropped covers, [4] and [8] covered cells (two lists),
+        // [5..8] and [9..12] their workgroups.
+        let status = init(
+            "status",
+            bytemuck::cast_slice(&[u32::MAX, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0]),
+            STORAGE,
+        );
+        let classes = CellList::new(&setup, true);
         let cell_list = init(
             "cell list",
             bytemuck::cast_slice(if classes.list.is_empty() {
@@ -255,7 +261,6 @@ impl Lattice {
         });
         let constants = [
             ("OPERATOR", setup.operator.code() as f64),
-            ("IMB", f64::from(u8::from(imb.is_some()))),
             ("FORCE", f64::from(u8::from(setup.force != [0.0; 3]))),
             ("SLOTS", imb.map_or(2, |o| o.slots) as f64),
             (
@@ -285,7 +290,7 @@ impl Lattice {
         let stream_collide_quads_odd =
             (classes.interior_quads > 0).then(|| pipeline("stream_collide_quads_odd"));
         let macroscopic = pipeline("macroscopic");
-        let coupling = coupling.with_pipelines(imb.is_some(), &pipeline);
+        let coupling = coupling.with_pipelines(imb.is_some(), &pipeline_kind);
         let bind_groups = [0, 1].map(|parity| {
             make_bind_group(
                 d,
@@ -610,7 +615,7 @@ pub fn cell_flags(setup: &Setup) -> Vec<u32> {
 /// fixed neighbour offsets), wrapping (no link leaves the fluid, some cross a periodic face),
 /// boundary (some link leaves the fluid). Quads: q such that cells 4q..4q+3 are all interior or
 /// wrapping, whose even step moves four cells per vector access; interior quads, of four interior
-/// cells, do so in the odd step too when nx is a multiple of 4 (no quads with particles).
+/// cells, do so in the odd step too when nx is a multiple of 4 (with or without particles).
 pub struct CellList {
     /// Interior cells (those of interior quads first, then those of other quads), wrapping cells
     /// (those of quads last), boundary cells, each group in increasing order, then the quads, then

@@ -51,6 +51,8 @@ struct GpuParticle {
 
 const PARTICLE_BYTES: u64 = std::mem::size_of::<GpuParticle>() as u64;
 const PAIR_BYTES: u64 = 32;
+/// The shader's `Saved`: a covered cell and its 19 populations (over the `fields` buffer).
+const SAVED_BYTES: u64 = 80;
 
 /// Edge of the bounding box of a sphere of radius r, in cells (matches `cover` in imb.wgsl).
 pub fn box_edge(radius: f64) -> u32 {
@@ -65,11 +67,18 @@ pub struct Coupling {
     slots: wgpu::Buffer,
     info: wgpu::Buffer,
     readback: wgpu::Buffer,
+    /// The workgroups of the covered cells (copied from status[5..8]: a buffer bound as storage
+    /// cannot be the indirect argument of the same dispatch).
+    indirect: wgpu::Buffer,
     particle_capacity: u64,
     pair_capacity: u64,
     previous_pairs: u32,
     slots_per_cell: u32,
-    pipelines: Option<[wgpu::ComputePipeline; 3]>,
+    /// uncover, cover, covered_groups, reduce, then save and stream_collide_covered for each KIND
+    /// (bit 0 the parity, bit 1 the covered cells with a link that leaves the fluid).
+    pipelines: Option<[wgpu::ComputePipeline; 12]>,
+    /// Covered cells the `fields` buffer can hold (`Saved` records).
+    saved_capacity: u32,
 }
 
 impl Coupling {
@@ -89,18 +98,38 @@ impl Coupling {
             slots: storage_buffer(d, "slots", per_cell(4 * slots)),
             info: storage_buffer(d, "imb info", 16),
             readback: readback_buffer(d, PARTICLE_BYTES),
+            indirect: d.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("covered cells' workgroups"),
+                size: 32,
+                usage: wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            }),
             particle_capacity: 1,
             pair_capacity: 1,
             previous_pairs: 0,
             slots_per_cell: slots as u32,
             pipelines: None,
+            saved_capacity: 0,
         }
     }
 
-    /// Adds the uncover, cover and reduce pipelines when the coupling is on.
-    pub fn with_pipelines(mut self, on: bool, make: &dyn Fn(&str) -> wgpu::ComputePipeline) -> Coupling {
+    /// Adds the uncover, cover, save, covered-cell and reduce pipelines when the coupling is on.
+    pub fn with_pipelines(mut self, on: bool, make: &dyn Fn(&str, u32) -> wgpu::ComputePipeline) -> Coupling {
         if on {
-            self.pipelines = Some([make("uncover"), make("cover"), make("reduce")]);
+            self.pipelines = Some([
+                make("uncover", 0),
+                make("cover", 0),
+                make("covered_groups", 0),
+                make("reduce", 0),
+                make("save", 0),
+                make("save", 1),
+                make("save", 2),
+                make("save", 3),
+                make("stream_collide_covered", 0),
+                make("stream_collide_covered", 1),
+                make("stream_collide_covered", 2),
+                make("stream_collide_covered", 3),
+            ]);
         }
         self
     }
@@ -137,7 +166,13 @@ impl Lattice {
             .pipelines
             .as_ref()
             .ok_or("this lattice was made without particle coupling")?;
-        let [uncover, cover, reduce] = [&pipelines[0], &pipelines[1], &pipelines[2]].map(|p| p.clone());
+        let parity = self.time % 2;
+        let [uncover, cover, groups, reduce] = std::array::from_fn(|i| pipelines[i].clone());
+        // KIND = parity + 2 * (list of the cells with a link that leaves the fluid).
+        let kind = |list: usize| parity as usize + 2 * list;
+        let save = [0, 1].map(|list| pipelines[4 + kind(list)].clone());
+        let covered = [0, 1].map(|list| pipelines[8 + kind(list)].clone());
+        let capacity = coupling.saved_capacity;
         let previous = coupling.previous_pairs;
         coupling.previous_pairs = pairs;
         let gpu = self.gpu.clone();
@@ -146,14 +181,26 @@ impl Lattice {
         gpu.queue.write_buffer(
             &coupling.info,
             0,
-            bytemuck::cast_slice(&[particles.len() as u32, pairs, previous, 0]),
+            bytemuck::cast_slice(&[particles.len() as u32, pairs, previous, capacity]),
         );
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
-        let parity = self.time % 2;
         let n = particles.len() as u32;
         self.dispatch_groups(&mut encoder, &uncover, parity, previous.div_ceil(64));
+        // The covered cells are listed by `cover` (status[4]) and dispatched indirectly (status[5..8]).
+        encoder.clear_buffer(&self.status, 16, Some(32));
         self.dispatch_groups(&mut encoder, &cover, parity, n);
+        self.dispatch_groups(&mut encoder, &groups, parity, 1);
+        let indirect = &self.imb.as_ref().expect("coupling").indirect;
+        encoder.copy_buffer_to_buffer(&self.status, 20, indirect, 0, 28);
+        // The fluid kernels update every cell without the solid term; the covered cells are then
+        // redone from their saved populations (shaders/imb.wgsl).
+        for (offset, pipeline) in [0, 16].into_iter().zip(&save) {
+            self.dispatch_indirect(&mut encoder, pipeline, parity, offset);
+        }
         self.encode_step(&mut encoder);
+        for (offset, pipeline) in [0, 16].into_iter().zip(&covered) {
+            self.dispatch_indirect(&mut encoder, pipeline, parity, offset);
+        }
         self.dispatch_groups(&mut encoder, &reduce, parity, n.div_ceil(64));
         let coupling = self.imb.as_ref().expect("coupling");
         let bytes = n as u64 * PARTICLE_BYTES;
@@ -181,6 +228,21 @@ impl Lattice {
         };
         coupling.readback.unmap();
         Ok(loads)
+    }
+
+    /// Dispatches as many workgroups as `covered_groups` wrote to status[5..8] (offset 0) or
+    /// status[9..12] (offset 16).
+    fn dispatch_indirect(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        pipeline: &wgpu::ComputePipeline,
+        parity: u64,
+        offset: u64,
+    ) {
+        let mut pass = encoder.begin_compute_pass(&Default::default());
+        pass.set_pipeline(pipeline);
+        pass.set_bind_group(0, &self.bind_groups[parity as usize], &[]);
+        pass.dispatch_workgroups_indirect(&self.imb.as_ref().expect("coupling").indirect, offset);
     }
 
     /// Particles one cell can hold.
@@ -219,6 +281,16 @@ impl Lattice {
             encoder.clear_buffer(&coupling.covered, 0, None);
             self.gpu.queue.submit([encoder.finish()]);
             coupling.previous_pairs = 0;
+            grew = true;
+        }
+        // The covered cells, at most min(cells, pairs), over the `fields` buffer.
+        let cells = self.setup.cells() as u64;
+        let most = (limit.min(self.gpu.limits.max_buffer_size) / SAVED_BYTES).min(cells);
+        let want = pairs.min(cells).next_power_of_two().min(most);
+        if want > coupling.saved_capacity as u64 {
+            let bytes = (want * SAVED_BYTES).max(cells * 16);
+            self.fields = storage_buffer(&d, "fields", bytes);
+            coupling.saved_capacity = (bytes / SAVED_BYTES).min(most) as u32;
             grew = true;
         }
         if grew {
@@ -262,4 +334,104 @@ fn layout(particles: &[SolidParticle]) -> (Vec<GpuParticle>, u32) {
         })
         .collect();
     (records, first)
+}
+
+/// The coupled step on grids where the fast fluid kernels (interior quads, their odd step, the
+/// wrapping and boundary cells) run next to covered cells, against the f64 reference: the other
+/// coupled tests' grids (nx = 11) have no interior quads.
+#[cfg(test)]
+mod quad_tests {
+    use super::super::geometry::{Face, Operator, Setup};
+    use super::super::gpu::{CellList, Gpu, Health};
+    use super::super::random::random_populations;
+    use super::super::reference;
+    use super::*;
+
+    fn check(setup: Setup, options: ImbOptions, seed: u64) {
+        let classes = CellList::new(&setup, true);
+        assert!(classes.interior_quads > 0, "the grid has interior quads");
+        let gpu = std::sync::Arc::new(Gpu::new().expect("a wgpu adapter (lavapipe in CI)"));
+        let mut lattice = Lattice::new(gpu, setup.clone(), Health::default(), Some(options)).unwrap();
+        let mut f = random_populations(&setup, seed);
+        lattice.set_populations(&f);
+        let tolerance = 64.0 * f32::EPSILON as f64 * 0.35;
+        for (step, shift) in [0.0, 0.37, 0.81, 1.3].into_iter().enumerate() {
+            let particles = vec![
+                SolidParticle {
+                    position: [4.3 + shift, 4.6, 3.9],
+                    radius: 2.4,
+                    velocity: [0.02, -0.01, 0.005],
+                    angular_velocity: [0.001, 0.002, -0.003],
+                },
+                SolidParticle {
+                    position: [7.4, 5.1 - shift, 4.4],
+                    radius: 1.7,
+                    velocity: [-0.01, 0.015, 0.0],
+                    angular_velocity: [0.0, -0.002, 0.004],
+                },
+                // Across the periodic face x = 0 / wall (wrapping and boundary cells covered).
+                SolidParticle {
+                    position: [0.6, 2.2 + shift, 6.5],
+                    radius: 1.9,
+                    velocity: [0.0, 0.01, -0.01],
+                    angular_velocity: [0.003, 0.0, 0.001],
+                },
+            ];
+            let (next, want) = reference::step_with_particles(&setup, &f, &particles, options);
+            let got = lattice.step_coupled(&particles).unwrap();
+            let scale = want
+                .iter()
+                .flat_map(|l| l.force)
+                .fold(0.0, |m: f64, v| m.max(v.abs()));
+            let err = got
+                .iter()
+                .zip(&want)
+                .flat_map(|(x, y)| {
+                    (0..3).flat_map(move |k| [x.force[k] - y.force[k], x.torque[k] - y.torque[k]])
+                })
+                .fold(0.0, |m: f64, d| m.max(d.abs()));
+            assert!(scale > 1e-3, "the particles feel a force: {want:?}");
+            assert!(
+                err < 1e-4 * scale.max(1.0),
+                "step {step}: loads differ by {err:e}: {got:?} vs {want:?}"
+            );
+            let pop_err = lattice
+                .populations()
+                .iter()
+                .zip(&next)
+                .flat_map(|(a, b)| a.iter().zip(b).map(|(p, q)| (p - q).abs()))
+                .fold(0.0, f64::max);
+            assert!(
+                pop_err < tolerance,
+                "step {step}: populations differ by {pop_err:e}"
+            );
+            f = next;
+        }
+        assert_eq!(lattice.dropped_covers(), 0);
+    }
+
+    #[test]
+    fn trt_periodic_quads_next_to_particles_match_reference() {
+        let setup = Setup::new(
+            [12, 10, 9],
+            [Face::Periodic; 6],
+            0.7,
+            Operator::Trt { magic: 3.0 / 16.0 },
+        );
+        check(setup, ImbOptions::default(), 21);
+    }
+
+    #[test]
+    fn bgk_walls_quads_next_to_particles_match_reference() {
+        let faces = [
+            Face::Periodic,
+            Face::Periodic,
+            Face::Wall,
+            Face::MovingWall([0.01, 0.0, 0.0]),
+            Face::Wall,
+            Face::Wall,
+        ];
+        let setup = Setup::new([16, 9, 10], faces, 0.8, Operator::Bgk);
+        check(setup, ImbOptions::default(), 22);
+    }
 }
