@@ -345,6 +345,7 @@ mod quad_tests {
     use super::super::gpu::{CellList, Gpu, Health};
     use super::super::random::random_populations;
     use super::super::reference;
+    use super::super::tests::immersed_boundary::two_particles;
     use super::*;
 
     fn check(setup: Setup, options: ImbOptions, seed: u64) {
@@ -356,19 +357,8 @@ mod quad_tests {
         lattice.set_populations(&f);
         let tolerance = 64.0 * f32::EPSILON as f64 * 0.35;
         for (step, shift) in [0.0, 0.37, 0.81, 1.3].into_iter().enumerate() {
-            let particles = vec![
-                SolidParticle {
-                    position: [4.3 + shift, 4.6, 3.9],
-                    radius: 2.4,
-                    velocity: [0.02, -0.01, 0.005],
-                    angular_velocity: [0.001, 0.002, -0.003],
-                },
-                SolidParticle {
-                    position: [7.4, 5.1 - shift, 4.4],
-                    radius: 1.7,
-                    velocity: [-0.01, 0.015, 0.0],
-                    angular_velocity: [0.0, -0.002, 0.004],
-                },
+            let mut particles = two_particles(shift);
+            particles.push(
                 // Across the periodic face x = 0 / wall (wrapping and boundary cells covered).
                 SolidParticle {
                     position: [0.6, 2.2 + shift, 6.5],
@@ -376,7 +366,7 @@ mod quad_tests {
                     velocity: [0.0, 0.01, -0.01],
                     angular_velocity: [0.003, 0.0, 0.001],
                 },
-            ];
+            );
             let (next, want) = reference::step_with_particles(&setup, &f, &particles, options);
             let got = lattice.step_coupled(&particles).unwrap();
             let scale = want

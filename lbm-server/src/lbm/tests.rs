@@ -201,11 +201,12 @@ mod validation_cases {
     }
 }
 
-mod immersed_boundary {
+pub(crate) mod immersed_boundary {
     use super::super::imb::{ImbOptions, Load, SolidParticle};
     use super::*;
 
-    fn two_particles(shift: f64) -> Vec<SolidParticle> {
+    /// Two overlapping moving, spinning spheres, moved by `shift` cells between steps.
+    pub(crate) fn two_particles(shift: f64) -> Vec<SolidParticle> {
         vec![
             SolidParticle {
                 position: [4.3 + shift, 4.6, 3.9],
