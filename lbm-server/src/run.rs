@@ -287,7 +287,7 @@ impl Session {
             si.clear();
             si.extend(received.particles().iter().map(|s| units.state_to_si(s)));
             drop(received);
-            let bad = check_states(&si, step);
+            let bad = check_states(&si, step, &self.p.scene.domain);
             replies.clear();
             self.fluid
                 .step(&si, &mut replies)
@@ -424,7 +424,7 @@ fn welcome_for(scene: &Scene, steps: u64, hello: &Hello, physics: u64) -> Welcom
 }
 
 /// Health check of the DEM's states: every number finite, every radius positive.
-fn check_states(states: &[ParticleState], step: u64) -> Option<String> {
+fn check_states(states: &[ParticleState], step: u64, domain: &scene::Domain) -> Option<String> {
     states.iter().find_map(|s| {
         let finite = s
             .position
@@ -432,12 +432,46 @@ fn check_states(states: &[ParticleState], step: u64) -> Option<String> {
             .chain(&s.velocity)
             .chain(&s.angular_velocity)
             .all(|v| v.is_finite());
-        (!finite || s.radius.is_nan() || s.radius <= 0.0).then(|| {
-            format!(
+        if !finite || s.radius.is_nan() || s.radius <= 0.0 {
+            return Some(format!(
                 "the DEM client sent an invalid state at step {step}: particle id {} with position {:?}, \
                  velocity {:?}, radius {}",
                 s.id, s.position, s.velocity, s.radius
+            ));
+        }
+        let outside = (0..3).any(|a| s.position[a] < domain.min[a] || s.position[a] > domain.max[a]);
+        outside.then(|| {
+            format!(
+                "particle id {} left the domain at step {step}: position {:?} m, velocity {:?} m/s \
+                 (domain {:?} .. {:?} m); the fluid covers only the domain: an instability upstream, or \
+                 a face without a wall",
+                s.id, s.position, s.velocity, domain.min, domain.max
             )
         })
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_particle_outside_the_domain_or_not_finite_stops_the_run_with_its_id() {
+        let domain = scene::Domain {
+            min: [0.0; 3],
+            max: [0.1, 0.1, 0.2],
+        };
+        let state = |id: u64, z: f64| ParticleState {
+            id,
+            position: [0.05, 0.05, z],
+            velocity: [0.0, 0.0, -22.0],
+            radius: 0.002,
+            ..Default::default()
+        };
+        assert_eq!(check_states(&[state(0, 0.1), state(1, 0.2)], 3, &domain), None);
+        let out = check_states(&[state(0, 0.1), state(7, -0.01)], 3, &domain).expect("refused");
+        assert!(out.contains("particle id 7 left the domain at step 3"), "{out}");
+        let nan = check_states(&[state(2, f64::NAN)], 4, &domain).expect("refused");
+        assert!(nan.contains("invalid state at step 4: particle id 2"), "{nan}");
+    }
 }
