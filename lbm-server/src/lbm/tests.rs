@@ -201,12 +201,12 @@ mod validation_cases {
     }
 }
 
-pub(crate) mod immersed_boundary {
+mod immersed_boundary {
     use super::super::imb::{ImbOptions, Load, SolidParticle};
     use super::*;
 
     /// Two overlapping moving, spinning spheres, moved by `shift` cells between steps.
-    pub(crate) fn two_particles(shift: f64) -> Vec<SolidParticle> {
+    fn two_particles(shift: f64) -> Vec<SolidParticle> {
         vec![
             SolidParticle {
                 position: [4.3 + shift, 4.6, 3.9],
@@ -231,12 +231,23 @@ pub(crate) mod immersed_boundary {
     }
 
     fn check(setup: Setup, options: ImbOptions, seed: u64) {
+        check_steps(setup, options, seed, &[0.0, 0.37, 0.81], two_particles);
+    }
+
+    /// One coupled step per shift on the GPU and in f64 (the particles moved between steps).
+    fn check_steps(
+        setup: Setup,
+        options: ImbOptions,
+        seed: u64,
+        shifts: &[f64],
+        particles_at: impl Fn(f64) -> Vec<SolidParticle>,
+    ) {
         let f0 = random_populations(&setup, seed);
         let mut lattice = Lattice::new(gpu(), setup.clone(), Health::default(), Some(options)).unwrap();
         lattice.set_populations(&f0);
         let mut f = f0;
-        for (step, shift) in [0.0, 0.37, 0.81].into_iter().enumerate() {
-            let particles = two_particles(shift);
+        for (step, &shift) in shifts.iter().enumerate() {
+            let particles = particles_at(shift);
             let (next, want) = reference::step_with_particles(&setup, &f, &particles, options);
             let got = lattice.step_coupled(&particles).unwrap();
             let scale = want
@@ -257,6 +268,50 @@ pub(crate) mod immersed_boundary {
             f = next;
         }
         assert_eq!(lattice.dropped_covers(), 0);
+    }
+
+    /// The grids below have interior quads (nx a multiple of 4), so the fast fluid kernels (quads,
+    /// their odd step, wrapping and boundary cells) run next to covered cells; a third sphere
+    /// crosses the face x = 0 (wrapping or boundary cells covered).
+    fn check_with_quads(setup: Setup, options: ImbOptions, seed: u64) {
+        let classes = super::super::gpu::CellList::new(&setup, true);
+        assert!(classes.interior_quads > 0, "the grid has interior quads");
+        let three = |shift: f64| {
+            let mut particles = two_particles(shift);
+            particles.push(SolidParticle {
+                position: [0.6, 2.2 + shift, 6.5],
+                radius: 1.9,
+                velocity: [0.0, 0.01, -0.01],
+                angular_velocity: [0.003, 0.0, 0.001],
+            });
+            particles
+        };
+        check_steps(setup, options, seed, &[0.0, 0.37, 0.81, 1.3], three);
+    }
+
+    #[test]
+    fn trt_periodic_quads_next_to_particles_match_reference() {
+        let setup = Setup::new(
+            [12, 10, 9],
+            [Face::Periodic; 6],
+            0.7,
+            Operator::Trt { magic: 3.0 / 16.0 },
+        );
+        check_with_quads(setup, ImbOptions::default(), 21);
+    }
+
+    #[test]
+    fn bgk_walls_quads_next_to_particles_match_reference() {
+        let faces = [
+            Face::Periodic,
+            Face::Periodic,
+            Face::Wall,
+            Face::MovingWall([0.01, 0.0, 0.0]),
+            Face::Wall,
+            Face::Wall,
+        ];
+        let setup = Setup::new([16, 9, 10], faces, 0.8, Operator::Bgk);
+        check_with_quads(setup, ImbOptions::default(), 22);
     }
 
     #[test]
