@@ -730,12 +730,7 @@ fn params(setup: &Setup, parity: usize, health: Health, classes: &CellList) -> P
             health.max_speed as f32,
             health.max_density_deviation as f32,
         ],
-        force: [
-            setup.force[0] as f32,
-            setup.force[1] as f32,
-            setup.force[2] as f32,
-            0.0,
-        ],
+        force: vec4(setup.force, 0.0),
         face_value: std::array::from_fn(|f| values(&setup.faces[f])),
         ranges: [
             classes.sizes[0],
@@ -789,6 +784,11 @@ pub fn total_mass(setup: &Setup, f: &[Cell]) -> f64 {
 
 /// The quad kernels (four cells per invocation) against the f64 reference step: the other tests'
 /// grids have no interior quads (nx not a multiple of 4).
+/// A 3-vector and a fourth value as the f32 vec4 of a GPU record.
+pub(crate) fn vec4(v: [f64; 3], w: f64) -> [f32; 4] {
+    [v[0] as f32, v[1] as f32, v[2] as f32, w as f32]
+}
+
 #[cfg(test)]
 mod quad_tests {
     use super::super::geometry::{Face, Operator, Setup};

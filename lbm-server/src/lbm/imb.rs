@@ -1,7 +1,7 @@
 //! Host side of the immersed moving boundary (shaders/imb.wgsl): particle and pair buffers, the
 //! bounding boxes, and the coupled step that returns each particle's force and torque.
 
-use super::gpu::{storage_buffer, Lattice};
+use super::gpu::{storage_buffer, vec4, Lattice};
 
 /// Settings of the coupling.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -308,24 +308,9 @@ fn layout(particles: &[SolidParticle]) -> (Vec<GpuParticle>, u32) {
         .map(|p| {
             let m = box_edge(p.radius);
             let record = GpuParticle {
-                pos_r: [
-                    p.position[0] as f32,
-                    p.position[1] as f32,
-                    p.position[2] as f32,
-                    p.radius as f32,
-                ],
-                vel: [
-                    p.velocity[0] as f32,
-                    p.velocity[1] as f32,
-                    p.velocity[2] as f32,
-                    0.0,
-                ],
-                omega: [
-                    p.angular_velocity[0] as f32,
-                    p.angular_velocity[1] as f32,
-                    p.angular_velocity[2] as f32,
-                    0.0,
-                ],
+                pos_r: vec4(p.position, p.radius),
+                vel: vec4(p.velocity, 0.0),
+                omega: vec4(p.angular_velocity, 0.0),
                 box_: [first, m, 0, 0],
                 ..Default::default()
             };

@@ -228,7 +228,7 @@ pub fn zick_homsy_with(
         radius,
         ..Default::default()
     };
-    let mut lattice = Lattice::new(gpu.clone(), setup, Health::default(), Some(options)).expect("lattice");
+    let mut lattice = coupled_lattice(gpu, &setup, options);
     let steps = relaxation_steps(n as f64, nu, 12.0);
     let mut exchange = 0.0;
     for _ in 0..steps {
@@ -248,6 +248,11 @@ pub fn zick_homsy_with(
         k_balance: f * (n * n * n) as f64 / stokes,
         steps,
     }
+}
+
+/// A lattice coupled to particles, with the default health limits.
+fn coupled_lattice(gpu: &Arc<Gpu>, setup: &Setup, options: super::imb::ImbOptions) -> Lattice {
+    Lattice::new(gpu.clone(), setup.clone(), Health::default(), Some(options)).expect("lattice")
 }
 
 /// Drag of a sphere held fixed in a uniform stream.
@@ -309,13 +314,7 @@ pub fn fixed_sphere(
         tau,
         Operator::Trt { magic: 3.0 / 16.0 },
     );
-    let mut lattice = Lattice::new(
-        gpu.clone(),
-        setup.clone(),
-        Health::default(),
-        Some(ImbOptions::default()),
-    )
-    .expect("lattice");
+    let mut lattice = coupled_lattice(gpu, &setup, ImbOptions::default());
     lattice.set_populations(&equilibrium_field(&setup, |_| (1.0, stream)));
     let sphere = SolidParticle {
         position: [length as f64 / 3.0, width as f64 / 2.0, width as f64 / 2.0],
@@ -380,13 +379,7 @@ pub fn momentum_exchange(gpu: &Arc<Gpu>, n: usize, steps: u64) -> Momentum {
         0.7,
         Operator::Trt { magic: 3.0 / 16.0 },
     );
-    let mut lattice = Lattice::new(
-        gpu.clone(),
-        setup.clone(),
-        Health::default(),
-        Some(ImbOptions::default()),
-    )
-    .expect("lattice");
+    let mut lattice = coupled_lattice(gpu, &setup, ImbOptions::default());
     let u0 = 0.02;
     lattice.set_populations(&equilibrium_field(&setup, |_| (1.0, [u0, 0.0, 0.0])));
     let radius = n as f64 / 6.0;
