@@ -16,8 +16,8 @@ pub struct ValidateArgs {
     #[arg(long, default_value = "validation/lbm")]
     out: PathBuf,
     /// Run only these sections (channel, wall, taylor-green, mass, array-drag,
-    /// sphere-drag, momentum) and print
-    /// them; REPORT.md is written only by a full run.
+    /// sphere-drag, momentum), print them and replace them in an existing REPORT.md (the other
+    /// sections are kept as they are).
     #[arg(long, value_delimiter = ',')]
     only: Vec<String>,
 }
@@ -61,26 +61,45 @@ pub fn main(args: ValidateArgs) -> ExitCode {
         );
         return ExitCode::FAILURE;
     }
+    let path = args.out.join("REPORT.md");
     if !args.only.is_empty() {
-        for (_, section) in SECTIONS
-            .iter()
-            .filter(|(name, _)| args.only.iter().any(|o| o == name))
-        {
-            print!("{}", section(&gpu));
+        match std::fs::read_to_string(&path) {
+            Ok(existing) => report = existing,
+            Err(e) => protocol::say!(
+                "lbm-server: {}: {e}; writing the chosen sections only",
+                path.display()
+            ),
         }
-        return ExitCode::SUCCESS;
     }
-    for (_, section) in SECTIONS {
-        report += &section(&gpu);
+    for (name, section) in SECTIONS {
+        if args.only.is_empty() || args.only.iter().any(|o| o == name) {
+            let text = section(&gpu);
+            print!("{text}");
+            report = replace_section(&report, &text);
+        }
     }
-    if let Err(e) =
-        std::fs::create_dir_all(&args.out).and_then(|()| std::fs::write(args.out.join("REPORT.md"), &report))
-    {
+    if let Err(e) = std::fs::create_dir_all(&args.out).and_then(|()| std::fs::write(&path, &report)) {
         protocol::say!("lbm-server: error: {}: {e}", args.out.display());
         return ExitCode::FAILURE;
     }
-    print!("{report}");
+    protocol::say!("lbm-server: wrote {}", path.display());
     ExitCode::SUCCESS
+}
+
+/// `report` with the section of the same `## ` heading as `section` replaced by it (appended when
+/// the report has no such section). A section runs from its heading to the next `## ` heading.
+fn replace_section(report: &str, section: &str) -> String {
+    let heading = section.lines().find(|l| l.starts_with("## ")).unwrap_or_default();
+    let marker = format!("\n{heading}\n");
+    match report.find(&marker) {
+        Some(start) if !heading.is_empty() => {
+            let end = report[start + 1..]
+                .find("\n## ")
+                .map_or(report.len(), |k| start + 1 + k);
+            format!("{}{section}{}", &report[..start], &report[end..])
+        }
+        _ => format!("{report}{section}"),
+    }
 }
 
 fn table_of(runs: &[Channel]) -> String {
@@ -246,42 +265,55 @@ fn sphere_drag(gpu: &Arc<Gpu>) -> String {
          Noble-Torczynski weighting; u0 = 0.08 or less (tau <= 1), run until the drag changes by less \
          than 1e-4 over 100 steps. C_d = F / (rho u0^2 pi d^2 / 8) against Schiller & Naumann (1933), \
          C_d = 24/Re (1 + 0.15 Re^0.687), itself within about 5% of experiments. The side faces make the \
-         box a confined stream: the rows at several W show the confinement's share.\n\n\
+         box a confined stream: where several W were run, the row \"W -> inf\" is the fit \
+         C_d(W) = C_inf + a (d/W)^p through the three widest boxes (p in the steps column), the \
+         sphere's drag without confinement at that resolution.\n\n\
          | Re | d | W | L | u0 | tau | steps | C_d measured | C_d Schiller-Naumann | error |\n\
          |---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
     );
-    for &(re, d, w, l) in SPHERE_DRAG_CASES {
-        let s = match validation::fixed_sphere(gpu, re, d, w, l) {
-            Ok(s) => s,
-            Err(e) => {
-                let _ = writeln!(t, "| {re} | {d} | {w} | {l} | | | | {e} | | |");
-                continue;
+    for &(re, d, widths, l) in SPHERE_DRAG_CASES {
+        let mut confined = Vec::new();
+        for &w in widths {
+            match validation::fixed_sphere(gpu, re, d, w, l) {
+                Ok(s) => {
+                    confined.push((d / w as f64, s.cd));
+                    let _ = writeln!(
+                        t,
+                        "| {re} | {} | {} | {} | {:.4} | {:.3} | {} | {:.3} | {:.3} | {:+.1}% |",
+                        s.diameter,
+                        s.width,
+                        s.length,
+                        s.u0,
+                        s.tau,
+                        s.steps,
+                        s.cd,
+                        s.schiller_naumann(),
+                        100.0 * (s.cd / s.schiller_naumann() - 1.0)
+                    );
+                }
+                Err(e) => {
+                    let _ = writeln!(t, "| {re} | {d} | {w} | {l} | | | | {e} | | |");
+                }
             }
-        };
-        let reference = s.schiller_naumann();
-        let _ = writeln!(
-            t,
-            "| {re} | {} | {} | {} | {:.4} | {:.3} | {} | {:.3} | {:.3} | {:+.1}% |",
-            s.diameter,
-            s.width,
-            s.length,
-            s.u0,
-            s.tau,
-            s.steps,
-            s.cd,
-            reference,
-            100.0 * (s.cd - reference) / reference
-        );
+        }
+        if let Some((cd, p)) = validation::unconfined_drag(&confined) {
+            let reference = validation::schiller_naumann(re);
+            let _ = writeln!(
+                t,
+                "| {re} | {d} | W -> inf | {l} | | | p = {p:.2} | {cd:.3} | {reference:.3} | {:+.1}% |",
+                100.0 * (cd / reference - 1.0)
+            );
+        }
     }
     t
 }
 
-/// (Re, diameter, width, length) of the fixed-sphere cases.
-const SPHERE_DRAG_CASES: &[(f64, f64, usize, usize)] = &[
-    (1.0, 8.0, 48, 80),
-    (10.0, 8.0, 48, 80),
-    (50.0, 8.0, 48, 80),
-    (100.0, 8.0, 48, 80),
+/// (Re, diameter, box widths, length) of the fixed-sphere cases.
+const SPHERE_DRAG_CASES: &[(f64, f64, &[usize], usize)] = &[
+    (1.0, 8.0, &[32, 48, 64], 80),
+    (10.0, 8.0, &[32, 48, 64, 80], 80),
+    (50.0, 8.0, &[48], 80),
+    (100.0, 12.0, &[72], 120),
 ];
 
 fn momentum(gpu: &Arc<Gpu>) -> String {
@@ -293,4 +325,20 @@ fn momentum(gpu: &Arc<Gpu>) -> String {
          change | particle velocity |\n|---|---|---:|---|\n| {:.6?} | {:.6?} | {:.2e} | {:.5?} |\n",
         m.initial, m.last, m.relative_change, m.particle_velocity
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::replace_section;
+
+    #[test]
+    fn a_section_is_replaced_in_place_and_a_new_one_appended() {
+        let report = "# R\n\n## A\n\nold a\n\n## B\n\nb\n";
+        let replaced = replace_section(report, "\n## A\n\nnew a\n");
+        assert_eq!(replaced, "# R\n\n## A\n\nnew a\n\n## B\n\nb\n");
+        let last = replace_section(report, "\n## B\n\nnew b\n");
+        assert_eq!(last, "# R\n\n## A\n\nold a\n\n## B\n\nnew b\n");
+        let added = replace_section(report, "\n## C\n\nc\n");
+        assert_eq!(added, format!("{report}\n## C\n\nc\n"));
+    }
 }

@@ -273,8 +273,44 @@ pub struct SphereDrag {
 impl SphereDrag {
     /// Schiller & Naumann (1933): C_d = 24 / Re (1 + 0.15 Re^0.687), Re < 800.
     pub fn schiller_naumann(&self) -> f64 {
-        24.0 / self.reynolds * (1.0 + 0.15 * self.reynolds.powf(0.687))
+        schiller_naumann(self.reynolds)
     }
+}
+
+/// Schiller & Naumann (1933): C_d = 24 / Re (1 + 0.15 Re^0.687), Re < 800.
+pub fn schiller_naumann(re: f64) -> f64 {
+    24.0 / re * (1.0 + 0.15 * re.powf(0.687))
+}
+
+/// The drag of an unconfined sphere from three confined ones: C_d(W) = C_inf + a (d / W)^p through
+/// the three points (d / W, C_d) with the smallest d / W, p found by bisection in [0.5, 8]. None
+/// when fewer than three points are given or the three are not monotone in d / W.
+pub fn unconfined_drag(points: &[(f64, f64)]) -> Option<(f64, f64)> {
+    let mut sorted = points.to_vec();
+    sorted.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let [(x1, c1), (x2, c2), (x3, c3)] = *sorted.get(..3)? else {
+        return None;
+    };
+    let ratio = (c3 - c2) / (c2 - c1);
+    if !(ratio > 0.0) || !ratio.is_finite() {
+        return None;
+    }
+    let shape = |p: f64| (x3.powf(p) - x2.powf(p)) / (x2.powf(p) - x1.powf(p));
+    let (mut lo, mut hi) = (0.5, 8.0);
+    if (shape(lo) - ratio) * (shape(hi) - ratio) > 0.0 {
+        return None;
+    }
+    for _ in 0..100 {
+        let mid = 0.5 * (lo + hi);
+        if (shape(lo) - ratio) * (shape(mid) - ratio) <= 0.0 {
+            hi = mid;
+        } else {
+            lo = mid;
+        }
+    }
+    let p = 0.5 * (lo + hi);
+    let a = (c2 - c1) / (x2.powf(p) - x1.powf(p));
+    Some((c1 - a * x1.powf(p), p))
 }
 
 /// The largest stream velocity (lattice units) of [`fixed_sphere`]: Mach 0.14.
@@ -421,5 +457,22 @@ pub fn momentum_exchange(gpu: &Arc<Gpu>, n: usize, steps: u64) -> Momentum {
         last,
         relative_change: change,
         particle_velocity: p.velocity,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::unconfined_drag;
+
+    #[test]
+    fn the_unconfined_drag_is_recovered_from_three_confined_boxes() {
+        let drag = |x: f64| 2.0 + 3.0 * x.powf(2.5);
+        let points: Vec<(f64, f64)> = [0.25, 1.0 / 6.0, 0.125, 0.1].map(|x| (x, drag(x))).to_vec();
+        let (c_inf, p) = unconfined_drag(&points).expect("a fit");
+        assert!((c_inf - 2.0).abs() < 1e-9, "{c_inf}");
+        assert!((p - 2.5).abs() < 1e-6, "{p}");
+        assert_eq!(unconfined_drag(&points[..2]), None);
+        let zigzag = [(0.1, 2.0), (0.125, 2.5), (0.25, 2.2)];
+        assert_eq!(unconfined_drag(&zigzag), None);
     }
 }
