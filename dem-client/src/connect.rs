@@ -84,6 +84,7 @@ pub fn main(args: ConnectArgs) -> ExitCode {
         world: setup.world,
         density: scene.particles.density,
         next_id: scene.particle_count(),
+        viscosity: substep_viscosity(&scene),
     };
     let mut hello = Hello::new(
         Units::SI,
@@ -111,7 +112,7 @@ pub fn main(args: ConnectArgs) -> ExitCode {
         skip_step: args.skip_step,
         stall_at: args.stall_at,
     };
-    let (k, dt) = substeps(welcome.dt, setup.dt_max);
+    let (k, dt) = substeps(welcome.dt, setup.dt_max.min(particles.drag_step_limit()));
     particles.world.dt = dt;
     particles.world.gravity = V3::from(welcome.gravity);
     protocol::say!(
@@ -202,11 +203,33 @@ fn check_ids(states: &[ParticleState], replies: &[ParticleReply]) -> Result<(), 
     Ok(())
 }
 
+/// The viscosity of the drag within a fluid step: the fluid's with `coupling.substep_drag` in a
+/// scene with a lattice, else 0.
+fn substep_viscosity(scene: &scene::Scene) -> f64 {
+    let on = scene.coupling.substep_drag && scene.lattice.is_some();
+    if on {
+        scene.fluid.dynamic_viscosity
+    } else {
+        0.0
+    }
+}
+
+/// Stokes drag coefficients of a sphere of radius r: 6 pi mu r [N s/m] and 8 pi mu r^3 [N m s].
+/// They make the held fluid force F_n + drag v_n - drag v(t): the force the fluid gave at the
+/// velocity v_n sent, corrected for the change of velocity within the step at the rate of Stokes
+/// drag (a lower bound of the fluid's response to a change of velocity, so never an overcorrection).
+fn stokes_drag(viscosity: f64, r: f64) -> (f64, f64) {
+    let pi = std::f64::consts::PI;
+    (6.0 * pi * viscosity * r, 8.0 * pi * viscosity * r.powi(3))
+}
+
 /// The DEM side's particles in a coupled run.
 struct Particles {
     world: World,
     density: f64,
     next_id: u64,
+    /// Fluid viscosity for the drag within a fluid step [Pa s] (0: the force is held constant).
+    viscosity: f64,
 }
 
 impl Particles {
@@ -221,14 +244,29 @@ impl Particles {
         }));
     }
 
-    /// Takes the fluid's force and torque (same order as the states), held constant over the
-    /// fluid step, and advances `k` DEM steps: dt_fluid = k dt_dem.
+    /// Takes the fluid's force and torque (same order as the states), held over the fluid step
+    /// (with the Stokes drag of the velocity change since the states were sent, when
+    /// `coupling.substep_drag` is on), and advances `k` DEM steps: dt_fluid = k dt_dem.
     fn advance(&mut self, replies: &[ParticleReply], k: u64) {
         for (b, r) in self.world.bodies.iter_mut().zip(replies) {
-            b.f_ext = V3::from(r.force);
-            b.t_ext = V3::from(r.torque);
+            (b.drag, b.spin_drag) = stokes_drag(self.viscosity, b.r);
+            b.f_ext = V3::from(r.force) + b.drag * b.v;
+            b.t_ext = V3::from(r.torque) + b.spin_drag * b.w;
         }
         self.world.advance(k);
+    }
+
+    /// The longest DEM step at which the drag within a fluid step stays accurate: a tenth of the
+    /// shortest particle relaxation time m / (6 pi mu r) (infinite without that drag).
+    fn drag_step_limit(&self) -> f64 {
+        let relaxation = |b: &Body| b.m / stokes_drag(self.viscosity, b.r).0;
+        let shortest = self
+            .world
+            .bodies
+            .iter()
+            .map(relaxation)
+            .fold(f64::INFINITY, f64::min);
+        0.1 * shortest
     }
 
     /// Test aid: removes the last particle or inserts a copy of the first with a fresh id, next to

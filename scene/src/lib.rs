@@ -119,9 +119,18 @@ pub struct Coupling {
     /// cell (default on).
     #[serde(default = "default_lubrication")]
     pub lubrication: bool,
+    /// With a `[lattice]`: within a fluid step the DEM lets the held fluid force and torque follow
+    /// each sphere's velocity with Stokes drag, F_n - 3 pi mu d (v - v_n) and T_n - pi mu d^3
+    /// (w - w_n) (default on; off: held constant).
+    #[serde(default = "default_substep_drag")]
+    pub substep_drag: bool,
 }
 
 fn default_lubrication() -> bool {
+    true
+}
+
+fn default_substep_drag() -> bool {
     true
 }
 
@@ -141,6 +150,7 @@ impl Default for Coupling {
             slots: default_slots(),
             weighting: default_weighting(),
             lubrication: default_lubrication(),
+            substep_drag: default_substep_drag(),
         }
     }
 }

@@ -76,6 +76,11 @@ pub struct Body {
     /// External (fluid) force and torque.
     pub f_ext: V3,
     pub t_ext: V3,
+    /// Linear drag coefficients [N s/m] and [N m s]: the external force and torque follow the
+    /// velocity within a held fluid step as F_ext - drag v and T_ext - spin_drag w (0 without a
+    /// fluid).
+    pub drag: f64,
+    pub spin_drag: f64,
 }
 
 impl Body {
@@ -94,13 +99,24 @@ impl Body {
             t: V3::zeros(),
             f_ext: V3::zeros(),
             t_ext: V3::zeros(),
+            drag: 0.0,
+            spin_drag: 0.0,
         }
     }
 
-    /// v += dt/2 a, w += dt/2 alpha with a = (f + F_ext)/m + g, alpha = (t + T_ext)/I.
+    /// Velocity change over half_dt: a = (f + F_ext - drag v)/m + g, alpha = (t + T_ext -
+    /// spin_drag w)/I.
+    fn half_kick(&self, half_dt: f64, g: V3) -> (V3, V3) {
+        let f = self.f + self.f_ext - self.drag * self.v;
+        let t = self.t + self.t_ext - self.spin_drag * self.w;
+        (half_dt * (f / self.m + g), half_dt * t / self.inertia)
+    }
+
+    /// v += dt/2 a, w += dt/2 alpha.
     fn kick(&mut self, half_dt: f64, g: V3) {
-        self.v += half_dt * ((self.f + self.f_ext) / self.m + g);
-        self.w += half_dt * (self.t + self.t_ext) / self.inertia;
+        let (dv, dw) = self.half_kick(half_dt, g);
+        self.v += dv;
+        self.w += dw;
     }
 
     pub fn kinetic_energy(&self) -> f64 {
@@ -726,9 +742,7 @@ impl<L: LawRef> Gather<'_, L> {
             }
             Finish::KickDrift => {
                 // Two half kicks with the same acceleration (computed once: the same bits).
-                let half_dt = 0.5 * dt;
-                let dv = half_dt * ((b.f + b.f_ext) / b.m + g);
-                let dw = half_dt * (b.t + b.t_ext) / b.inertia;
+                let (dv, dw) = b.half_kick(0.5 * dt, g);
                 b.v += dv;
                 b.w += dw;
                 b.v += dv;
