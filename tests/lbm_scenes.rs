@@ -159,6 +159,11 @@ fn settling_sphere_approaches_ten_cates_terminal_velocity() {
     let (code, err, out) = run("tencate", &SCENE.replace("steps = 400", "steps = 150"));
     assert_eq!(code, Some(0), "{err}");
     assert!(err.contains("immersed moving boundary"), "{err}");
+    // Mach 0.1 at 6 cells per diameter gives tau 1.2: the run says what that costs.
+    assert!(
+        err.contains("warning: lattice tau = 1.201: above 1 the immersed boundary's drag"),
+        "{err}"
+    );
     let text = std::fs::read_to_string(out.join("particles.csv")).unwrap();
     let rows: Vec<Vec<f64>> = text
         .lines()
@@ -208,6 +213,7 @@ fn a_sphere_resting_on_the_floor_stays_at_rest() {
     let rms_speed_at_rest = |substep_drag: bool| {
         let (code, err, out) = run("resting", &scene(substep_drag));
         assert_eq!(code, Some(0), "{err}");
+        assert!(!err.contains("warning"), "tau 0.85 needs no warning: {err}");
         let text = std::fs::read_to_string(out.join("particles.csv")).unwrap();
         let vz: Vec<f64> = text
             .lines()
