@@ -102,31 +102,12 @@ pub fn collide(setup: &Setup, f: &Cell) -> (Cell, f64, [f64; 3]) {
     (out, rho, u)
 }
 
-/// Fraction of the cell centred at `x` inside the sphere, by the same 4^3 sub-cell samples as
-/// imb.wgsl (exact 0 or 1 away from the surface).
+/// Fraction of the cell centred at `x` inside the sphere, as imb.wgsl: the fraction of a unit cell
+/// below a face-aligned plane at the centre's distance from the surface, on a radius shortened by
+/// 1/(12 r) (docs/imb.md).
 pub fn solid_fraction(x: [f64; 3], centre: [f64; 3], r: f64) -> f64 {
-    const SAMPLES: usize = 4;
     let d = (0..3).map(|a| (x[a] - centre[a]).powi(2)).sum::<f64>().sqrt();
-    if d >= r + 0.8660254 {
-        return 0.0;
-    }
-    if d <= r - 0.8660254 {
-        return 1.0;
-    }
-    let step = 1.0 / SAMPLES as f64;
-    let mut inside = 0;
-    for a in 0..SAMPLES {
-        for b in 0..SAMPLES {
-            for c in 0..SAMPLES {
-                let p = [a, b, c].map(|v| (v as f64 + 0.5) * step - 0.5);
-                let d2: f64 = (0..3).map(|k| (x[k] + p[k] - centre[k]).powi(2)).sum();
-                if d2 <= r * r {
-                    inside += 1;
-                }
-            }
-        }
-    }
-    inside as f64 / (SAMPLES * SAMPLES * SAMPLES) as f64
+    (r - 1.0 / (12.0 * r) + 0.5 - d).clamp(0.0, 1.0)
 }
 
 /// Per cell: (particle, solid fraction) of the particles covering it, in particle order, at most
