@@ -60,14 +60,25 @@ fn solid_fraction(x: vec3<f32>, centre: vec3<f32>, r: f32) -> f32 {
     return clamp(r - 1.0 / (12.0 * r) + 0.5 - length(x - centre), 0.0, 1.0);
 }
 
-// The first cell (lowest corner) of a particle's bounding box.
+// The first cell (lowest corner) of a particle's bounding box: the cell holding x - r. Its lower
+// neighbour's centre is at least r + 1/2 away along an axis, where `solid_fraction` is 0 with a
+// margin of 1/(12 r) (far above the rounding of x - r).
 fn box_origin(p: Particle) -> vec3<i32> {
-    return vec3<i32>(floor(p.pos_r.xyz - p.pos_r.w)) - vec3<i32>(1);
+    return vec3<i32>(floor(p.pos_r.xyz - p.pos_r.w));
+}
+
+// t / m for t < 2^24: by the float quotient, corrected by one either way (llvmpipe has no vector
+// integer division and divides lane by lane).
+fn divide(t: u32, m: u32) -> u32 {
+    let q = u32(max(f32(t) / f32(m), 0.0));
+    return select(select(q, q + 1u, (q + 1u) * m <= t), q - 1u, q * m > t);
 }
 
 // Cell t of a particle's bounding box of edge m, x fastest.
 fn box_cell(origin: vec3<i32>, m: u32, t: u32) -> vec3<i32> {
-    return origin + vec3<i32>(i32(t % m), i32((t / m) % m), i32(t / (m * m)));
+    let row = divide(t, m);
+    let layer = divide(row, m);
+    return origin + vec3<i32>(i32(t - row * m), i32(row - layer * m), i32(layer));
 }
 
 fn inside_domain(q: vec3<i32>) -> bool {

@@ -55,9 +55,11 @@ const PAIR_BYTES: u64 = 16;
 /// The shader's `Saved`: a covered cell and its 19 populations (over the `fields` buffer).
 const SAVED_BYTES: u64 = 80;
 
-/// Edge of the bounding box of a sphere of radius r, in cells (matches `cover` in imb.wgsl).
+/// Edge of the bounding box of a sphere of radius r, in cells (matches `cover` in imb.wgsl): from
+/// the cell holding x - r to the one holding x + r, the cells whose centre lies within r + 1/2 of
+/// x along each axis (beyond, the solid fraction is 0; docs/imb.md).
 pub fn box_edge(radius: f64) -> u32 {
-    (2.0 * radius).ceil() as u32 + 3
+    (2.0 * radius).ceil() as u32 + 1
 }
 
 /// Receives the encoder after each pass of a coupled step (named) and returns the one to go on

@@ -127,11 +127,12 @@ fn cover(setup: &Setup, particles: &[SolidParticle], slots: usize) -> Vec<Vec<(u
 
 /// The cells of a particle's bounding box inside the domain, in the order of imb.wgsl, with
 /// their centres.
-fn box_cells<'a>(setup: &'a Setup, p: &SolidParticle) -> impl Iterator<Item = (usize, [f64; 3])> + 'a {
+pub(super) fn box_cells<'a>(
+    setup: &'a Setup,
+    p: &SolidParticle,
+) -> impl Iterator<Item = (usize, [f64; 3])> + 'a {
     let m = box_edge(p.radius) as i64;
-    let origin = p
-        .position
-        .map(|x| (x as f32 - p.radius as f32).floor() as i64 - 1);
+    let origin = p.position.map(|x| (x as f32 - p.radius as f32).floor() as i64);
     (0..m * m * m).filter_map(move |t| {
         let q = [
             origin[0] + t % m,

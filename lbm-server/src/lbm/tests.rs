@@ -417,6 +417,33 @@ mod immersed_boundary {
         }
     }
 
+    #[test]
+    fn the_bounding_box_holds_every_cell_with_a_solid_fraction() {
+        let setup = Setup::new([24; 3], [Face::Periodic; 6], 0.7, Operator::Bgk);
+        for r in [0.3f64, 0.7, 1.3, 2.0, 2.5, 4.0, 7.3] {
+            // Centres with x - r and x + r on cell faces included.
+            for offset in [0.0, 0.25, 0.5, 0.999, 1.0 - r.fract()] {
+                let p = SolidParticle {
+                    position: [11.0 + offset, 12.0 - offset, 11.5 + offset],
+                    radius: r,
+                    ..Default::default()
+                };
+                let in_box: f64 = reference::box_cells(&setup, &p)
+                    .map(|(_, x)| reference::solid_fraction(x, p.position, r))
+                    .sum();
+                let everywhere: f64 = (0..setup.cells())
+                    .map(|k| setup.coords(k).map(|v| v as f64 + 0.5))
+                    .map(|x| reference::solid_fraction(x, p.position, r))
+                    .sum();
+                assert!(
+                    (in_box - everywhere).abs() < 1e-9,
+                    "r = {r}, centre {:?}: {in_box} in the box, {everywhere} in the grid",
+                    p.position
+                );
+            }
+        }
+    }
+
     /// The sum of the solid fractions of a 21^3 grid around a sphere.
     fn covered_volume(c: [f64; 3], r: f64) -> f64 {
         let mut volume = 0.0;
