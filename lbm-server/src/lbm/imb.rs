@@ -55,6 +55,9 @@ const PAIR_BYTES: u64 = 16;
 /// The shader's `Saved`: a covered cell and its 19 populations (over the `fields` buffer).
 const SAVED_BYTES: u64 = 80;
 
+/// The largest bounding box edge: imb.wgsl's `divide` takes box indices below 2^24 = 256^3.
+const MAX_BOX_EDGE: u32 = 255;
+
 /// Edge of the bounding box of a sphere of radius r, in cells (matches `cover` in imb.wgsl): from
 /// the cell holding x - r to the one holding x + r, the cells whose centre lies within r + 1/2 of
 /// x along each axis (beyond, the solid fraction is 0; docs/imb.md).
@@ -197,6 +200,17 @@ impl Lattice {
     /// The coupled step; `split` receives the encoder after each pass (named) and returns the one
     /// to go on with.
     fn coupled_step(&mut self, particles: &[SolidParticle], split: Split) -> Result<Vec<Load>, String> {
+        if let Some((j, p)) = particles
+            .iter()
+            .enumerate()
+            .find(|(_, p)| box_edge(p.radius) > MAX_BOX_EDGE)
+        {
+            return Err(format!(
+                "particle {j}: radius {} cells exceeds the coupling's {} cells",
+                p.radius,
+                (MAX_BOX_EDGE - 1) / 2
+            ));
+        }
         let (gpu_particles, pairs) = layout(particles);
         self.reserve(gpu_particles.len() as u64, pairs as u64)?;
         let coupling = self.imb.as_mut().expect("coupling");

@@ -418,6 +418,16 @@ mod immersed_boundary {
     }
 
     #[test]
+    fn a_particle_too_large_for_the_box_index_is_refused_by_id() {
+        let setup = Setup::new([8; 3], [Face::Periodic; 6], 0.7, Operator::Bgk);
+        let mut lattice = Lattice::new(gpu(), setup, Health::default(), Some(ImbOptions::default())).unwrap();
+        let mut particles = two_particles(0.0);
+        particles[1].radius = 128.0;
+        let err = lattice.step_coupled(&particles).unwrap_err();
+        assert!(err.contains("particle 1"), "{err}");
+    }
+
+    #[test]
     fn the_bounding_box_holds_every_cell_with_a_solid_fraction() {
         let setup = Setup::new([24; 3], [Face::Periodic; 6], 0.7, Operator::Bgk);
         for r in [0.3f64, 0.7, 1.3, 2.0, 2.5, 4.0, 7.3] {
