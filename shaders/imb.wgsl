@@ -1,15 +1,15 @@
 // Immersed moving boundary (partially saturated cells; Noble & Torczynski 1998, Owen et al. 2011;
 // seed eq. 7-11). Appended to lbm.wgsl when a scene couples particles.
 //
-// Per step: `uncover` clears the cells the particles covered last step, `cover` computes the solid
-// fraction of every cell in each particle's bounding box (work = particles x cells covered, never
-// cells x particles), registers up to SLOTS particles per cell and lists the covered cells, `save`
-// keeps the pre-collision populations of the covered cells, the fluid kernels of lbm.wgsl update every cell as without
-// particles, `stream_collide_covered` redoes each covered cell from its saved populations with the
-// solid collision term (the AA pattern: a cell reads and writes the same 19 slots, which no other
-// cell touches in that step, so the second write simply replaces the first), and `reduce` sums each
+// Per step: `cover` computes the solid fraction of every cell in each particle's bounding box
+// (work = particles x cells covered, never cells x particles), registers up to SLOTS particles per
+// cell and lists the covered cells, `save` keeps the pre-collision populations of the covered
+// cells, the fluid kernels of lbm.wgsl update every cell as without particles,
+// `stream_collide_covered` redoes each covered cell from its saved populations with the solid
+// collision term (the AA pattern: a cell reads and writes the same 19 slots, which no other cell
+// touches in that step, so the second write simply replaces the first), and `reduce` sums each
 // particle's force and torque in a fixed order (no floating-point atomics: the result is the same
-// every run).
+// every run) and clears the cover counts of its cells for the next step.
 
 // Particles a cell can hold (1-4).
 override SLOTS: u32 = 2u;
@@ -28,16 +28,6 @@ struct Particle {
     torque: vec4<f32>,
 }
 
-// One cell of a particle's bounding box.
-struct Pair {
-    cell: u32,
-    particle: u32,
-    eps: f32,
-    pad: f32,
-    // momentum the fluid gave the particle in this cell during the step
-    force: vec4<f32>,
-}
-
 // A covered cell and its pre-collision populations (`save`).
 struct Saved {
     cell: u32,
@@ -45,12 +35,15 @@ struct Saved {
 }
 
 @group(0) @binding(24) var<storage, read_write> particles: array<Particle>;
-@group(0) @binding(25) var<storage, read_write> pairs: array<Pair>;
+// Per cell of each particle's bounding box (the particle's pair range, in the box order of
+// `box_cell`): xyz the momentum the fluid gave the particle in that cell during the step, w 1 where
+// the particle covers the cell with a slot, 0 elsewhere.
+@group(0) @binding(25) var<storage, read_write> pairs: array<vec4<f32>>;
 // Per cell: how many particles cover it this step.
 @group(0) @binding(26) var<storage, read_write> covered: array<atomic<u32>>;
-// Per cell: SLOTS pair indices.
+// Per cell: the indices of the particles covering it (SLOTS entries).
 @group(0) @binding(27) var<storage, read_write> slots: array<u32>;
-// particles, pairs, pairs of the previous step, capacity of `saved`
+// particles, pairs, -, capacity of `saved`
 @group(0) @binding(28) var<storage, read> imb_info: vec4<u32>;
 // The covered cells of this step, each once, in the order `cover` found them, over the `fields`
 // buffer (binding 3), which only `macroscopic` uses and which it rewrites: from the front those
@@ -58,27 +51,42 @@ struct Saved {
 @group(0) @binding(3) var<storage, read_write> saved: array<Saved>;
 
 const NO_CELL: u32 = 0xffffffffu;
-// Sub-samples per cell edge for the solid fraction of cells cut by the surface.
-const SAMPLES: u32 = 4u;
 
-// Fraction of the cell centred at `x` inside the sphere: exact 0 or 1 away from the surface,
-// SAMPLES^3 sub-cell points where the surface cuts the cell.
+// Fraction of the cell centred at `x` inside the sphere: the fraction of a unit cell below a plane
+// at the cell centre's distance from the surface (exact for a face-aligned plane), 0 or 1 beyond
+// half a cell, on a radius shortened by 1/(12 r) that cancels the volume the curvature adds
+// (docs/imb.md). Branch-free: one square root per cell.
 fn solid_fraction(x: vec3<f32>, centre: vec3<f32>, r: f32) -> f32 {
-    let d = length(x - centre);
-    if d >= r + 0.8660254 { return 0.0; }
-    if d <= r - 0.8660254 { return 1.0; }
-    var inside = 0u;
-    let step = 1.0 / f32(SAMPLES);
-    for (var a = 0u; a < SAMPLES; a++) {
-        for (var b = 0u; b < SAMPLES; b++) {
-            for (var c = 0u; c < SAMPLES; c++) {
-                let p = x - 0.5 + (vec3<f32>(f32(a), f32(b), f32(c)) + 0.5) * step;
-                let v = p - centre;
-                if dot(v, v) <= r * r { inside++; }
-            }
-        }
-    }
-    return f32(inside) / f32(SAMPLES * SAMPLES * SAMPLES);
+    return clamp(r - 1.0 / (12.0 * r) + 0.5 - length(x - centre), 0.0, 1.0);
+}
+
+// The first cell (lowest corner) of a particle's bounding box: the cell holding x - r. Its lower
+// neighbour's centre is at least r + 1/2 away along an axis, where `solid_fraction` is 0 with a
+// margin of 1/(12 r) (far above the rounding of x - r).
+fn box_origin(p: Particle) -> vec3<i32> {
+    return vec3<i32>(floor(p.pos_r.xyz - p.pos_r.w));
+}
+
+// t / m for t < 2^24: by the float quotient, corrected by one either way (llvmpipe has no vector
+// integer division and divides lane by lane).
+fn divide(t: u32, m: u32) -> u32 {
+    let q = u32(max(f32(t) / f32(m), 0.0));
+    return select(select(q, q + 1u, (q + 1u) * m <= t), q - 1u, q * m > t);
+}
+
+// Cell t of a particle's bounding box of edge m, x fastest.
+fn box_cell(origin: vec3<i32>, m: u32, t: u32) -> vec3<i32> {
+    let row = divide(t, m);
+    let layer = divide(row, m);
+    return origin + vec3<i32>(i32(t - row * m), i32(row - layer * m), i32(layer));
+}
+
+fn inside_domain(q: vec3<i32>) -> bool {
+    return all(q >= vec3<i32>(0)) && all(q < vec3<i32>(params.n.xyz));
+}
+
+fn cell_at(q: vec3<i32>) -> u32 {
+    return u32(q.x) + params.n.x * (u32(q.y) + params.n.y * u32(q.z));
 }
 
 // Weight of the solid collision for solid fraction eps.
@@ -86,18 +94,6 @@ fn weighting(eps: f32) -> f32 {
     if SEED_WEIGHTING { return eps; }
     let t = 1.0 / params.relax.x - 0.5;
     return eps * t / ((1.0 - eps) + t);
-}
-
-@compute @workgroup_size(64)
-fn uncover(
-    @builtin(workgroup_id) wg: vec3<u32>,
-    @builtin(num_workgroups) nwg: vec3<u32>,
-    @builtin(local_invocation_index) local: u32,
-) {
-    let t = cell_index(wg, nwg, local);
-    if t >= imb_info.z { return; }
-    let cell = pairs[t].cell;
-    if cell != NO_CELL { atomicStore(&covered[cell], 0u); }
 }
 
 // One workgroup per particle, its threads over the particle's bounding box.
@@ -111,15 +107,12 @@ fn cover(
     if j >= imb_info.x { return; }
     let p = particles[j];
     let m = p.box_.y;
-    let origin = vec3<i32>(floor(p.pos_r.xyz - p.pos_r.w)) - vec3<i32>(1);
-    let n = vec3<i32>(params.n.xyz);
+    let origin = box_origin(p);
     for (var t = local; t < m * m * m; t += 64u) {
-        let q = origin + vec3<i32>(i32(t % m), i32((t / m) % m), i32(t / (m * m)));
-        let index = p.box_.x + t;
-        var cell = NO_CELL;
-        var fraction = 0.0;
-        if all(q >= vec3<i32>(0)) && all(q < n) {
-            let k = u32(q.x) + params.n.x * (u32(q.y) + params.n.y * u32(q.z));
+        let q = box_cell(origin, m, t);
+        var registered = 0.0;
+        if inside_domain(q) {
+            let k = cell_at(q);
             let eps = solid_fraction(vec3<f32>(q) + 0.5, p.pos_r.xyz, p.pos_r.w);
             if eps > 0.0 && (flags[k] & SOLID) == 0u {
                 let slot = atomicAdd(&covered[k], 1u);
@@ -135,19 +128,14 @@ fn cover(
                     }
                 }
                 if slot < SLOTS {
-                    slots[k * SLOTS + slot] = index;
-                    cell = k;
-                    fraction = eps;
+                    slots[k * SLOTS + slot] = j;
+                    registered = 1.0;
                 } else {
                     atomicAdd(&status[1], 1u);
                 }
             }
         }
-        // Field by field: the populations are written by `save`.
-        pairs[index].cell = cell;
-        pairs[index].particle = j;
-        pairs[index].eps = fraction;
-        pairs[index].force = vec4<f32>(0.0);
+        pairs[p.box_.x + t] = vec4<f32>(0.0, 0.0, 0.0, registered);
     }
 }
 
@@ -277,7 +265,7 @@ fn stream_collide_covered(
 fn immersed_boundary(k: u32, f: array<f32, 19>, m: Moments, post: array<f32, 19>) -> array<f32, 19> {
     let count = min(atomicLoad(&covered[k]), SLOTS);
     if count == 0u { return post; }
-    // Pair indices in ascending order: sums do not depend on the order of insertion.
+    // Particles in ascending order: sums do not depend on the order of insertion.
     var ids: array<u32, 4>;
     for (var s = 0u; s < count; s++) {
         var id = slots[k * SLOTS + s];
@@ -288,39 +276,56 @@ fn immersed_boundary(k: u32, f: array<f32, 19>, m: Moments, post: array<f32, 19>
         }
         ids[q] = id;
     }
-    // Total solid fraction capped at 1.
+    // The solid fractions as `cover` computed them (the same function of the same values).
+    let q = coords(k);
+    let x = vec3<f32>(q) + 0.5;
+    var eps: array<f32, 4>;
     var eps_total = 0.0;
-    for (var s = 0u; s < count; s++) { eps_total += pairs[ids[s]].eps; }
+    for (var s = 0u; s < count; s++) {
+        let p = particles[ids[s]];
+        eps[s] = solid_fraction(x, p.pos_r.xyz, p.pos_r.w);
+        eps_total += eps[s];
+    }
+    // Total solid fraction capped at 1.
     let scale = select(1.0, 1.0 / eps_total, eps_total > 1.0);
     var b: array<f32, 4>;
     var b_total = 0.0;
     for (var s = 0u; s < count; s++) {
-        b[s] = weighting(pairs[ids[s]].eps * scale);
+        b[s] = weighting(eps[s] * scale);
         b_total += b[s];
     }
     var out: array<f32, 19>;
     //#for i
     out[{i}] = f[{i}] - (1.0 - b_total) * (f[{i}] - post[{i}]);
     //#end
-    let x = vec3<f32>(coords(k)) + 0.5;
     for (var s = 0u; s < count; s++) {
-        let p = particles[pairs[ids[s]].particle];
-        let solid = Moments(m.rho, p.vel.xyz + cross(p.omega.xyz, x - p.pos_r.xyz));
+        let p = particles[ids[s]];
+        let solid = p.vel.xyz + cross(p.omega.xyz, x - p.pos_r.xyz);
+        // f_eq_i(rho, u_s) - f_eq_ibar(rho, u) = w_i rho (3 c.sum + 4.5 (c.sum)(c.diff) - 1.5 sum.diff)
+        // with sum = u_s + u, diff = u_s - u.
+        let sum = solid + m.u;
+        let diff = solid - m.u;
+        let scalar = -1.5 * dot(sum, diff);
         var momentum = vec3<f32>(0.0);
         //#for i
         {
             let c = vec3<f32>({i.cx}.0, {i.cy}.0, {i.cz}.0);
-            let omega = b[s] * (f[{i.o}] - f[{i}] + equilibrium(c, {i.w}, solid) - equilibrium(-c, {i.w}, m));
+            let cs = dot(c, sum);
+            let equilibria = {i.w} * m.rho * (3.0 * cs + 4.5 * cs * dot(c, diff) + scalar);
+            let omega = b[s] * (f[{i.o}] - f[{i}] + equilibria);
             out[{i}] += omega;
             momentum += omega * c;
         }
         //#end
-        pairs[ids[s]].force = vec4<f32>(-momentum, 0.0);
+        let t = vec3<u32>(q - box_origin(p));
+        let m_ = p.box_.y;
+        pairs[p.box_.x + t.x + m_ * (t.y + m_ * t.z)] = vec4<f32>(-momentum, 1.0);
     }
     return out;
 }
 
-// One thread per particle: force and torque summed over its bounding box in a fixed order.
+// One invocation per particle: force and torque summed over its bounding box in a fixed order
+// (no floating-point atomics), and the cover counts of its cells cleared for the next step.
 @compute @workgroup_size(64)
 fn reduce(
     @builtin(workgroup_id) wg: vec3<u32>,
@@ -331,15 +336,17 @@ fn reduce(
     if j >= imb_info.x { return; }
     let p = particles[j];
     let m = p.box_.y;
+    let origin = box_origin(p);
     var force = vec3<f32>(0.0);
     var torque = vec3<f32>(0.0);
     for (var t = 0u; t < m * m * m; t++) {
-        let cell = pairs[p.box_.x + t].cell;
-        if cell != NO_CELL {
-            let pair_force = pairs[p.box_.x + t].force.xyz;
-            let arm = vec3<f32>(coords(cell)) + 0.5 - p.pos_r.xyz;
-            force += pair_force;
-            torque += cross(arm, pair_force);
+        let pair = pairs[p.box_.x + t];
+        if pair.w != 0.0 {
+            let q = box_cell(origin, m, t);
+            let arm = vec3<f32>(q) + 0.5 - p.pos_r.xyz;
+            force += pair.xyz;
+            torque += cross(arm, pair.xyz);
+            atomicStore(&covered[cell_at(q)], 0u);
         }
     }
     particles[j].force = vec4<f32>(force, 0.0);

@@ -2,6 +2,7 @@
 
 use crate::lbm::geometry::{Face, Operator, Setup};
 use crate::lbm::gpu::{Gpu, Health, Lattice};
+use crate::lbm::imb::SolidParticle;
 use crate::lbm::mrt::Rates;
 use std::process::ExitCode;
 use std::sync::Arc;
@@ -26,6 +27,10 @@ pub struct BenchArgs {
     /// 4 cells diameter on a regular lattice, immersed moving boundary; MLUPS and ratio to LBM-only.
     #[arg(long, value_delimiter = ',')]
     particles: Vec<usize>,
+    /// With --particles: also time each pass of the coupled step on its own (each submitted and
+    /// waited for: the round trip is in every pass), mean over the timed steps.
+    #[arg(long)]
+    passes: bool,
     /// Timed rounds, ours and the naive kernel alternating (best round reported).
     #[arg(long, default_value_t = 3)]
     rounds: u32,
@@ -140,7 +145,16 @@ fn run(args: &BenchArgs) -> Result<(), String> {
         );
     }
     if !args.particles.is_empty() {
-        coupled_sweep(&gpu, n, tau, operator, args.steps, &args.particles, mlups)?;
+        coupled_sweep(
+            &gpu,
+            n,
+            tau,
+            operator,
+            args.steps,
+            &args.particles,
+            mlups,
+            args.passes,
+        )?;
     }
     if time_naive {
         match naive {
@@ -315,6 +329,7 @@ impl Naive {
 }
 
 /// Coupled MLUPS for each particle count, against the LBM-only figure of the same run.
+#[allow(clippy::too_many_arguments)]
 fn coupled_sweep(
     gpu: &Arc<Gpu>,
     n: [usize; 3],
@@ -323,8 +338,10 @@ fn coupled_sweep(
     steps: u64,
     counts: &[usize],
     lbm_only: f64,
+    passes: bool,
 ) -> Result<(), String> {
-    use crate::lbm::imb::{ImbOptions, SolidParticle};
+    use crate::lbm::imb::ImbOptions;
+    let mut breakdown = Vec::new();
     println!("coupled (spheres of 4 cells diameter, immersed moving boundary, one readback per step):");
     println!("| particles | MLUPS | ratio to LBM-only ({lbm_only:.1} MLUPS) |");
     println!("|---:|---:|---:|");
@@ -341,16 +358,7 @@ fn coupled_sweep(
                 "--particles {count}: {side}^3 spheres of 4 cells do not fit the grid"
             ));
         }
-        let particles: Vec<SolidParticle> = (0..count)
-            .map(|k| {
-                let idx = [k % side, (k / side) % side, k / (side * side)];
-                SolidParticle {
-                    position: std::array::from_fn(|a| (idx[a] as f64 + 0.5) * spacing[a]),
-                    radius: 2.0,
-                    ..Default::default()
-                }
-            })
-            .collect();
+        let particles = sphere_lattice(side, spacing);
         let setup = Setup::new(n, [Face::Periodic; 6], tau, operator);
         let mut lattice = Lattice::new(gpu.clone(), setup, Health::default(), Some(ImbOptions::default()))?;
         for _ in 0..5 {
@@ -362,6 +370,101 @@ fn coupled_sweep(
         }
         let mlups = (n[0] * n[1] * n[2]) as f64 * steps as f64 / start.elapsed().as_secs_f64() / 1e6;
         println!("| {count} | {mlups:.1} | {:.0}% |", 100.0 * mlups / lbm_only);
+        if passes {
+            breakdown.push((count, time_passes(&mut lattice, &particles, steps)?));
+        }
+    }
+    if passes {
+        print_passes(&breakdown);
     }
     Ok(())
+}
+
+/// side^3 spheres of radius 2 cells at the centres of a regular lattice of `spacing`.
+fn sphere_lattice(side: usize, spacing: [f64; 3]) -> Vec<SolidParticle> {
+    (0..side * side * side)
+        .map(|k| {
+            let idx = [k % side, (k / side) % side, k / (side * side)];
+            SolidParticle {
+                position: std::array::from_fn(|a| (idx[a] as f64 + 0.5) * spacing[a]),
+                radius: 2.0,
+                ..Default::default()
+            }
+        })
+        .collect()
+}
+
+/// Mean milliseconds of each pass of the coupled step over `steps` steps, each pass submitted on
+/// its own: wall time and this process's CPU time (all threads: lavapipe's workers do the work, and
+/// the CPU time moves less than the wall time when other jobs share the cores).
+fn time_passes(
+    lattice: &mut Lattice,
+    particles: &[SolidParticle],
+    steps: u64,
+) -> Result<Vec<(&'static str, [f64; 2])>, String> {
+    let clock = || [start_of_run().elapsed().as_secs_f64(), process_cpu_seconds()];
+    let mut sums: Vec<(&'static str, [f64; 2])> = Vec::new();
+    for _ in 0..steps {
+        let times = lattice.step_coupled_timed(particles, &clock)?;
+        if sums.is_empty() {
+            sums = times.iter().map(|(name, _)| (*name, [0.0; 2])).collect();
+        }
+        for (sum, (_, t)) in sums.iter_mut().zip(&times) {
+            for k in 0..2 {
+                sum.1[k] += t[k] * 1e3 / steps as f64;
+            }
+        }
+    }
+    Ok(sums)
+}
+
+fn start_of_run() -> Instant {
+    static START: std::sync::OnceLock<Instant> = std::sync::OnceLock::new();
+    *START.get_or_init(Instant::now)
+}
+
+/// CPU seconds of this process, all threads (0 where the clock is not available).
+fn process_cpu_seconds() -> f64 {
+    let mut t = libc::timespec {
+        tv_sec: 0,
+        tv_nsec: 0,
+    };
+    // SAFETY: clock_gettime writes one timespec, which `t` is.
+    let ok = unsafe { libc::clock_gettime(libc::CLOCK_PROCESS_CPUTIME_ID, &mut t) } == 0;
+    if ok {
+        t.tv_sec as f64 + t.tv_nsec as f64 * 1e-9
+    } else {
+        0.0
+    }
+}
+
+fn print_passes(breakdown: &[(usize, Vec<(&'static str, [f64; 2])>)]) {
+    let Some((_, first)) = breakdown.first() else {
+        return;
+    };
+    let names: Vec<&str> = first.iter().map(|(name, _)| *name).collect();
+    for (k, what) in ["wall", "CPU (all threads)"].iter().enumerate() {
+        println!(
+            "coupled step by pass, {what} ms per step (mean; each pass submitted and waited for on its own):"
+        );
+        println!(
+            "| particles | {} | total | total without fluid |",
+            names.join(" | ")
+        );
+        println!("|---:|{}---:|---:|", "---:|".repeat(names.len()));
+        for (count, times) in breakdown {
+            let cells: Vec<String> = times.iter().map(|(_, t)| format!("{:.2}", t[k])).collect();
+            let total: f64 = times.iter().map(|(_, t)| t[k]).sum();
+            let fluid: f64 = times
+                .iter()
+                .filter(|(name, _)| *name == "fluid")
+                .map(|(_, t)| t[k])
+                .sum();
+            println!(
+                "| {count} | {} | {total:.2} | {:.2} |",
+                cells.join(" | "),
+                total - fluid
+            );
+        }
+    }
 }

@@ -50,14 +50,24 @@ struct GpuParticle {
 }
 
 const PARTICLE_BYTES: u64 = std::mem::size_of::<GpuParticle>() as u64;
-const PAIR_BYTES: u64 = 32;
+/// The shader's pair: one vec4 per cell of a particle's bounding box.
+const PAIR_BYTES: u64 = 16;
 /// The shader's `Saved`: a covered cell and its 19 populations (over the `fields` buffer).
 const SAVED_BYTES: u64 = 80;
 
-/// Edge of the bounding box of a sphere of radius r, in cells (matches `cover` in imb.wgsl).
+/// The largest bounding box edge: imb.wgsl's `divide` takes box indices below 2^24 = 256^3.
+const MAX_BOX_EDGE: u32 = 255;
+
+/// Edge of the bounding box of a sphere of radius r, in cells (matches `cover` in imb.wgsl): from
+/// the cell holding x - r to the one holding x + r, the cells whose centre lies within r + 1/2 of
+/// x along each axis (beyond, the solid fraction is 0; docs/imb.md).
 pub fn box_edge(radius: f64) -> u32 {
-    (2.0 * radius).ceil() as u32 + 3
+    (2.0 * radius).ceil() as u32 + 1
 }
+
+/// Receives the encoder after each pass of a coupled step (named) and returns the one to go on
+/// with: the identity, or a submit and wait for timing each pass.
+type Split<'a> = &'a mut dyn FnMut(&'static str, wgpu::CommandEncoder) -> wgpu::CommandEncoder;
 
 /// Buffers and pipelines of the coupling (tiny placeholders when the scene has no particles).
 pub struct Coupling {
@@ -72,11 +82,10 @@ pub struct Coupling {
     indirect: wgpu::Buffer,
     particle_capacity: u64,
     pair_capacity: u64,
-    previous_pairs: u32,
     slots_per_cell: u32,
-    /// uncover, cover, covered_groups, reduce, then save and stream_collide_covered for each KIND
-    /// (bit 0 the parity, bit 1 the covered cells with a link that leaves the fluid).
-    pipelines: Option<[wgpu::ComputePipeline; 12]>,
+    /// cover, covered_groups, reduce, then save and stream_collide_covered for each KIND (bit 0
+    /// the parity, bit 1 the covered cells with a link that leaves the fluid).
+    pipelines: Option<[wgpu::ComputePipeline; 11]>,
     /// Covered cells the `fields` buffer can hold (`Saved` records).
     saved_capacity: u32,
 }
@@ -106,18 +115,16 @@ impl Coupling {
             }),
             particle_capacity: 1,
             pair_capacity: 1,
-            previous_pairs: 0,
             slots_per_cell: slots as u32,
             pipelines: None,
             saved_capacity: 0,
         }
     }
 
-    /// Adds the uncover, cover, save, covered-cell and reduce pipelines when the coupling is on.
+    /// Adds the cover, save, covered-cell and reduce pipelines when the coupling is on.
     pub fn with_pipelines(mut self, on: bool, make: &dyn Fn(&str, u32) -> wgpu::ComputePipeline) -> Coupling {
         if on {
             self.pipelines = Some([
-                make("uncover", 0),
                 make("cover", 0),
                 make("covered_groups", 0),
                 make("reduce", 0),
@@ -159,6 +166,51 @@ impl Lattice {
     /// One coupled step: the particles cover the cells, the fluid streams and collides with the
     /// solid term, and the force and torque on each particle over the step come back.
     pub fn step_coupled(&mut self, particles: &[SolidParticle]) -> Result<Vec<Load>, String> {
+        self.coupled_step(particles, &mut |_, encoder| encoder)
+    }
+
+    /// A coupled step with each pass submitted and waited for on its own: what `clock` advanced
+    /// by over each pass (the submit round trip included), in the order of the step
+    /// (`lbm-server bench --passes`).
+    pub fn step_coupled_timed<const N: usize>(
+        &mut self,
+        particles: &[SolidParticle],
+        clock: &dyn Fn() -> [f64; N],
+    ) -> Result<Vec<(&'static str, [f64; N])>, String> {
+        let gpu = self.gpu.clone();
+        let mut times = Vec::new();
+        let mut mark = clock();
+        let elapsed = |mark: &mut [f64; N]| {
+            let now = clock();
+            let spent = std::array::from_fn(|i| now[i] - mark[i]);
+            *mark = now;
+            spent
+        };
+        let mut split = |pass: &'static str, encoder: wgpu::CommandEncoder| {
+            gpu.queue.submit([encoder.finish()]);
+            gpu.wait();
+            times.push((pass, elapsed(&mut mark)));
+            gpu.device.create_command_encoder(&Default::default())
+        };
+        self.coupled_step(particles, &mut split)?;
+        times.push(("readback", elapsed(&mut mark)));
+        Ok(times)
+    }
+
+    /// The coupled step; `split` receives the encoder after each pass (named) and returns the one
+    /// to go on with.
+    fn coupled_step(&mut self, particles: &[SolidParticle], split: Split) -> Result<Vec<Load>, String> {
+        if let Some((j, p)) = particles
+            .iter()
+            .enumerate()
+            .find(|(_, p)| box_edge(p.radius) > MAX_BOX_EDGE)
+        {
+            return Err(format!(
+                "particle {j}: radius {} cells exceeds the coupling's {} cells",
+                p.radius,
+                (MAX_BOX_EDGE - 1) / 2
+            ));
+        }
         let (gpu_particles, pairs) = layout(particles);
         self.reserve(gpu_particles.len() as u64, pairs as u64)?;
         let coupling = self.imb.as_mut().expect("coupling");
@@ -167,41 +219,44 @@ impl Lattice {
             .as_ref()
             .ok_or("this lattice was made without particle coupling")?;
         let parity = self.time % 2;
-        let [uncover, cover, groups, reduce] = std::array::from_fn(|i| pipelines[i].clone());
+        let [cover, groups, reduce] = std::array::from_fn(|i| pipelines[i].clone());
         // KIND = parity + 2 * (list of the cells with a link that leaves the fluid).
         let kind = |list: usize| parity as usize + 2 * list;
-        let save = [0, 1].map(|list| pipelines[4 + kind(list)].clone());
-        let covered = [0, 1].map(|list| pipelines[8 + kind(list)].clone());
+        let save = [0, 1].map(|list| pipelines[3 + kind(list)].clone());
+        let covered = [0, 1].map(|list| pipelines[7 + kind(list)].clone());
         let capacity = coupling.saved_capacity;
-        let previous = coupling.previous_pairs;
-        coupling.previous_pairs = pairs;
         let gpu = self.gpu.clone();
         gpu.queue
             .write_buffer(&coupling.particles, 0, bytemuck::cast_slice(&gpu_particles));
         gpu.queue.write_buffer(
             &coupling.info,
             0,
-            bytemuck::cast_slice(&[particles.len() as u32, pairs, previous, capacity]),
+            bytemuck::cast_slice(&[particles.len() as u32, pairs, 0, capacity]),
         );
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
         let n = particles.len() as u32;
-        self.dispatch_groups(&mut encoder, &uncover, parity, previous.div_ceil(64));
-        // The covered cells are listed by `cover` (status[4]) and dispatched indirectly (status[5..8]).
+        // The cover counts are all 0 here: `reduce` clears them. The covered cells are listed by `cover` (status[4]) and dispatched indirectly (status[5..8]).
         encoder.clear_buffer(&self.status, 16, Some(32));
         self.dispatch_groups(&mut encoder, &cover, parity, n);
+        encoder = split("cover", encoder);
         self.dispatch_groups(&mut encoder, &groups, parity, 1);
         let indirect = &self.imb.as_ref().expect("coupling").indirect;
         encoder.copy_buffer_to_buffer(&self.status, 20, indirect, 0, 28);
+        encoder = split("covered_groups", encoder);
         // The fluid kernels update every cell without the solid term; the covered cells are then
         // redone from their saved populations (shaders/imb.wgsl).
         for (offset, pipeline) in [0, 16].into_iter().zip(&save) {
             self.dispatch_indirect(&mut encoder, pipeline, parity, offset);
         }
+        encoder = split("save", encoder);
         self.encode_step(&mut encoder);
+        encoder = split("fluid", encoder);
         for (offset, pipeline) in [0, 16].into_iter().zip(&covered) {
             self.dispatch_indirect(&mut encoder, pipeline, parity, offset);
         }
+        encoder = split("stream_collide_covered", encoder);
         self.dispatch_groups(&mut encoder, &reduce, parity, n.div_ceil(64));
+        encoder = split("reduce", encoder);
         let coupling = self.imb.as_ref().expect("coupling");
         let bytes = n as u64 * PARTICLE_BYTES;
         if bytes > 0 {
@@ -276,11 +331,6 @@ impl Lattice {
         if pairs > coupling.pair_capacity {
             coupling.pair_capacity = pairs.next_power_of_two();
             coupling.pairs = storage_buffer(&d, "pairs", coupling.pair_capacity * PAIR_BYTES);
-            // The old pairs are gone: clear every cell's cover count instead.
-            let mut encoder = d.create_command_encoder(&Default::default());
-            encoder.clear_buffer(&coupling.covered, 0, None);
-            self.gpu.queue.submit([encoder.finish()]);
-            coupling.previous_pairs = 0;
             grew = true;
         }
         // The covered cells, at most min(cells, pairs), over the `fields` buffer.

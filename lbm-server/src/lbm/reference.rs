@@ -102,31 +102,12 @@ pub fn collide(setup: &Setup, f: &Cell) -> (Cell, f64, [f64; 3]) {
     (out, rho, u)
 }
 
-/// Fraction of the cell centred at `x` inside the sphere, by the same 4^3 sub-cell samples as
-/// imb.wgsl (exact 0 or 1 away from the surface).
+/// Fraction of the cell centred at `x` inside the sphere, as imb.wgsl: the fraction of a unit cell
+/// below a face-aligned plane at the centre's distance from the surface, on a radius shortened by
+/// 1/(12 r) (docs/imb.md).
 pub fn solid_fraction(x: [f64; 3], centre: [f64; 3], r: f64) -> f64 {
-    const SAMPLES: usize = 4;
     let d = (0..3).map(|a| (x[a] - centre[a]).powi(2)).sum::<f64>().sqrt();
-    if d >= r + 0.8660254 {
-        return 0.0;
-    }
-    if d <= r - 0.8660254 {
-        return 1.0;
-    }
-    let step = 1.0 / SAMPLES as f64;
-    let mut inside = 0;
-    for a in 0..SAMPLES {
-        for b in 0..SAMPLES {
-            for c in 0..SAMPLES {
-                let p = [a, b, c].map(|v| (v as f64 + 0.5) * step - 0.5);
-                let d2: f64 = (0..3).map(|k| (x[k] + p[k] - centre[k]).powi(2)).sum();
-                if d2 <= r * r {
-                    inside += 1;
-                }
-            }
-        }
-    }
-    inside as f64 / (SAMPLES * SAMPLES * SAMPLES) as f64
+    (r - 1.0 / (12.0 * r) + 0.5 - d).clamp(0.0, 1.0)
 }
 
 /// Per cell: (particle, solid fraction) of the particles covering it, in particle order, at most
@@ -146,11 +127,12 @@ fn cover(setup: &Setup, particles: &[SolidParticle], slots: usize) -> Vec<Vec<(u
 
 /// The cells of a particle's bounding box inside the domain, in the order of imb.wgsl, with
 /// their centres.
-fn box_cells<'a>(setup: &'a Setup, p: &SolidParticle) -> impl Iterator<Item = (usize, [f64; 3])> + 'a {
+pub(super) fn box_cells<'a>(
+    setup: &'a Setup,
+    p: &SolidParticle,
+) -> impl Iterator<Item = (usize, [f64; 3])> + 'a {
     let m = box_edge(p.radius) as i64;
-    let origin = p
-        .position
-        .map(|x| (x as f32 - p.radius as f32).floor() as i64 - 1);
+    let origin = p.position.map(|x| (x as f32 - p.radius as f32).floor() as i64);
     (0..m * m * m).filter_map(move |t| {
         let q = [
             origin[0] + t % m,
