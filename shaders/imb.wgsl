@@ -141,14 +141,15 @@ fn cover(
 
 // The covered cells' workgroups for the indirect dispatches of `save` and `stream_collide_covered`:
 // status[5..8] (x, y, z; 2D beyond 65535 workgroups) for the front of the list, status[9..12] for
-// the back. One invocation; cells beyond the capacity count as dropped covers.
+// the back. One invocation; covered cells beyond the capacity are counted in status[2] (the run
+// stops: their solid term would be missing).
 @compute @workgroup_size(1)
 fn covered_groups() {
     let front = atomicLoad(&status[4]);
     let back = atomicLoad(&status[8]);
     let capacity = imb_info.w;
     if front + back > capacity {
-        atomicAdd(&status[1], front + back - capacity);
+        atomicAdd(&status[2], front + back - capacity);
     }
     let counts = vec2<u32>(min(front, capacity), min(back, capacity - min(front, capacity)));
     for (var list = 0u; list < 2u; list++) {

@@ -161,6 +161,16 @@ impl FluidSide {
                 self.steps
             ));
         }
+        let unlisted = self.lattice.unlisted_covered_cells();
+        if unlisted > 0 {
+            return Err(format!(
+                "by step {}, {unlisted} covered cells did not fit the list of covered cells (room for {} \
+                 on this device: its storage binding limit / 80 bytes), so their solid term was missing: \
+                 use fewer or smaller particles, or a device with a larger binding limit",
+                self.steps,
+                self.lattice.covered_cell_capacity()
+            ));
+        }
         let dropped = self.lattice.dropped_covers();
         if dropped > 0 {
             protocol::say!(

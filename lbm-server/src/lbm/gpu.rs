@@ -221,7 +221,8 @@ impl Lattice {
             wgpu::BufferUsages::UNIFORM,
         );
         let fields = storage_buffer(d, "fields", bytes * 4);
-        // [0] first unhealthy cell, [1] dropped covers, [4] and [8] covered cells (two lists),
+        // [0] first unhealthy cell, [1] dropped covers, [2] covered cells beyond the list's room,
+        // [4] and [8] covered cells (two lists),
         // [5..8] and [9..12] their workgroups.
         let status = init(
             "status",

@@ -88,6 +88,8 @@ pub struct Coupling {
     pipelines: Option<[wgpu::ComputePipeline; 11]>,
     /// Covered cells the `fields` buffer can hold (`Saved` records).
     saved_capacity: u32,
+    /// Most covered cells the list may hold (below the device's limit only in tests).
+    saved_cap: u64,
 }
 
 impl Coupling {
@@ -118,6 +120,7 @@ impl Coupling {
             slots_per_cell: slots as u32,
             pipelines: None,
             saved_capacity: 0,
+            saved_cap: u64::MAX,
         }
     }
 
@@ -305,10 +308,33 @@ impl Lattice {
         self.imb.as_ref().map_or(0, |c| c.slots_per_cell)
     }
 
-    /// Particles that no longer fit one cell's slots since the last call (0 when none).
+    /// Particle-cell covers that did not fit a cell's slots since the start (0 when none).
     pub fn dropped_covers(&self) -> u32 {
+        self.status_word(1)
+    }
+
+    /// Covered cells that did not fit the list of covered cells since the start (0 when none):
+    /// their solid term was missing.
+    pub fn unlisted_covered_cells(&self) -> u32 {
+        self.status_word(2)
+    }
+
+    /// Room in the list of covered cells.
+    pub fn covered_cell_capacity(&self) -> u32 {
+        self.imb.as_ref().map_or(0, |c| c.saved_capacity)
+    }
+
+    /// Test aid: caps the list of covered cells at `cells`.
+    #[cfg(test)]
+    pub fn cap_covered_cells(&mut self, cells: u64) {
+        if let Some(c) = self.imb.as_mut() {
+            c.saved_cap = cells;
+        }
+    }
+
+    fn status_word(&self, k: usize) -> u32 {
         let status: Vec<u32> = bytemuck::cast_slice(&self.gpu.read_buffer(&self.status, 16)).to_vec();
-        status[1]
+        status[k]
     }
 
     /// Grows the particle and pair buffers to hold `particles` and `pairs`.
@@ -335,7 +361,9 @@ impl Lattice {
         }
         // The covered cells, at most min(cells, pairs), over the `fields` buffer.
         let cells = self.setup.cells() as u64;
-        let most = (limit.min(self.gpu.limits.max_buffer_size) / SAVED_BYTES).min(cells);
+        let most = (limit.min(self.gpu.limits.max_buffer_size) / SAVED_BYTES)
+            .min(cells)
+            .min(coupling.saved_cap);
         let want = pairs.min(cells).next_power_of_two().min(most);
         if want > coupling.saved_capacity as u64 {
             let bytes = (want * SAVED_BYTES).max(cells * 16);

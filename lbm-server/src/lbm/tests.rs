@@ -427,6 +427,31 @@ mod immersed_boundary {
         assert!(err.contains("particle 1"), "{err}");
     }
 
+    /// Covered cells beyond the room of the list of covered cells are counted (the run stops on
+    /// them), none when the list has room.
+    #[test]
+    fn covered_cells_beyond_the_list_are_counted() {
+        let setup = Setup::new([12; 3], [Face::Periodic; 6], 0.7, Operator::Bgk);
+        let unlisted = |cap: Option<u64>| {
+            let mut lattice = Lattice::new(
+                gpu(),
+                setup.clone(),
+                Health::default(),
+                Some(ImbOptions::default()),
+            )
+            .unwrap();
+            if let Some(cells) = cap {
+                lattice.cap_covered_cells(cells);
+            }
+            lattice.step_coupled(&two_particles(0.0)).unwrap();
+            (lattice.unlisted_covered_cells(), lattice.covered_cell_capacity())
+        };
+        assert_eq!(unlisted(None).0, 0);
+        let (missing, room) = unlisted(Some(16));
+        assert_eq!(room, 16);
+        assert!(missing > 16, "{missing} covered cells beyond a list of 16");
+    }
+
     #[test]
     fn the_bounding_box_holds_every_cell_with_a_solid_fraction() {
         let setup = Setup::new([24; 3], [Face::Periodic; 6], 0.7, Operator::Bgk);
