@@ -680,20 +680,21 @@ def narrative(results, extra, wide, ops, opw=()):
         op_bullets.append("- **Against u_inf without the walls (an estimate, not runs):** if the experiment's box slows the BGK "
                           "and MRT spheres by the same factor as the TRT one (measured with TRT in 200 x 200 x 240 mm, "
                           "section \"Larger boxes\"), their errors against u_inf would be %s. On that estimate BGK and MRT "
-                          "are closer to u_inf than TRT at N = 6; runs of BGK and MRT in a larger box would settle it." % "; ".join(est))
+                          "are closer to u_inf than TRT at N = 6; the runs in the next item test it." % "; ".join(est))
     meas = []
     for r in opw:
         if "terminal_speed" not in r:
             continue
         t = find_run(wide, r["case"], r["N"], r["box"][0] * 1e3, r["box"][2] * 1e3)
         b = next((o for o in ops if o["case"] == r["case"] and o["N"] == r["N"] and o["op"] == r["op"] and "peak_speed" in o), None)
-        meas.append("%s N = %g: %.4f m/s (%s; in the experiment's box %s, wall effect %s; TRT in the same box %s) [`%s`]" % (
-            r["op"].upper(), r["N"], r["terminal_speed"], pct(r["terminal_error_pct"]),
+        meas.append("%s %s N = %g%s: %.4f m/s (%s; in the experiment's box %s, wall effect %s; TRT in the same box %s) [`%s`]" % (
+            r["case"], r["op"].upper(), r["N"], "" if r["mach"] == MACH else ", Mach %g" % r["mach"],
+            r["terminal_speed"], pct(r["terminal_error_pct"]),
             pct(b["peak_error_pct"]) if b else "-", fmt(b["peak_speed"] / r["terminal_speed"] if b else None, "%.3f"),
             pct(t["terminal_error_pct"]) if t else "-", os.path.basename(r["dir"])))
     if meas:
-        op_bullets.append("- **Measured in %s (terminal speed as in \"Larger boxes\"):** %s." % (
-            box_txt(opw[0]), "; ".join(meas)))
+        op_bullets.append("- **BGK and MRT in a larger box, measured** (%s; terminal speed as in \"Larger boxes\"; E1 and "
+                          "E4 with BGK added to see whether their errors are TRT's): %s." % (box_txt(opw[0]), "; ".join(meas)))
     op_findings = "\n".join(op_bullets)
     # ---- headline and "what the error means"
     items, effects = [], []
@@ -710,7 +711,7 @@ def narrative(results, extra, wide, ops, opw=()):
                 effects.append("%s %.3f (N = %g, %s)" % (case, b["peak_speed"] / w["terminal_speed"], n, box_txt(w)))
     headline = HEADLINE.format(items="; ".join(items)) if items else HEADLINE_NONE
     meaning = MEANING.format(effects="; ".join(effects) if effects else "not measured")
-    hc, mc, wc = conclusions(results, extra, wide)
+    hc, mc, wc = conclusions(results, extra, wide, opw)
     headline = headline.replace("HEADLINE_CONCLUSION", hc)
     meaning = meaning.replace("MEANING_CONCLUSION", mc)
     wide_findings = wide_findings + ("\n" + wc if wc else "")
@@ -725,7 +726,7 @@ def find_run(wide, case, n, w_mm, h_mm):
     return None
 
 
-def conclusions(results, extra, wide):
+def conclusions(results, extra, wide, opw=()):
     """The conclusions of the larger-box runs: (headline, "what the error means", wide-box findings)."""
     if not wide:
         return "", "", ""
@@ -836,13 +837,21 @@ def conclusions(results, extra, wide):
         "**Against u_inf in the widest box run per case and N: within 3 %%:** %s; **at the limit (3.0-3.5 %%):** %s; "
         "**outside:** %s. %s" % (", ".join(inside) or "none", ", ".join(edge) or "none", ", ".join(outside) or "none",
                                  HEADLINE_END))
+    ops_w = []
+    for r in sorted(opw, key=lambda r: (r["case"], r["N"], r["op"])):
+        t = find_run(wide, r["case"], r["N"], r["box"][0] * 1e3, r["box"][2] * 1e3)
+        if "terminal_speed" in r and t:
+            ops_w.append("%s N = %g %s %s (TRT %s)" % (r["case"], r["N"], r["op"].upper(), F(r), F(t)))
+    if ops_w:
+        head.append("**These larger-box numbers are TRT's (the operator of the main table); the operator matters:** in the same "
+                    "200 x 200 x 240 mm box %s (section \"Operators\")." % "; ".join(ops_w))
     return " ".join(head), MEANING_END, "\n".join(f for f in find if f)
 
 
 OP_END = (
     "In the experiment's box TRT has the smallest |error| at N = 6 and 9, but that is its zero crossing "
-    "(too small a sphere, too fast, meeting the walls, too slow), not a better operator; against u_inf "
-    "without walls the ranking could reverse (see \"Larger boxes\" for E3 with TRT).")
+    "(too small a sphere, too fast, meeting the walls, too slow), not a better operator: without the walls "
+    "the ranking reverses (estimate and runs below).")
 OP_TIME_END = (
     "BGK and TRT cost the same within the noise; MRT takes about twice as long at N = 6 and 9 (more arithmetic "
     "per cell in its collision). At these small grids a good part of the wall time is per-step overhead of the "
@@ -866,7 +875,8 @@ MEANING_END = (
     "u_inf; the larger-box numbers are (section \"Larger boxes\");\n"
     "- in the larger boxes the simulated sphere is too fast at low Re (E1, and E3 at N = 6) and too slow "
     "at the highest Re (E4); the error changes sign with Re (and with tau, which falls with Re at fixed "
-    "Mach), which points at the IMB boundary's effective size, not at the box;\n"
+    "Mach), which points at the IMB boundary's effective size, not at the box; that size also depends on "
+    "the collision operator (section \"Operators\": in a larger box BGK and MRT put E3 closer to u_inf than TRT);\n"
     "- a comparison with the experiment itself (the in-box trajectories) still needs the experimental "
     "velocity curves of Ten Cate et al. (2002), not in the reference file.")
 WIDE_END = ""
