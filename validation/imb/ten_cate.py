@@ -9,12 +9,20 @@ writes results.json, REPORT.md and the charts in validation/imb/.
     python3 validation/imb/ten_cate.py run 3 6 7.5          # run the missing (case, N) pairs, then report
     python3 validation/imb/ten_cate.py run 6 --cases E1 E4  # a subset
     python3 validation/imb/ten_cate.py report               # only rebuild results/report/charts from runs/
+    python3 validation/imb/ten_cate.py run 6 --cases E4 --width 300 --height 320 --sim-time 2.5
+                                        # a larger closed box (mm): runs/E4_N6_W300_H320, terminal (plateau) speed
+    python3 validation/imb/ten_cate.py run 3 6 9 --cases E3 --op bgk    # another operator: runs/E3_N<n>_bgk
+    python3 validation/imb/ten_cate.py run 3 6 9 --cases E3 --op-suffix # TRT rerun: runs/E3_N<n>_trt (timing)
 
 Geometry: sphere d = 15 mm, rho_p = 1120 kg/m^3, closed box 100 x 100 x 160 mm, released from rest
 with its *bottom* 120 mm above the floor (centre at z = 127.5 mm). Fluid properties and u_inf from
 /work/shared/reference/ten-cate-2002.md. lattice.velocity_scale = u_inf, mach = 0.1, TRT, so
 dt = 0.1/sqrt(3) dx / u_inf. Simulated time: 1.3 * 120 mm / u_inf (the sphere reaches the floor
 region in every case: it settles slower than u_inf in the box).
+
+Larger boxes (--width/--height, mm): width x width x height, all faces walls, the sphere centred in x, y and
+released 32.5 mm below the lid as in the experiment; the terminal speed is the mean of -v_z over the rows
+around its maximum that stay within 0.5 % of it. The experiment's box and folders are unchanged without them.
 """
 import argparse
 import csv
@@ -57,26 +65,51 @@ def ntag(n):
     return ("%g" % n).replace(".", "p")
 
 
-def run_dir(case, n, mach=MACH):
-    """runs/<case>_N<n>, or runs/<case>_N<n>_M<mach> for a Mach number other than the default."""
+OPERATORS = ("bgk", "trt", "mrt")
+OPERATOR = "trt"          # the default operator: its runs keep the folders without an operator suffix
+
+
+def geometry(width=None, height=None):
+    """(box, release centre z, release gap) for a box of width x width x height [m] (None: the experiment's).
+
+    A larger box keeps the sphere centred in x, y and releases it 32.5 mm below the lid, as in the
+    experiment (there: centre 127.5 mm in a 160 mm box), so the fall is height - 40 mm long.
+    """
+    if width is None and height is None:
+        return BOX, Z0, GAP0
+    w = BOX[0] if width is None else width
+    h = BOX[2] if height is None else height
+    z0 = h - (BOX[2] - Z0)
+    return (w, w, h), z0, z0 - R
+
+
+def run_dir(case, n, mach=MACH, op=OPERATOR, width=None, height=None, explicit=False):
+    """runs/<case>_N<n>[_M<mach>][_W<w>_H<h>][_<op>]: the suffixes only where not the default
+    (Mach 0.1, the experiment's 100 x 100 x 160 mm box, TRT); w and h in mm."""
     tail = "" if mach == MACH else "_M%s" % ntag(mach)
+    if width is not None or height is not None:
+        box, _, _ = geometry(width, height)
+        tail += "_W%s_H%s" % (ntag(round(box[0] * 1e3, 6)), ntag(round(box[2] * 1e3, 6)))
+    if op != OPERATOR or explicit:
+        tail += "_%s" % op
     return os.path.join(RUNS, "%s_N%s%s" % (case, ntag(n), tail))
 
 
-def lattice_numbers(case, n, mach=MACH):
+def lattice_numbers(case, n, mach=MACH, width=None, height=None, sim_time=None):
     c = CASES[case]
+    box, z0, gap0 = geometry(width, height)
     dx = D / n
-    for L in BOX:
+    for L in box:
         cells = L / dx
         if abs(cells - round(cells)) > 1e-6:
             raise SystemExit("N = %g: dx = %g m does not divide the box side %g m" % (n, dx, L))
     dt = mach / math.sqrt(3.0) * dx / c["u_inf"]
     nu = c["mu"] / c["rho_f"]
     tau = 0.5 + 3.0 * nu * dt / dx ** 2
-    t_end = TIME_FACTOR * GAP0 / c["u_inf"]
+    t_end = TIME_FACTOR * gap0 / c["u_inf"] if sim_time is None else sim_time
     steps = int(math.ceil(t_end / dt))
-    cells = [int(round(L / dx)) for L in BOX]
-    return dict(dx=dx, dt=dt, tau=tau, nu=nu, t_end=t_end, steps=steps, cells=cells)
+    cells = [int(round(L / dx)) for L in box]
+    return dict(dx=dx, dt=dt, tau=tau, nu=nu, t_end=t_end, steps=steps, cells=cells, box=box, z0=z0, gap0=gap0)
 
 
 def sub1(pattern, repl, text):
@@ -86,16 +119,24 @@ def sub1(pattern, repl, text):
     return new
 
 
-def write_scene(case, n, path, mach=MACH):
+def write_scene(case, n, path, mach=MACH, op=OPERATOR, width=None, height=None, sim_time=None, explicit=False):
     c = CASES[case]
-    ln = lattice_numbers(case, n, mach)
+    ln = lattice_numbers(case, n, mach, width, height, sim_time)
+    wide = width is not None or height is not None
+    tag = ("" if mach == MACH else "-M" + ntag(mach))
+    if wide:
+        tag += "-W%s-H%s" % (ntag(round(ln["box"][0] * 1e3, 6)), ntag(round(ln["box"][2] * 1e3, 6)))
+    if op != OPERATOR or explicit:
+        tag += "-" + op
     text = open(TEMPLATE).read()
-    text = sub1(r'^name = ".*"', 'name = "ten-cate-%s-N%s%s"' % (case.lower(), ntag(n), "" if mach == MACH else "-M" + ntag(mach)), text)
+    text = sub1(r'^name = ".*"', 'name = "ten-cate-%s-N%s%s"' % (case.lower(), ntag(n), tag), text)
+    if wide:
+        text = sub1(r"^max = \[0\.1, 0\.1, 0\.16\].*", "max = [%r, %r, %r]        # m" % tuple(ln["box"]), text)
     text = sub1(r"^density = .*# kg/m\^3\n(?=dynamic_viscosity)", "density = %r                      # kg/m^3\n" % c["rho_f"], text)
     text = sub1(r"^dynamic_viscosity = .*", "dynamic_viscosity = %r                # Pa s" % c["mu"], text)
     text = sub1(r"^steps = .*", "steps = %d                          # %.4g s simulated" % (ln["steps"], ln["steps"] * ln["dt"]), text)
     text = sub1(r"^dx = .*", "dx = %r                           # m: %g cells per diameter" % (ln["dx"], n), text)
-    text = sub1(r'^operator = .*', 'operator = "trt"', text)
+    text = sub1(r'^operator = .*', 'operator = "%s"' % op, text)
     text = sub1(r"^velocity_scale = .*", "velocity_scale = %r               # m/s: u_inf of %s" % (c["u_inf"], case), text)
     text = sub1(r"^mach = .*", "mach = %r" % mach, text)
     interval = max(1, ln["steps"] // 300)
@@ -103,11 +144,20 @@ def write_scene(case, n, path, mach=MACH):
                 "[output]\ninterval = %d                         # steps between rows of particles.csv\n"
                 "fields_interval = 0                  # last step's snapshot only (deleted after the run)" % interval, text)
     text = sub1(r"^density = 1120\.0.*", "density = %r                     # kg/m^3" % RHO_P, text)
-    text = sub1(r"^position = .*", "position = [0.05, 0.05, %r]      # m: bottom 120 mm above the floor" % Z0, text)
+    if wide:
+        text = sub1(r"^position = .*", "position = [%r, %r, %r]      # m: centred in x, y; bottom %g mm above the floor"
+                    % (ln["box"][0] / 2, ln["box"][1] / 2, ln["z0"], round(ln["gap0"] * 1e3, 6)), text)
+    else:
+        text = sub1(r"^position = .*", "position = [0.05, 0.05, %r]      # m: bottom 120 mm above the floor" % Z0, text)
     text = sub1(r"^radius = .*", "radius = %r                      # m" % R, text)
     text = text[text.index("name = "):]          # drop the template's E1 header comment
-    text = ("# Ten Cate et al. 2002, case %s (Re %.1f, u_inf %.3f m/s), %g cells per diameter; generated by\n"
-            "# validation/imb/ten_cate.py from validation/scenes/ten-cate-e1.toml\n" % (case, c["Re"], c["u_inf"], n)) + text
+    where = ""
+    if wide:
+        where = "; box %g x %g x %g mm" % tuple(round(L * 1e3, 6) for L in ln["box"])
+    if op != OPERATOR or explicit:
+        where += "; operator %s" % op.upper()
+    text = ("# Ten Cate et al. 2002, case %s (Re %.1f, u_inf %.3f m/s), %g cells per diameter%s; generated by\n"
+            "# validation/imb/ten_cate.py from validation/scenes/ten-cate-e1.toml\n" % (case, c["Re"], c["u_inf"], n, where)) + text
     with open(path, "w") as f:
         f.write(text)
     return ln
@@ -125,26 +175,37 @@ def reduce_csv(src, dst):
             w.writerow([row["step"]] + ["%.7g" % float(row[k]) for k in keep[1:]])
 
 
-def run_one(case, n, force=False, mach=MACH):
-    out = run_dir(case, n, mach)
+def uptime():
+    try:
+        return subprocess.run(["uptime"], capture_output=True, text=True).stdout.strip()
+    except OSError:
+        return "?"
+
+
+def run_one(case, n, force=False, mach=MACH, op=OPERATOR, width=None, height=None, sim_time=None, explicit=False):
+    out = run_dir(case, n, mach, op, width, height, explicit)
     if os.path.exists(os.path.join(out, "summary.json")) and not force:
         print("%s N=%g: already run (%s), skipped" % (case, n, out))
         return
     os.makedirs(out, exist_ok=True)
     scene = os.path.join(out, "scene.toml")
-    ln = write_scene(case, n, scene, mach)
-    print("%s N=%g: %d x %d x %d cells, dx %.4g m, dt %.4g s, tau %.4f (predicted), %d steps, %.3g s simulated"
-          % (case, n, *ln["cells"], ln["dx"], ln["dt"], ln["tau"], ln["steps"], ln["steps"] * ln["dt"]), flush=True)
+    ln = write_scene(case, n, scene, mach, op, width, height, sim_time, explicit)
+    print("%s N=%g %s: %d x %d x %d cells, dx %.4g m, dt %.4g s, tau %.4f (predicted), %d steps, %.3g s simulated"
+          % (case, n, op, *ln["cells"], ln["dx"], ln["dt"], ln["tau"], ln["steps"], ln["steps"] * ln["dt"]), flush=True)
     if ln["tau"] < 0.5005:
         print("  tau %.5f < 0.5005: skipped" % ln["tau"])
         return
     tmp = os.path.join("/tmp", "ten_cate_" + os.path.basename(out))
     shutil.rmtree(tmp, ignore_errors=True)
     env = dict(os.environ, NODEVICE_SELECT="1")
+    load = ["before: " + uptime()]
     t0 = time.time()
     with open(os.path.join(out, "log.txt"), "w") as log:
         p = subprocess.run([BINARY, "run", scene, "--out", tmp], stdout=log, stderr=subprocess.STDOUT, env=env, cwd=ROOT)
     wall = time.time() - t0
+    load.append("after:  " + uptime())
+    with open(os.path.join(out, "load.txt"), "w") as f:   # the machine's load around the run (shared cores)
+        f.write("\n".join(load) + "\n")
     print("  exit %d after %.1f s" % (p.returncode, wall), flush=True)
     if os.path.exists(os.path.join(tmp, "summary.json")):
         shutil.copy(os.path.join(tmp, "summary.json"), os.path.join(out, "summary.json"))
@@ -182,17 +243,37 @@ def load_series(path):
     return cols
 
 
-def analyse(case, n, mach=MACH):
-    out = run_dir(case, n, mach)
+def plateau(t, gap, speed, tol=0.005):
+    """Terminal (plateau) speed: the mean of the speed over the contiguous rows around its maximum that
+    stay within `tol` (0.5 %) of that maximum, so the speed changes by less than 0.5 % over the window.
+    Returns the mean, the window's gap range and its length of fall [m], and the rows in it."""
+    i = max(range(len(speed)), key=lambda k: speed[k])
+    floor = (1.0 - tol) * speed[i]
+    lo = i
+    while lo > 0 and speed[lo - 1] >= floor:
+        lo -= 1
+    hi = i
+    while hi + 1 < len(speed) and speed[hi + 1] >= floor:
+        hi += 1
+    w = speed[lo:hi + 1]
+    return dict(terminal_speed=sum(w) / len(w), window_gap=[gap[lo], gap[hi]], window_fall=gap[lo] - gap[hi],
+                window_t=[t[lo], t[hi]], window_rows=len(w), window_spread_pct=100.0 * (max(w) - min(w)) / (sum(w) / len(w)))
+
+
+def analyse(case, n, mach=MACH, op=OPERATOR, width=None, height=None, explicit=False):
+    out = run_dir(case, n, mach, op, width, height, explicit)
     sp = os.path.join(out, "summary.json")
     if not os.path.exists(sp):
         return None
     s = json.load(open(sp))
     c = CASES[case]
-    ln = lattice_numbers(case, n, mach)
+    ln = lattice_numbers(case, n, mach, width, height)
     info = parse_log(os.path.join(out, "log.txt"))
     dt = info.get("dt", ln["dt"])
-    res = dict(case=case, N=n, mach=mach, dx=ln["dx"], cells=info.get("cells", ln["cells"]), dt=dt,
+    lp = os.path.join(out, "load.txt")
+    res = dict(case=case, N=n, mach=mach, op=op, explicit_op=explicit, box=list(ln["box"]), release_gap=ln["gap0"],
+               dir=os.path.relpath(out, HERE), load=open(lp).read().strip() if os.path.exists(lp) else None,
+               dx=ln["dx"], cells=info.get("cells", ln["cells"]), dt=dt,
                tau=info.get("tau"), tau_predicted=ln["tau"], u_inf=c["u_inf"], Re_inf=c["Re"],
                steps=s.get("steps_completed"), steps_requested=s.get("steps_requested"),
                exit_reason=s.get("exit_reason"), exit_code=s.get("exit_code"),
@@ -221,6 +302,9 @@ def analyse(case, n, mach=MACH):
         # mean speed while the gap closes from 80 to 40 mm (smooths the ripple of coarse grids)
         band = [speed[k] for k in range(len(z)) if 0.040 <= z[k] - R <= 0.080]
         res["plateau_speed"] = sum(band) / len(band) if band else None
+        pl = plateau(t, [zz - R for zz in z], speed)
+        pl["terminal_error_pct"] = 100.0 * (pl["terminal_speed"] - c["u_inf"]) / c["u_inf"]
+        res.update(pl)
         # after landing (gap < 0.5 mm for the last quarter of the run): rms of the reported velocity
         # (last 5 % of the run, all rows within 50 um of the floor), and the rms of dz/dt from the
         # positions of consecutive rows over the same window: they differ when the sphere oscillates
@@ -311,7 +395,22 @@ def fmt(v, f):
     return "-" if v is None else f % v
 
 
-def make_findings(ok, extra=()):
+def e4_split(ok, extra, wide):
+    """How the larger boxes split E4's deficit in the experiment's box (a sentence; empty without them)."""
+    w = widest(wide, "E4", 6)
+    b = box_baseline(w, ok, extra) if w else None
+    if not w or not b:
+        return ("Whether that is the box-wall and floor effect at Re 32 cannot be decided without the experimental "
+                "curve or a larger box.")
+    return ("The larger boxes (section \"Larger boxes\") split it: at N = 6 the terminal speed in %g x %g x %g mm is %+.1f %% "
+            "from u_inf, so the experiment's box accounts for a factor %.3f (%+.1f %% of the %+.1f %%) and the other %+.1f %% "
+            "is the simulation against u_inf." % (w["box"][0] * 1e3, w["box"][1] * 1e3, w["box"][2] * 1e3,
+                                                  w["terminal_error_pct"], b["peak_speed"] / w["terminal_speed"],
+                                                  100.0 * (b["peak_speed"] - w["terminal_speed"]) / CASES["E4"]["u_inf"],
+                                                  b["peak_error_pct"], w["terminal_error_pct"]))
+
+
+def make_findings(ok, extra=(), wide=()):
     out = []
     by = {}
     for r in ok:
@@ -333,28 +432,30 @@ def make_findings(ok, extra=()):
         "grows with N at fixed Mach." % (" -> ".join("%+.1f" % r["peak_error_pct"] for r in by.get("E1", [])),
                                        ", ".join("%g" % r["N"] for r in by.get("E1", []))))
     if extra:
+        checks = []
         for e in extra:
             base = next((r for r in ok if r["case"] == e["case"] and r["N"] == e["N"]), None)
             if base and "peak_speed" in e:
-                out.append(
-                    "- **Tau check (%s, N = %g):** Mach %g -> %g lowers tau %.3f -> %.3f and moves the peak error "
-                    "%+.1f %% -> %+.1f %% (mean speed over the 80-40 mm gap %.4f -> %.4f m/s), at %.1fx the "
-                    "wall time." % (e["case"], e["N"], base["mach"], e["mach"], base["tau"], e["tau"],
-                                    base["peak_error_pct"], e["peak_error_pct"], base["plateau_speed"],
-                                    e["plateau_speed"], e["wall_s_per_sim_s"] / base["wall_s_per_sim_s"]) +
-                    " Halving dt also halves the Mach number, but compressibility errors at Mach 0.1 are of order "
-                    "Ma^2 = 1 %, so most of this shift is tau: the IMB sphere's effective radius depends on tau, "
-                    "and a large part of the low-Re excess at fixed Mach 0.1 is that dependence, not resolution. "
-                    "Choosing dt so that tau stays near 0.6-0.9 (here: a lower Mach for E1/E2) is the cheap fix; "
-                    "it costs steps in proportion.")
+                checks.append(
+                    "%s at N = %g: Mach %g -> %g lowers tau %.3f -> %.3f and moves the peak error %+.1f %% -> %+.1f %% "
+                    "(mean speed over the 80-40 mm gap %.4f -> %.4f m/s)" % (
+                        e["case"], e["N"], base["mach"], e["mach"], base["tau"], e["tau"], base["peak_error_pct"],
+                        e["peak_error_pct"], base["plateau_speed"], e["plateau_speed"]))
+        if checks:
+            out.append(
+                "- **Tau check** (same grid, half the time step, twice the steps): " + "; ".join(checks) + ". Halving dt "
+                "also halves the Mach number, but compressibility errors at Mach 0.1 are of order Ma^2 = 1 %, so most "
+                "of this shift is tau: the IMB sphere's effective radius depends on tau, and part of the low-Re "
+                "excess at fixed Mach 0.1 is that dependence, not resolution. Keeping tau near 0.6-1 (a lower Mach "
+                "for E1/E2) helps and costs steps in proportion, but it is not the whole fix: in a larger box E1 at "
+                "Mach 0.05 is still far too fast (section \"Larger boxes\").")
     e3 = ", ".join("%+.1f %% at N = %g" % (r["peak_error_pct"], r["N"]) for r in by.get("E3", []))
     e4 = ", ".join("%+.1f %% at N = %g" % (r["peak_error_pct"], r["N"]) for r in by.get("E4", []))
     out.append(
         "- **Errors that cross zero are not accuracy.** E3 (%s) crosses zero between N = 3 and 6: a too-small "
         "effective radius (too fast) meets the wall effect (too slow); a small error there is not evidence "
-        "that the sphere is resolved. E4 (%s) settles near -6 %% from N = 6 on, which is plausibly the size "
-        "of the box-wall and floor effect at Re 32, i.e. possibly already converged for this box; "
-        "without the experimental curve that cannot be decided here." % (e3, e4))
+        "that the sphere is resolved. E4 (%s) settles near -6 %% from N = 6 on: converged in N for this box. %s"
+        % (e3, e4, e4_split(ok, extra, wide)))
     out.append(
         "- **Coarse grids ripple.** At N = 3 the speed oscillates with the period of the sphere crossing a "
         "cell (visible in the velocity charts); the peak is then a ripple maximum, the mean speed over the "
@@ -362,7 +463,8 @@ def make_findings(ok, extra=()):
     out.append(
         "- **The high-Stokes case (E4) only just reaches its plateau.** Its peak comes 20-25 mm above the "
         "floor, after which the floor decelerates it; 1.3 x 120 mm / u_inf is just enough simulated time "
-        "for it to reach the floor (final gaps in the second table).")
+        "for it to reach the floor (final gaps in the second table). The larger boxes measure what the short "
+        "fall costs: see \"Where E4's box effect comes from\" below.")
     rest = [r for r in ok if r.get("rest_speed_rms") is not None]
     loud = [r for r in rest if r["rest_speed_rms"] > 1e-3]
     quiet = [r for r in rest if r["rest_speed_rms"] <= 1e-3]
@@ -393,7 +495,421 @@ def make_findings(ok, extra=()):
     return "\n".join(out)
 
 
-def report(results, chart_paths, extra=()):
+def drag_law_velocity(case, law):
+    """Terminal velocity from a standard drag law, for orientation only (each law scatters by several percent
+    around the data it fits): "sn" Schiller-Naumann, Cd = 24/Re (1 + 0.15 Re^0.687); "cgw" Clift, Grace and
+    Weber (1978), Cd = 24/Re (1 + 0.1315 Re^(0.82 - 0.05 log10 Re)) for Re <= 20, 24/Re (1 + 0.1935 Re^0.6305)
+    for 20 < Re <= 260."""
+    c = CASES[case]
+    u = c["u_inf"]
+    for _ in range(200):
+        re_ = c["rho_f"] * u * D / c["mu"]
+        if law == "sn":
+            cd = 24.0 / re_ * (1.0 + 0.15 * re_ ** 0.687)
+        elif re_ <= 20.0:
+            cd = 24.0 / re_ * (1.0 + 0.1315 * re_ ** (0.82 - 0.05 * math.log10(re_)))
+        else:
+            cd = 24.0 / re_ * (1.0 + 0.1935 * re_ ** 0.6305)
+        u = math.sqrt(4.0 / 3.0 * (RHO_P / c["rho_f"] - 1.0) * 9.81 * D / cd)
+    return u
+
+
+def widest(wide, case, n, mach=None):
+    rs = [r for r in wide if r["case"] == case and r["N"] == n and (mach is None or r["mach"] == mach) and "terminal_speed" in r]
+    return max(rs, key=lambda r: (r["box"][0], r["box"][2])) if rs else None
+
+
+def narrative(results, extra, wide, ops, opw=()):
+    """The prose of the wide-box and operator sections, the headline and "What the error means", from the runs."""
+    ok = [r for r in results if "peak_speed" in r]
+    pct = lambda v: "%+.1f %%" % v
+    box_txt = lambda r: "%g x %g x %g mm" % tuple(round(L * 1e3, 3) for L in r["box"])
+    # ---- wide boxes
+    wide_intro = (
+        "The table above compares the peak speed *in the experiment's box* with u_inf, the terminal velocity in an "
+        "*unbounded* fluid. To separate the box from the method, the same cases were run in larger closed boxes "
+        "(all six faces walls, as before): width = depth W, height H, the sphere centred in x and y and released "
+        "from rest 32.5 mm below the lid as in the experiment, so it falls H - 40 mm before touching the floor; "
+        "same fluid, sphere, operator (TRT) and Mach number as the matching run in the experiment's box "
+        "(BGK and MRT in a larger box: section \"Operators\"). "
+        "**Terminal (plateau) speed:** the mean of -v_z over the contiguous rows of particles.csv around the "
+        "maximum speed in which the speed stays within 0.5 % of that maximum (so it changes by less than 0.5 % "
+        "over the window; the window's gap range and length of fall are in the table; a window of several "
+        "diameters is a plateau, not a passing maximum). **Error:** (terminal - u_inf) / u_inf. **Wall effect:** "
+        "(peak speed in the 100 x 100 x 160 mm box) / (terminal speed in the larger box) at the same N and Mach; "
+        "1 means no effect of the box.\n\n"
+        "Choice of boxes (cost on this CPU ~ cells x steps / (5-10 MLUPS), one run at a time, the cores shared "
+        "with another session): N = 6 (dx 2.5 mm) for the width scans, widths 100, 200, 300 mm (d / W = 0.15, "
+        "0.075, 0.05). E4 (and E3 at N = 6, 300 mm wide) in 320 mm tall boxes (280 mm of fall: E4, the highest Stokes number, needs "
+        "about 100 mm of fall to come within 0.5 % of its plateau, and in the 160 mm box only just gets there). "
+        "E1 (Re 1.5) at Mach 0.05 (tau 0.85; the tau check shows that tau 1.2 at Mach 0.1 biases it) in 240 mm "
+        "tall boxes (200 mm of fall: E1 reaches its plateau within ~40 mm, but at low Re the lid and the floor "
+        "reach further). N = 9 (dx 1.667 mm) in 200 x 200 x 240 mm, not 300 mm wide: 300 x 300 x 240 mm at "
+        "N = 9 is 4.7 M cells x 2500-3000 steps, 20-40 min here; a run at N = 6 in the same 200 x 200 x 240 mm box "
+        "gives the N = 6 -> 9 comparison in one box (E4, E1, E3). E3 last, as time allowed: N = 6 and 9 in "
+        "200 x 200 x 240 mm, N = 6 in 300 x 300 x 320 mm. Simulated time: long enough for the sphere to reach the "
+        "floor region (steps in the table); the runs stop before the sphere rests on the floor.")
+    bullets = []
+    for case in CASES:
+        rc = [r for r in wide if r["case"] == case and "terminal_speed" in r]
+        if not rc:
+            continue
+        c = CASES[case]
+        for n in sorted({r["N"] for r in rc}):
+            rn = sorted([r for r in rc if r["N"] == n], key=lambda r: (r["box"][2], r["box"][0]))
+            base = box_baseline(rn[0], results, extra)
+            parts = ["%s: %.4f m/s (%s, window %.0f mm of fall, wall effect %s)" % (
+                box_txt(r), r["terminal_speed"], pct(r["terminal_error_pct"]), r["window_fall"] * 1e3,
+                fmt(base["peak_speed"] / r["terminal_speed"] if base else None, "%.3f")) for r in rn]
+            bullets.append("- **%s, N = %g, Mach %g (tau %.3f):** in the experiment's box the peak is %s m/s (%s); %s." % (
+                case, n, rn[0]["mach"], rn[0]["tau"], fmt(base["peak_speed"] if base else None, "%.4f"),
+                pct(base["peak_error_pct"]) if base else "-", "; ".join(parts)))
+    # the width trend at the N with the most widths, per case
+    trend = []
+    for case in CASES:
+        for n in sorted({r["N"] for r in wide if r["case"] == case}):
+            tall = {}
+            for r in wide:
+                if r["case"] == case and r["N"] == n and "terminal_speed" in r:
+                    tall.setdefault(r["box"][2], []).append(r)
+            for h, rs in tall.items():
+                if len(rs) >= 3:
+                    rs.sort(key=lambda r: r["box"][0])
+                    d_last = 100.0 * (rs[-1]["terminal_speed"] - rs[-2]["terminal_speed"]) / rs[-1]["terminal_speed"]
+                    trend.append("%s at N = %g, H = %g mm: terminal speed %s m/s at W = %s mm; the last widening (%g -> %g mm) "
+                                 "changes it by %+.2f %%" % (case, n, h * 1e3, " / ".join("%.4f" % r["terminal_speed"] for r in rs),
+                                                             " / ".join("%g" % (r["box"][0] * 1e3) for r in rs),
+                                                             rs[-2]["box"][0] * 1e3, rs[-1]["box"][0] * 1e3, d_last))
+    if trend:
+        bullets.append("- **Width convergence:** " + "; ".join(trend) + ". Lateral wall effects fall off with the "
+                       "width; a last step that changes the speed by a fraction of a percent puts the widest box "
+                       "within about that much of the unbounded value (assuming the remaining effect decays at least "
+                       "as fast as the step; not shown by a still wider box).")
+    laws = "; ".join("%s: %.4f / %.4f m/s (u_inf %.3f)" % (c, drag_law_velocity(c, "sn"), drag_law_velocity(c, "cgw"), CASES[c]["u_inf"])
+                     for c in CASES)
+    bullets.append("- **u_inf itself** (for orientation only): standard drag laws give terminal velocities (Schiller-Naumann / "
+                   "Clift-Grace-Weber) of %s. For E3 and E4 they lie within -2 to +3 %% of the reference's u_inf; for E1 "
+                   "and E2 they are 5-9 %% above it. The laws differ from each other by up to 3 %%, so they cannot "
+                   "arbitrate at the 3 %% level; every error in this report is against the reference's u_inf." % laws)
+    wide_findings = "\n".join(bullets)
+    # ---- operators
+    op_intro = (
+        "E3 (Re 11.6, the seed paper's case) in the experiment's box at Mach 0.1 with the three collision operators "
+        "of the lattice: BGK (one rate 1/tau), TRT (magic 3/16; the runs of the main table) and MRT (d'Humieres et "
+        "al. 2002 D3Q19, shear rate 1/tau, the scene's default rates for the other moments: s_e = 1.19, "
+        "s_epsilon = 1.4, s_q = 1.2, s_pi = 1.4, s_m = 1.98; `[lattice.mrt]` in scene/src/lattice.rs). Same "
+        "grids, steps and measurement (peak speed) as the main table. **Timings:** wall time of the whole coupled "
+        "run on 2 CPU cores shared with another session's builds and runs; the 1-minute load average before and "
+        "after each run is listed (2 = both cores busy); runs of the same size can differ by 2x, so read the "
+        "timing ratios between operators as +-50 %. For the timing TRT was rerun beside BGK and MRT "
+        "(`runs/E3_N<n>_trt`, N = 3, 6, 9; the chart's dashed TRT line); the earlier TRT runs of the main table were "
+        "timed under another load (no load recorded).")
+    op_bullets = []
+    for op in ("bgk", "mrt"):
+        rs = sorted([r for r in ops if r["op"] == op and "peak_speed" in r], key=lambda r: r["N"])
+        if not rs:
+            continue
+        items = []
+        for r in rs:
+            t = next((b for b in ok if b["case"] == r["case"] and b["N"] == r["N"]), None)
+            items.append("N = %g: %s (TRT %s)" % (r["N"], pct(r["peak_error_pct"]), pct(t["peak_error_pct"]) if t else "-"))
+        op_bullets.append("- **%s on %s, peak speed error against u_inf in the experiment's box:** %s." % (op.upper(), rs[0]["case"], "; ".join(items)))
+    # operators against each other, N by N
+    cmp_ = []
+    for n in sorted({r["N"] for r in ops}):
+        by_op = {}
+        for r in ops:
+            if r["N"] == n and "peak_speed" in r and not (r["op"] == OPERATOR):
+                by_op[r["op"]] = r
+        t = next((b for b in ok if b["case"] == "E3" and b["N"] == n), None)
+        if t:
+            by_op[OPERATOR] = t
+        if len(by_op) >= 2:
+            cmp_.append("N = %g: %s" % (n, ", ".join("%s %.4f" % (o.upper(), by_op[o]["peak_speed"]) for o in OPERATORS if o in by_op)))
+    if cmp_:
+        diffs_bm, diffs_tb = [], []
+        for n in sorted({r["N"] for r in ops}):
+            bg = next((r for r in ops if r["N"] == n and r["op"] == "bgk" and "peak_speed" in r), None)
+            mr = next((r for r in ops if r["N"] == n and r["op"] == "mrt" and "peak_speed" in r), None)
+            tr = next((b for b in ok if b["case"] == "E3" and b["N"] == n), None)
+            u = CASES["E3"]["u_inf"]
+            if bg and mr:
+                diffs_bm.append(abs(100 * (mr["peak_speed"] - bg["peak_speed"]) / u))
+            if bg and tr:
+                diffs_tb.append("%+.1f %% at N = %g" % (100 * (tr["peak_speed"] - bg["peak_speed"]) / u, n))
+        op_bullets.append("- **Peak speeds [m/s] side by side:** " + "; ".join(cmp_) + ". BGK and MRT give the same sphere "
+                          "(peaks within %.1f %% of u_inf of each other at every N); TRT (magic 3/16) gives a faster one on "
+                          "coarse grids, TRT - BGK = %s of u_inf, shrinking as N grows. So at N <= 9 the IMB sphere's "
+                          "effective size depends on the collision operator, TRT's being the smallest (fastest). %s" % (
+                              max(diffs_bm) if diffs_bm else float("nan"), ", ".join(diffs_tb), OP_END))
+    timing = []
+    for n in sorted({r["N"] for r in ops}):
+        row = {r["op"]: r for r in ops if r["N"] == n and "wall_time_s" in r}
+        if len(row) >= 2:
+            timing.append("N = %g: %s" % (n, ", ".join("%s %.0f s (load %s)" % (o.upper(), row[o]["wall_time_s"], load_short(row[o]))
+                                                        for o in OPERATORS if o in row)))
+    if timing:
+        same = []
+        for r in ops:
+            t = next((b for b in ok if b["case"] == r["case"] and b["N"] == r["N"]), None)
+            if r["op"] == OPERATOR and t and "peak_speed" in r:
+                same.append((abs(r["peak_speed"] - t["peak_speed"]) / t["peak_speed"], r["wall_time_s"] / t["wall_time_s"]))
+        rerun = ""
+        if same:
+            mx = max(a for a, _ in same)
+            rerun = (" The TRT reruns reproduce the earlier TRT runs' peak speeds (%s); their "
+                     "wall times are %.2f-%.2f of the earlier runs', which shows how much the load on this shared machine "
+                     "moves the timings." % ("identical to the 7 digits kept" if mx == 0 else "largest relative difference %.1e" % mx,
+                                             min(b for _, b in same), max(b for _, b in same)))
+        op_bullets.append("- **Wall time of the whole run** (TRT: the reruns `runs/E3_N<n>_trt`, same steps and grid; "
+                          "1-minute load before / after): " + "; ".join(timing) + ". " + OP_TIME_END + rerun)
+    est = []
+    for n in sorted({r["N"] for r in ops}):
+        w = find_run(wide, "E3", n, 200, 240)
+        t = next((b for b in ok if b["case"] == "E3" and b["N"] == n), None)
+        if not (w and t):
+            continue
+        f = t["peak_speed"] / w["terminal_speed"]
+        parts = []
+        for op in ("bgk", "mrt"):
+            r = next((r for r in ops if r["N"] == n and r["op"] == op and "peak_speed" in r), None)
+            if r:
+                parts.append("%s %+.1f %%" % (op.upper(), 100 * (r["peak_speed"] / f - CASES["E3"]["u_inf"]) / CASES["E3"]["u_inf"]))
+        if parts:
+            est.append("N = %g (factor %.3f; TRT measured %+.1f %%): %s" % (n, f, w["terminal_error_pct"], ", ".join(parts)))
+    if est:
+        op_bullets.append("- **Against u_inf without the walls (an estimate, not runs):** if the experiment's box slows the BGK "
+                          "and MRT spheres by the same factor as the TRT one (measured with TRT in 200 x 200 x 240 mm, "
+                          "section \"Larger boxes\"), their errors against u_inf would be %s. On that estimate BGK and MRT "
+                          "are closer to u_inf than TRT at N = 6; the runs in the next item test it." % "; ".join(est))
+    meas = []
+    for r in opw:
+        if "terminal_speed" not in r:
+            continue
+        t = find_run(wide, r["case"], r["N"], r["box"][0] * 1e3, r["box"][2] * 1e3)
+        b = next((o for o in ops if o["case"] == r["case"] and o["N"] == r["N"] and o["op"] == r["op"] and "peak_speed" in o), None)
+        meas.append("%s %s N = %g%s: %.4f m/s (%s; %s; TRT in the same box %s) [`%s`]" % (
+            r["case"], r["op"].upper(), r["N"], "" if r["mach"] == MACH else ", Mach %g" % r["mach"],
+            r["terminal_speed"], pct(r["terminal_error_pct"]),
+            "in the experiment's box %s, wall effect %.3f" % (pct(b["peak_error_pct"]), b["peak_speed"] / r["terminal_speed"])
+            if b else "not run in the experiment's box",
+            pct(t["terminal_error_pct"]) if t else "-", os.path.basename(r["dir"])))
+    if meas:
+        op_bullets.append("- **BGK and MRT in a larger box, measured** (%s; terminal speed as in \"Larger boxes\"; E1 and "
+                          "E4 with BGK added to see whether their errors are TRT's): %s." % (box_txt(opw[0]), "; ".join(meas)))
+    op_findings = "\n".join(op_bullets)
+    # ---- headline and "what the error means"
+    items, effects = [], []
+    for case in CASES:
+        for n in sorted({r["N"] for r in wide if r["case"] == case}):
+            w = widest(wide, case, n)
+            if w is None:
+                continue
+            b = box_baseline(w, results, extra)
+            items.append("%s at N = %g (Mach %g, tau %.2f) %s in %s (experiment's box: %s)" % (
+                case, n, w["mach"], w["tau"], pct(w["terminal_error_pct"]), box_txt(w),
+                pct(b["peak_error_pct"]) if b else "not run"))
+            if b:
+                effects.append("%s %.3f (N = %g, %s)" % (case, b["peak_speed"] / w["terminal_speed"], n, box_txt(w)))
+    headline = HEADLINE.format(items="; ".join(items)) if items else HEADLINE_NONE
+    meaning = MEANING.format(effects="; ".join(effects) if effects else "not measured")
+    hc, mc, wc = conclusions(results, extra, wide, opw)
+    headline = headline.replace("HEADLINE_CONCLUSION", hc)
+    meaning = meaning.replace("MEANING_CONCLUSION", mc)
+    wide_findings = wide_findings + ("\n" + wc if wc else "")
+    return wide_intro, wide_findings, op_intro, op_findings, headline, meaning
+
+
+def find_run(wide, case, n, w_mm, h_mm):
+    for r in wide:
+        if r["case"] == case and r["N"] == n and abs(r["box"][0] * 1e3 - w_mm) < 1e-6 and abs(r["box"][2] * 1e3 - h_mm) < 1e-6 \
+                and "terminal_speed" in r:
+            return r
+    return None
+
+
+def conclusions(results, extra, wide, opw=()):
+    """The conclusions of the larger-box runs: (headline, "what the error means", wide-box findings)."""
+    if not wide:
+        return "", "", ""
+    F = lambda r: "%+.1f %%" % r["terminal_error_pct"]
+    e4 = {k: find_run(wide, "E4", *k) for k in [(6, 100, 320), (6, 200, 320), (6, 300, 320), (6, 200, 240), (9, 200, 240)]}
+    e1 = {k: find_run(wide, "E1", *k) for k in [(6, 100, 240), (6, 200, 240), (6, 300, 240), (9, 200, 240)]}
+    e3 = {k: find_run(wide, "E3", *k) for k in [(6, 200, 240), (9, 200, 240), (6, 300, 320)]}
+    b4 = box_baseline(e4[(6, 300, 320)], results, extra) if e4[(6, 300, 320)] else None
+    b1 = box_baseline(e1[(6, 300, 240)], results, extra) if e1[(6, 300, 240)] else None
+    head, mean, find = [], [], []
+    if e4[(6, 300, 320)] and b4:
+        w = e4[(6, 300, 320)]
+        t = ("**E4's %+.1f %% in the experiment's box is half box, half simulation:** at N = 6 the box lowers the "
+             "peak by a factor %.3f, and in the 300 mm wide box E4 settles %s from u_inf" % (
+                 b4["peak_error_pct"], b4["peak_speed"] / w["terminal_speed"], F(w)))
+        if e4[(9, 200, 240)] and e4[(6, 200, 240)]:
+            t += (" (in 200 x 200 x 240 mm: %s at N = 6, %s at N = 9, so refining does not remove it)" % (
+                F(e4[(6, 200, 240)]), F(e4[(9, 200, 240)])))
+        head.append(t + ".")
+    if e1[(6, 300, 240)] and b1:
+        w = e1[(6, 300, 240)]
+        t = ("**The experiment's walls hide a too-fast sphere at low Re:** E1 at N = 6 (Mach 0.05, tau 0.85) peaks "
+             "%+.1f %% from u_inf in the experiment's box but settles %s from it in a 300 mm wide box (wall effect %.3f)" % (
+                 b1["peak_error_pct"], F(w), b1["peak_speed"] / w["terminal_speed"]))
+        if e1[(9, 200, 240)] and e1[(6, 200, 240)]:
+            t += ("; in 200 x 200 x 240 mm it is %s at N = 6 and %s at N = 9 (tau %.2f)" % (
+                F(e1[(6, 200, 240)]), F(e1[(9, 200, 240)]), e1[(9, 200, 240)]["tau"]))
+        head.append(t + ".")
+    if e3[(6, 200, 240)]:
+        t = "E3 in 200 x 200 x 240 mm: %s at N = 6" % F(e3[(6, 200, 240)])
+        if e3[(9, 200, 240)]:
+            t += ", %s at N = 9" % F(e3[(9, 200, 240)])
+        if e3[(6, 300, 320)]:
+            t += "; %s at N = 6 in 300 x 300 x 320 mm" % F(e3[(6, 300, 320)])
+        head.append(t + ".")
+    # where the box's effect comes from (E4 and E1 at N = 6)
+    if e4[(6, 100, 320)] and e4[(6, 300, 320)] and b4:
+        tall, w = e4[(6, 100, 320)], e4[(6, 300, 320)]
+        find.append(
+            "- **Where E4's box effect comes from (N = 6):** the 100 x 100 x 320 mm box (the experiment's width, more "
+            "than twice the fall) gives %.4f m/s against the peak %.4f m/s in the experiment's box: %.1f %% of u_inf "
+            "is the short fall (E4, the highest Stokes number, approaches its plateau slowly, within 0.5 %% only after "
+            "about 100 mm of fall, and in the 160 mm box the floor acts before that), %.1f %% the lateral walls (%.4f "
+            "m/s at 300 mm). The same short-fall effect shows between the 240 and 320 mm tall boxes at 200 mm width "
+            "(%.4f against %.4f m/s)." % (
+                tall["terminal_speed"], b4["peak_speed"], 100 * (tall["terminal_speed"] - b4["peak_speed"]) / CASES["E4"]["u_inf"],
+                100 * (w["terminal_speed"] - tall["terminal_speed"]) / CASES["E4"]["u_inf"], w["terminal_speed"],
+                e4[(6, 200, 240)]["terminal_speed"] if e4[(6, 200, 240)] else float("nan"),
+                e4[(6, 200, 320)]["terminal_speed"] if e4[(6, 200, 320)] else float("nan")))
+    if e4[(9, 200, 240)] and e4[(6, 200, 240)]:
+        a6, a9 = e4[(6, 200, 240)], e4[(9, 200, 240)]
+        find.append(
+            "- **E4 does not improve from N = 6 to 9:** in the same 200 x 200 x 240 mm box the terminal speed is %.4f "
+            "m/s (%s) at N = 6 and %.4f m/s (%s) at N = 9, as in the experiment's box (-5.7 %% to -6.0 %% for N = 6-12). "
+            "Applying the N = 6 width and height effect (300 x 300 x 320 against 200 x 200 x 240 mm: %+.1f %%) to "
+            "N = 9 would put N = 9 near %+.1f %% (an estimate, not a run)." % (
+                a6["terminal_speed"], F(a6), a9["terminal_speed"], F(a9),
+                (e4[(6, 300, 320)]["terminal_error_pct"] - a6["terminal_error_pct"]) if e4[(6, 300, 320)] else float("nan"),
+                (a9["terminal_error_pct"] + e4[(6, 300, 320)]["terminal_error_pct"] - a6["terminal_error_pct"]) if e4[(6, 300, 320)] else float("nan")))
+    if e1[(6, 100, 240)] and e1[(6, 300, 240)] and b1:
+        n100, w2, w3 = e1[(6, 100, 240)], e1[(6, 200, 240)], e1[(6, 300, 240)]
+        find.append(
+            "- **E1 (Re 1.5): the lateral walls are everything, and the plateau is a broad maximum.** In the 100 mm "
+            "wide box the height hardly matters (%.4f m/s in 240 mm, peak %.4f m/s in 160 mm); widening to 200 and "
+            "300 mm raises the speed by %+.1f %% and then %+.1f %%. In the wide boxes the lid and the floor act over "
+            "many diameters at this Reynolds number, so the speed stays within 0.5 %% of its maximum over only "
+            "%.0f-%.0f mm of fall (%.0f mm in the 100 mm box, whose walls screen them). The 300 mm value is therefore "
+            "a lower bound of E1's unbounded terminal velocity: a wider or taller box would most likely raise it further (not run)." % (
+                n100["terminal_speed"], b1["peak_speed"],
+                100 * (w2["terminal_speed"] - n100["terminal_speed"]) / n100["terminal_speed"] if w2 else float("nan"),
+                100 * (w3["terminal_speed"] - w2["terminal_speed"]) / w2["terminal_speed"] if w2 else float("nan"),
+                w3["window_fall"] * 1e3, w2["window_fall"] * 1e3 if w2 else float("nan"), n100["window_fall"] * 1e3))
+    if e1[(9, 200, 240)] and e1[(6, 200, 240)]:
+        a6, a9 = e1[(6, 200, 240)], e1[(9, 200, 240)]
+        find.append(
+            "- **E1 from N = 6 to 9** (Mach 0.05; tau %.2f -> %.2f), 200 x 200 x 240 mm: %.4f m/s (%s) -> %.4f m/s (%s)." % (
+                a6["tau"], a9["tau"], a6["terminal_speed"], F(a6), a9["terminal_speed"], F(a9)))
+    if e3[(6, 200, 240)]:
+        b3 = box_baseline(e3[(6, 200, 240)], results, extra)
+        t = "- **E3 (Re 11.6), 200 x 200 x 240 mm:** %.4f m/s (%s) at N = 6" % (e3[(6, 200, 240)]["terminal_speed"], F(e3[(6, 200, 240)]))
+        if b3:
+            t += " (experiment's box: peak %+.1f %%, wall effect %.3f)" % (b3["peak_error_pct"], b3["peak_speed"] / e3[(6, 200, 240)]["terminal_speed"])
+        if e3[(9, 200, 240)]:
+            b9 = box_baseline(e3[(9, 200, 240)], results, extra)
+            t += "; %.4f m/s (%s) at N = 9" % (e3[(9, 200, 240)]["terminal_speed"], F(e3[(9, 200, 240)]))
+            if b9:
+                t += " (experiment's box: %+.1f %%, wall effect %.3f)" % (b9["peak_error_pct"], b9["peak_speed"] / e3[(9, 200, 240)]["terminal_speed"])
+        if e3[(6, 300, 320)]:
+            t += "; %.4f m/s (%s) at N = 6 in 300 x 300 x 320 mm" % (e3[(6, 300, 320)]["terminal_speed"], F(e3[(6, 300, 320)]))
+            if e3[(9, 200, 240)]:
+                dd = e3[(6, 300, 320)]["terminal_error_pct"] - e3[(6, 200, 240)]["terminal_error_pct"]
+                t += (". Applying the N = 6 change from 200 x 200 x 240 to 300 x 300 x 320 mm (%+.1f %%) to N = 9 would "
+                      "put N = 9 near %+.1f %% (an estimate, not a run)" % (dd, e3[(9, 200, 240)]["terminal_error_pct"] + dd))
+        find.append(t + ". The experiment's box takes about 3 % off E3's speed, so E3's small in-box errors at N = 6-7.5 "
+                    "(main table) were a too-fast sphere meeting the walls, as suspected under Findings.")
+    allw = list(wide) + list(opw)
+    badw = [r for r in allw if r.get("exit_code") != 0]
+    find.append("- **Stability:** " + ("all %d runs in larger boxes completed (exit 0, no health-check failure)." % len(allw) if not badw
+                else "runs that did not complete: " + ", ".join("%s (%s)" % (r["dir"], r.get("exit_reason")) for r in badw)))
+    find.append(WIDE_END)
+    # verdict against the target, from the widest box run per case and N
+    verdict = []
+    for case in CASES:
+        for n in sorted({r["N"] for r in wide if r["case"] == case}):
+            w = widest(wide, case, n)
+            if w:
+                verdict.append((case, n, w))
+    inside = ["%s N = %g (%s)" % (c, n, F(w)) for c, n, w in verdict if abs(w["terminal_error_pct"]) < 2.95]
+    edge = ["%s N = %g (%s)" % (c, n, F(w)) for c, n, w in verdict if 2.95 <= abs(w["terminal_error_pct"]) <= 3.5]
+    outside = ["%s N = %g (%s)" % (c, n, F(w)) for c, n, w in verdict if abs(w["terminal_error_pct"]) > 3.5]
+    head.append(
+        "**Against u_inf in the widest box run per case and N: within 3 %%:** %s; **at the limit (3.0-3.5 %%):** %s; "
+        "**outside:** %s. %s" % (", ".join(inside) or "none", ", ".join(edge) or "none", ", ".join(outside) or "none",
+                                 HEADLINE_END))
+    ops_w = []
+    for r in sorted(opw, key=lambda r: (r["case"], r["N"], r["op"])):
+        t = find_run(wide, r["case"], r["N"], r["box"][0] * 1e3, r["box"][2] * 1e3)
+        if "terminal_speed" in r and t:
+            ops_w.append("%s N = %g %s %s (TRT %s)" % (r["case"], r["N"], r["op"].upper(), F(r), F(t)))
+    if ops_w:
+        head.append("**These larger-box numbers are TRT's (the operator of the main table); the operator matters:** in the same "
+                    "200 x 200 x 240 mm box %s (section \"Operators\")." % "; ".join(ops_w))
+    return " ".join(head), MEANING_END, "\n".join(f for f in find if f)
+
+
+OP_END = (
+    "In the experiment's box TRT has the smallest |error| at N = 6 and 9, but that is its zero crossing "
+    "(too small a sphere, too fast, meeting the walls, too slow), not a better operator: without the walls "
+    "the ranking reverses (estimate and runs below).")
+OP_TIME_END = (
+    "BGK and TRT cost the same within the noise; MRT takes about twice as long at N = 6 and 9 (more arithmetic "
+    "per cell in its collision). At these small grids a good part of the wall time is per-step overhead of the "
+    "coupled run (3-9 MLUPS), so the ratios at N = 12-16 or on a GPU may differ.")
+HEADLINE_END = (
+    "So, once the experiment's walls are taken away (TRT, as in the main table): E3 (the seed paper's case) "
+    "comes within 3 % at N = 9; E4 sits at about -3 % at N = 6 and 9 (the experiment's box is half of its "
+    "-5.8 %; the other half does not shrink from N = 6 to 9); E1 (Re 1.5) falls much too fast, improving "
+    "from N = 6 to 9 but far from 3 %. BGK (measured in 200 x 200 x 240 mm) makes every case 1-2.5 % of "
+    "u_inf slower than TRT: E3 then comes within 1 % at N = 6 and 9, E4 moves further off (-4.6 % at N = 6) "
+    "and E1 stays far too fast (+11.8 %). The target of issue 5 (within 3 % at N <= 16) is therefore met "
+    "here for E3 (with BGK or MRT already at N = 6), at its edge for E4 with TRT, and not met for E1 at the "
+    "resolutions run, with either operator (E2 was not run in a larger box). The small in-box errors of E1 and "
+    "E2 at N = 9-12 in the table below owe much to the experiment's walls, which slow the simulated low-Re "
+    "sphere by about 11 %. Whether N = 12-16 brings E1 within 3 % needs those grids in a wide box (hours "
+    "each on this CPU, minutes on a GPU); E1 errs fast and E4 slow, so the IMB sphere's drag depends on Re "
+    "and/or tau, not only on N.")
+MEANING_END = (
+    "Consequences:\n\n"
+    "- the box slows the simulated sphere a lot at low Re (E1) and by a few percent at higher Re (E3, E4; for "
+    "E4 about a third of it because 120 mm of fall is too short for it to reach its plateau);\n"
+    "- a small error in the experiment's box can hide a large error against u_inf: E1's +1.5 % in the box "
+    "at N = 6 is +14 % in a 300 mm wide box. The main table's errors are not the method's error against "
+    "u_inf; the larger-box numbers are (section \"Larger boxes\");\n"
+    "- in the larger boxes the simulated sphere is too fast at low Re (E1, and E3 at N = 6) and too slow "
+    "at the highest Re (E4); the error changes sign with Re (and with tau, which falls with Re at fixed "
+    "Mach), which points at the IMB boundary's effective size, not at the box; that size also depends on "
+    "the collision operator (section \"Operators\": in a larger box BGK makes the sphere 1-2.5 % of u_inf "
+    "slower than TRT in every case run, closer to u_inf for E3, further for E4; no operator fixes E1);\n"
+    "- a comparison with the experiment itself (the in-box trajectories) still needs the experimental "
+    "velocity curves of Ten Cate et al. (2002), not in the reference file.")
+WIDE_END = ""
+
+
+HEADLINE_NONE = (
+    "It is not yet the target met: the box makes the true in-box peak lower than u_inf (see \"What the error "
+    "means\"), the cases cross zero error at different N, and at Mach 0.1 the error depends on tau. Issue 5's "
+    "target should be judged against the experimental in-box curves, or against u_inf in a larger box.")
+
+HEADLINE = (
+    "But the table compares a peak *in the experiment's box* with the *unbounded* u_inf. **In larger boxes** "
+    "(section \"Larger boxes\"; terminal = plateau speed, widest box run per case and N) the error against "
+    "u_inf is: {items}. HEADLINE_CONCLUSION")
+
+MEANING = (
+    "The error in the main table is measured against u_inf, the terminal velocity in an unbounded fluid, as "
+    "the brief of issue 5 asks, but the sphere falls in the experiment's closed 100 x 100 x 160 mm box. The "
+    "larger boxes measure what that box does to the simulated sphere: the wall effect (peak in the "
+    "experiment's box) / (terminal speed in the widest box run) is {effects}. MEANING_CONCLUSION")
+
+
+def report(results, chart_paths, extra=(), wide=(), ops=(), opw=()):
     ok = [r for r in results if "peak_speed" in r]
     rows = []
     for r in sorted(results, key=lambda r: (r["case"], r["N"])):
@@ -432,7 +948,7 @@ def report(results, chart_paths, extra=()):
             est.append("| %g | %.3g mm | %.2f M | %d | %.1f h | %.1f h |" % (
                 n, D / n * 1e3, cells / 1e6, steps, secs / 3600, 4 * secs / 3600))
     est = "\n".join(est)
-    findings = make_findings(ok, extra)
+    findings = make_findings(ok, extra, wide)
     nmax = max([r["N"] for r in ok], default=None)
     within = ", ".join("%s" % c for c in sorted(best) if abs(best[c]["peak_error_pct"]) <= 3.0)
     within = (within + (" are" if "," in within else " is")) if within else ""
@@ -454,6 +970,9 @@ def report(results, chart_paths, extra=()):
                  "boundary's effective radius depends on the viscosity in lattice units.\n\n"
                  "| case | N | Mach | tau | steps | peak speed [m/s] | error vs u_inf [%] | mean speed, gap 80-40 mm [m/s] | wall s / sim s |\n"
                  "|---|---|---|---|---|---|---|---|---|\n" + "\n".join(tc)) if tc else "(not run)"
+    wide_table = wide_section(wide, results, extra)
+    op_table = op_section(ops, results)
+    wide_intro, wide_findings, op_intro, op_findings, headline, meaning = narrative(results, extra, wide, ops, opw)
     text = f"""# Ten Cate et al. (2002) settling sphere with the immersed moving boundary (issue 5)
 
 Generated by `python3 validation/imb/ten_cate.py` from the runs under `runs/`. **Device: a CPU.** No GPU
@@ -463,12 +982,7 @@ was available in this session, so every run used Mesa **lavapipe** (llvmpipe, th
 **Target of issue 5:** terminal velocity within 3 % at 16 cells per diameter or less.
 **Reached here** (finest grid per case; error of the *peak* settling speed in the box against the
 *unbounded* u_inf): {best_txt or "no completed run"}. Taken at face value {within or "no case"} within 3 %
-at N = {fmt(nmax, "%g")} cells per diameter or less, far below the 16 the target allows. It is not yet the
-target met: the box makes the true in-box peak lower than u_inf (see "What the error means"), the cases
-cross zero error at different N, and at Mach 0.1 the error depends on tau (the tau check: E1 at N = 6
-goes from {tc_line}). Issue 5's target should be judged against the experimental in-box curves, or
-against u_inf in a larger box, at N = 12-15; the cost of those grids on this CPU is estimated below
-(hours; minutes on a GPU).
+at N = {fmt(nmax, "%g")} cells per diameter or less. {headline}
 
 ## Set-up
 
@@ -484,8 +998,11 @@ against u_inf in a larger box, at N = 12-15; the cost of those grids on this CPU
   1.3 x 0.12 / (0.1/sqrt(3) x dx)); the sphere reaches the floor region in all cases.
 - Each run's `scene.toml`, `summary.json`, `log.txt` and a reduced `particles.csv`
   (step,time,x,y,z,vx,vy,vz,fz of the sphere every ~1/300 of the run) are kept in `runs/<case>_N<n>/`
-  (`runs/<case>_N<n>_M<mach>/` for the tau check at another Mach number). The .vti snapshot of the last
-  step (`fields_interval = 0`) was deleted after each run.
+  (`runs/<case>_N<n>_M<mach>/` for the tau check at another Mach number, `runs/<case>_N<n>[_M<mach>]_W<w>_H<h>/`
+  for a box of w x w x h mm, `runs/<case>_N<n>_<op>/` for the BGK and MRT operators and the TRT reruns,
+  `runs/<case>_N<n>_W<w>_H<h>_<op>/` for those in a larger box). The .vti snapshot of
+  the last step (`fields_interval = 0`) was deleted after each run. The runs made with the larger boxes and
+  the other operators also keep `load.txt`: `uptime` just before and just after the run.
 
 ## How things were measured
 
@@ -524,21 +1041,29 @@ seconds per simulated second (dashed, log scale), one colour per case.
 
 {tau_check}
 
+## Larger boxes: the terminal velocity without the experiment's walls
+
+{wide_intro}
+
+{wide_table}
+
+![wide boxes](wide_boxes.png)
+
+{wide_findings}
+
+## Operators: BGK, TRT, MRT on E3
+
+{op_intro}
+
+{op_table}
+
+![operators](speed_vs_accuracy_operators.png)
+
+{op_findings}
+
 ## What the error means
 
-The error is measured against u_inf, the terminal velocity in an unbounded fluid, as the brief of issue 5
-asks. In the 100 x 100 mm box (d / width = 0.15) the walls slow the sphere, so even an exact simulation of
-the experiment peaks below u_inf: a few percent at the higher Reynolds numbers (E3, E4), and more at the
-lowest, because wall effects grow as Re falls (for orientation only: in creeping flow a sphere on the axis
-of a *cylinder* of 100 mm diameter settles at about 0.69 u_inf, Haberman-Sayre; the square box is less
-confining and Re 1.5 is not creeping flow, so E1's wall effect lies somewhere between a few percent and
-that). The approach to the floor decelerates the sphere further before contact. Consequences:
-
-- a *positive* error (faster than u_inf) is a real deficit of drag, larger against the experiment than
-  the number in the table says;
-- a *negative* error mixes the wall effect (physics, in the experiment too) with discretisation error;
-- a fair comparison needs the experimental velocity curves of Ten Cate et al. (2002) (not in the
-  reference file), or a much larger / periodic box to measure u_inf itself.
+{meaning}
 
 ## Cost of finer resolutions on this CPU
 
@@ -569,6 +1094,195 @@ def mach_runs():
     return out
 
 
+DIR_RE = re.compile(r"(E\d)_N([0-9p]+)(?:_M([0-9p]+))?(?:_W([0-9p]+)_H([0-9p]+))?(?:_(bgk|mrt|trt))?$")
+
+
+def run_specs():
+    """Every run folder as dict(case, n, mach, op, width, height) (width, height in m; None: the experiment's box)."""
+    out = []
+    if os.path.isdir(RUNS):
+        for name in sorted(os.listdir(RUNS)):
+            m = DIR_RE.match(name)
+            if not m:
+                continue
+            num = lambda g: None if g is None else float(g.replace("p", "."))
+            out.append(dict(case=m.group(1), n=num(m.group(2)), mach=num(m.group(3)) or MACH, op=m.group(6) or OPERATOR,
+                            explicit=m.group(6) is not None,
+                            width=None if m.group(4) is None else num(m.group(4)) * 1e-3,
+                            height=None if m.group(5) is None else num(m.group(5)) * 1e-3))
+    return out
+
+
+def wide_results():
+    """Runs in a box other than the experiment's (TRT)."""
+    rs = [analyse(sp["case"], sp["n"], sp["mach"], sp["op"], sp["width"], sp["height"], sp["explicit"])
+          for sp in run_specs() if sp["width"] is not None and sp["op"] == OPERATOR]
+    return sorted([r for r in rs if r is not None], key=lambda r: (r["case"], r["N"], r["mach"], r["box"][0], r["box"][2]))
+
+
+def op_wide_results():
+    """Runs in a box other than the experiment's with an operator other than TRT."""
+    rs = [analyse(sp["case"], sp["n"], sp["mach"], sp["op"], sp["width"], sp["height"], sp["explicit"])
+          for sp in run_specs() if sp["width"] is not None and sp["op"] != OPERATOR]
+    return sorted([r for r in rs if r is not None], key=lambda r: (r["case"], r["N"], r["op"]))
+
+
+def op_results():
+    """Runs with an operator other than TRT, in the experiment's box at Mach 0.1."""
+    rs = [analyse(sp["case"], sp["n"], sp["mach"], sp["op"], explicit=sp["explicit"])
+          for sp in run_specs() if sp["width"] is None and sp["explicit"] and sp["mach"] == MACH]
+    return sorted([r for r in rs if r is not None], key=lambda r: (r["case"], r["op"], r["N"]))
+
+
+def box_baseline(r, results, extra):
+    """The run in the experiment's box with the same case, N, Mach and operator as r."""
+    for b in list(results) + list(extra):
+        if b["case"] == r["case"] and b["N"] == r["N"] and b["mach"] == r["mach"] and b.get("op", OPERATOR) == r.get("op", OPERATOR) \
+                and b["box"] == list(BOX) and "peak_speed" in b:
+            return b
+    return None
+
+
+def wide_charts(wide, results, extra):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    paths = []
+    cases = [c for c in CASES if any(r["case"] == c and "series" in r for r in wide)]
+    if not cases:
+        return paths
+    fig, axes = plt.subplots(1, len(cases), figsize=(5.2 * len(cases), 4.2), squeeze=False)
+    for ax, case in zip(axes[0], cases):
+        c = CASES[case]
+        rs = [r for r in wide if r["case"] == case and "series" in r]
+        bases = []
+        for r in rs:
+            b = box_baseline(r, results, extra)
+            if b is not None and b not in bases:
+                bases.append(b)
+        for k, b in enumerate(sorted(bases, key=lambda b: b["N"])):
+            s = b["series"]
+            ax.plot([(GAP0 - g) * 1e3 for g in s["gap"]], [v / c["u_inf"] for v in s["speed"]], color=("0.55", "0.2")[k % 2], lw=1.0,
+                    ls=(":", "--")[k % 2], label="N = %g, 100 x 100 x 160 mm (experiment)" % b["N"])
+        for k, r in enumerate(rs):
+            s = r["series"]
+            ln = ax.plot([(r["release_gap"] - g) * 1e3 for g in s["gap"]], [v / c["u_inf"] for v in s["speed"]],
+                         ["-", "--", "-.", ":"][k % 4], lw=1.3,
+                         label="N = %g, %g x %g x %g mm" % (r["N"], r["box"][0] * 1e3, r["box"][1] * 1e3, r["box"][2] * 1e3))
+            # the plateau window and its mean
+            f0, f1 = r["release_gap"] - r["window_gap"][0], r["release_gap"] - r["window_gap"][1]
+            ax.plot([f0 * 1e3, f1 * 1e3], [r["terminal_speed"] / c["u_inf"]] * 2, color=ln[0].get_color(), lw=4, alpha=0.35)
+        ax.axhline(1.0, color="k", lw=0.8, ls=":")
+        for y in (0.97, 1.03):
+            ax.axhline(y, color="k", lw=0.5, ls="--", alpha=0.4)
+        ax.set_ylim(0.7, 1.2)
+        ax.set_xlabel("distance fallen [mm]")
+        ax.set_ylabel("settling speed / u_inf (unbounded %.3f m/s)" % c["u_inf"])
+        mach = sorted({r["mach"] for r in rs})
+        ax.set_title("%s (Re %.1f), Mach %s: larger boxes" % (case, c["Re"], "/".join("%g" % m for m in mach)))
+        ax.legend(fontsize=6.5, loc="lower center", ncol=2)
+        ax.grid(alpha=0.3)
+    fig.suptitle("Settling speed against distance fallen; thick bars: plateau window (speed within 0.5 % of its maximum) and its mean; dashed: +-3 %",
+                 fontsize=8)
+    fig.tight_layout()
+    p = os.path.join(HERE, "wide_boxes.png")
+    fig.savefig(p, dpi=110); plt.close(fig)
+    paths.append(p)
+    return paths
+
+
+OP_COLORS = {"bgk": "tab:purple", "trt": "tab:green", "mrt": "tab:brown"}
+
+
+def op_chart(ops, results, case="E3"):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(figsize=(7.5, 4.8))
+    ax2 = ax.twinx()
+    drawn = False
+    for op in OPERATORS:
+        src = [r for r in results if r["case"] == case] if op == OPERATOR else [r for r in ops if r["case"] == case and r["op"] == op]
+        rs = sorted([r for r in src if "peak_speed" in r], key=lambda r: r["N"])
+        if not rs:
+            continue
+        drawn = True
+        x = [r["N"] for r in rs]
+        ax.plot(x, [abs(r["peak_error_pct"]) for r in rs], "o-", color=OP_COLORS[op], label="%s |error| %%" % op.upper())
+        timed = rs
+        if op == OPERATOR:    # TRT reruns (runs/<case>_N<n>_trt) timed beside the BGK and MRT runs, where present
+            rr = sorted([r for r in ops if r["case"] == case and r["op"] == op and "peak_speed" in r], key=lambda r: r["N"])
+            timed = rr or rs
+        ax2.plot([r["N"] for r in timed], [r["wall_s_per_sim_s"] for r in timed], "s--", color=OP_COLORS[op], alpha=0.7,
+                 label="%s wall s / sim s%s" % (op.upper(), " (reruns)" if timed is not rs else ""))
+    if not drawn:
+        plt.close(fig)
+        return []
+    ax.axhline(3.0, color="k", lw=0.8, ls=":")
+    ax.text(3, 3.2, "target 3 %", fontsize=8)
+    ax.set_xlabel("cells per diameter N")
+    ax.set_ylabel("|peak speed - u_inf| / u_inf  [%%]  (solid), %s" % case)
+    ax2.set_ylabel("wall seconds per simulated second (dashed)")
+    ax2.set_yscale("log")
+    ax.set_title("%s (Re %.1f), experiment's box, Mach 0.1: operators (lavapipe CPU, 2 shared cores)" % (case, CASES[case]["Re"]), fontsize=9)
+    h1, l1 = ax.get_legend_handles_labels(); h2, l2 = ax2.get_legend_handles_labels()
+    ax.legend(h1 + h2, l1 + l2, fontsize=7, loc="center right", ncol=2)
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    p = os.path.join(HERE, "speed_vs_accuracy_operators.png")
+    fig.savefig(p, dpi=110); plt.close(fig)
+    return [p]
+
+
+def load_short(r):
+    """The 1-minute load averages before and after a run, from load.txt."""
+    if not r.get("load"):
+        return "-"
+    la = re.findall(r"load average: ([0-9.]+)", r["load"])
+    return " / ".join(la) if la else "-"
+
+
+def wide_section(wide, results, extra):
+    if not wide:
+        return "(not run)"
+    rows = []
+    for r in wide:
+        b = box_baseline(r, results, extra)
+        rows.append("| %s | %g | %g | %s | %g x %g x %g | %s | %.0f | %s | %.2f | %s | %s | %.0f-%.0f (%.0f) | %s | %s | %s | %s | %s | %s | %s |" % (
+            r["case"], r["N"], r["mach"], fmt(r.get("tau"), "%.3f"),
+            r["box"][0] * 1e3, r["box"][1] * 1e3, r["box"][2] * 1e3, "%dx%dx%d" % tuple(r["cells"]),
+            r["release_gap"] * 1e3, r["steps"], r["simulated_time_s"],
+            fmt(r.get("terminal_speed"), "%.4f"), fmt(r.get("terminal_error_pct"), "%+.1f"),
+            r["window_gap"][0] * 1e3, r["window_gap"][1] * 1e3, r["window_fall"] * 1e3,
+            fmt(r.get("peak_speed"), "%.4f"),
+            fmt(b["peak_speed"] if b else None, "%.4f"),
+            fmt(b["peak_speed"] / r["terminal_speed"] if b else None, "%.3f"),
+            fmt(r.get("wall_time_s"), "%.0f"), fmt(r.get("mlups"), "%.2f"), load_short(r),
+            "" if r.get("exit_code") == 0 else "exit %s: %s" % (r.get("exit_code"), r.get("exit_reason"))))
+    return ("| case | N | Mach | tau | box [mm] | lattice | release gap [mm] | steps | simulated [s] | terminal speed [m/s] | "
+            "error vs u_inf [%] | plateau window: gap [mm] (fall) | peak [m/s] | peak in the 100 x 100 x 160 box, same N and Mach [m/s] | "
+            "wall effect = box peak / terminal | wall time [s] | MLUPS | load before / after | note |\n"
+            "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n" + "\n".join(rows))
+
+
+def op_section(ops, results):
+    if not ops:
+        return "(not run)"
+    rows = []
+    trt = [r for r in results if r["case"] in {o["case"] for o in ops}]
+    for r in sorted(list(ops) + trt, key=lambda r: (r["case"], r["N"], OPERATORS.index(r.get("op", OPERATOR)), r.get("explicit_op", False))):
+        if "peak_speed" not in r:
+            continue
+        rows.append("| %s | %s | %g | %s | %s | %.4f | %+.1f | %s | %s | %.0f | %.0f | %s | %s |" % (
+            r["case"], r.get("op", OPERATOR).upper() + (" (rerun, `%s`)" % os.path.basename(r["dir"]) if r.get("op") == OPERATOR and r.get("explicit_op") else ""),
+            r["N"], "%dx%dx%d" % tuple(r["cells"]), fmt(r.get("tau"), "%.4f"),
+            r["peak_speed"], r["peak_error_pct"], fmt(r.get("plateau_speed"), "%.4f"),
+            r["steps"], r["wall_time_s"], r["wall_s_per_sim_s"], fmt(r.get("mlups"), "%.2f"), load_short(r)))
+    return ("| case | operator | N | lattice | tau | peak speed [m/s] | error vs u_inf [%] | mean speed, gap 80-40 mm [m/s] | steps | "
+            "wall time [s] | wall s / sim s | MLUPS | load before / after (1 min) |\n"
+            "|---|---|---|---|---|---|---|---|---|---|---|---|---|\n" + "\n".join(rows))
+
+
 def build_outputs():
     extra = [r for r in (analyse(c, n, m) for c, n, m in mach_runs()) if r is not None]
     results = []
@@ -577,14 +1291,20 @@ def build_outputs():
             r = analyse(case, n)
             if r is not None:
                 results.append(r)
-    paths = charts(results, extra)
+    wide = wide_results()
+    ops = op_results()
+    opw = op_wide_results()
+    paths = charts(results, extra) + wide_charts(wide, results, extra) + op_chart(ops, results)
     slim = [{k: v for k, v in r.items() if k != "series"} for r in results]
     with open(os.path.join(HERE, "results.json"), "w") as f:
         json.dump(dict(reference="Ten Cate et al. 2002, Phys. Fluids 14(11) 4012; /work/shared/reference/ten-cate-2002.md",
                        device=DEVICE, sphere=dict(d=D, rho_p=RHO_P, release_centre_z=Z0, release_gap=GAP0),
                        box=BOX, mach=MACH, operator="trt", time_factor=TIME_FACTOR, runs=slim,
-                       tau_check=[{k: v for k, v in r.items() if k != "series"} for r in extra]), f, indent=1)
-    report(results, paths, extra)
+                       tau_check=[{k: v for k, v in r.items() if k != "series"} for r in extra],
+                       wide_boxes=[{k: v for k, v in r.items() if k != "series"} for r in wide],
+                       operators=[{k: v for k, v in r.items() if k != "series"} for r in ops],
+                       operators_larger_box=[{k: v for k, v in r.items() if k != "series"} for r in opw]), f, indent=1)
+    report(results, paths, extra, wide, ops, opw)
     for r in slim:
         print("%s N=%-4g peak %s m/s  err %s %%  tau %s  wall/sim %s  (%s)" % (
             r["case"], r["N"], fmt(r.get("peak_speed"), "%.4f"), fmt(r.get("peak_error_pct"), "%+.1f"),
@@ -600,14 +1320,27 @@ def main():
     a.add_argument("--cases", nargs="+", default=list(CASES), choices=list(CASES))
     a.add_argument("--force", action="store_true", help="rerun pairs that already have a summary.json")
     a.add_argument("--mach", type=float, default=MACH, help="Mach number of u_inf (default 0.1; others go to runs/<case>_N<n>_M<mach>)")
+    a.add_argument("--op", default=OPERATOR, choices=OPERATORS,
+                   help="collision operator (default trt; bgk and mrt go to runs/<case>_N<n>_<op>, MRT with the scene's default rates)")
+    a.add_argument("--width", type=float, help="box width and depth in mm (default: the experiment's 100); with --height, "
+                   "runs go to runs/<case>_N<n>_W<w>_H<h>; the sphere stays centred in x, y, 32.5 mm below the lid")
+    a.add_argument("--height", type=float, help="box height in mm (default: the experiment's 160)")
+    a.add_argument("--sim-time", type=float, help="simulated time in s (default 1.3 x release gap / u_inf)")
+    a.add_argument("--op-suffix", action="store_true",
+                   help="put the operator in the folder name even for trt (runs/<case>_N<n>_trt: a TRT rerun timed beside BGK and MRT)")
     sub.add_parser("report")
     args = ap.parse_args()
     if args.cmd == "run":
         if not os.path.exists(BINARY):
             raise SystemExit("%s missing: cargo build --release --bins" % BINARY)
+        w = None if args.width is None else args.width * 1e-3
+        h = None if args.height is None else args.height * 1e-3
+        if (w is None) != (h is None):
+            w = BOX[0] if w is None else w
+            h = BOX[2] if h is None else h
         for n in args.N:
             for case in args.cases:
-                run_one(case, n, args.force, args.mach)
+                run_one(case, n, args.force, args.mach, args.op, w, h, args.sim_time, args.op_suffix)
     build_outputs()
 
 
