@@ -1035,7 +1035,7 @@ at N = {fmt(nmax, "%g")} cells per diameter or less. {headline}
   `runs/<case>_N<n>_W<w>_H<h>_<op>/` for those in a larger box). The .vti snapshot of
   the last step (`fields_interval = 0`) was deleted after each run. The runs made with the larger boxes and
   the other operators also keep `load.txt`: `uptime` just before and just after the run.
-- Code: every run here predates two changes of 2026-11-24 (the summaries give each run's time): the
+- Code: every run here predates two changes of 2026-11-24 (all runs were made before them): the
   solid fraction by a distance ramp instead of 4^3 sub-samples, which moves the Zick-Homsy and
   Schiller-Naumann errors by at most 0.9 points (docs/imb.md), and the Stokes drag within a fluid
   step in the DEM (`coupling.substep_drag`), which removes the bouncing at rest (Findings) and moves
