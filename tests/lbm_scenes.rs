@@ -255,6 +255,8 @@ fn the_default_scene_is_a_coupled_run() {
         "{err}"
     );
     let s = summary(&out);
+    assert_eq!(s["software"], format!("lbm-server {}", env!("CARGO_PKG_VERSION")));
+    assert!(s["written_unix_s"].as_u64().unwrap() > 1_700_000_000, "{s}");
     assert_eq!(s["particles_initial"], 36);
     assert_eq!(s["lattice"]["cells"].to_string(), "[32,32,48]");
     let physics = s["fluid_physics"].to_string();

@@ -67,6 +67,8 @@ struct LatticeInfo {
 
 #[derive(Debug, Serialize)]
 struct FluidSummary {
+    software: String,
+    written_unix_s: u64,
     scene: String,
     scene_file: String,
     adapter: String,
@@ -129,6 +131,8 @@ pub fn run(scene: &Scene, scene_file: &str, steps: u64, out: &Path, interrupted:
     }
     let cells = units.n.iter().product::<usize>() as f64;
     let summary = FluidSummary {
+        software: crate::output::software(),
+        written_unix_s: crate::output::unix_seconds(),
         scene: scene.name.clone(),
         scene_file: scene_file.to_string(),
         adapter: gpu.adapter.name.clone(),

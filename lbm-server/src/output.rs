@@ -57,6 +57,10 @@ pub struct PeerInfo {
 /// OUT/summary.json.
 #[derive(Debug, Clone, Serialize)]
 pub struct Summary {
+    /// The fluid program and its version.
+    pub software: String,
+    /// When the summary was written, seconds since 1970-01-01 UTC.
+    pub written_unix_s: u64,
     pub scene: String,
     pub scene_file: String,
     pub run: String,
@@ -159,4 +163,16 @@ impl Progress {
             bar.finish();
         }
     }
+}
+
+/// The fluid program and its version, for the summaries.
+pub fn software() -> String {
+    format!("lbm-server {}", env!("CARGO_PKG_VERSION"))
+}
+
+/// Seconds since 1970-01-01 UTC (0 if the clock is before it).
+pub fn unix_seconds() -> u64 {
+    std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.as_secs())
 }

@@ -385,6 +385,8 @@ impl Session {
         let wall = self.started.elapsed().as_secs_f64();
         let steps_completed = self.last_completed.map_or(0, |s| s + 1);
         Summary {
+            software: crate::output::software(),
+            written_unix_s: crate::output::unix_seconds(),
             scene: self.p.scene.name.clone(),
             scene_file: self.p.scene_file.clone(),
             run: self.link.run().to_string(),
