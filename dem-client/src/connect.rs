@@ -84,7 +84,7 @@ pub fn main(args: ConnectArgs) -> ExitCode {
         world: setup.world,
         density: scene.particles.density,
         next_id: scene.particle_count(),
-        viscosity: substep_viscosity(&scene),
+        viscosity: 0.0,
     };
     let mut hello = Hello::new(
         Units::SI,
@@ -112,6 +112,7 @@ pub fn main(args: ConnectArgs) -> ExitCode {
         skip_step: args.skip_step,
         stall_at: args.stall_at,
     };
+    particles.viscosity = substep_viscosity(&scene, &welcome);
     let (k, dt) = substeps(welcome.dt, setup.dt_max.min(particles.drag_step_limit()));
     particles.world.dt = dt;
     particles.world.gravity = V3::from(welcome.gravity);
@@ -203,12 +204,12 @@ fn check_ids(states: &[ParticleState], replies: &[ParticleReply]) -> Result<(), 
     Ok(())
 }
 
-/// The viscosity of the drag within a fluid step: the fluid's with `coupling.substep_drag` in a
-/// scene with a lattice, else 0.
-fn substep_viscosity(scene: &scene::Scene) -> f64 {
+/// The viscosity of the drag within a fluid step: the fluid's (as its Welcome gives it) with
+/// `coupling.substep_drag` in a scene with a lattice, else 0.
+fn substep_viscosity(scene: &scene::Scene, welcome: &Welcome) -> f64 {
     let on = scene.coupling.substep_drag && scene.lattice.is_some();
     if on {
-        scene.fluid.dynamic_viscosity
+        welcome.fluid_viscosity
     } else {
         0.0
     }
