@@ -229,7 +229,7 @@ impl Lattice {
             bytemuck::cast_slice(&[u32::MAX, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0]),
             STORAGE,
         );
-        let classes = CellList::new(&setup, true);
+        let classes = CellList::new(&setup);
         let cell_list = init(
             "cell list",
             bytemuck::cast_slice(if classes.list.is_empty() {
@@ -647,7 +647,7 @@ impl CellList {
         }
     }
 
-    pub fn new(setup: &Setup, with_quads: bool) -> CellList {
+    pub fn new(setup: &Setup) -> CellList {
         let flags = cell_flags(setup);
         let cells = flags.len();
         let class = |flag: u32| {
@@ -662,10 +662,7 @@ impl CellList {
             }
         };
         let all = |q: usize, most: u32| (4 * q..4 * q + 4).all(|k| class(flags[k]) <= most);
-        let quads: Vec<u32> = (0..cells / 4)
-            .filter(|&q| with_quads && all(q, 1))
-            .map(|q| q as u32)
-            .collect();
+        let quads: Vec<u32> = (0..cells / 4).filter(|&q| all(q, 1)).map(|q| q as u32).collect();
         let interior_quads: Vec<u32> = quads
             .iter()
             .copied()
@@ -799,7 +796,7 @@ mod quad_tests {
     use super::*;
 
     fn check(setup: Setup, seed: u64) {
-        let classes = CellList::new(&setup, true);
+        let classes = CellList::new(&setup);
         assert!(
             classes.quads > 0 && classes.interior_quads > 0,
             "the grid has quads"

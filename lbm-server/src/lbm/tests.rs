@@ -274,7 +274,7 @@ mod immersed_boundary {
     /// their odd step, wrapping and boundary cells) run next to covered cells; a third sphere
     /// crosses the face x = 0 (wrapping or boundary cells covered).
     fn check_with_quads(setup: Setup, options: ImbOptions, seed: u64) {
-        let classes = super::super::gpu::CellList::new(&setup, true);
+        let classes = super::super::gpu::CellList::new(&setup);
         assert!(classes.interior_quads > 0, "the grid has interior quads");
         let three = |shift: f64| {
             let mut particles = two_particles(shift);
