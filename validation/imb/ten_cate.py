@@ -877,7 +877,7 @@ def law_check(verdict):
         head = ("**E1's excess is mostly its reference:** u_inf = %.3f m/s for E1 is %.1f %% below the Schiller-Naumann "
                 "terminal velocity (%.4f m/s); against that law E1 at N = %g in %s settles %+.1f %% off, and a sphere "
                 "held in a stream at Re 1 (validation/lbm/REPORT.md, 8 cells per diameter, confinement fitted out) "
-                "has a drag within 2 %% of the law." % (
+                "has a drag 2.2 %% below the law." % (
                     CASES["E1"]["u_inf"], 100 * (1 - CASES["E1"]["u_inf"] / sn), sn, n,
                     "%g x %g x %g mm" % tuple(round(L * 1e3, 3) for L in w["box"]), 100 * (w["terminal_speed"] / sn - 1)))
     find = ("- **The widest-box terminal speeds against the drag laws' terminal velocities** (Schiller-Naumann / "
