@@ -378,17 +378,23 @@ def charts(results, extra=()):
     ax.text(ns[0] if ns else 3, 3.2, "target 3 %", fontsize=8)
     ax.set_xlabel("cells per diameter N")
     ax.set_ylabel("|peak speed - u_inf| / u_inf  [%]  (solid)")
+    ax.set_title("Speed against accuracy (lavapipe CPU, 2 cores)")
+    paths.append(finish_speed_chart(fig, ax, ax2, "upper right", "speed_vs_accuracy.png"))
+    return paths
+
+
+def finish_speed_chart(fig, ax, ax2, legend_at, name):
+    """The time axis, the joint legend and the file of a speed-against-accuracy chart; returns its path."""
+    import matplotlib.pyplot as plt
     ax2.set_ylabel("wall seconds per simulated second (dashed)")
     ax2.set_yscale("log")
-    ax.set_title("Speed against accuracy (lavapipe CPU, 2 cores)")
     h1, l1 = ax.get_legend_handles_labels(); h2, l2 = ax2.get_legend_handles_labels()
-    ax.legend(h1 + h2, l1 + l2, fontsize=7, loc="upper right", ncol=2)
+    ax.legend(h1 + h2, l1 + l2, fontsize=7, loc=legend_at, ncol=2)
     ax.grid(alpha=0.3)
     fig.tight_layout()
-    p = os.path.join(HERE, "speed_vs_accuracy.png")
+    p = os.path.join(HERE, name)
     fig.savefig(p, dpi=110); plt.close(fig)
-    paths.append(p)
-    return paths
+    return p
 
 
 def fmt(v, f):
@@ -1259,16 +1265,8 @@ def op_chart(ops, results, case="E3"):
     ax.text(3, 3.2, "target 3 %", fontsize=8)
     ax.set_xlabel("cells per diameter N")
     ax.set_ylabel("|peak speed - u_inf| / u_inf  [%%]  (solid), %s" % case)
-    ax2.set_ylabel("wall seconds per simulated second (dashed)")
-    ax2.set_yscale("log")
     ax.set_title("%s (Re %.1f), experiment's box, Mach 0.1: operators (lavapipe CPU, 2 shared cores)" % (case, CASES[case]["Re"]), fontsize=9)
-    h1, l1 = ax.get_legend_handles_labels(); h2, l2 = ax2.get_legend_handles_labels()
-    ax.legend(h1 + h2, l1 + l2, fontsize=7, loc="center right", ncol=2)
-    ax.grid(alpha=0.3)
-    fig.tight_layout()
-    p = os.path.join(HERE, "speed_vs_accuracy_operators.png")
-    fig.savefig(p, dpi=110); plt.close(fig)
-    return [p]
+    return [finish_speed_chart(fig, ax, ax2, "center right", "speed_vs_accuracy_operators.png")]
 
 
 def load_short(r):

@@ -223,6 +223,17 @@ mod immersed_boundary {
         ]
     }
 
+    /// A lattice coupled with the default settings.
+    fn coupled(setup: &Setup) -> Lattice {
+        Lattice::new(
+            gpu(),
+            setup.clone(),
+            Health::default(),
+            Some(ImbOptions::default()),
+        )
+        .unwrap()
+    }
+
     fn max_load_difference(a: &[Load], b: &[Load]) -> f64 {
         a.iter()
             .zip(b)
@@ -384,13 +395,7 @@ mod immersed_boundary {
         );
         let f0 = random_populations(&setup, 14);
         let run = || {
-            let mut lattice = Lattice::new(
-                gpu(),
-                setup.clone(),
-                Health::default(),
-                Some(ImbOptions::default()),
-            )
-            .unwrap();
+            let mut lattice = coupled(&setup);
             lattice.set_populations(&f0);
             (0..5)
                 .map(|k| lattice.step_coupled(&two_particles(0.1 * k as f64)).unwrap())
@@ -420,7 +425,7 @@ mod immersed_boundary {
     #[test]
     fn a_particle_too_large_for_the_box_index_is_refused_by_id() {
         let setup = Setup::new([8; 3], [Face::Periodic; 6], 0.7, Operator::Bgk);
-        let mut lattice = Lattice::new(gpu(), setup, Health::default(), Some(ImbOptions::default())).unwrap();
+        let mut lattice = coupled(&setup);
         let mut particles = two_particles(0.0);
         particles[1].radius = 128.0;
         let err = lattice.step_coupled(&particles).unwrap_err();
@@ -433,13 +438,7 @@ mod immersed_boundary {
     fn covered_cells_beyond_the_list_are_counted() {
         let setup = Setup::new([12; 3], [Face::Periodic; 6], 0.7, Operator::Bgk);
         let unlisted = |cap: Option<u64>| {
-            let mut lattice = Lattice::new(
-                gpu(),
-                setup.clone(),
-                Health::default(),
-                Some(ImbOptions::default()),
-            )
-            .unwrap();
+            let mut lattice = coupled(&setup);
             if let Some(cells) = cap {
                 lattice.cap_covered_cells(cells);
             }
