@@ -84,7 +84,7 @@ pub fn main(args: ConnectArgs) -> ExitCode {
         world: setup.world,
         density: scene.particles.density,
         next_id: scene.particle_count(),
-        viscosity: 0.0,
+        covered_mass_rate: 0.0,
     };
     let mut hello = Hello::new(
         Units::SI,
@@ -112,7 +112,7 @@ pub fn main(args: ConnectArgs) -> ExitCode {
         skip_step: args.skip_step,
         stall_at: args.stall_at,
     };
-    particles.viscosity = substep_viscosity(&scene, &welcome);
+    particles.covered_mass_rate = covered_mass_rate(&scene, &welcome);
     let (k, dt) = substeps(welcome.dt, setup.dt_max.min(particles.drag_step_limit()));
     particles.world.dt = dt;
     particles.world.gravity = V3::from(welcome.gravity);
@@ -204,24 +204,26 @@ fn check_ids(states: &[ParticleState], replies: &[ParticleReply]) -> Result<(), 
     Ok(())
 }
 
-/// The viscosity of the drag within a fluid step: the fluid's (as its Welcome gives it) with
-/// `coupling.substep_drag` in a scene with a lattice, else 0.
-fn substep_viscosity(scene: &scene::Scene, welcome: &Welcome) -> f64 {
+/// rho_f / dt_fluid (the fluid's Welcome) with `coupling.substep_drag` in a scene with a lattice,
+/// else 0 (the fluid force held constant over the fluid step).
+fn covered_mass_rate(scene: &scene::Scene, welcome: &Welcome) -> f64 {
     let on = scene.coupling.substep_drag && scene.lattice.is_some();
     if on {
-        welcome.fluid_viscosity
+        welcome.fluid_density / welcome.dt
     } else {
         0.0
     }
 }
 
-/// Stokes drag coefficients of a sphere of radius r: 6 pi mu r [N s/m] and 8 pi mu r^3 [N m s].
-/// They make the held fluid force F_n + drag v_n - drag v(t): the force the fluid gave at the
-/// velocity v_n sent, corrected for the change of velocity within the step at the rate of Stokes
-/// drag (a lower bound of the fluid's response to a change of velocity, so never an overcorrection).
-fn stokes_drag(viscosity: f64, r: f64) -> (f64, f64) {
-    let pi = std::f64::consts::PI;
-    (6.0 * pi * viscosity * r, 8.0 * pi * viscosity * r.powi(3))
+/// The rate at which the immersed boundary's force answers a sphere's velocity, the fluid state
+/// held: its solid term drives the fluid of the covered cells to the sphere's velocity every
+/// step, so dF/dv = -sum_cells B rho dx^3 / dt, about the fluid mass the sphere covers per fluid
+/// step, rho_f V / dt [N s/m]; for the torque rho_f (2/5) V r^2 / dt [N m s]. The DEM applies
+/// F_n - drag (v(t) - v_n): the fluid's force at the velocity the sphere has within the step, to
+/// first order.
+fn substep_drag(covered_mass_rate: f64, r: f64) -> (f64, f64) {
+    let drag = covered_mass_rate * 4.0 / 3.0 * std::f64::consts::PI * r.powi(3);
+    (drag, 0.4 * drag * r * r)
 }
 
 /// The DEM side's particles in a coupled run.
@@ -229,8 +231,9 @@ struct Particles {
     world: World,
     density: f64,
     next_id: u64,
-    /// Fluid viscosity for the drag within a fluid step [Pa s] (0: the force is held constant).
-    viscosity: f64,
+    /// Fluid density / fluid step [kg/m^3/s] for the drag within a fluid step (0: the force is
+    /// held constant).
+    covered_mass_rate: f64,
 }
 
 impl Particles {
@@ -246,11 +249,11 @@ impl Particles {
     }
 
     /// Takes the fluid's force and torque (same order as the states), held over the fluid step
-    /// (with the Stokes drag of the velocity change since the states were sent, when
-    /// `coupling.substep_drag` is on), and advances `k` DEM steps: dt_fluid = k dt_dem.
+    /// (following the velocity change since the states were sent at the immersed boundary's own
+    /// rate, when `coupling.substep_drag` is on), and advances `k` DEM steps: dt_fluid = k dt_dem.
     fn advance(&mut self, replies: &[ParticleReply], k: u64) {
         for (b, r) in self.world.bodies.iter_mut().zip(replies) {
-            (b.drag, b.spin_drag) = stokes_drag(self.viscosity, b.r);
+            (b.drag, b.spin_drag) = substep_drag(self.covered_mass_rate, b.r);
             b.f_ext = V3::from(r.force) + b.drag * b.v;
             b.t_ext = V3::from(r.torque) + b.spin_drag * b.w;
         }
@@ -258,9 +261,9 @@ impl Particles {
     }
 
     /// The longest DEM step at which the drag within a fluid step stays accurate: a tenth of the
-    /// shortest particle relaxation time m / (6 pi mu r) (infinite without that drag).
+    /// shortest relaxation time m / drag = (rho_p / rho_f) dt_fluid (infinite without that drag).
     fn drag_step_limit(&self) -> f64 {
-        let relaxation = |b: &Body| b.m / stokes_drag(self.viscosity, b.r).0;
+        let relaxation = |b: &Body| b.m / substep_drag(self.covered_mass_rate, b.r).0;
         let shortest = self
             .world
             .bodies

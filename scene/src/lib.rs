@@ -120,8 +120,8 @@ pub struct Coupling {
     #[serde(default = "default_lubrication")]
     pub lubrication: bool,
     /// With a `[lattice]`: within a fluid step the DEM lets the held fluid force and torque follow
-    /// each sphere's velocity with Stokes drag, F_n - 3 pi mu d (v - v_n) and T_n - pi mu d^3
-    /// (w - w_n) (default on; off: held constant).
+    /// each sphere's velocity at the immersed boundary's own rate, F_n - c (v - v_n) and
+    /// T_n - c (2/5) r^2 (w - w_n) with c = rho_f V / dt (default on; off: held constant).
     #[serde(default = "default_substep_drag")]
     pub substep_drag: bool,
 }

@@ -483,10 +483,10 @@ def make_findings(ok, extra=(), wide=()):
             "cycle of the coupling: the IMB force answers the velocity sent at the start of a fluid step and "
             "is then held constant over all the DEM sub-steps of that step (%s). %s It does not touch the peak "
             "speed, but it matters for beds at rest. **Fixed since these runs:** the DEM now lets the held force "
-            "follow the velocity within the step with Stokes drag (`coupling.substep_drag`, default on; "
-            "docs/imb.md): E1 at N = 3 rerun with it rests with an rms of 1e-8 m/s instead of 7.4 mm/s, and "
-            "its peak speed moves by -0.2 %% (0.0508 -> 0.0507 m/s; the test "
-            "`a_sphere_resting_on_the_floor_stays_at_rest` guards it)." % (
+            "follow the velocity within the step at the immersed boundary's own rate rho_f V / dt "
+            "(`coupling.substep_drag`, default on; docs/imb.md): E1 rerun with the current code rests with an rms "
+            "of 5e-9 m/s at N = 3 and 1.4e-8 m/s at N = 6, and its peak speed moves by +0.42 %% and +0.04 %% (the "
+            "test `a_sphere_resting_on_the_floor_stays_at_rest` guards it)." % (
                 ", ".join("%.1f mm/s (%s N=%g)" % (1e3 * r["rest_speed_rms"], r["case"], r["N"]) for r in loud),
                 ", ".join("%.2f mm/s" % (1e3 * r["rest_dzdt_rms"]) for r in loud),
                 ", ".join("%.1f to %.1f um" % tuple(r["rest_gap_range_um"]) for r in loud),
@@ -1043,9 +1043,10 @@ at N = {fmt(nmax, "%g")} cells per diameter or less. {headline}
   the other operators also keep `load.txt`: `uptime` just before and just after the run.
 - Code: every run here predates two changes of 2026-11-24 (all runs were made before them): the
   solid fraction by a distance ramp instead of 4^3 sub-samples, which moves the Zick-Homsy and
-  Schiller-Naumann errors by at most 0.9 points (docs/imb.md), and the Stokes drag within a fluid
-  step in the DEM (`coupling.substep_drag`), which removes the bouncing at rest (Findings) and moves
-  E1's peak at N = 3 by -0.2 %. Rerunning a scene of runs/ with the current code gives both.
+  Schiller-Naumann errors by at most 0.9 points (docs/imb.md), and the force within a fluid step
+  following the velocity in the DEM (`coupling.substep_drag`), which removes the bouncing at rest
+  (Findings). E1 rerun with the current code: peak +0.42 % at N = 3, +0.04 % at N = 6. Rerunning a
+  scene of runs/ with the current code gives both.
 
 ## How things were measured
 
