@@ -185,7 +185,7 @@ fn step_loop(
         if done {
             return Ok(step + 1);
         }
-        particles.advance(&replies, substeps);
+        particles.advance(&replies, substeps, welcome.dt);
     }
     Ok(welcome.steps)
 }
@@ -219,8 +219,8 @@ fn covered_mass_rate(scene: &scene::Scene, welcome: &Welcome) -> f64 {
 /// held: its solid term drives the fluid of the covered cells to the sphere's velocity every
 /// step, so dF/dv = -sum_cells B rho dx^3 / dt, about the fluid mass the sphere covers per fluid
 /// step, rho_f V / dt [N s/m]; for the torque rho_f (2/5) V r^2 / dt [N m s]. The DEM applies
-/// F_n - drag (v(t) - v_n): the fluid's force at the velocity the sphere has within the step, to
-/// first order.
+/// F_n - drag (v(t) - v_n - a t), a the acceleration of the held force, gravity and the previous
+/// step's mean contact force (`advance`): the fluid's answer to what the contacts change.
 fn substep_drag(covered_mass_rate: f64, r: f64) -> (f64, f64) {
     let drag = covered_mass_rate * 4.0 / 3.0 * std::f64::consts::PI * r.powi(3);
     (drag, 0.4 * drag * r * r)
@@ -251,11 +251,22 @@ impl Particles {
     /// Takes the fluid's force and torque (same order as the states), held over the fluid step
     /// (following the velocity change since the states were sent at the immersed boundary's own
     /// rate, when `coupling.substep_drag` is on), and advances `k` DEM steps: dt_fluid = k dt_dem.
-    fn advance(&mut self, replies: &[ParticleReply], k: u64) {
+    fn advance(&mut self, replies: &[ParticleReply], k: u64, dt: f64) {
+        let g = self.world.gravity;
         for (b, r) in self.world.bodies.iter_mut().zip(replies) {
+            let (force, torque) = (V3::from(r.force), V3::from(r.torque));
             (b.drag, b.spin_drag) = substep_drag(self.covered_mass_rate, b.r);
-            b.f_ext = V3::from(r.force) + b.drag * b.v;
-            b.t_ext = V3::from(r.torque) + b.spin_drag * b.w;
+            b.f_ext = force + b.drag * b.v;
+            b.t_ext = torque + b.spin_drag * b.w;
+            // The reference velocity moves as the held force, gravity and the previous step's mean
+            // contact force would move the sphere: only the change of the contacts within the step
+            // is damped.
+            let contact = b.contact_impulse / dt;
+            let contact_torque = b.contact_angular_impulse / dt;
+            b.f_ext_rate = b.drag * ((force + contact) / b.m + g);
+            b.t_ext_rate = b.spin_drag * (torque + contact_torque) / b.inertia;
+            b.contact_impulse = V3::zeros();
+            b.contact_angular_impulse = V3::zeros();
         }
         self.world.advance(k);
     }

@@ -119,9 +119,9 @@ pub struct Coupling {
     /// cell (default on).
     #[serde(default = "default_lubrication")]
     pub lubrication: bool,
-    /// With a `[lattice]`: within a fluid step the DEM lets the held fluid force and torque follow
-    /// each sphere's velocity at the immersed boundary's own rate, F_n - c (v - v_n) and
-    /// T_n - c (2/5) r^2 (w - w_n) with c = rho_f V / dt (default on; off: held constant).
+    /// With a `[lattice]`: within a fluid step the DEM lets the held fluid force and torque answer
+    /// the velocity change the contacts cause, at the immersed boundary's own rate c = rho_f V / dt
+    /// (docs/imb.md; default on; off: held constant).
     #[serde(default = "default_substep_drag")]
     pub substep_drag: bool,
 }

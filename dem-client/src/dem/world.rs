@@ -81,6 +81,14 @@ pub struct Body {
     /// fluid).
     pub drag: f64,
     pub spin_drag: f64,
+    /// Rates of change of f_ext and t_ext over a held fluid step [N/s], [N m/s] (0 without a
+    /// fluid): the drag's reference velocity moves with the acceleration the held forces give.
+    pub f_ext_rate: V3,
+    pub t_ext_rate: V3,
+    /// Contact impulse and angular impulse summed over the DEM steps since they were last reset
+    /// [N s], [N m s].
+    pub contact_impulse: V3,
+    pub contact_angular_impulse: V3,
 }
 
 impl Body {
@@ -101,6 +109,10 @@ impl Body {
             t_ext: V3::zeros(),
             drag: 0.0,
             spin_drag: 0.0,
+            f_ext_rate: V3::zeros(),
+            t_ext_rate: V3::zeros(),
+            contact_impulse: V3::zeros(),
+            contact_angular_impulse: V3::zeros(),
         }
     }
 
@@ -734,6 +746,10 @@ impl<L: LawRef> Gather<'_, L> {
         }
         b.f = f;
         b.t = t;
+        b.f_ext += dt * b.f_ext_rate;
+        b.t_ext += dt * b.t_ext_rate;
+        b.contact_impulse += dt * b.f;
+        b.contact_angular_impulse += dt * b.t;
         match self.finish {
             Finish::Nothing => (touching, 0.0),
             Finish::HalfKick => {
