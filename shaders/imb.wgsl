@@ -205,17 +205,6 @@ fn save(
     }
 }
 
-// The face (or SOLID_LINK) a link from p along c leaves through, for a link that leaves the fluid:
-// `neighbour` without its load of the neighbour's flags.
-fn link_face(p: vec3<i32>, c: vec3<i32>) -> u32 {
-    let n = vec3<i32>(params.n.xyz);
-    let q = p + c;
-    var face = crossed(0xffu, q.x, n.x, 0u);
-    face = crossed(face, q.y, n.y, 1u);
-    face = crossed(face, q.z, n.z, 2u);
-    return select(face, SOLID_LINK, face == 0xffu);
-}
-
 // After the fluid step, which updated the covered cells without the solid term: each covered cell
 // is redone from its saved populations, with the solid term, over the fluid kernels' result.
 @compute @workgroup_size(64)
@@ -243,20 +232,7 @@ fn stream_collide_covered(
         f{i}[wrapped(p + vec3<i32>({i.cx}, {i.cy}, {i.cz}))] = post[{i}];
         //#end
     } else {
-        // As `write_populations`, without the flag loads of `neighbour`.
-        let flag = flags[k];
-        //#for i
-        {
-            let c = vec3<i32>({i.cx}, {i.cy}, {i.cz});
-            if leaves(flag, {i}u) {
-                f{i.o}[k] = bounce(link_face(p, c), vec3<f32>(c), {i.w}, post[{i}], m);
-            } else if KIND == 3u {
-                f{i}[wrapped(p + c)] = post[{i}];
-            } else {
-                f{i.o}[k] = post[{i}];
-            }
-        }
-        //#end
+        write_populations(k, flags[k], post, m);
     }
 }
 

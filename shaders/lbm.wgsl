@@ -150,15 +150,29 @@ fn wrap(q: i32, n: i32) -> u32 {
 // or corner takes the crossed face of highest type (wall < moving wall or inlet < outlet), so
 // that, e.g., a moving lid owns its edge links and conserves mass.
 fn neighbour(p: vec3<i32>, c: vec3<i32>) -> u32 {
+    let face = crossed_face(p, c);
+    if face != 0xffu { return BOUNDARY | face; }
+    let n = vec3<i32>(params.n.xyz);
+    let q = p + c;
+    let k = wrap(q.x, n.x) + params.n.x * (wrap(q.y, n.y) + params.n.y * wrap(q.z, n.z));
+    if is_solid(k) { return BOUNDARY | SOLID_LINK; }
+    return k;
+}
+
+// The face a link from p along c crosses (see `neighbour`), or 0xff when it stays in the box.
+fn crossed_face(p: vec3<i32>, c: vec3<i32>) -> u32 {
     let n = vec3<i32>(params.n.xyz);
     let q = p + c;
     var face = crossed(0xffu, q.x, n.x, 0u);
     face = crossed(face, q.y, n.y, 1u);
-    face = crossed(face, q.z, n.z, 2u);
-    if face != 0xffu { return BOUNDARY | face; }
-    let k = wrap(q.x, n.x) + params.n.x * (wrap(q.y, n.y) + params.n.y * wrap(q.z, n.z));
-    if is_solid(k) { return BOUNDARY | SOLID_LINK; }
-    return k;
+    return crossed(face, q.z, n.z, 2u);
+}
+
+// The face (or SOLID_LINK) a link from p along c leaves through, for a link known to leave the
+// fluid: `neighbour` without its load of the neighbour's flags.
+fn link_face(p: vec3<i32>, c: vec3<i32>) -> u32 {
+    let face = crossed_face(p, c);
+    return select(face, SOLID_LINK, face == 0xffu);
 }
 
 // The cell along c from cell k, for a link that stays in the fluid.
@@ -331,7 +345,7 @@ fn write_populations(k: u32, flag: u32, post: array<f32, 19>, m: Moments) {
     let odd = params.n.w == 1u;
     //#for i
     if leaves(flag, {i}u) {
-        let face = neighbour(coords(k), vec3<i32>({i.cx}, {i.cy}, {i.cz})) & 0xffu;
+        let face = link_face(coords(k), vec3<i32>({i.cx}, {i.cy}, {i.cz}));
         f{i.o}[k] = bounce(face, vec3<f32>({i.cx}.0, {i.cy}.0, {i.cz}.0), {i.w}, post[{i}], m);
     } else if odd {
         f{i}[next_cell(k, vec3<i32>({i.cx}, {i.cy}, {i.cz}), flag)] = post[{i}];

@@ -161,7 +161,8 @@ impl FluidSide {
                 self.steps
             ));
         }
-        let unlisted = self.lattice.unlisted_covered_cells();
+        let lost = self.lattice.lost_covers();
+        let (unlisted, dropped) = (lost.unlisted, lost.dropped);
         if unlisted > 0 {
             return Err(format!(
                 "by step {}, {unlisted} covered cells did not fit the list of covered cells (room for {} \
@@ -171,7 +172,6 @@ impl FluidSide {
                 self.lattice.covered_cell_capacity()
             ));
         }
-        let dropped = self.lattice.dropped_covers();
         if dropped > 0 {
             protocol::say!(
                 "lbm-server: warning: by step {}, {dropped} particle-cell covers did not fit coupling.slots = {}",

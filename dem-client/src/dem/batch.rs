@@ -195,33 +195,16 @@ impl Batch {
             let ftx = if slip { scx } else { ex - gamma_t * vtx };
             let fty = if slip { scy } else { ey - gamma_t * vty };
             let ftz = if slip { scz } else { ez - gamma_t * vtz };
-            self.hx[k] = if slip {
-                if stiff {
-                    -scx / k_t
-                } else {
-                    0.0
-                }
-            } else {
-                hx
+            // The spring's history: at the Coulomb limit the stretch that gives it (none without a
+            // spring), else the stretched spring.
+            let history = |limit: f64, stretched: f64| match (slip, stiff) {
+                (true, true) => -limit / k_t,
+                (true, false) => 0.0,
+                (false, _) => stretched,
             };
-            self.hy[k] = if slip {
-                if stiff {
-                    -scy / k_t
-                } else {
-                    0.0
-                }
-            } else {
-                hy
-            };
-            self.hz[k] = if slip {
-                if stiff {
-                    -scz / k_t
-                } else {
-                    0.0
-                }
-            } else {
-                hz
-            };
+            self.hx[k] = history(scx, hx);
+            self.hy[k] = history(scy, hy);
+            self.hz[k] = history(scz, hz);
             // contact_force: F = F_n n + F_t, torques -l n x F_t.
             self.fx[k] = f_n * nx + ftx;
             self.fy[k] = f_n * ny + fty;

@@ -30,6 +30,15 @@ pub struct SolidParticle {
     pub angular_velocity: [f64; 3],
 }
 
+/// Covers lost since the start of a coupled run ([`Lattice::lost_covers`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct LostCovers {
+    /// Particle-cell covers beyond a cell's slots (dropped; the run warns).
+    pub dropped: u32,
+    /// Covered cells beyond the list of covered cells (the run stops).
+    pub unlisted: u32,
+}
+
 /// Force and torque on a particle over one step, in lattice units.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Load {
@@ -308,15 +317,15 @@ impl Lattice {
         self.imb.as_ref().map_or(0, |c| c.slots_per_cell)
     }
 
-    /// Particle-cell covers that did not fit a cell's slots since the start (0 when none).
-    pub fn dropped_covers(&self) -> u32 {
-        self.status_word(1)
-    }
-
-    /// Covered cells that did not fit the list of covered cells since the start (0 when none):
-    /// their solid term was missing.
-    pub fn unlisted_covered_cells(&self) -> u32 {
-        self.status_word(2)
+    /// Since the start (one readback): the particle-cell covers that did not fit a cell's slots,
+    /// and the covered cells that did not fit the list of covered cells (their solid term was
+    /// missing); (0, 0) when none.
+    pub fn lost_covers(&self) -> LostCovers {
+        let status: Vec<u32> = bytemuck::cast_slice(&self.gpu.read_buffer(&self.status, 16)).to_vec();
+        LostCovers {
+            dropped: status[1],
+            unlisted: status[2],
+        }
     }
 
     /// Room in the list of covered cells.
@@ -330,11 +339,6 @@ impl Lattice {
         if let Some(c) = self.imb.as_mut() {
             c.saved_cap = cells;
         }
-    }
-
-    fn status_word(&self, k: usize) -> u32 {
-        let status: Vec<u32> = bytemuck::cast_slice(&self.gpu.read_buffer(&self.status, 16)).to_vec();
-        status[k]
     }
 
     /// Grows the particle and pair buffers to hold `particles` and `pairs`.

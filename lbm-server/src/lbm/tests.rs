@@ -278,7 +278,7 @@ mod immersed_boundary {
             );
             f = next;
         }
-        assert_eq!(lattice.dropped_covers(), 0);
+        assert_eq!(lattice.lost_covers().dropped, 0);
     }
 
     /// The grids below have interior quads (nx a multiple of 4), so the fast fluid kernels (quads,
@@ -382,7 +382,7 @@ mod immersed_boundary {
         let got = lattice.step_coupled(&particles).unwrap();
         assert!(max_load_difference(&got, &want) < 1e-4);
         assert!(max_difference(&lattice.populations(), &next) < TOLERANCE);
-        assert_eq!(lattice.dropped_covers(), 0);
+        assert_eq!(lattice.lost_covers().dropped, 0);
     }
 
     #[test]
@@ -443,7 +443,7 @@ mod immersed_boundary {
                 lattice.cap_covered_cells(cells);
             }
             lattice.step_coupled(&two_particles(0.0)).unwrap();
-            (lattice.unlisted_covered_cells(), lattice.covered_cell_capacity())
+            (lattice.lost_covers().unlisted, lattice.covered_cell_capacity())
         };
         assert_eq!(unlisted(None).0, 0);
         let (missing, room) = unlisted(Some(16));
