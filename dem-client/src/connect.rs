@@ -1,5 +1,6 @@
 //! `dem-client connect`: the DEM side of the lockstep loop.
 
+use crate::dem::lubrication::Lubrication;
 use crate::dem::timestep::substeps;
 use crate::dem::world::{Body, World};
 use crate::dem::V3;
@@ -46,8 +47,26 @@ struct Faults {
     stall_at: Option<u64>,
 }
 
-/// Physics this side applies: gravity and contacts (buoyancy is the fluid's).
-const PHYSICS: u64 = Physics::GRAVITY | Physics::CONTACTS;
+/// Physics this side applies: gravity and contacts (buoyancy is the fluid's), and the squeeze
+/// films of `coupling.lubrication` in a scene with a lattice (the fluid then leaves them to us).
+fn physics(scene: &scene::Scene) -> u64 {
+    let films = if wet_films(scene) { Physics::LUBRICATION } else { 0 };
+    Physics::GRAVITY | Physics::CONTACTS | films
+}
+
+fn wet_films(scene: &scene::Scene) -> bool {
+    scene.coupling.lubrication && scene.lattice_units.is_some()
+}
+
+/// The squeeze films integrated in the DEM steps: the fluid's viscosity (Welcome), the cut-off one
+/// lattice cell of the scene.
+fn lubrication(scene: &scene::Scene, welcome: &Welcome) -> Option<Lubrication> {
+    let units = scene.lattice_units.as_ref().filter(|_| wet_films(scene))?;
+    Some(Lubrication {
+        viscosity: welcome.fluid_viscosity,
+        cutoff: units.dx,
+    })
+}
 
 pub fn main(args: ConnectArgs) -> ExitCode {
     let scene = match crate::scene_or_default(args.scene.as_ref()) {
@@ -88,7 +107,7 @@ pub fn main(args: ConnectArgs) -> ExitCode {
     };
     let mut hello = Hello::new(
         Units::SI,
-        PHYSICS,
+        physics(&scene),
         particles.world.bodies.len(),
         &format!("dem-client {} (soft-sphere DEM)", env!("CARGO_PKG_VERSION")),
     );
@@ -113,13 +132,27 @@ pub fn main(args: ConnectArgs) -> ExitCode {
         stall_at: args.stall_at,
     };
     particles.covered_mass_rate = covered_mass_rate(&scene, &welcome);
-    let (k, dt) = substeps(welcome.dt, setup.dt_max.min(particles.drag_step_limit()));
+    particles.world.set_lubrication(lubrication(&scene, &welcome));
+    let limits = [
+        setup.dt_max,
+        particles.drag_step_limit(),
+        particles.film_step_limit(),
+    ];
+    let (k, dt) = substeps(welcome.dt, limits.into_iter().fold(f64::INFINITY, f64::min));
     particles.world.dt = dt;
     particles.world.gravity = V3::from(welcome.gravity);
     protocol::say!(
-        "dem-client: DEM step {dt:.3e} s = fluid step / {k} (shortest contact time {:.3e} s), {} walls",
+        "dem-client: DEM step {dt:.3e} s = fluid step / {k} (shortest contact time {:.3e} s, step limits: \
+         contacts {:.3e} s, sub-step drag {:.3e} s, squeeze films {:.3e} s), {} walls{}",
         setup.contact_time,
-        particles.world.walls.len()
+        limits[0],
+        limits[1],
+        limits[2],
+        particles.world.walls.len(),
+        match particles.world.lubrication() {
+            Some(l) => format!(", lubrication below {:.3e} m", l.cutoff),
+            None => String::new(),
+        }
     );
     match step_loop(
         &link,
@@ -282,6 +315,21 @@ impl Particles {
             .map(relaxation)
             .fold(f64::INFINITY, f64::min);
         0.1 * shortest
+    }
+
+    /// The longest DEM step at which no squeeze film, at its roughness floor, changes a sphere's
+    /// approach speed by more than a fraction `MAX_FILM_LAMBDA` per step (infinite without
+    /// lubrication). The wall film of the sphere with the least m / r is the stiffest (m*/R* of a
+    /// pair is never below its smaller sphere's m / r).
+    fn film_step_limit(&self) -> f64 {
+        let Some(lub) = self.world.lubrication() else {
+            return f64::INFINITY;
+        };
+        self.world
+            .bodies
+            .iter()
+            .map(|b| lub.step_limit(b.r, b.m))
+            .fold(f64::INFINITY, f64::min)
     }
 
     /// Test aid: removes the last particle or inserts a copy of the first with a fresh id, next to

@@ -85,6 +85,11 @@ impl FluidSide {
         Physics::LATTICE_BOLTZMANN | Physics::IMMERSED_BOUNDARY | Physics::BUOYANCY | lubrication
     }
 
+    /// Leaves the lubrication correction to the DEM (which declared it in its Hello).
+    pub fn leave_lubrication(&mut self) {
+        self.lubrication = None;
+    }
+
     /// How the fluid is described in logs.
     pub fn describe(&self) -> String {
         let u = &self.units;

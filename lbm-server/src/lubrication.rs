@@ -17,8 +17,9 @@
 //! << 1, and never more than the force that stops the approach within the step. A pair in
 //! contact, or that reaches contact within the step at its approach speed, gets no force: the
 //! DEM's contact law resolves that collision in its sub-steps. Separating pairs get no force
-//! either (the film cavitates in tension; see `squeeze`). Integrating the film force in the DEM's
-//! sub-steps, with the contacts, would be better: the DEM would then declare LUBRICATION.
+//! either (the film cavitates in tension; see `squeeze`). This is the correction for a DEM that
+//! does not integrate the films itself: a DEM that does (dem-client) declares LUBRICATION in its
+//! Hello and the fluid leaves this out (`run.rs`, PROTOCOL.md 4.5).
 
 use protocol::{ParticleReply, ParticleState};
 use std::collections::HashMap;

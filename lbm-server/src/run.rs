@@ -247,7 +247,7 @@ impl Session {
             }
         };
         let (scene, steps) = (&self.p.scene, self.p.steps);
-        let (physics, fluid) = (self.fluid.physics(), self.fluid.describe());
+        let physics = self.fluid.physics();
         let interrupted = self.interrupted.clone();
         let hello = self
             .link
@@ -255,9 +255,13 @@ impl Session {
                 spawned,
                 self.p.connect_timeout,
                 &|| interrupted.load(Ordering::SeqCst),
-                |hello| welcome_for(scene, steps, hello, physics),
+                |hello| welcome_for(scene, steps, hello, physics & !yielded(hello)),
             )
             .map_err(|e| e.to_string())?;
+        if yielded(&hello) != 0 {
+            self.fluid.leave_lubrication();
+        }
+        let fluid = self.fluid.describe();
         self.peer = Some(PeerInfo {
             software: protocol::handshake::field_text(&hello.software),
             pid: hello.pid,
@@ -407,6 +411,13 @@ impl Session {
 }
 
 /// The fluid's answer to a DEM's Hello, in the DEM's units.
+/// The negotiable effects the fluid leaves to a DEM that declares them: lubrication (a DEM that
+/// integrates the squeeze films in its own sub-steps does it better than a force held over the
+/// fluid step; PROTOCOL.md 4.5).
+fn yielded(hello: &Hello) -> u64 {
+    hello.physics & Physics::LUBRICATION
+}
+
 fn welcome_for(scene: &Scene, steps: u64, hello: &Hello, physics: u64) -> Welcome {
     let u = hello.units;
     let accel = u.length_m / (u.time_s * u.time_s);
@@ -456,6 +467,28 @@ fn check_states(states: &[ParticleState], step: u64, domain: &scene::Domain) -> 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The fluid applies lubrication unless the DEM declares it (then the DEM integrates it in its
+    /// sub-steps); gravity and buoyancy are not negotiable.
+    #[test]
+    fn the_fluid_leaves_lubrication_to_a_dem_that_declares_it() {
+        let scene = Scene::default_scene();
+        let ours = Physics::LATTICE_BOLTZMANN | Physics::BUOYANCY | Physics::LUBRICATION;
+        let welcome = |dem: u64| {
+            let hello = Hello::new(protocol::Units::SI, dem, 1, "test");
+            welcome_for(&scene, 1, &hello, ours & !yielded(&hello)).physics
+        };
+        assert_eq!(welcome(Physics::GRAVITY), ours);
+        assert_eq!(
+            welcome(Physics::GRAVITY | Physics::LUBRICATION),
+            ours & !Physics::LUBRICATION
+        );
+        assert_eq!(
+            welcome(Physics::GRAVITY | Physics::BUOYANCY),
+            ours,
+            "a conflict stays one"
+        );
+    }
 
     #[test]
     fn a_particle_outside_the_domain_or_not_finite_stops_the_run_with_its_id() {

@@ -116,7 +116,8 @@ pub struct Coupling {
     #[serde(default = "default_weighting")]
     pub weighting: String,
     /// With a `[lattice]`: lubrication correction for sphere-sphere and sphere-wall gaps below one
-    /// cell (default on).
+    /// cell (default on): integrated in the DEM's sub-steps by a DEM that declares LUBRICATION
+    /// (dem-client does), else the fluid's held correction.
     #[serde(default = "default_lubrication")]
     pub lubrication: bool,
     /// With a `[lattice]`: within a fluid step the DEM lets the held fluid force and torque answer

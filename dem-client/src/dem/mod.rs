@@ -3,6 +3,7 @@
 
 pub mod batch;
 pub mod contact;
+pub mod lubrication;
 pub mod neighbor;
 pub mod timestep;
 pub mod world;

@@ -8,6 +8,7 @@
 
 use super::batch::{Batch, LANES};
 use super::contact::{contact_force, Contact, ContactForce, ContactLaw, PairMaterial};
+use super::lubrication::Lubrication;
 use super::neighbor::verlet_pairs;
 use super::V3;
 use rayon::prelude::*;
@@ -70,7 +71,7 @@ pub struct Body {
     pub inertia: f64,
     /// Index into the world's materials.
     pub material: usize,
-    /// Contact force and torque of the last force evaluation.
+    /// Contact (and lubrication) force and torque of the last force evaluation.
     pub f: V3,
     pub t: V3,
     /// External (fluid) force and torque.
@@ -154,15 +155,18 @@ pub struct Wall {
 impl Wall {
     /// (unit normal from the wall to the sphere, overlap) when touching.
     fn touch(&self, x: V3, r: f64) -> Option<(V3, f64)> {
+        self.separation(x, r)
+            .and_then(|(n, gap)| (gap < 0.0).then_some((n, -gap)))
+    }
+
+    /// (unit normal from the wall to the sphere, gap between them), where the normal is defined.
+    fn separation(&self, x: V3, r: f64) -> Option<(V3, f64)> {
         match self.shape {
-            Shape::Plane { point, normal } => {
-                let overlap = r - (x - point).dot(&normal);
-                (overlap > 0.0).then_some((normal, overlap))
-            }
+            Shape::Plane { point, normal } => Some((normal, (x - point).dot(&normal) - r)),
             Shape::Solid { min, max } => {
                 let delta = x - x.sup(&min).inf(&max);
                 let dist = delta.norm();
-                (dist < r && dist > 0.0).then(|| (delta / dist, r - dist))
+                (dist > 0.0).then(|| (delta / dist, dist - r))
             }
         }
     }
@@ -218,6 +222,10 @@ pub struct World {
     pub dt: f64,
     pub skin: f64,
     pub time: f64,
+    /// Squeeze films of a coupled fluid (None: dry, the pure DEM). Set by `set_lubrication`.
+    lubrication: Option<Lubrication>,
+    /// Film force on i of each pair at the last evaluation (empty without lubrication).
+    films: Vec<V3>,
     /// The Verlet pairs (i < j), sorted by i then j.
     slots: Vec<Slot>,
     pair_const: Vec<PairConst>,
@@ -264,6 +272,8 @@ impl World {
             dt,
             skin,
             time: 0.0,
+            lubrication: None,
+            films: Vec::new(),
             slots: Vec::new(),
             pair_const: Vec::new(),
             out: Vec::new(),
@@ -284,6 +294,23 @@ impl World {
 
     fn pair_material(&self, a: usize, b: usize) -> &PairMaterial {
         &self.pair_materials[a * self.n_materials + b]
+    }
+
+    /// Adds (or removes) the squeeze-film force of a fluid to every pair and wall gap below its
+    /// cut-off; the neighbour lists then reach the cut-off further.
+    pub fn set_lubrication(&mut self, lubrication: Option<Lubrication>) {
+        self.lubrication = lubrication;
+        self.stale = true;
+        self.forces(0.0, Finish::Nothing);
+    }
+
+    pub fn lubrication(&self) -> Option<&Lubrication> {
+        self.lubrication.as_ref()
+    }
+
+    /// How much further than contact the neighbour lists must reach: the film cut-off.
+    fn reach(&self) -> f64 {
+        self.lubrication.map_or(0.0, |l| l.cutoff)
     }
 
     /// Contacts (sphere-sphere and sphere-wall) at the last force evaluation.
@@ -389,7 +416,8 @@ impl World {
             })
             .collect();
         let ids: Vec<u64> = self.bodies.iter().map(|b| b.id).collect();
-        self.slots = verlet_pairs(&x, &r, self.skin)
+        let reach = self.reach();
+        self.slots = verlet_pairs(&x, &r, self.skin + reach)
             .into_iter()
             .map(|(i, j)| {
                 let (a, b) = (ids[i as usize], ids[j as usize]);
@@ -423,6 +451,10 @@ impl World {
             .collect();
         self.out.clear();
         self.out.resize(self.slots.len(), ContactForce::default());
+        self.films.clear();
+        if self.lubrication.is_some() {
+            self.films.resize(self.slots.len(), V3::zeros());
+        }
         self.build_adjacency();
         let w = self.walls.len();
         self.wall_history
@@ -434,7 +466,7 @@ impl World {
         self.near.clear();
         for (k, b) in self.bodies.iter().enumerate() {
             for (l, wall) in self.walls.iter().enumerate() {
-                if wall.near(b.x, b.r, self.skin) {
+                if wall.near(b.x, b.r, self.skin + reach) {
                     self.near.push(l as u32);
                 } else {
                     self.wall_history[k * w + l] = V3::zeros();
@@ -480,15 +512,13 @@ impl World {
         }
         let law = self.law;
         let (pair_contacts, (wall_contacts, moved)) = if law == ContactLaw::LIGGGHTS_HERTZ {
-            (
-                self.pair_forces(LiggghtsHertz, dt),
-                self.gather(LiggghtsHertz, dt, finish),
-            )
+            let pair_contacts = self.pair_forces(LiggghtsHertz, dt);
+            self.film_forces();
+            (pair_contacts, self.gather(LiggghtsHertz, dt, finish))
         } else {
-            (
-                self.pair_forces(AnyLaw(&law), dt),
-                self.gather(AnyLaw(&law), dt, finish),
-            )
+            let pair_contacts = self.pair_forces(AnyLaw(&law), dt);
+            self.film_forces();
+            (pair_contacts, self.gather(AnyLaw(&law), dt, finish))
         };
         self.contacts = pair_contacts + wall_contacts;
         moved
@@ -516,6 +546,24 @@ impl World {
             .sum()
     }
 
+    /// Squeeze-film force of every listed pair into `films` (nothing without lubrication).
+    fn film_forces(&mut self) {
+        let Some(lub) = self.lubrication else {
+            return;
+        };
+        let bodies = &self.bodies;
+        self.films
+            .par_chunks_mut(PAIR_CHUNK)
+            .zip(self.slots.par_chunks(PAIR_CHUNK))
+            .zip(self.pair_const.par_chunks(PAIR_CHUNK))
+            .for_each(|((films, slots), consts)| {
+                for ((film, s), p) in films.iter_mut().zip(slots).zip(consts) {
+                    let (a, b) = (&bodies[s.i as usize], &bodies[s.j as usize]);
+                    *film = lub.pair_force(a.x - b.x, a.v - b.v, p.r_sum, p.r_eff);
+                }
+            });
+    }
+
     /// Sums the pair forces and adds the wall contacts, in parallel over chunks of the bodies;
     /// returns the number of wall contacts and the largest squared displacement since the last
     /// build (after a drift). Each body sums its pairs in slot order (first as j, then as i), then
@@ -527,6 +575,8 @@ impl World {
             finish,
             g: self.gravity,
             out: &self.out,
+            films: &self.films,
+            lubrication: self.lubrication,
             first_i: &self.first_i,
             as_j: &self.as_j,
             as_j_start: &self.as_j_start,
@@ -688,6 +738,8 @@ struct Gather<'a, L> {
     finish: Finish,
     g: V3,
     out: &'a [ContactForce],
+    films: &'a [V3],
+    lubrication: Option<Lubrication>,
     first_i: &'a [u32],
     as_j: &'a [u32],
     as_j_start: &'a [u32],
@@ -700,6 +752,29 @@ struct Gather<'a, L> {
 }
 
 impl<L: LawRef> Gather<'_, L> {
+    /// The walls body k can reach before the next neighbour-list build.
+    fn near_walls(&self, k: usize) -> &[u32] {
+        &self.near[self.near_start[k] as usize..self.near_start[k + 1] as usize]
+    }
+
+    /// The film forces of body k's pairs: as j, then as i (its slots `own`).
+    fn pair_films(&self, k: usize, own: std::ops::Range<usize>) -> V3 {
+        let as_j = &self.as_j[self.as_j_start[k] as usize..self.as_j_start[k + 1] as usize];
+        let pulled: V3 = as_j.iter().map(|&slot| self.films[slot as usize]).sum();
+        self.films[own].iter().sum::<V3>() - pulled
+    }
+
+    /// The film forces between body `b` and the walls it can reach (R* = r).
+    fn wall_films(&self, lub: &Lubrication, k: usize, b: &Body) -> V3 {
+        let mut f = V3::zeros();
+        for &l in self.near_walls(k) {
+            if let Some((n, gap)) = self.walls[l as usize].separation(b.x, b.r) {
+                f += n * lub.film_force(b.r, gap, -b.v.dot(&n));
+            }
+        }
+        f
+    }
+
     /// Body k: pair forces, wall contacts, then `finish`; returns (wall contacts, squared
     /// displacement since the last build after a drift, else 0).
     #[inline(always)]
@@ -711,12 +786,17 @@ impl<L: LawRef> Gather<'_, L> {
             f += -o.force;
             t += o.torque_j;
         }
-        for o in &out[self.first_i[k] as usize..self.first_i[k + 1] as usize] {
+        let own = self.first_i[k] as usize..self.first_i[k + 1] as usize;
+        for o in &out[own.clone()] {
             f += o.force;
             t += o.torque_i;
         }
+        if let Some(lub) = &self.lubrication {
+            f += self.pair_films(k, own);
+            f += self.wall_films(lub, k, b);
+        }
         let mut touching = 0;
-        for &l in &self.near[self.near_start[k] as usize..self.near_start[k + 1] as usize] {
+        for &l in self.near_walls(k) {
             let (wall, h) = (&self.walls[l as usize], &mut hist[l as usize]);
             let Some((n, overlap)) = wall.touch(b.x, b.r) else {
                 *h = V3::zeros();
