@@ -5,11 +5,14 @@ use common::*;
 use std::process::Command;
 use std::time::Duration;
 
-fn python_run(tag: &str, particles: u64, steps: u64) {
+/// A run with the Python DEM; with `lubrication` the scene asks for it, and as the Python DEM does
+/// not declare LUBRICATION the fluid applies its own correction.
+fn python_run(tag: &str, particles: u64, steps: u64, lubrication: bool) {
     let dir = temp_dir(tag);
     // The external DEM brings its own particles: the scene only sets the capacity.
-    let text =
-        scene_text(tag, [2, 2, 2], steps, 50, 10.0).replace("timeout = 10", "timeout = 10\ncapacity = 4096");
+    let text = scene_text(tag, [2, 2, 2], steps, 50, 10.0)
+        .replace("timeout = 10", "timeout = 10\ncapacity = 4096")
+        .replace("lubrication = false", &format!("lubrication = {lubrication}"));
     let scene = write_scene(&dir, &text);
     let out = dir.join("out");
     let (mut server, run) = start_external(&scene, &out);
@@ -39,6 +42,8 @@ fn python_run(tag: &str, particles: u64, steps: u64) {
         s["peer"]["software"].as_str().unwrap().contains("example_dem.py"),
         "{s}"
     );
+    let fluid = s["fluid_physics"].to_string();
+    assert_eq!(fluid.contains("lubrication"), lubrication, "{fluid}");
     // Forces arrived for every particle of every output step.
     let rows = csv_steps(&out);
     assert!(rows.values().all(|ids| ids.len() as u64 == particles));
@@ -47,10 +52,10 @@ fn python_run(tag: &str, particles: u64, steps: u64) {
 
 #[test]
 fn python_client_completes_a_run() {
-    python_run("python", 64, 150);
+    python_run("python", 64, 150, true);
 }
 
 #[test]
 fn python_client_with_2000_particles() {
-    python_run("python2k", 2000, 60);
+    python_run("python2k", 2000, 60, false);
 }
