@@ -190,15 +190,9 @@ impl Lattice {
         health: Health,
         imb: Option<super::imb::ImbOptions>,
     ) -> Result<Lattice, String> {
+        fits_device(&gpu.limits, setup.n)?;
         let cells = setup.cells();
         let bytes = (cells * 4) as u64;
-        let binding_limit = gpu.limits.max_storage_buffer_binding_size;
-        if bytes > binding_limit.min(gpu.limits.max_buffer_size) || cells as u64 >= (1u64 << 31) {
-            return Err(format!(
-                "grid {}x{}x{} needs {bytes} bytes per direction, above this device's limit of {binding_limit}",
-                setup.n[0], setup.n[1], setup.n[2]
-            ));
-        }
         let d = &gpu.device;
         let populations: Vec<wgpu::Buffer> = (0..19)
             .map(|i| storage_buffer(d, &format!("f{i}"), bytes.div_ceil(16) * 16))
@@ -539,6 +533,29 @@ pub(super) fn storage_buffer(device: &wgpu::Device, label: &str, bytes: u64) -> 
 }
 
 #[allow(clippy::too_many_arguments)]
+/// Bytes per cell of the largest buffer indexed by cell: the fields (density and velocity, four
+/// f32), as large as the coupling's slots at 4 slots per cell.
+const LARGEST_BYTES_PER_CELL: u64 = 16;
+
+/// Refuses a grid whose largest per-cell buffer exceeds what one storage binding of this device
+/// may hold (each buffer is bound whole), or whose cell index would not fit an i32.
+pub fn fits_device(limits: &wgpu::Limits, n: [usize; 3]) -> Result<(), String> {
+    let cells = n.iter().map(|&k| k as u64).product::<u64>();
+    let largest = cells * LARGEST_BYTES_PER_CELL;
+    let limit = limits.max_storage_buffer_binding_size.min(limits.max_buffer_size);
+    if largest <= limit && cells < (1u64 << 31) {
+        return Ok(());
+    }
+    let [x, y, z] = n;
+    Err(format!(
+        "grid {x}x{y}x{z} ({cells} cells) needs {largest} bytes in one buffer (the fields, \
+         {LARGEST_BYTES_PER_CELL} bytes per cell), above this device's storage binding limit of {limit} \
+         bytes: at most {} cells here (Mesa lavapipe, the CPU driver, allows 128 MiB: 8.4 M cells); use a \
+         coarser lattice.dx or a smaller domain, or a GPU",
+        (limit / LARGEST_BYTES_PER_CELL).min((1u64 << 31) - 1)
+    ))
+}
+
 fn make_bind_group(
     d: &wgpu::Device,
     layout: &wgpu::BindGroupLayout,

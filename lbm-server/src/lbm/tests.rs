@@ -1,7 +1,7 @@
 //! Every GPU kernel against the f64 reference step, on random populations.
 
 use super::geometry::{Cell, Face, Operator, Setup};
-use super::gpu::{Gpu, Health, Lattice};
+use super::gpu::{fits_device, Gpu, Health, Lattice};
 use super::mrt::Rates;
 use super::random::{random_populations, Random};
 use super::reference;
@@ -53,6 +53,29 @@ fn sprinkle_solids(setup: &mut Setup, seed: u64) {
     for s in setup.solid.iter_mut() {
         *s = r.next() > 0.8;
     }
+}
+
+/// A grid whose fields buffer would exceed the device's storage binding limit is refused with the
+/// numbers before anything is allocated (it used to panic in wgpu's bind-group validation: Ten Cate
+/// E4 at 16 cells per diameter, 224 x 224 x 256, on lavapipe's 128 MiB).
+#[test]
+fn a_grid_beyond_the_binding_limit_is_refused_clearly() {
+    let lavapipe = wgpu::Limits {
+        max_storage_buffer_binding_size: 128 << 20,
+        ..wgpu::Limits::default()
+    };
+    assert_eq!(fits_device(&lavapipe, [64, 64, 2048]), Ok(()));
+    let err = fits_device(&lavapipe, [64, 64, 2049]).unwrap_err();
+    for part in [
+        "64x64x2049",
+        "8392704 cells",
+        "134283264 bytes",
+        "134217728 bytes",
+        "8388608 cells here",
+    ] {
+        assert!(err.contains(part), "{part} missing: {err}");
+    }
+    assert!(fits_device(&lavapipe, [224, 224, 256]).is_err());
 }
 
 #[test]
