@@ -222,14 +222,14 @@ fn stream_collide_covered(
     //#end
     let m = moments(f);
     let post = immersed_boundary(k, f, m, collide(f, m));
-    let p = coords(k);
     if KIND == 0u {
         //#for i
         f{i.o}[k] = post[{i}];
         //#end
     } else if KIND == 1u {
+        let flag = flags[k];
         //#for i
-        f{i}[wrapped(p + vec3<i32>({i.cx}, {i.cy}, {i.cz}))] = post[{i}];
+        f{i}[next_cell(k, vec3<i32>({i.cx}, {i.cy}, {i.cz}), flag)] = post[{i}];
         //#end
     } else {
         write_populations(k, flags[k], post, m);

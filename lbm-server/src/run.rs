@@ -410,7 +410,6 @@ impl Session {
     }
 }
 
-/// The fluid's answer to a DEM's Hello, in the DEM's units.
 /// The negotiable effects the fluid leaves to a DEM that declares them: lubrication (a DEM that
 /// integrates the squeeze films in its own sub-steps does it better than a force held over the
 /// fluid step; PROTOCOL.md 4.5).
@@ -418,6 +417,7 @@ fn yielded(hello: &Hello) -> u64 {
     hello.physics & Physics::LUBRICATION
 }
 
+/// The fluid's answer to a DEM's Hello, in the DEM's units.
 fn welcome_for(scene: &Scene, steps: u64, hello: &Hello, physics: u64) -> Welcome {
     let u = hello.units;
     let accel = u.length_m / (u.time_s * u.time_s);
