@@ -47,7 +47,8 @@ struct Saved {
 @group(0) @binding(28) var<storage, read> imb_info: vec4<u32>;
 // The covered cells of this step, each once, in the order `cover` found them, over the `fields`
 // buffer (binding 3), which only `macroscopic` uses and which it rewrites: from the front those
-// none of whose links leaves the fluid (status[4] of them), from the back the others (status[8]).
+// none of whose links leaves the fluid or wraps (status[4] of them: their neighbours are at fixed
+// index offsets), from the back the others (status[8]).
 @group(0) @binding(3) var<storage, read_write> saved: array<Saved>;
 
 const NO_CELL: u32 = 0xffffffffu;
@@ -119,7 +120,7 @@ fn cover(
                 if slot == 0u {
                     // First to cover the cell: it joins the list of covered cells (a cell that
                     // would not fit is counted by `covered_groups`).
-                    if (flags[k] & 0x7ffffu) == 0u {
+                    if (flags[k] & (0x7ffffu | WRAPS)) == 0u {
                         let e = atomicAdd(&status[4], 1u);
                         if e < imb_info.w { saved[e].cell = k; }
                     } else {
@@ -162,7 +163,7 @@ fn covered_groups() {
 }
 
 // The entry of `saved` of invocation j, or NO_CELL past the end of its list. KIND: bit 0 the
-// parity, bit 1 the back of the list (cells with a link that leaves the fluid).
+// parity, bit 1 the back of the list (cells with a link that leaves the fluid or wraps).
 fn saved_entry(j: u32) -> u32 {
     let capacity = imb_info.w;
     let front = min(atomicLoad(&status[4]), capacity);
@@ -192,7 +193,7 @@ fn save(
         //#end
     } else if KIND == 1u {
         //#for i
-        saved[e].f[{i}] = f{i.o}[wrapped(p - vec3<i32>({i.cx}, {i.cy}, {i.cz}))];
+        saved[e].f[{i}] = f{i.o}[u32(i32(k) - offset(vec3<i32>({i.cx}, {i.cy}, {i.cz})))];
         //#end
     } else {
         let flag = flags[k];
@@ -227,9 +228,8 @@ fn stream_collide_covered(
         f{i.o}[k] = post[{i}];
         //#end
     } else if KIND == 1u {
-        let flag = flags[k];
         //#for i
-        f{i}[next_cell(k, vec3<i32>({i.cx}, {i.cy}, {i.cz}), flag)] = post[{i}];
+        f{i}[u32(i32(k) + offset(vec3<i32>({i.cx}, {i.cy}, {i.cz})))] = post[{i}];
         //#end
     } else {
         write_populations(k, flags[k], post, m);
