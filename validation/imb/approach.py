@@ -14,6 +14,7 @@ reduced to the sphere from 40 mm above the floor on).
 import argparse
 import csv
 import json
+import math
 import os
 import re
 import shutil
@@ -80,21 +81,22 @@ def run_one(case, n, lub):
     shutil.rmtree(tmp, ignore_errors=True)
 
 
-def crossing(t, gap, level):
-    """Time at which the gap first falls to `level` (linear between rows), None if never."""
+def at_crossing(y, gap, level):
+    """y where the gap first falls to `level` (linear between rows), None if never."""
     for k in range(1, len(gap)):
         if gap[k] <= level < gap[k - 1]:
             f = (gap[k - 1] - level) / (gap[k - 1] - gap[k])
-            return t[k - 1] + f * (t[k] - t[k - 1])
+            return y[k - 1] + f * (y[k] - y[k - 1])
     return None
 
 
-def speed_at(t, gap, speed, level):
-    for k in range(1, len(gap)):
-        if gap[k] <= level < gap[k - 1]:
-            f = (gap[k - 1] - level) / (gap[k - 1] - gap[k])
-            return speed[k - 1] + f * (speed[k] - speed[k - 1])
-    return None
+def film_alone_time(case, dx, h0, h1):
+    """Quasi-steady closing time of the floor film alone from h0 to h1 under the buoyant weight F:
+    K/F (ln(h0/h1) - (h0 - h1)/dx), K = 6 pi mu r^2."""
+    c = tc.CASES[case]
+    weight = (tc.RHO_P - c["rho_f"]) * math.pi / 6.0 * tc.D ** 3 * 9.81
+    k = 6.0 * math.pi * c["mu"] * tc.R ** 2
+    return k / weight * (math.log(h0 / h1) - (h0 - h1) / dx)
 
 
 def analyse(case, n, lub):
@@ -113,12 +115,17 @@ def analyse(case, n, lub):
                wall_time_s=s.get("wall_time_s"), tau=info.get("tau"), dt=info.get("dt"),
                dem_substeps=int(m.group(2)) if m else None,
                dem_physics=(s.get("peer") or {}).get("physics"), fluid_physics=s.get("fluid_physics"))
-    t1 = crossing(t, gap, dx)
+    t1 = at_crossing(t, gap, dx)
     res["t_1dx"] = t1
     for name, level in (("dx", dx), ("0p1dx", 0.1 * dx), ("0p01d", 0.01 * tc.D)):
-        tl = crossing(t, gap, level)
+        tl = at_crossing(t, gap, level)
         res["dt_to_" + name] = None if tl is None or t1 is None else tl - t1
-        res["speed_at_" + name] = speed_at(t, gap, speed, level)
+        res["speed_at_" + name] = at_crossing(speed, gap, level)
+    res["film_ratio"] = {}
+    for h0, h1 in ((0.5e-3, 0.1e-3), (0.2e-3, 0.1e-3)):
+        t0, t1_ = at_crossing(t, gap, h0), at_crossing(t, gap, h1)
+        if t0 is not None and t1_ is not None:
+            res["film_ratio"]["%g-%g" % (h0 * 1e3, h1 * 1e3)] = (t1_ - t0) / film_alone_time(case, dx, h0, h1)
     first = next((k for k in range(len(gap)) if gap[k] <= 0.0), None)
     res["t_contact"] = t[first] if first is not None else None
     res["dt_to_contact"] = None if first is None or t1 is None else t[first] - t1
@@ -197,6 +204,14 @@ def report(results):
             fmt(None if r["rebound_max_gap"] is None else r["rebound_max_gap"] * 1e6, "%.2f"),
             fmt(r["final_gap"] * 1e6, "%.2f"), fmt(r["rms_speed_end"], "%.2e"), fmt(r["dem_substeps"], "%d"),
             fmt(r["wall_time_s"], "%.0f"), r["dir"]))
+    lines += ["", "Closing time of the last gap against the quasi-steady film alone, K/F (ln(h0/h1) - (h0 - h1)/dx), "
+              "K = 6 pi mu r^2, F the buoyant weight (1 = the film carries the whole weight at every instant):", "",
+              "| case | N | films | 0.5 -> 0.1 mm | 0.2 -> 0.1 mm |", "|---|---|---|---|---|"]
+    for r in sorted(results, key=lambda r: (r["case"], r["N"])):
+        if r["lub"] == "on":
+            fr = r["film_ratio"]
+            lines.append("| %s | %g | on | %s | %s |" % (r["case"], r["N"], fmt(fr.get("0.5-0.1"), "%.2f"),
+                                                         fmt(fr.get("0.2-0.1"), "%.2f")))
     lines += ["", "![approach](approach.png)", ""]
     findings = os.path.join(HERE, "approach_findings.md")
     if os.path.exists(findings):
