@@ -1103,9 +1103,10 @@ at N = {fmt(nmax, "%g")} cells per diameter or less. {headline}
   `runs/<case>_N<n>_W<w>_H<h>_<op>/` for those in a larger box). The .vti snapshot of
   the last step (`fields_interval = 0`) was deleted after each run. The runs made with the larger boxes and
   the other operators also keep `load.txt`: `uptime` just before and just after the run.
-- Code: every run here except the larger-box runs of E2 (N = 6, 9, 12), E3 at N = 12 and E4 at
-  N = 12 (200 and 150 mm wide) and N = 16 (made last, with the current fluid code; the E2 N = 12 and
-  E4 150 mm runs also with the squeeze films integrated in the DEM, which act only below one cell of gap)
+- Code: every run here except the larger-box runs of E1 at N = 12, E2 (N = 6, 9, 12), E3 at N = 12
+  and E4 at N = 12 (200 and 150 mm wide) and N = 16 (made last, with the current fluid code; the E1
+  and E2 N = 12 and E4 150 mm runs also with the squeeze films integrated in the DEM, which act only
+  below one cell of gap)
   predates two changes of 2026-11-24: the
   solid fraction by a distance ramp instead of 4^3 sub-samples, which moves the Zick-Homsy and
   Schiller-Naumann errors by at most 0.9 points (docs/imb.md), and the force within a fluid step
