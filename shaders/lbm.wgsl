@@ -152,9 +152,7 @@ fn wrap(q: i32, n: i32) -> u32 {
 fn neighbour(p: vec3<i32>, c: vec3<i32>) -> u32 {
     let face = crossed_face(p, c);
     if face != 0xffu { return BOUNDARY | face; }
-    let n = vec3<i32>(params.n.xyz);
-    let q = p + c;
-    let k = wrap(q.x, n.x) + params.n.x * (wrap(q.y, n.y) + params.n.y * wrap(q.z, n.z));
+    let k = wrapped(p + c);
     if is_solid(k) { return BOUNDARY | SOLID_LINK; }
     return k;
 }

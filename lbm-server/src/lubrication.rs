@@ -39,9 +39,6 @@ pub struct Lubrication {
     pub dt: f64,
 }
 
-/// Roughness floor, as a fraction of the reduced radius.
-const MIN_GAP_FRACTION: f64 = 0.01;
-
 impl Lubrication {
     /// Adds the correction to `replies` (same order as `states`).
     pub fn apply(&self, states: &[ParticleState], replies: &mut [ParticleReply]) {
@@ -84,9 +81,7 @@ impl Lubrication {
             // scene: beads at rest kicked to 0.1-0.23 m/s with the pull, none without).
             return 0.0;
         }
-        let h = gap.max(MIN_GAP_FRACTION * reduced);
-        let damping =
-            6.0 * std::f64::consts::PI * self.viscosity * reduced * reduced * (1.0 / h - 1.0 / self.cutoff);
+        let damping = protocol::lubrication::film_damping(self.viscosity, reduced, gap, self.cutoff);
         let lambda = damping * self.dt / mass;
         -mass * approach * (-lambda).exp_m1() / self.dt
     }

@@ -12,7 +12,6 @@ reduced to the sphere from 40 mm above the floor on).
 """
 
 import argparse
-import csv
 import json
 import math
 import os
@@ -47,16 +46,6 @@ def write_scene(case, n, lub, path):
     return ln
 
 
-def reduce_csv(src, dst):
-    keep = ["step", "time", "z", "vz", "fz"]
-    with open(src) as f, open(dst, "w", newline="") as g:
-        w = csv.writer(g)
-        w.writerow(keep)
-        for row in csv.DictReader(f):
-            if row["id"] == "0" and float(row["z"]) - tc.R < KEEP_BELOW:
-                w.writerow([row["step"]] + ["%.9g" % float(row[k]) for k in keep[1:]])
-
-
 def run_one(case, n, lub):
     out = run_dir(case, n, lub)
     if os.path.exists(os.path.join(out, "summary.json")):
@@ -77,7 +66,9 @@ def run_one(case, n, lub):
         if os.path.exists(os.path.join(tmp, name)):
             shutil.copy(os.path.join(tmp, name), os.path.join(out, name))
     if os.path.exists(os.path.join(tmp, "particles.csv")):
-        reduce_csv(os.path.join(tmp, "particles.csv"), os.path.join(out, "particles.csv"))
+        tc.reduce_csv(os.path.join(tmp, "particles.csv"), os.path.join(out, "particles.csv"),
+                      keep=("step", "time", "z", "vz", "fz"), digits=9,
+                      row_kept=lambda row: float(row["z"]) - tc.R < KEEP_BELOW)
     shutil.rmtree(tmp, ignore_errors=True)
 
 

@@ -163,16 +163,17 @@ def write_scene(case, n, path, mach=MACH, op=OPERATOR, width=None, height=None, 
     return ln
 
 
-def reduce_csv(src, dst):
-    keep = ["step", "time", "x", "y", "z", "vx", "vy", "vz", "fz"]
+def reduce_csv(src, dst, keep=("step", "time", "x", "y", "z", "vx", "vy", "vz", "fz"), digits=7, row_kept=None):
+    """The sphere's rows (id 0) of particles.csv, columns `keep`, `digits` significant digits; with
+    `row_kept`, only the rows it accepts."""
     with open(src) as f, open(dst, "w", newline="") as g:
         r = csv.DictReader(f)
         w = csv.writer(g)
         w.writerow(keep)
         for row in r:
-            if row["id"] != "0":
+            if row["id"] != "0" or (row_kept and not row_kept(row)):
                 continue
-            w.writerow([row["step"]] + ["%.7g" % float(row[k]) for k in keep[1:]])
+            w.writerow([row["step"]] + ["%.*g" % (digits, float(row[k])) for k in keep[1:]])
 
 
 def uptime():

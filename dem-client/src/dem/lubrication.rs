@@ -20,10 +20,7 @@
 //! of the steady load by lambda / (1 - exp(-lambda)): closing times 3-8% short at lambda 0.1-0.4.
 
 use super::V3;
-use std::f64::consts::PI;
-
-/// Roughness floor of the gap, as a fraction of the reduced radius.
-pub const MIN_GAP_FRACTION: f64 = 0.01;
+pub use protocol::lubrication::MIN_GAP_FRACTION;
 
 /// Largest lambda = c dt / m of a sphere's wall film at the roughness floor that `step_limit`
 /// allows.
@@ -42,11 +39,7 @@ impl Lubrication {
     /// Film damping 6 pi mu R*^2 (1/h - 1/h_c) [N s/m] of a gap below the cut-off (0 beyond it
     /// and in contact).
     pub fn damping(&self, r_eff: f64, gap: f64) -> f64 {
-        if gap <= 0.0 || gap >= self.cutoff {
-            return 0.0;
-        }
-        let h = gap.max(MIN_GAP_FRACTION * r_eff);
-        6.0 * PI * self.viscosity * r_eff * r_eff * (1.0 / h - 1.0 / self.cutoff)
+        protocol::lubrication::film_damping(self.viscosity, r_eff, gap, self.cutoff)
     }
 
     /// Film force along the separation direction (positive pushes apart) for an approach speed
@@ -81,6 +74,7 @@ impl Lubrication {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::f64::consts::PI;
 
     const LUB: Lubrication = Lubrication {
         viscosity: 0.1,

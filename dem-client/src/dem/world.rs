@@ -153,12 +153,6 @@ pub struct Wall {
 }
 
 impl Wall {
-    /// (unit normal from the wall to the sphere, overlap) when touching.
-    fn touch(&self, x: V3, r: f64) -> Option<(V3, f64)> {
-        self.separation(x, r)
-            .and_then(|(n, gap)| (gap < 0.0).then_some((n, -gap)))
-    }
-
     /// (unit normal from the wall to the sphere, gap between them), where the normal is defined.
     fn separation(&self, x: V3, r: f64) -> Option<(V3, f64)> {
         match self.shape {
@@ -764,17 +758,6 @@ impl<L: LawRef> Gather<'_, L> {
         self.films[own].iter().sum::<V3>() - pulled
     }
 
-    /// The film forces between body `b` and the walls it can reach (R* = r).
-    fn wall_films(&self, lub: &Lubrication, k: usize, b: &Body) -> V3 {
-        let mut f = V3::zeros();
-        for &l in self.near_walls(k) {
-            if let Some((n, gap)) = self.walls[l as usize].separation(b.x, b.r) {
-                f += n * lub.film_force(b.r, gap, -b.v.dot(&n));
-            }
-        }
-        f
-    }
-
     /// Body k: pair forces, wall contacts, then `finish`; returns (wall contacts, squared
     /// displacement since the last build after a drift, else 0).
     #[inline(always)]
@@ -791,20 +774,27 @@ impl<L: LawRef> Gather<'_, L> {
             f += o.force;
             t += o.torque_i;
         }
-        if let Some(lub) = &self.lubrication {
+        if self.lubrication.is_some() {
             f += self.pair_films(k, own);
-            f += self.wall_films(lub, k, b);
         }
         let mut touching = 0;
         for &l in self.near_walls(k) {
             let (wall, h) = (&self.walls[l as usize], &mut hist[l as usize]);
-            let Some((n, overlap)) = wall.touch(b.x, b.r) else {
+            let Some((n, gap)) = wall.separation(b.x, b.r) else {
                 *h = V3::zeros();
                 continue;
             };
+            if gap >= 0.0 {
+                // Apart: no contact; with lubrication, the squeeze film (R* = r) below its cut-off.
+                *h = V3::zeros();
+                if let Some(lub) = &self.lubrication {
+                    f += n * lub.film_force(b.r, gap, -b.v.dot(&n));
+                }
+                continue;
+            }
             let c = Contact {
                 n,
-                overlap,
+                overlap: -gap,
                 r_i: b.r,
                 r_j: 0.0,
                 r_eff: self.law.law().switches.wall_radius_factor * b.r,
