@@ -23,7 +23,11 @@ struct Particle {
     omega: vec4<f32>,
     // first pair index, bounding box edge m (cells), -, -
     box_: vec4<u32>,
-    // out: hydrodynamic force and torque about the centre (lattice units)
+}
+
+// Hydrodynamic force and torque about the centre (lattice units): the coupling's output, kept
+// apart from the states so that only these 32 bytes per particle are read back by the host.
+struct Load {
     force: vec4<f32>,
     torque: vec4<f32>,
 }
@@ -35,6 +39,7 @@ struct Saved {
 }
 
 @group(0) @binding(24) var<storage, read_write> particles: array<Particle>;
+@group(0) @binding(30) var<storage, read_write> loads: array<Load>;
 // Per cell of each particle's bounding box (the particle's pair range, in the box order of
 // `box_cell`): xyz the momentum the fluid gave the particle in that cell during the step, w 1 where
 // the particle covers the cell with a slot, 0 elsewhere.
@@ -326,6 +331,5 @@ fn reduce(
             atomicStore(&covered[cell_at(q)], 0u);
         }
     }
-    particles[j].force = vec4<f32>(force, 0.0);
-    particles[j].torque = vec4<f32>(torque, 0.0);
+    loads[j] = Load(vec4<f32>(force, 0.0), vec4<f32>(torque, 0.0));
 }

@@ -19,7 +19,9 @@ const FIRST_POPULATION_BINDING: u32 = 5;
 pub(super) const FIRST_IMB_BINDING: u32 = FIRST_POPULATION_BINDING + 19;
 /// The cell list (read-only) follows them.
 const CELL_LIST_BINDING: u32 = FIRST_IMB_BINDING + 5;
-const BINDINGS: u32 = CELL_LIST_BINDING + 1;
+/// The particles' force and torque (the coupling's output, the only part read back).
+const LOADS_BINDING: u32 = CELL_LIST_BINDING + 1;
+const BINDINGS: u32 = LOADS_BINDING + 1;
 
 /// The device and its queue.
 pub struct Gpu {
@@ -512,6 +514,7 @@ fn bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
     entries.extend((3..CELL_LIST_BINDING - 1).map(|b| storage(b, false)));
     entries.push(storage(CELL_LIST_BINDING - 1, true));
     entries.push(storage(CELL_LIST_BINDING, true));
+    entries.push(storage(LOADS_BINDING, false));
     device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
         label: Some("lattice"),
         entries: &entries,
@@ -589,6 +592,7 @@ fn make_bind_group(
             .map(|(i, b)| entry(FIRST_IMB_BINDING + i as u32, b)),
     );
     entries.push(entry(CELL_LIST_BINDING, cell_list));
+    entries.push(entry(LOADS_BINDING, coupling.loads()));
     d.create_bind_group(&wgpu::BindGroupDescriptor {
         label: Some("lattice"),
         layout,

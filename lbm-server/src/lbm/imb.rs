@@ -46,7 +46,7 @@ pub struct Load {
     pub torque: [f64; 3],
 }
 
-/// The shader's `Particle`.
+/// The shader's `Particle`: what goes to the GPU each step.
 #[repr(C)]
 #[derive(Clone, Copy, Default, bytemuck::Pod, bytemuck::Zeroable)]
 struct GpuParticle {
@@ -54,11 +54,18 @@ struct GpuParticle {
     vel: [f32; 4],
     omega: [f32; 4],
     box_: [u32; 4],
+}
+
+/// The shader's `Load`: what comes back each step.
+#[repr(C)]
+#[derive(Clone, Copy, Default, bytemuck::Pod, bytemuck::Zeroable)]
+struct GpuLoad {
     force: [f32; 4],
     torque: [f32; 4],
 }
 
 const PARTICLE_BYTES: u64 = std::mem::size_of::<GpuParticle>() as u64;
+const LOAD_BYTES: u64 = std::mem::size_of::<GpuLoad>() as u64;
 /// The shader's pair: one vec4 per cell of a particle's bounding box.
 const PAIR_BYTES: u64 = 16;
 /// The shader's `Saved`: a covered cell and its 19 populations (over the `fields` buffer).
@@ -81,6 +88,8 @@ type Split<'a> = &'a mut dyn FnMut(&'static str, wgpu::CommandEncoder) -> wgpu::
 /// Buffers and pipelines of the coupling (tiny placeholders when the scene has no particles).
 pub struct Coupling {
     particles: wgpu::Buffer,
+    /// Force and torque per particle, apart from the states so that only they are read back.
+    loads: wgpu::Buffer,
     pairs: wgpu::Buffer,
     covered: wgpu::Buffer,
     slots: wgpu::Buffer,
@@ -113,11 +122,12 @@ impl Coupling {
         let slots = options.map_or(1, |o| o.slots as u64);
         Coupling {
             particles: storage_buffer(d, "particles", PARTICLE_BYTES),
+            loads: storage_buffer(d, "loads", LOAD_BYTES),
             pairs: storage_buffer(d, "pairs", PAIR_BYTES),
             covered: storage_buffer(d, "covered", per_cell(4)),
             slots: storage_buffer(d, "slots", per_cell(4 * slots)),
             info: storage_buffer(d, "imb info", 16),
-            readback: readback_buffer(d, PARTICLE_BYTES),
+            readback: readback_buffer(d, LOAD_BYTES),
             indirect: d.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("covered cells' workgroups"),
                 size: 32,
@@ -162,6 +172,11 @@ impl Coupling {
             &self.slots,
             &self.info,
         ]
+    }
+
+    /// The particles' force and torque (its own binding).
+    pub fn loads(&self) -> &wgpu::Buffer {
+        &self.loads
     }
 }
 
@@ -270,9 +285,9 @@ impl Lattice {
         self.dispatch_groups(&mut encoder, &reduce, parity, n.div_ceil(64));
         encoder = split("reduce", encoder);
         let coupling = self.imb.as_ref().expect("coupling");
-        let bytes = n as u64 * PARTICLE_BYTES;
+        let bytes = n as u64 * LOAD_BYTES;
         if bytes > 0 {
-            encoder.copy_buffer_to_buffer(&coupling.particles, 0, &coupling.readback, 0, bytes);
+            encoder.copy_buffer_to_buffer(&coupling.loads, 0, &coupling.readback, 0, bytes);
         }
         gpu.queue.submit([encoder.finish()]);
         if bytes == 0 {
@@ -285,7 +300,7 @@ impl Lattice {
             let data = slice
                 .get_mapped_range()
                 .map_err(|e| format!("particle readback: {e:?}"))?;
-            let out: &[GpuParticle] = bytemuck::cast_slice(&data);
+            let out: &[GpuLoad] = bytemuck::cast_slice(&data);
             out.iter()
                 .map(|p| Load {
                     force: [p.force[0], p.force[1], p.force[2]].map(f64::from),
@@ -355,7 +370,8 @@ impl Lattice {
         if particles > coupling.particle_capacity {
             coupling.particle_capacity = particles.next_power_of_two();
             coupling.particles = storage_buffer(&d, "particles", coupling.particle_capacity * PARTICLE_BYTES);
-            coupling.readback = readback_buffer(&d, coupling.particle_capacity * PARTICLE_BYTES);
+            coupling.loads = storage_buffer(&d, "loads", coupling.particle_capacity * LOAD_BYTES);
+            coupling.readback = readback_buffer(&d, coupling.particle_capacity * LOAD_BYTES);
             grew = true;
         }
         if pairs > coupling.pair_capacity {
@@ -394,7 +410,6 @@ fn layout(particles: &[SolidParticle]) -> (Vec<GpuParticle>, u32) {
                 vel: vec4(p.velocity, 0.0),
                 omega: vec4(p.angular_velocity, 0.0),
                 box_: [first, m, 0, 0],
-                ..Default::default()
             };
             first += m * m * m;
             record
