@@ -41,13 +41,15 @@ struct Saved {
 @group(0) @binding(24) var<storage, read_write> particles: array<Particle>;
 @group(0) @binding(30) var<storage, read_write> loads: array<Load>;
 // Per cell of each particle's bounding box (the particle's pair range, in the box order of
-// `box_cell`): xyz the momentum the fluid gave the particle in that cell during the step, w 1 where
-// the particle covers the cell with a slot, 0 elsewhere.
+// `box_cell`): xyz the momentum the fluid gave the particle in that cell during the step (0 where
+// it holds no slot), w 1 where the particle covers the cell, 0 elsewhere.
 @group(0) @binding(25) var<storage, read_write> pairs: array<vec4<f32>>;
 // Per cell: how many particles cover it this step.
 @group(0) @binding(26) var<storage, read_write> covered: array<atomic<u32>>;
-// Per cell: the indices of the particles covering it (SLOTS entries).
-@group(0) @binding(27) var<storage, read_write> slots: array<u32>;
+// Per cell: the particles covering it (SLOTS entries), as keys ~j (0: empty), largest first: the
+// SLOTS lowest particle indices, in increasing order, whatever the order in which `cover`'s
+// invocations arrive (see `hold_slot`).
+@group(0) @binding(27) var<storage, read_write> slots: array<atomic<u32>>;
 // particles, pairs, -, capacity of `saved`
 @group(0) @binding(28) var<storage, read> imb_info: vec4<u32>;
 // The covered cells of this step, each once, in the order `cover` found them, over the `fields`
@@ -102,6 +104,18 @@ fn weighting(eps: f32) -> f32 {
     return eps * t / ((1.0 - eps) + t);
 }
 
+// Particle j joins cell k's slots if it is among the SLOTS lowest indices covering the cell: the
+// key ~j goes down the slots by atomicMax, each slot keeping the larger key and passing the smaller
+// on. Every key but the largest reaches slot 1, every key but the two largest slot 2, ..., so the
+// slots end with the SLOTS largest keys in order whatever the order of arrival: which particles
+// a crowded cell drops does not change from run to run (the f64 reference keeps the same ones).
+fn hold_slot(k: u32, j: u32) {
+    var key = ~j;
+    for (var s = 0u; s < SLOTS && key != 0u; s++) {
+        key = min(key, atomicMax(&slots[k * SLOTS + s], key));
+    }
+}
+
 // One workgroup per particle, its threads over the particle's bounding box.
 @compute @workgroup_size(64)
 fn cover(
@@ -116,7 +130,7 @@ fn cover(
     let origin = box_origin(p);
     for (var t = local; t < m * m * m; t += 64u) {
         let q = box_cell(origin, m, t);
-        var registered = 0.0;
+        var covers = 0.0;
         if inside_domain(q) {
             let k = cell_at(q);
             let eps = solid_fraction(vec3<f32>(q) + 0.5, p.pos_r.xyz, p.pos_r.w);
@@ -133,15 +147,14 @@ fn cover(
                         if e < imb_info.w { saved[imb_info.w - 1u - e].cell = k; }
                     }
                 }
-                if slot < SLOTS {
-                    slots[k * SLOTS + slot] = j;
-                    registered = 1.0;
-                } else {
+                if slot >= SLOTS {
                     atomicAdd(&status[1], 1u);
                 }
+                hold_slot(k, j);
+                covers = 1.0;
             }
         }
-        pairs[p.box_.x + t] = vec4<f32>(0.0, 0.0, 0.0, registered);
+        pairs[p.box_.x + t] = vec4<f32>(0.0, 0.0, 0.0, covers);
     }
 }
 
@@ -247,16 +260,10 @@ fn stream_collide_covered(
 fn immersed_boundary(k: u32, f: array<f32, 19>, m: Moments, post: array<f32, 19>) -> array<f32, 19> {
     let count = min(atomicLoad(&covered[k]), SLOTS);
     if count == 0u { return post; }
-    // Particles in ascending order: sums do not depend on the order of insertion.
+    // Particles in ascending order (`hold_slot`): the sums do not depend on the order of arrival.
     var ids: array<u32, 4>;
     for (var s = 0u; s < count; s++) {
-        var id = slots[k * SLOTS + s];
-        var q = s;
-        while q > 0u && ids[q - 1u] > id {
-            ids[q] = ids[q - 1u];
-            q--;
-        }
-        ids[q] = id;
+        ids[s] = ~atomicLoad(&slots[k * SLOTS + s]);
     }
     // The solid fractions as `cover` computed them (the same function of the same values).
     let q = coords(k);
@@ -307,7 +314,7 @@ fn immersed_boundary(k: u32, f: array<f32, 19>, m: Moments, post: array<f32, 19>
 }
 
 // One invocation per particle: force and torque summed over its bounding box in a fixed order
-// (no floating-point atomics), and the cover counts of its cells cleared for the next step.
+// (no floating-point atomics), and the cover counts and slots of its cells cleared for the next step.
 @compute @workgroup_size(64)
 fn reduce(
     @builtin(workgroup_id) wg: vec3<u32>,
@@ -328,7 +335,11 @@ fn reduce(
             let arm = vec3<f32>(q) + 0.5 - p.pos_r.xyz;
             force += pair.xyz;
             torque += cross(arm, pair.xyz);
-            atomicStore(&covered[cell_at(q)], 0u);
+            let k = cell_at(q);
+            atomicStore(&covered[k], 0u);
+            for (var s = 0u; s < SLOTS; s++) {
+                atomicStore(&slots[k * SLOTS + s], 0u);
+            }
         }
     }
     loads[j] = Load(vec4<f32>(force, 0.0), vec4<f32>(torque, 0.0));

@@ -323,7 +323,8 @@ impl Lattice {
             imb: Some(coupling),
             time: 0,
         };
-        lattice.upload(&vec![[0.0; 19]; cells]);
+        // wgpu zero-initialises every buffer: the shifted populations start at rest (f = w, rho = 1)
+        // without an upload (which took a 5 GB host array at 256 x 256 x 512).
         Ok(lattice)
     }
 
@@ -525,7 +526,7 @@ const STORAGE: wgpu::BufferUsages = wgpu::BufferUsages::STORAGE
     .union(wgpu::BufferUsages::COPY_SRC)
     .union(wgpu::BufferUsages::COPY_DST);
 
-/// An uninitialised storage buffer that can be copied to and from.
+/// A storage buffer that can be copied to and from (zero-filled by wgpu).
 pub(super) fn storage_buffer(device: &wgpu::Device, label: &str, bytes: u64) -> wgpu::Buffer {
     device.create_buffer(&wgpu::BufferDescriptor {
         label: Some(label),
