@@ -1416,6 +1416,56 @@ def build_outputs():
     return results
 
 
+def box_args(args):
+    """(width, height) in m from --width/--height in mm; one alone takes the experiment's other side."""
+    w = None if args.width is None else args.width * 1e-3
+    h = None if args.height is None else args.height * 1e-3
+    if (w is None) != (h is None):
+        w = BOX[0] if w is None else w
+        h = BOX[2] if h is None else h
+    return w, h
+
+
+def write_scenes(args):
+    """The scenes of `run` without running them: DIR/<run folder name>/scene.toml, one line each on stdout
+    (name, cells, steps, cell-steps) for the batch script to order and budget."""
+    w, h = box_args(args)
+    for n in args.N:
+        for case in args.cases:
+            name = os.path.basename(run_dir(case, n, args.mach, args.op, w, h, args.op_suffix))
+            ln = lattice_numbers(case, n, args.mach, w, h, args.sim_time)
+            if ln["tau"] < 0.5005:
+                print("%s: tau %.5f < 0.5005, skipped" % (name, ln["tau"]), file=sys.stderr)
+                continue
+            os.makedirs(os.path.join(args.dir, name), exist_ok=True)
+            write_scene(case, n, os.path.join(args.dir, name, "scene.toml"), args.mach, args.op, w, h,
+                        args.sim_time, args.op_suffix)
+            cells = ln["cells"][0] * ln["cells"][1] * ln["cells"][2]
+            print("%s %dx%dx%d tau %.3f steps %d cell-steps %.3g" % (name, *ln["cells"], ln["tau"], ln["steps"],
+                                                                     cells * ln["steps"]))
+
+
+def import_runs(src, force=False):
+    """Each DIR/<name>/ that holds a summary.json goes to runs/<name>/ as `run_one` leaves its runs: scene.toml,
+    summary.json, log.txt and the sphere's rows of particles.csv. A run already in runs/ is kept unless `force`."""
+    for name in sorted(os.listdir(src)):
+        d = os.path.join(src, name)
+        if not os.path.exists(os.path.join(d, "summary.json")):
+            print("%s: no summary.json, not imported" % name)
+            continue
+        out = os.path.join(RUNS, name)
+        if os.path.exists(os.path.join(out, "summary.json")) and not force:
+            print("%s: already in %s, kept (--force replaces it)" % (name, out))
+            continue
+        os.makedirs(out, exist_ok=True)
+        for f in ("scene.toml", "summary.json", "log.txt"):
+            if os.path.exists(os.path.join(d, f)):
+                shutil.copy(os.path.join(d, f), os.path.join(out, f))
+        if os.path.exists(os.path.join(d, "particles.csv")):
+            reduce_csv(os.path.join(d, "particles.csv"), os.path.join(out, "particles.csv"))
+        print("%s: imported into %s" % (name, out))
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = ap.add_subparsers(dest="cmd", required=True)
@@ -1433,15 +1483,26 @@ def main():
     a.add_argument("--op-suffix", action="store_true",
                    help="put the operator in the folder name even for trt (runs/<case>_N<n>_trt: a TRT rerun timed beside BGK and MRT)")
     sub.add_parser("report")
+    sc = sub.add_parser("scenes", help="only write the scenes, DIR/<run folder name>/scene.toml (for a batch on another "
+                        "machine: validation/gpu/run.sh); same options as run")
+    sc.add_argument("dir")
+    for action in a._actions:
+        if action.dest not in ("help", "force", "dir"):
+            sc._add_action(action)
+    im = sub.add_parser("import", help="take the outputs of such a batch (DIR/<run folder name>/ with summary.json, "
+                        "particles.csv, log.txt) into runs/, then rebuild the report")
+    im.add_argument("dir")
+    im.add_argument("--force", action="store_true", help="replace runs that already have a summary.json")
     args = ap.parse_args()
+    if args.cmd == "scenes":
+        write_scenes(args)
+        return
+    if args.cmd == "import":
+        import_runs(args.dir, args.force)
     if args.cmd == "run":
         if not os.path.exists(BINARY):
             raise SystemExit("%s missing: cargo build --release --bins" % BINARY)
-        w = None if args.width is None else args.width * 1e-3
-        h = None if args.height is None else args.height * 1e-3
-        if (w is None) != (h is None):
-            w = BOX[0] if w is None else w
-            h = BOX[2] if h is None else h
+        w, h = box_args(args)
         for n in args.N:
             for case in args.cases:
                 run_one(case, n, args.force, args.mach, args.op, w, h, args.sim_time, args.op_suffix)

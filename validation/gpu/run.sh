@@ -1,0 +1,78 @@
+#!/usr/bin/env bash
+# Every GPU figure of the project in one call on the device machine (a machine start costs minutes
+# of a short budget). Prepare it first on the development machine: bash validation/gpu/prepare.sh.
+# On the device machine, from the repository root, with carry [".gl", ".gpu"]:
+#
+#     bash validation/gpu/run.sh 540      # seconds for the whole batch (default 540)
+#
+# Writes under $OUT (default out/gpu): batch.log, system.txt, bench_<op>.txt (LBM-only, 256^3, with
+# the copy bandwidth and the naive kernel), coupled_trt.txt (256 x 256 x 512, 1 to 32^3 particles,
+# ratio to LBM-only, time per pass), default/ (the default scene), tencate/<run>/ (import with
+# python3 validation/imb/ten_cate.py import DIR). The steps run in order of priority; a step that
+# would start with less time left than it needs is skipped and named in batch.log.
+set -u
+cd "$(dirname "$0")/../.."
+budget=${1:-540}
+start=$(date +%s)
+OUT=${OUT:-out/gpu}
+mkdir -p "$OUT"
+elapsed() { echo $(($(date +%s) - start)); }
+left() { echo $((budget - $(elapsed))); }
+log() { echo "[$(elapsed) s] $*" | tee -a "$OUT/batch.log"; }
+
+# step NAME NEED LIMIT COMMAND...: COMMAND (stdout and stderr to $OUT/NAME.txt) when at least NEED
+# seconds are left, stopped by SIGINT (a clean stop: lbm-server writes its outputs) after LIMIT
+# seconds or when the budget runs out.
+step() {
+    local name=$1 need=$2 limit=$3
+    shift 3
+    if [ "$(left)" -lt "$need" ]; then
+        log "skipped $name: $(left) s left, needs $need"
+        return
+    fi
+    [ "$limit" -gt $(($(left) - 5)) ] && limit=$(($(left) - 5))
+    log "start $name (limit $limit s): $*"
+    mkdir -p "$(dirname "$OUT/$name")"
+    timeout -s INT -k 10 "$limit" "$@" > "$OUT/$name.txt" 2>&1
+    log "end $name: exit $?"
+}
+
+if ls .gl/*.deb >/dev/null 2>&1; then
+    for f in .gl/*.deb; do dpkg -x "$f" /; done
+    ldconfig
+fi
+icd=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
+[ -f "$icd" ] && export VK_DRIVER_FILES=$icd
+export NODEVICE_SELECT=1
+bin=.gpu/bin
+mode=$(cat .gpu/mode 2>/dev/null || echo full)
+{
+    date -u
+    uname -a
+    nproc
+    free -g
+    command -v nvidia-smi >/dev/null && nvidia-smi
+} > "$OUT/system.txt" 2>&1
+
+if [ "$mode" = small ]; then
+    cube=32x32x32 coupled=32x32x64 counts=1,8,64 steps=20
+else
+    cube=256x256x256 coupled=256x256x512 counts=1,8,64,512,4096,32768 steps=500
+fi
+# LBM-only against the copy bandwidth and the naive kernel (issue 3's target: 85% of the copy bandwidth).
+for op in bgk trt mrt; do
+    step bench_$op 60 120 $bin/lbm-server bench --grid $cube --operator $op --steps $steps --rounds 3
+done
+# Coupled, the seed's Fig. 5 sweep (issue 5's target: 90% of LBM-only at 32^3 particles).
+step coupled_trt 120 240 $bin/lbm-server bench --grid $coupled --operator trt --particles $counts \
+    --steps $steps --rounds 2 --kernel ours --passes
+# The default scene, the whole coupled program (DEM process and lockstep included).
+step default/log 30 60 $bin/lbm-server run .gpu/default.toml --out "$OUT/default"
+rm -rf "$OUT/default/fields"
+# Ten Cate, in the order of .gpu/plan.txt.
+while read -r name _; do
+    [ -f ".gpu/scenes/$name/scene.toml" ] || continue
+    step "tencate/$name/log" 20 300 $bin/lbm-server run ".gpu/scenes/$name/scene.toml" --out "$OUT/tencate/$name"
+    rm -rf "$OUT/tencate/$name/fields"
+done < .gpu/plan.txt
+log "done"
