@@ -156,6 +156,16 @@ impl FluidSide {
         Ok(())
     }
 
+    /// After the run's last step: the health check and the covers' warning, unless the last step
+    /// was a check already (a run shorter than `lattice.check_interval`, or its tail beyond the
+    /// last multiple, went unchecked).
+    pub fn check_last_step(&self) -> Result<(), String> {
+        if self.steps.is_multiple_of(self.units.check_interval) {
+            return Ok(());
+        }
+        self.check()
+    }
+
     /// The health check of the lattice, and a warning when cells had more particles than slots.
     fn check(&self) -> Result<(), String> {
         let (_, bad) = self.lattice.fields();

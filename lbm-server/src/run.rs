@@ -297,6 +297,9 @@ impl Session {
                 .step(&si, &mut replies)
                 .map_err(|e| self.describe_fluid(e))?;
             let last = step + 1 == self.p.steps;
+            if last {
+                self.fluid.check_last_step().map_err(|e| self.describe_fluid(e))?;
+            }
             let stop =
                 header.has(StepFlags::STOP) || self.interrupted.load(Ordering::SeqCst) || bad.is_some();
             let flags = if last { StepFlags::FINAL } else { 0 } | if stop { StepFlags::STOP } else { 0 };
