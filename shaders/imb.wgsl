@@ -46,9 +46,9 @@ struct Saved {
 @group(0) @binding(25) var<storage, read_write> pairs: array<vec4<f32>>;
 // Per cell: how many particles cover it this step.
 @group(0) @binding(26) var<storage, read_write> covered: array<atomic<u32>>;
-// Per cell: the particles covering it (SLOTS entries), as keys ~j (0: empty), largest first: the
-// SLOTS lowest particle indices, in increasing order, whatever the order in which `cover`'s
-// invocations arrive (see `hold_slot`).
+// Per cell: the particles covering it (SLOTS entries), as keys (`slot_key`, 0: empty), largest
+// first: the SLOTS largest solid fractions, whatever the order in which `cover`'s invocations
+// arrive (see `hold_slot`).
 @group(0) @binding(27) var<storage, read_write> slots: array<atomic<u32>>;
 // particles, pairs, -, capacity of `saved`
 @group(0) @binding(28) var<storage, read> imb_info: vec4<u32>;
@@ -104,13 +104,28 @@ fn weighting(eps: f32) -> f32 {
     return eps * t / ((1.0 - eps) + t);
 }
 
-// Particle j joins cell k's slots if it is among the SLOTS lowest indices covering the cell: the
-// key ~j goes down the slots by atomicMax, each slot keeping the larger key and passing the smaller
-// on. Every key but the largest reaches slot 1, every key but the two largest slot 2, ..., so the
-// slots end with the SLOTS largest keys in order whatever the order of arrival: which particles
-// a crowded cell drops does not change from run to run (the f64 reference keeps the same ones).
-fn hold_slot(k: u32, j: u32) {
-    var key = ~j;
+// The rank of particle j, covering a cell with solid fraction eps, among the cell's particles: eps
+// in 1/255ths (rounded up, so 1-255) above the complement of j (24 bits), so that a larger key is a
+// larger solid fraction, or the lower index of two equal ones. `coupled_step` refuses more than
+// 2^24 particles.
+fn slot_key(eps: f32, j: u32) -> u32 {
+    return (min(u32(ceil(eps * 255.0)), 255u) << 24u) | (PARTICLE_MASK - j);
+}
+
+const PARTICLE_MASK: u32 = 0xffffffu;
+
+// The particle of a key.
+fn slot_particle(key: u32) -> u32 {
+    return PARTICLE_MASK - (key & PARTICLE_MASK);
+}
+
+// Particle j joins cell k's slots if its key is among the SLOTS largest of the cell: the key goes
+// down the slots by atomicMax, each slot keeping the larger key and passing the smaller on. Every
+// key but the largest reaches slot 1, every key but the two largest slot 2, ..., so the slots end
+// with the SLOTS largest keys in order whatever the order of arrival: a crowded cell keeps its
+// largest solid fractions, and the same particles every run (the f64 reference keeps the same ones).
+fn hold_slot(k: u32, rank: u32) {
+    var key = rank;
     for (var s = 0u; s < SLOTS && key != 0u; s++) {
         key = min(key, atomicMax(&slots[k * SLOTS + s], key));
     }
@@ -150,7 +165,7 @@ fn cover(
                 if slot >= SLOTS {
                     atomicAdd(&status[1], 1u);
                 }
-                hold_slot(k, j);
+                hold_slot(k, slot_key(eps, j));
                 covers = 1.0;
             }
         }
@@ -260,10 +275,11 @@ fn stream_collide_covered(
 fn immersed_boundary(k: u32, f: array<f32, 19>, m: Moments, post: array<f32, 19>) -> array<f32, 19> {
     let count = min(atomicLoad(&covered[k]), SLOTS);
     if count == 0u { return post; }
-    // Particles in ascending order (`hold_slot`): the sums do not depend on the order of arrival.
+    // Particles in the order of their keys (`hold_slot`): the sums do not depend on the order of
+    // arrival.
     var ids: array<u32, 4>;
     for (var s = 0u; s < count; s++) {
-        ids[s] = ~atomicLoad(&slots[k * SLOTS + s]);
+        ids[s] = slot_particle(atomicLoad(&slots[k * SLOTS + s]));
     }
     // The solid fractions as `cover` computed them (the same function of the same values).
     let q = coords(k);

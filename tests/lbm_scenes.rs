@@ -302,7 +302,7 @@ fn the_default_scene_is_a_coupled_run() {
 }
 
 /// Five beads in a row, 4.2 mm apart at 4 cells per diameter, one slot per cell: the cells between
-/// neighbours are covered by both, and each keeps the lower index. Two runs write the same
+/// neighbours are covered by both, and each keeps the larger solid fraction. Two runs write the same
 /// particles.csv byte for byte (until 2026-12-01 a slot went to whichever particle arrived first:
 /// three runs gave three different files), and the run warns about the dropped covers at its last
 /// step, 40, which is no multiple of `lattice.check_interval` (such a tail went unchecked).

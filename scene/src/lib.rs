@@ -110,7 +110,8 @@ pub struct Coupling {
     /// Most particles one step may carry (default: the initial count).
     pub capacity: Option<u64>,
     /// With a `[lattice]`: particles one cell can hold at once (1-4); a cell covered by more keeps
-    /// the lowest particle indices (the same every run) and the run warns with the count dropped.
+    /// those with the largest solid fractions (the same every run) and the run warns with the
+    /// count dropped.
     #[serde(default = "default_slots")]
     pub slots: u32,
     /// With a `[lattice]`: solid weighting B, "noble-torczynski" (B(eps, tau)) or "seed" (B = eps).

@@ -71,6 +71,9 @@ const PAIR_BYTES: u64 = 16;
 /// The shader's `Saved`: a covered cell and its 19 populations (over the `fields` buffer).
 const SAVED_BYTES: u64 = 80;
 
+/// Most particles a coupled step takes: imb.wgsl's `slot_key` holds 24-bit particle indices.
+const MAX_PARTICLES: usize = 1 << 24;
+
 /// The largest bounding box edge: imb.wgsl's `divide` takes box indices below 2^24 = 256^3.
 const MAX_BOX_EDGE: u32 = 255;
 
@@ -227,6 +230,12 @@ impl Lattice {
     /// The coupled step; `split` receives the encoder after each pass (named) and returns the one
     /// to go on with.
     fn coupled_step(&mut self, particles: &[SolidParticle], split: Split) -> Result<Vec<Load>, String> {
+        if particles.len() > MAX_PARTICLES {
+            return Err(format!(
+                "{} particles exceed the coupling's {MAX_PARTICLES} (imb.wgsl's slot keys hold 24-bit indices)",
+                particles.len()
+            ));
+        }
         if let Some((j, p)) = particles
             .iter()
             .enumerate()

@@ -110,17 +110,22 @@ pub fn solid_fraction(x: [f64; 3], centre: [f64; 3], r: f64) -> f64 {
     (r - 1.0 / (12.0 * r) + 0.5 - d).clamp(0.0, 1.0)
 }
 
-/// Per cell: (particle, solid fraction) of the particles covering it, in particle order, at most
-/// `slots` of them.
+/// Per cell: (particle, solid fraction) of the particles covering it, at most `slots` of them: the
+/// largest solid fractions in 1/255ths, the lower index first among equals (imb.wgsl `slot_key`).
 fn cover(setup: &Setup, particles: &[SolidParticle], slots: usize) -> Vec<Vec<(usize, f64)>> {
     let mut covers = vec![Vec::new(); setup.cells()];
     for (j, p) in particles.iter().enumerate() {
         for (cell, x) in box_cells(setup, p) {
             let eps = solid_fraction(x, p.position, p.radius);
-            if eps > 0.0 && !setup.solid[cell] && covers[cell].len() < slots {
+            if eps > 0.0 && !setup.solid[cell] {
                 covers[cell].push((j, eps));
             }
         }
+    }
+    let rank = |&(j, eps): &(usize, f64)| (std::cmp::Reverse((eps * 255.0).ceil() as u32), j);
+    for c in covers.iter_mut().filter(|c| c.len() > slots) {
+        c.sort_by_key(rank);
+        c.truncate(slots);
     }
     covers
 }

@@ -329,8 +329,8 @@ mod immersed_boundary {
     }
 
     /// Three spheres whose overlap holds cells covered by all three, so that a cell's slots cannot
-    /// hold them all: each run keeps the same particles (the lowest indices, as the f64 reference
-    /// does) and gives the same loads bit for bit, whatever the order in which the GPU's
+    /// hold them all: each run keeps the same particles (the largest solid fractions, as the f64
+    /// reference does) and gives the same loads bit for bit, whatever the order in which the GPU's
     /// invocations reach a cell.
     #[test]
     fn crowded_cells_keep_the_same_particles_every_run() {
