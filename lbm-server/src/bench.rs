@@ -147,6 +147,7 @@ fn run(args: &BenchArgs) -> Result<(), String> {
     if !args.particles.is_empty() {
         coupled_sweep(
             &gpu,
+            lattice,
             n,
             tau,
             operator,
@@ -328,10 +329,12 @@ impl Naive {
     }
 }
 
-/// Coupled MLUPS for each particle count, against the LBM-only figure of the same run.
+/// Coupled MLUPS for each particle count, against the LBM-only figure of the same run; first the
+/// LBM-only `lattice` of that figure stepped as the lockstep steps (then freed).
 #[allow(clippy::too_many_arguments)]
 fn coupled_sweep(
     gpu: &Arc<Gpu>,
+    mut lattice: Lattice,
     n: [usize; 3],
     tau: f64,
     operator: Operator,
@@ -346,13 +349,6 @@ fn coupled_sweep(
     println!("| particles | MLUPS | ratio to LBM-only ({lbm_only:.1} MLUPS) |");
     println!("|---:|---:|---:|");
     // The lockstep's own cost: LBM-only steps, each submitted and waited for as a coupled step is.
-    let mut lattice = Lattice::new(
-        gpu.clone(),
-        Setup::new(n, [Face::Periodic; 6], tau, operator),
-        Health::default(),
-        None,
-    )?;
-    lattice.step(5);
     gpu.wait();
     let start = Instant::now();
     for _ in 0..steps {
