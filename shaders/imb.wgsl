@@ -2,17 +2,23 @@
 // seed eq. 7-11). Appended to lbm.wgsl when a scene couples particles.
 //
 // Per step: `cover` computes the solid fraction of every cell in each particle's bounding box
-// (work = particles x cells covered, never cells x particles), registers up to SLOTS particles per
-// cell and lists the covered cells, `save` keeps the pre-collision populations of the covered
-// cells, the fluid kernels of lbm.wgsl update every cell as without particles,
-// `stream_collide_covered` redoes each covered cell from its saved populations with the solid
-// collision term (the AA pattern: a cell reads and writes the same 19 slots, which no other cell
-// touches in that step, so the second write simply replaces the first), and `reduce` sums each
-// particle's force and torque in a fixed order (no floating-point atomics: the result is the same
-// every run) and clears the cover counts of its cells for the next step.
+// (work = particles x cells covered, never cells x particles) and registers up to SLOTS particles
+// per cell; the fluid kernels of lbm.wgsl stream and collide; `reduce` sums each particle's force
+// and torque in a fixed order (no floating-point atomics: the result is the same every run) and
+// clears the cover counts of its cells for the next step. The covered cells get their solid term
+// in one of two ways (the same result):
+// - FUSED: `cover` sets the cell's bit in a cover mask, and the fluid kernels, which test the bit
+//   of every cell, apply the solid term where it is set (`solid_term`);
+// - otherwise (the redo): `cover` lists the covered cells, `save` keeps their pre-collision
+//   populations, the fluid kernels update every cell as without particles, and
+//   `stream_collide_covered` redoes each covered cell from its saved populations with the solid
+//   term (the AA pattern: a cell reads and writes the same 19 slots, which no other cell touches
+//   in that step, so the second write simply replaces the first).
 
 // Particles a cell can hold (1-4).
 override SLOTS: u32 = 2u;
+// The solid term in the fluid kernels (true) or redone after them (false).
+override FUSED: bool = false;
 // Solid weighting: false = Noble & Torczynski B(eps, tau), true = the seed's B = eps.
 override SEED_WEIGHTING: bool = false;
 
@@ -44,7 +50,8 @@ struct Saved {
 // `box_cell`): xyz the momentum the fluid gave the particle in that cell during the step (0 where
 // it holds no slot), w 1 where the particle covers the cell, 0 elsewhere.
 @group(0) @binding(25) var<storage, read_write> pairs: array<vec4<f32>>;
-// Per cell: how many particles cover it this step.
+// Per cell: how many particles cover it this step; then (FUSED) the cover mask, bit k % 32 of word
+// cells + k / 32 set when cell k is covered.
 @group(0) @binding(26) var<storage, read_write> covered: array<atomic<u32>>;
 // Per cell: the particles covering it (SLOTS entries), as keys (`slot_key`, 0: empty), largest
 // first: the SLOTS largest solid fractions, whatever the order in which `cover`'s invocations
@@ -152,9 +159,12 @@ fn cover(
             if eps > 0.0 && (flags[k] & SOLID) == 0u {
                 let slot = atomicAdd(&covered[k], 1u);
                 if slot == 0u {
-                    // First to cover the cell: it joins the list of covered cells (a cell that
-                    // would not fit is counted by `covered_groups`).
-                    if (flags[k] & (0x7ffffu | WRAPS)) == 0u {
+                    // First to cover the cell: it sets the cell's bit of the cover mask (FUSED),
+                    // or joins the list of covered cells (a cell that would not fit is counted by
+                    // `covered_groups`).
+                    if FUSED {
+                        atomicOr(&covered[mask_word(k)], mask_bit(k));
+                    } else if (flags[k] & (0x7ffffu | WRAPS)) == 0u {
                         let e = atomicAdd(&status[4], 1u);
                         if e < imb_info.w { saved[e].cell = k; }
                     } else {
@@ -269,6 +279,26 @@ fn stream_collide_covered(
     }
 }
 
+// The word of the cover mask that holds cell k's bit, and the bit.
+fn mask_word(k: u32) -> u32 {
+    return cell_count() + (k >> 5u);
+}
+
+fn mask_bit(k: u32) -> u32 {
+    return 1u << (k & 31u);
+}
+
+// In the fluid kernels (lbm.wgsl): the collision `post` of cell k, with the solid term when FUSED
+// and particles cover the cell. One mask word serves 32 consecutive cells: a warp reads it once.
+fn solid_term(k: u32, f: array<f32, 19>, m: Moments, post: array<f32, 19>) -> array<f32, 19> {
+    if FUSED {
+        if (atomicLoad(&covered[mask_word(k)]) & mask_bit(k)) != 0u {
+            return immersed_boundary(k, f, m, post);
+        }
+    }
+    return post;
+}
+
 // The collision of a cell covered by particles: the fluid part of `post` (the operator's
 // relaxation and source) is weighted by 1 - sum B, and each particle adds B_s Omega_s with
 // Omega_i = f_ibar - f_i + f_eq_i(rho, u_s) - f_eq_ibar(rho, u) (seed eq. 7-8).
@@ -353,6 +383,9 @@ fn reduce(
             torque += cross(arm, pair.xyz);
             let k = cell_at(q);
             atomicStore(&covered[k], 0u);
+            if FUSED {
+                atomicAnd(&covered[mask_word(k)], ~mask_bit(k));
+            }
             for (var s = 0u; s < SLOTS; s++) {
                 atomicStore(&slots[k * SLOTS + s], 0u);
             }

@@ -318,10 +318,10 @@ fn bounce(face: u32, c: vec3<f32>, w: f32, f_star: f32, m: Moments) -> f32 {
 
 // The step of cells with a link that leaves the fluid (boundary part of the cell list), either
 // parity. llvmpipe (lavapipe) executes both sides of every branch: the fluid cells, far more, go
-// through the branch-free `stream_collide_fluid` instead. With particles, these kernels update
-// every cell without the solid term, and `stream_collide_covered` (imb.wgsl) then redoes the
-// covered cells from their saved populations: the cost of the coupling is paid by the covered
-// cells only.
+// through the branch-free `stream_collide_fluid` instead. With particles, either these kernels
+// give the covered cells their solid term (FUSED, `solid_term` in imb.wgsl: one bit tested per
+// cell), or they update every cell without it and `stream_collide_covered` (imb.wgsl) then redoes
+// the covered cells from their saved populations.
 @compute @workgroup_size(64)
 fn stream_collide(
     @builtin(workgroup_id) wg: vec3<u32>,
@@ -334,7 +334,7 @@ fn stream_collide(
     let flag = flags[k];
     let f = read_populations(k, flag);
     let m = moments(f);
-    write_populations(k, flag, collide(f, m), m);
+    write_populations(k, flag, solid_term(k, f, m, collide(f, m)), m);
 }
 
 // Stores the post-collision populations of cell k where the next step reads them, either parity,
@@ -390,7 +390,7 @@ fn stream_collide_fluid(
         //#end
     }
     let m = moments(f);
-    let post = collide(f, m);
+    let post = solid_term(k, f, m, collide(f, m));
     if KIND == 0u {
         //#for i
         f{i.o}[k] = post[{i}];

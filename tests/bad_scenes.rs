@@ -50,6 +50,12 @@ const MISTAKES: &[(&str, &str, &str, &[&str])] = &[
         &["particles (ids 0 and 1)", "overlap"],
     ),
     ("capacity below count", "timeout = 10", "timeout = 10\ncapacity = 3", &["coupling.capacity = 3", "below the 8 particles"]),
+    (
+        "unknown covered-cell mode",
+        "timeout = 10",
+        "timeout = 10\ncovered_cells = \"gpu\"",
+        &["coupling.covered_cells = \"gpu\"", "\"fused\" or \"redo\""],
+    ),
 ];
 
 #[test]

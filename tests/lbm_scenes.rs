@@ -305,7 +305,9 @@ fn the_default_scene_is_a_coupled_run() {
 /// neighbours are covered by both, and each keeps the larger solid fraction. Two runs write the same
 /// particles.csv byte for byte (until 2026-12-01 a slot went to whichever particle arrived first:
 /// three runs gave three different files), and the run warns about the dropped covers at its last
-/// step, 40, which is no multiple of `lattice.check_interval` (such a tail went unchecked).
+/// step, 40, which is no multiple of `lattice.check_interval` (such a tail went unchecked). A third
+/// run with the solid term in the fluid kernels (`coupling.covered_cells = "fused"`; "auto" redoes
+/// the covered cells on lavapipe) writes the same file too.
 #[test]
 fn crowded_cells_give_the_same_run_every_time() {
     let beads: String = [3.7, 7.9, 12.1, 16.3, 20.5]
@@ -323,18 +325,25 @@ fn crowded_cells_give_the_same_run_every_time() {
          [time]\nsteps = 40\n[lattice]\ndx = 0.001\noperator = \"trt\"\nvelocity_scale = 0.05\n\
          mach = 0.1\n[output]\ninterval = 1\n[coupling]\nslots = 1\n[particles]\ndensity = 2500.0\n{beads}"
     );
-    let files: Vec<String> = ["crowd_a", "crowd_b"]
-        .iter()
-        .map(|tag| {
-            let (code, err, out) = run(tag, &scene);
+    let fused = scene.replace("slots = 1\n", "slots = 1\ncovered_cells = \"fused\"\n");
+    let files: Vec<String> = [("crowd_a", &scene, "redone"), ("crowd_b", &scene, "redone")]
+        .into_iter()
+        .chain([("crowd_fused", &fused, "solid term in the fluid kernels")])
+        .map(|(tag, scene, mode)| {
+            let (code, err, out) = run(tag, scene);
             assert_eq!(code, Some(0), "{err}");
             assert!(
                 err.contains("by step 40,") && err.contains("did not fit coupling.slots = 1"),
                 "the last step is checked and the dropped covers named: {err}"
             );
+            assert!(err.contains(mode), "{tag}: covered cells {mode}: {err}");
             std::fs::read_to_string(out.join("particles.csv")).unwrap()
         })
         .collect();
     assert_eq!(files[0].lines().count(), 1 + 40 * 5, "a row per bead per step");
     assert!(files[0] == files[1], "the two runs' particles.csv differ");
+    assert!(
+        files[0] == files[2],
+        "fused and redone covered cells give different particles.csv"
+    );
 }

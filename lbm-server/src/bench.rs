@@ -2,7 +2,7 @@
 
 use crate::lbm::geometry::{Face, Operator, Setup};
 use crate::lbm::gpu::{Gpu, Health, Lattice};
-use crate::lbm::imb::SolidParticle;
+use crate::lbm::imb::{CoveredCells, ImbOptions, SolidParticle};
 use crate::lbm::mrt::Rates;
 use std::process::ExitCode;
 use std::sync::Arc;
@@ -31,6 +31,10 @@ pub struct BenchArgs {
     /// waited for: the round trip is in every pass), mean over the timed steps.
     #[arg(long)]
     passes: bool,
+    /// With --particles: where the covered cells get their solid term: auto (fused on a GPU, redo
+    /// on a CPU driver), fused, redo, or both (each particle count both ways).
+    #[arg(long, default_value = "auto")]
+    covered_cells: String,
     /// Timed rounds, ours and the naive kernel alternating (best round reported).
     #[arg(long, default_value_t = 3)]
     rounds: u32,
@@ -145,6 +149,7 @@ fn run(args: &BenchArgs) -> Result<(), String> {
         );
     }
     if !args.particles.is_empty() {
+        let modes = covered_cell_modes(&args.covered_cells)?;
         coupled_sweep(
             &gpu,
             lattice,
@@ -155,6 +160,7 @@ fn run(args: &BenchArgs) -> Result<(), String> {
             &args.particles,
             mlups,
             args.passes,
+            &modes,
         )?;
     }
     if time_naive {
@@ -329,8 +335,19 @@ impl Naive {
     }
 }
 
-/// Coupled MLUPS for each particle count, against the LBM-only figure of the same run; first the
-/// LBM-only `lattice` of that figure stepped as the lockstep steps (then freed).
+/// The ways of treating the covered cells that `--covered-cells` names.
+fn covered_cell_modes(name: &str) -> Result<Vec<CoveredCells>, String> {
+    if name == "both" {
+        return Ok(vec![CoveredCells::Redo, CoveredCells::Fused]);
+    }
+    CoveredCells::from_name(name)
+        .map(|mode| vec![mode])
+        .ok_or_else(|| format!("--covered-cells {name}: expected auto, fused, redo or both"))
+}
+
+/// Coupled MLUPS for each particle count (and way of treating the covered cells), against the
+/// LBM-only figure of the same run; first the LBM-only `lattice` of that figure stepped as the
+/// lockstep steps (then freed).
 #[allow(clippy::too_many_arguments)]
 fn coupled_sweep(
     gpu: &Arc<Gpu>,
@@ -342,12 +359,12 @@ fn coupled_sweep(
     counts: &[usize],
     lbm_only: f64,
     passes: bool,
+    modes: &[CoveredCells],
 ) -> Result<(), String> {
-    use crate::lbm::imb::ImbOptions;
     let mut breakdown = Vec::new();
     println!("coupled (spheres of 4 cells diameter, immersed moving boundary, one readback per step):");
-    println!("| particles | MLUPS | ratio to LBM-only ({lbm_only:.1} MLUPS) |");
-    println!("|---:|---:|---:|");
+    println!("| particles | covered cells | MLUPS | ratio to LBM-only ({lbm_only:.1} MLUPS) |");
+    println!("|---:|---|---:|---:|");
     // The lockstep's own cost: LBM-only steps, each submitted and waited for as a coupled step is.
     gpu.wait();
     let start = Instant::now();
@@ -357,7 +374,7 @@ fn coupled_sweep(
     }
     let mlups = (n[0] * n[1] * n[2]) as f64 * steps as f64 / start.elapsed().as_secs_f64() / 1e6;
     println!(
-        "| 0 (no coupling: one submit and wait per step) | {mlups:.1} | {:.0}% |",
+        "| 0 (no coupling: one submit and wait per step) | - | {mlups:.1} | {:.0}% |",
         100.0 * mlups / lbm_only
     );
     drop(lattice);
@@ -375,19 +392,33 @@ fn coupled_sweep(
             ));
         }
         let particles = sphere_lattice(side, spacing);
-        let setup = Setup::new(n, [Face::Periodic; 6], tau, operator);
-        let mut lattice = Lattice::new(gpu.clone(), setup, Health::default(), Some(ImbOptions::default()))?;
-        for _ in 0..5 {
-            lattice.step_coupled(&particles)?;
-        }
-        let start = Instant::now();
-        for _ in 0..steps {
-            lattice.step_coupled(&particles)?;
-        }
-        let mlups = (n[0] * n[1] * n[2]) as f64 * steps as f64 / start.elapsed().as_secs_f64() / 1e6;
-        println!("| {count} | {mlups:.1} | {:.0}% |", 100.0 * mlups / lbm_only);
-        if passes {
-            breakdown.push((count, time_passes(&mut lattice, &particles, steps)?));
+        for &mode in modes {
+            let setup = Setup::new(n, [Face::Periodic; 6], tau, operator);
+            let options = ImbOptions {
+                covered_cells: mode,
+                ..Default::default()
+            };
+            let mut lattice = Lattice::new(gpu.clone(), setup, Health::default(), Some(options))?;
+            let name = if lattice.covered_cells_fused() {
+                "fused"
+            } else {
+                "redo"
+            };
+            for _ in 0..5 {
+                lattice.step_coupled(&particles)?;
+            }
+            let start = Instant::now();
+            for _ in 0..steps {
+                lattice.step_coupled(&particles)?;
+            }
+            let mlups = (n[0] * n[1] * n[2]) as f64 * steps as f64 / start.elapsed().as_secs_f64() / 1e6;
+            println!(
+                "| {count} | {name} | {mlups:.1} | {:.0}% |",
+                100.0 * mlups / lbm_only
+            );
+            if passes {
+                breakdown.push((count, name, time_passes(&mut lattice, &particles, steps)?));
+            }
         }
     }
     if passes {
@@ -454,14 +485,30 @@ fn process_cpu_seconds() -> f64 {
     }
 }
 
-fn print_passes(breakdown: &[(usize, Vec<(&'static str, [f64; 2])>)]) {
+/// Milliseconds (wall, CPU) of each pass of a coupled step, in the order of the step.
+type PassTimes = Vec<(&'static str, [f64; 2])>;
+
+/// The time of each pass per particle count: one table per way of treating the covered cells
+/// (their passes differ) and clock.
+fn print_passes(breakdown: &[(usize, &str, PassTimes)]) {
+    for mode in ["redo", "fused"] {
+        let rows: Vec<(usize, &PassTimes)> = breakdown
+            .iter()
+            .filter(|(_, m, _)| *m == mode)
+            .map(|(count, _, times)| (*count, times))
+            .collect();
+        print_pass_table(mode, &rows);
+    }
+}
+
+fn print_pass_table(mode: &str, breakdown: &[(usize, &PassTimes)]) {
     let Some((_, first)) = breakdown.first() else {
         return;
     };
     let names: Vec<&str> = first.iter().map(|(name, _)| *name).collect();
     for (k, what) in ["wall", "CPU (all threads)"].iter().enumerate() {
         println!(
-            "coupled step by pass, {what} ms per step (mean; each pass submitted and waited for on its own):"
+            "coupled step by pass, covered cells {mode}, {what} ms per step (mean; each pass submitted and waited for on its own):"
         );
         println!(
             "| particles | {} | total | total without fluid |",

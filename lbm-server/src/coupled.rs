@@ -11,7 +11,7 @@
 
 use crate::fluid::{health_of, setup_of};
 use crate::lbm::gpu::{Gpu, Lattice};
-use crate::lbm::imb::{ImbOptions, SolidParticle};
+use crate::lbm::imb::{CoveredCells, ImbOptions, SolidParticle};
 use crate::lubrication::Lubrication;
 use protocol::{ParticleReply, ParticleState, Physics};
 use scene::lattice::{LatticeFace, LatticeUnits};
@@ -58,6 +58,12 @@ impl FluidSide {
         let options = ImbOptions {
             slots: scene.coupling.slots,
             seed_weighting: scene.coupling.weighting == "seed",
+            covered_cells: CoveredCells::from_name(&scene.coupling.covered_cells).ok_or_else(|| {
+                format!(
+                    "coupling.covered_cells = {:?}: expected \"auto\", \"fused\" or \"redo\"",
+                    scene.coupling.covered_cells
+                )
+            })?,
         };
         let lattice = Lattice::new(gpu, setup_of(&units), health_of(&units), Some(options))?;
         let lubrication = scene.coupling.lubrication.then(|| lubrication_of(scene, &units));
@@ -94,7 +100,8 @@ impl FluidSide {
     pub fn describe(&self) -> String {
         let u = &self.units;
         format!(
-            "lattice {}x{}x{} ({}, tau {:.4}, dx {:e} m, dt {:e} s) on {}, immersed moving boundary{}",
+            "lattice {}x{}x{} ({}, tau {:.4}, dx {:e} m, dt {:e} s) on {}, immersed moving boundary \
+             ({}){}",
             u.n[0],
             u.n[1],
             u.n[2],
@@ -103,6 +110,11 @@ impl FluidSide {
             u.dx,
             u.dt,
             self.lattice.adapter(),
+            if self.lattice.covered_cells_fused() {
+                "solid term in the fluid kernels"
+            } else {
+                "covered cells redone"
+            },
             if self.lubrication.is_some() {
                 ", lubrication"
             } else {

@@ -239,6 +239,7 @@ fn array_drag(gpu: &Arc<Gpu>) -> String {
         let options = crate::lbm::imb::ImbOptions {
             slots: 2,
             seed_weighting: seed,
+            ..Default::default()
         };
         let d = validation::zick_homsy_with(gpu, 16, validation::radius_for(phi, 16), tau, op, options);
         let name = if seed {

@@ -127,6 +127,12 @@ pub struct Coupling {
     /// (docs/imb.md; default on; off: held constant).
     #[serde(default = "default_substep_drag")]
     pub substep_drag: bool,
+    /// With a `[lattice]`: where the covered cells get their solid term (docs/imb.md, "Speed"):
+    /// "fused" in the fluid kernels (each cell tests one bit; suits a GPU, and dense beds),
+    /// "redo" saved and redone after them (the fluid kernels stay branch-free; suits a CPU driver
+    /// with sparse particles), "auto" (default): fused on a GPU, redo on a CPU driver.
+    #[serde(default = "default_covered_cells")]
+    pub covered_cells: String,
 }
 
 fn default_lubrication() -> bool {
@@ -135,6 +141,10 @@ fn default_lubrication() -> bool {
 
 fn default_substep_drag() -> bool {
     true
+}
+
+fn default_covered_cells() -> String {
+    "auto".into()
 }
 
 fn default_slots() -> u32 {
@@ -154,6 +164,7 @@ impl Default for Coupling {
             weighting: default_weighting(),
             lubrication: default_lubrication(),
             substep_drag: default_substep_drag(),
+            covered_cells: default_covered_cells(),
         }
     }
 }

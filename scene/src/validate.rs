@@ -135,6 +135,14 @@ impl Scene {
                 "expected \"noble-torczynski\" or \"seed\"",
             ));
         }
+        if !["auto", "fused", "redo"].contains(&self.coupling.covered_cells.as_str()) {
+            let value = format!("{:?}", self.coupling.covered_cells);
+            return Err(c.fail(
+                "coupling.covered_cells",
+                value,
+                "expected \"auto\", \"fused\" or \"redo\"",
+            ));
+        }
         if self.coupling.timeout > 86_400.0 {
             return Err(c.fail(
                 "coupling.timeout",

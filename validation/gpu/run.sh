@@ -64,8 +64,8 @@ for op in bgk trt mrt; do
     step bench_$op 60 120 $bin/lbm-server bench --grid $cube --operator $op --steps $steps --rounds 3
 done
 # Coupled, the seed's Fig. 5 sweep (issue 5's target: 90% of LBM-only at 32^3 particles).
-step coupled_trt 120 240 $bin/lbm-server bench --grid $coupled --operator trt --particles $counts \
-    --steps $steps --rounds 2 --kernel ours --passes
+step coupled_trt 150 300 $bin/lbm-server bench --grid $coupled --operator trt --particles $counts \
+    --steps $steps --rounds 2 --kernel ours --passes --covered-cells both
 # The default scene, the whole coupled program (DEM process and lockstep included).
 step default/log 30 60 $bin/lbm-server run .gpu/default.toml --out "$OUT/default"
 rm -rf "$OUT/default/fields"

@@ -225,7 +225,10 @@ impl Lattice {
             bytemuck::cast_slice(&[u32::MAX, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0]),
             STORAGE,
         );
-        let classes = CellList::new(&setup);
+        // The solid term in the fluid kernels (imb.rs, `CoveredCells`): those kernels then update
+        // every cell one at a time, without the four-cell quads.
+        let fused = imb.is_some_and(|o| o.covered_cells.fused_on(gpu.adapter.device_type));
+        let classes = CellList::new(&setup, !fused);
         let cell_list = init(
             "cell list",
             bytemuck::cast_slice(if classes.list.is_empty() {
@@ -244,7 +247,7 @@ impl Lattice {
                 )
             })
             .collect();
-        let coupling = super::imb::Coupling::new(d, imb, cells);
+        let coupling = super::imb::Coupling::new(d, imb, cells, fused);
         let source = format!("{SHADER}\n{IMB_SHADER}");
         let module = d.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("lbm.wgsl + imb.wgsl"),
@@ -264,6 +267,7 @@ impl Lattice {
                 "SEED_WEIGHTING",
                 f64::from(u8::from(imb.is_some_and(|o| o.seed_weighting))),
             ),
+            ("FUSED", f64::from(u8::from(fused))),
         ];
         let pipeline_kind = |entry: &str, kind: u32| {
             let mut constants = constants.to_vec();
@@ -669,7 +673,9 @@ impl CellList {
         }
     }
 
-    pub fn new(setup: &Setup) -> CellList {
+    /// The cell list, with the quads when `quads` (without, every interior and wrapping cell goes
+    /// through `stream_collide_fluid`).
+    pub fn new(setup: &Setup, quads: bool) -> CellList {
         let flags = cell_flags(setup);
         let cells = flags.len();
         let class = |flag: u32| {
@@ -684,7 +690,10 @@ impl CellList {
             }
         };
         let all = |q: usize, most: u32| (4 * q..4 * q + 4).all(|k| class(flags[k]) <= most);
-        let quads: Vec<u32> = (0..cells / 4).filter(|&q| all(q, 1)).map(|q| q as u32).collect();
+        let quads: Vec<u32> = (0..cells / 4)
+            .filter(|&q| quads && all(q, 1))
+            .map(|q| q as u32)
+            .collect();
         let interior_quads: Vec<u32> = quads
             .iter()
             .copied()
@@ -818,7 +827,7 @@ mod quad_tests {
     use super::*;
 
     fn check(setup: Setup, seed: u64) {
-        let classes = CellList::new(&setup);
+        let classes = CellList::new(&setup, true);
         assert!(
             classes.quads > 0 && classes.interior_quads > 0,
             "the grid has quads"

@@ -10,6 +10,8 @@ pub struct ImbOptions {
     pub slots: u32,
     /// B = eps (the seed's choice) instead of Noble & Torczynski's B(eps, tau).
     pub seed_weighting: bool,
+    /// Where the covered cells get their solid term.
+    pub covered_cells: CoveredCells,
 }
 
 impl Default for ImbOptions {
@@ -17,6 +19,45 @@ impl Default for ImbOptions {
         Self {
             slots: 2,
             seed_weighting: false,
+            covered_cells: CoveredCells::Auto,
+        }
+    }
+}
+
+/// Where the covered cells get their solid term (docs/imb.md, "Speed"). Both give the same
+/// populations and loads (tested bit for bit); they differ in cost.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum CoveredCells {
+    /// Fused on a GPU, redo on a CPU driver.
+    #[default]
+    Auto,
+    /// In the fluid kernels: every cell tests one bit of a cover mask, and a covered cell takes
+    /// its solid term where it collides (no four-cell quads). Moves no population twice; costs a
+    /// branch in the fluid kernels, which a GPU pays per warp that holds a covered cell and a CPU
+    /// driver such as lavapipe (which runs both sides of a branch) for every cell.
+    Fused,
+    /// Saved before the fluid kernels and redone after them with the solid term: the fluid
+    /// kernels stay branch-free, each covered cell's populations move three times.
+    Redo,
+}
+
+impl CoveredCells {
+    /// The scene's `coupling.covered_cells` ("auto", "fused", "redo").
+    pub fn from_name(name: &str) -> Option<CoveredCells> {
+        match name {
+            "auto" => Some(CoveredCells::Auto),
+            "fused" => Some(CoveredCells::Fused),
+            "redo" => Some(CoveredCells::Redo),
+            _ => None,
+        }
+    }
+
+    /// Whether the solid term goes in the fluid kernels on this kind of device.
+    pub fn fused_on(self, device: wgpu::DeviceType) -> bool {
+        match self {
+            CoveredCells::Auto => device != wgpu::DeviceType::Cpu,
+            CoveredCells::Fused => true,
+            CoveredCells::Redo => false,
         }
     }
 }
@@ -88,12 +129,29 @@ pub fn box_edge(radius: f64) -> u32 {
 /// with: the identity, or a submit and wait for timing each pass.
 type Split<'a> = &'a mut dyn FnMut(&'static str, wgpu::CommandEncoder) -> wgpu::CommandEncoder;
 
+/// The coupling's kernels: `cover` and `reduce`, and with the redo the passes around the fluid step.
+struct Passes {
+    cover: wgpu::ComputePipeline,
+    reduce: wgpu::ComputePipeline,
+    redo: Option<Redo>,
+}
+
+/// The passes of [`CoveredCells::Redo`]: `covered_groups`, then `save` and
+/// `stream_collide_covered` for each KIND (bit 0 the parity, bit 1 the covered cells with a link
+/// that leaves the fluid).
+struct Redo {
+    groups: wgpu::ComputePipeline,
+    save: [wgpu::ComputePipeline; 4],
+    covered: [wgpu::ComputePipeline; 4],
+}
+
 /// Buffers and pipelines of the coupling (tiny placeholders when the scene has no particles).
 pub struct Coupling {
     particles: wgpu::Buffer,
     /// Force and torque per particle, apart from the states so that only they are read back.
     loads: wgpu::Buffer,
     pairs: wgpu::Buffer,
+    /// Per cell the count of its particles, then the cover mask (one bit per cell, 32 to a word).
     covered: wgpu::Buffer,
     slots: wgpu::Buffer,
     info: wgpu::Buffer,
@@ -104,9 +162,9 @@ pub struct Coupling {
     particle_capacity: u64,
     pair_capacity: u64,
     slots_per_cell: u32,
-    /// cover, covered_groups, reduce, then save and stream_collide_covered for each KIND (bit 0
-    /// the parity, bit 1 the covered cells with a link that leaves the fluid).
-    pipelines: Option<[wgpu::ComputePipeline; 11]>,
+    /// The solid term in the fluid kernels ([`CoveredCells::Fused`]).
+    fused: bool,
+    pipelines: Option<Passes>,
     /// Covered cells the `fields` buffer can hold (`Saved` records).
     saved_capacity: u32,
     /// Most covered cells the list may hold (below the device's limit only in tests).
@@ -114,7 +172,7 @@ pub struct Coupling {
 }
 
 impl Coupling {
-    pub fn new(d: &wgpu::Device, options: Option<ImbOptions>, cells: usize) -> Coupling {
+    pub fn new(d: &wgpu::Device, options: Option<ImbOptions>, cells: usize, fused: bool) -> Coupling {
         let per_cell = |bytes: u64| {
             if options.is_some() {
                 bytes * cells as u64
@@ -127,7 +185,7 @@ impl Coupling {
             particles: storage_buffer(d, "particles", PARTICLE_BYTES),
             loads: storage_buffer(d, "loads", LOAD_BYTES),
             pairs: storage_buffer(d, "pairs", PAIR_BYTES),
-            covered: storage_buffer(d, "covered", per_cell(4)),
+            covered: storage_buffer(d, "covered", per_cell(4) + per_cell(4).div_ceil(128) * 4),
             slots: storage_buffer(d, "slots", per_cell(4 * slots)),
             info: storage_buffer(d, "imb info", 16),
             readback: readback_buffer(d, LOAD_BYTES),
@@ -140,30 +198,34 @@ impl Coupling {
             particle_capacity: 1,
             pair_capacity: 1,
             slots_per_cell: slots as u32,
+            fused,
             pipelines: None,
             saved_capacity: 0,
             saved_cap: u64::MAX,
         }
     }
 
-    /// Adds the cover, save, covered-cell and reduce pipelines when the coupling is on.
+    /// Adds the cover and reduce pipelines when the coupling is on, and with the redo the save and
+    /// covered-cell pipelines.
     pub fn with_pipelines(mut self, on: bool, make: &dyn Fn(&str, u32) -> wgpu::ComputePipeline) -> Coupling {
         if on {
-            self.pipelines = Some([
-                make("cover", 0),
-                make("covered_groups", 0),
-                make("reduce", 0),
-                make("save", 0),
-                make("save", 1),
-                make("save", 2),
-                make("save", 3),
-                make("stream_collide_covered", 0),
-                make("stream_collide_covered", 1),
-                make("stream_collide_covered", 2),
-                make("stream_collide_covered", 3),
-            ]);
+            let redo = (!self.fused).then(|| Redo {
+                groups: make("covered_groups", 0),
+                save: [0, 1, 2, 3].map(|kind| make("save", kind)),
+                covered: [0, 1, 2, 3].map(|kind| make("stream_collide_covered", kind)),
+            });
+            self.pipelines = Some(Passes {
+                cover: make("cover", 0),
+                reduce: make("reduce", 0),
+                redo,
+            });
         }
         self
+    }
+
+    /// Whether the covered cells take their solid term in the fluid kernels.
+    pub fn fused(&self) -> bool {
+        self.fused
     }
 
     /// The buffers in binding order.
@@ -249,48 +311,63 @@ impl Lattice {
         }
         let (gpu_particles, pairs) = layout(particles);
         self.reserve(gpu_particles.len() as u64, pairs as u64)?;
-        let coupling = self.imb.as_mut().expect("coupling");
-        let pipelines = coupling
+        let coupling = self.imb.as_ref().expect("coupling");
+        let passes = coupling
             .pipelines
             .as_ref()
             .ok_or("this lattice was made without particle coupling")?;
+        let (cover, reduce) = (passes.cover.clone(), passes.reduce.clone());
+        let redo = passes.redo.as_ref().map(|r| {
+            // KIND = parity + 2 * (list of the cells with a link that leaves the fluid).
+            let kind = |list: usize| (self.time % 2) as usize + 2 * list;
+            (
+                r.groups.clone(),
+                [0, 1].map(|list| r.save[kind(list)].clone()),
+                [0, 1].map(|list| r.covered[kind(list)].clone()),
+            )
+        });
         let parity = self.time % 2;
-        let [cover, groups, reduce] = std::array::from_fn(|i| pipelines[i].clone());
-        // KIND = parity + 2 * (list of the cells with a link that leaves the fluid).
-        let kind = |list: usize| parity as usize + 2 * list;
-        let save = [0, 1].map(|list| pipelines[3 + kind(list)].clone());
-        let covered = [0, 1].map(|list| pipelines[7 + kind(list)].clone());
-        let capacity = coupling.saved_capacity;
         let gpu = self.gpu.clone();
         gpu.queue
             .write_buffer(&coupling.particles, 0, bytemuck::cast_slice(&gpu_particles));
         gpu.queue.write_buffer(
             &coupling.info,
             0,
-            bytemuck::cast_slice(&[particles.len() as u32, pairs, 0, capacity]),
+            bytemuck::cast_slice(&[particles.len() as u32, pairs, 0, coupling.saved_capacity]),
         );
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
         let n = particles.len() as u32;
-        // The cover counts are all 0 here: `reduce` clears them. The covered cells are listed by `cover` (status[4]) and dispatched indirectly (status[5..8]).
+        // The cover counts, slots and mask are all 0 here: `reduce` clears them. With the redo the
+        // covered cells are listed by `cover` (status[4], status[8]) and dispatched indirectly
+        // (status[5..8], status[9..12]).
         encoder.clear_buffer(&self.status, 16, Some(32));
         self.dispatch_groups(&mut encoder, &cover, parity, n);
         encoder = split("cover", encoder);
-        self.dispatch_groups(&mut encoder, &groups, parity, 1);
-        let indirect = &self.imb.as_ref().expect("coupling").indirect;
-        encoder.copy_buffer_to_buffer(&self.status, 20, indirect, 0, 28);
-        encoder = split("covered_groups", encoder);
-        // The fluid kernels update every cell without the solid term; the covered cells are then
-        // redone from their saved populations (shaders/imb.wgsl).
-        for (offset, pipeline) in [0, 16].into_iter().zip(&save) {
-            self.dispatch_indirect(&mut encoder, pipeline, parity, offset);
+        match redo {
+            // The fluid kernels give the covered cells their solid term (shaders/lbm.wgsl).
+            None => {
+                self.encode_step(&mut encoder);
+                encoder = split("fluid", encoder);
+            }
+            // The fluid kernels update every cell without the solid term; the covered cells are
+            // then redone from their saved populations (shaders/imb.wgsl).
+            Some((groups, save, covered)) => {
+                self.dispatch_groups(&mut encoder, &groups, parity, 1);
+                let indirect = &self.imb.as_ref().expect("coupling").indirect;
+                encoder.copy_buffer_to_buffer(&self.status, 20, indirect, 0, 28);
+                encoder = split("covered_groups", encoder);
+                for (offset, pipeline) in [0, 16].into_iter().zip(&save) {
+                    self.dispatch_indirect(&mut encoder, pipeline, parity, offset);
+                }
+                encoder = split("save", encoder);
+                self.encode_step(&mut encoder);
+                encoder = split("fluid", encoder);
+                for (offset, pipeline) in [0, 16].into_iter().zip(&covered) {
+                    self.dispatch_indirect(&mut encoder, pipeline, parity, offset);
+                }
+                encoder = split("stream_collide_covered", encoder);
+            }
         }
-        encoder = split("save", encoder);
-        self.encode_step(&mut encoder);
-        encoder = split("fluid", encoder);
-        for (offset, pipeline) in [0, 16].into_iter().zip(&covered) {
-            self.dispatch_indirect(&mut encoder, pipeline, parity, offset);
-        }
-        encoder = split("stream_collide_covered", encoder);
         self.dispatch_groups(&mut encoder, &reduce, parity, n.div_ceil(64));
         encoder = split("reduce", encoder);
         let coupling = self.imb.as_ref().expect("coupling");
@@ -336,6 +413,12 @@ impl Lattice {
         pass.dispatch_workgroups_indirect(&self.imb.as_ref().expect("coupling").indirect, offset);
     }
 
+    /// Whether the covered cells take their solid term in the fluid kernels
+    /// ([`CoveredCells::Fused`]) rather than being redone after them.
+    pub fn covered_cells_fused(&self) -> bool {
+        self.imb.as_ref().is_some_and(|c| c.fused())
+    }
+
     /// Particles one cell can hold.
     pub fn slots(&self) -> u32 {
         self.imb.as_ref().map_or(0, |c| c.slots_per_cell)
@@ -357,6 +440,20 @@ impl Lattice {
         self.imb.as_ref().map_or(0, |c| c.saved_capacity)
     }
 
+    /// Test aid: the words of the cover counts, the cover mask and the slots that are not zero
+    /// (`reduce` clears them all for the next step).
+    #[cfg(test)]
+    pub fn cover_words_left(&self) -> usize {
+        let c = self.imb.as_ref().expect("coupling");
+        [&c.covered, &c.slots]
+            .iter()
+            .map(|b| {
+                let words: Vec<u32> = bytemuck::cast_slice(&self.gpu.read_buffer(b, b.size())).to_vec();
+                words.iter().filter(|&&w| w != 0).count()
+            })
+            .sum()
+    }
+
     /// Test aid: caps the list of covered cells at `cells`.
     #[cfg(test)]
     pub fn cap_covered_cells(&mut self, cells: u64) {
@@ -376,6 +473,7 @@ impl Lattice {
         let d = self.gpu.device.clone();
         let coupling = self.imb.as_mut().expect("coupling");
         let mut grew = false;
+        let fused = coupling.fused;
         if particles > coupling.particle_capacity {
             coupling.particle_capacity = particles.next_power_of_two();
             coupling.particles = storage_buffer(&d, "particles", coupling.particle_capacity * PARTICLE_BYTES);
@@ -388,7 +486,13 @@ impl Lattice {
             coupling.pairs = storage_buffer(&d, "pairs", coupling.pair_capacity * PAIR_BYTES);
             grew = true;
         }
-        // The covered cells, at most min(cells, pairs), over the `fields` buffer.
+        if fused {
+            if grew {
+                self.rebind();
+            }
+            return Ok(());
+        }
+        // The redo's covered cells, at most min(cells, pairs), over the `fields` buffer.
         let cells = self.setup.cells() as u64;
         let most = (limit.min(self.gpu.limits.max_buffer_size) / SAVED_BYTES)
             .min(cells)

@@ -225,7 +225,7 @@ mod validation_cases {
 }
 
 mod immersed_boundary {
-    use super::super::imb::{ImbOptions, Load, SolidParticle};
+    use super::super::imb::{CoveredCells, ImbOptions, Load, SolidParticle};
     use super::*;
 
     /// Two overlapping moving, spinning spheres, moved by `shift` cells between steps.
@@ -270,7 +270,8 @@ mod immersed_boundary {
     }
 
     /// One coupled step per shift on the GPU and in f64 (the particles moved between steps), each
-    /// compared; the GPU's loads of every step and the covers it dropped.
+    /// compared, with the covered cells both fused in the fluid kernels and redone after them,
+    /// which must agree bit for bit; the GPU's loads of every step and the covers it dropped.
     fn check_steps(
         setup: Setup,
         options: ImbOptions,
@@ -278,8 +279,37 @@ mod immersed_boundary {
         shifts: &[f64],
         particles_at: impl Fn(f64) -> Vec<SolidParticle>,
     ) -> (Vec<Vec<Load>>, u32) {
+        let runs = [CoveredCells::Redo, CoveredCells::Fused].map(|covered_cells| {
+            let options = ImbOptions {
+                covered_cells,
+                ..options
+            };
+            check_steps_in(setup.clone(), options, seed, shifts, &particles_at)
+        });
+        let [(redo, redo_f, redo_dropped), (fused, fused_f, fused_dropped)] = runs;
+        assert_eq!(redo, fused, "loads: redo and fused differ");
+        assert_eq!(
+            redo_dropped, fused_dropped,
+            "dropped covers: redo and fused differ"
+        );
+        assert!(redo_f == fused_f, "populations: redo and fused differ");
+        (redo, redo_dropped)
+    }
+
+    /// `check_steps` with one way of treating the covered cells; also the final populations.
+    fn check_steps_in(
+        setup: Setup,
+        options: ImbOptions,
+        seed: u64,
+        shifts: &[f64],
+        particles_at: &impl Fn(f64) -> Vec<SolidParticle>,
+    ) -> (Vec<Vec<Load>>, Vec<Cell>, u32) {
         let f0 = random_populations(&setup, seed);
         let mut lattice = Lattice::new(gpu(), setup.clone(), Health::default(), Some(options)).unwrap();
+        assert_eq!(
+            lattice.covered_cells_fused(),
+            options.covered_cells == CoveredCells::Fused
+        );
         lattice.set_populations(&f0);
         let mut f = f0;
         let mut loads = Vec::new();
@@ -292,27 +322,33 @@ mod immersed_boundary {
                 .flat_map(|l| l.force)
                 .fold(0.0, |m: f64, v| m.max(v.abs()));
             let err = max_load_difference(&got, &want);
+            let mode = options.covered_cells;
             assert!(scale > 1e-3, "the particles feel a force: {want:?}");
             assert!(
                 err < 1e-4 * scale.max(1.0),
-                "step {step}: loads differ by {err:e}: {got:?} vs {want:?}"
+                "{mode:?}, step {step}: loads differ by {err:e}: {got:?} vs {want:?}"
             );
             let pop_err = max_difference(&lattice.populations(), &next);
             assert!(
                 pop_err < TOLERANCE,
-                "step {step}: populations differ by {pop_err:e}"
+                "{mode:?}, step {step}: populations differ by {pop_err:e}"
+            );
+            assert_eq!(
+                lattice.cover_words_left(),
+                0,
+                "{mode:?}, step {step}: covers left for the next step"
             );
             f = next;
             loads.push(got);
         }
-        (loads, lattice.lost_covers().dropped)
+        (loads, lattice.populations(), lattice.lost_covers().dropped)
     }
 
     /// The grids below have interior quads (nx a multiple of 4), so the fast fluid kernels (quads,
     /// their odd step, wrapping and boundary cells) run next to covered cells; a third sphere
     /// crosses the face x = 0 (wrapping or boundary cells covered).
     fn check_with_quads(setup: Setup, options: ImbOptions, seed: u64) {
-        let classes = super::super::gpu::CellList::new(&setup);
+        let classes = super::super::gpu::CellList::new(&setup, true);
         assert!(classes.interior_quads > 0, "the grid has interior quads");
         let three = |shift: f64| {
             let mut particles = two_particles(shift);
@@ -356,7 +392,7 @@ mod immersed_boundary {
         for slots in [1, 2] {
             let options = ImbOptions {
                 slots,
-                seed_weighting: false,
+                ..Default::default()
             };
             let runs: Vec<(Vec<Vec<Load>>, u32)> = (0..3)
                 .map(|_| check_steps(setup.clone(), options, 23, &[0.0, 0.29, 0.74], crowd))
@@ -415,6 +451,7 @@ mod immersed_boundary {
             ImbOptions {
                 slots: 2,
                 seed_weighting: true,
+                ..Default::default()
             },
             12,
         );
@@ -432,7 +469,7 @@ mod immersed_boundary {
         );
         let options = ImbOptions {
             slots: 1,
-            seed_weighting: false,
+            ..Default::default()
         };
         let f0 = random_populations(&setup, 13);
         let mut lattice = Lattice::new(gpu(), setup.clone(), Health::default(), Some(options)).unwrap();
