@@ -11,7 +11,7 @@
 
 use crate::fluid::{health_of, setup_of};
 use crate::lbm::gpu::{Gpu, Lattice};
-use crate::lbm::imb::{CoveredCells, ImbOptions, SolidParticle};
+use crate::lbm::imb::{covered_fraction, CoveredCells, ImbOptions, SolidParticle};
 use crate::lubrication::Lubrication;
 use protocol::{ParticleReply, ParticleState, Physics};
 use scene::lattice::{LatticeFace, LatticeUnits};
@@ -45,6 +45,24 @@ fn tau_warning(tau: f64) -> Option<String> {
     })
 }
 
+/// The scene's `coupling.covered_cells`, "auto" made definite for this device and the scene's
+/// initial particles (their covered fraction of the lattice).
+fn covered_cells(
+    scene: &Scene,
+    units: &LatticeUnits,
+    device: wgpu::DeviceType,
+) -> Result<CoveredCells, String> {
+    let mode = CoveredCells::from_name(&scene.coupling.covered_cells).ok_or_else(|| {
+        format!(
+            "coupling.covered_cells = {:?}: expected \"auto\", \"fused\" or \"redo\"",
+            scene.coupling.covered_cells
+        )
+    })?;
+    let radii = scene.initial_particles().into_iter().map(|p| p.radius / units.dx);
+    let cells = units.n.iter().product();
+    Ok(mode.for_scene(device, covered_fraction(radii, cells)))
+}
+
 impl FluidSide {
     /// The fluid a scene asks for.
     pub fn for_scene(scene: &Scene) -> Result<FluidSide, String> {
@@ -58,12 +76,7 @@ impl FluidSide {
         let options = ImbOptions {
             slots: scene.coupling.slots,
             seed_weighting: scene.coupling.weighting == "seed",
-            covered_cells: CoveredCells::from_name(&scene.coupling.covered_cells).ok_or_else(|| {
-                format!(
-                    "coupling.covered_cells = {:?}: expected \"auto\", \"fused\" or \"redo\"",
-                    scene.coupling.covered_cells
-                )
-            })?,
+            covered_cells: covered_cells(scene, &units, gpu.adapter.device_type)?,
         };
         let lattice = Lattice::new(gpu, setup_of(&units), health_of(&units), Some(options))?;
         let lubrication = scene.coupling.lubrication.then(|| lubrication_of(scene, &units));

@@ -52,7 +52,8 @@ impl CoveredCells {
         }
     }
 
-    /// Whether the solid term goes in the fluid kernels on this kind of device.
+    /// Whether the solid term goes in the fluid kernels on this kind of device (`Auto` taken as
+    /// sparse particles; see [`CoveredCells::for_scene`]).
     pub fn fused_on(self, device: wgpu::DeviceType) -> bool {
         match self {
             CoveredCells::Auto => device != wgpu::DeviceType::Cpu,
@@ -60,6 +61,36 @@ impl CoveredCells {
             CoveredCells::Redo => false,
         }
     }
+
+    /// `Auto` made definite for particles that cover `covered_fraction` of the cells: fused on a
+    /// GPU; on a CPU driver redo for sparse particles and fused from [`FUSED_ON_CPU_FROM`] on.
+    pub fn for_scene(self, device: wgpu::DeviceType, covered_fraction: f64) -> CoveredCells {
+        let dense = covered_fraction >= FUSED_ON_CPU_FROM;
+        match self {
+            CoveredCells::Auto if self.fused_on(device) || dense => CoveredCells::Fused,
+            CoveredCells::Auto => CoveredCells::Redo,
+            mode => mode,
+        }
+    }
+}
+
+/// The covered fraction of the cells from which a CPU driver runs the coupled step faster with the
+/// solid term fused: lavapipe, 64 x 64 x 128, TRT, spheres of 4 cells (BENCHMARKS.md): the redo
+/// runs at 94 / 64 / 44 / 30 / 26% of LBM-only at 1 / 512 / 1728 / 2744 / 4096 spheres (about 0 /
+/// 5 / 18 / 29 / 44% of the cells covered), fused at 57 / 53 / 43 / 39 / 37%.
+pub const FUSED_ON_CPU_FROM: f64 = 0.2;
+
+/// The fraction of the cells that spheres of these radii (cells) cover: those whose centre lies
+/// within r + 1/2 - 1/(12 r) of a sphere's centre (where the solid fraction is above 0), counted
+/// per sphere (overlaps twice).
+pub fn covered_fraction(radii: impl Iterator<Item = f64>, cells: usize) -> f64 {
+    let covered: f64 = radii
+        .map(|r| {
+            let reach = r - 1.0 / (12.0 * r) + 0.5;
+            4.0 / 3.0 * std::f64::consts::PI * reach.powi(3)
+        })
+        .sum();
+    covered / cells as f64
 }
 
 /// A particle in lattice units (cell i spans [i, i + 1] along each axis).
@@ -529,4 +560,57 @@ fn layout(particles: &[SolidParticle]) -> (Vec<GpuParticle>, u32) {
         })
         .collect();
     (records, first)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Cells whose centre lies where the solid fraction of a sphere at `c` (radius r) is above 0.
+    fn cells_covered(c: [f64; 3], r: f64) -> usize {
+        let reach = r - 1.0 / (12.0 * r) + 0.5;
+        let m = reach.ceil() as i64 + 1;
+        let base = c.map(|x| x.floor() as i64);
+        let mut count = 0;
+        for dz in -m..=m {
+            for dy in -m..=m {
+                for dx in -m..=m {
+                    let q = [base[0] + dx, base[1] + dy, base[2] + dz];
+                    let d2: f64 = (0..3).map(|a| (q[a] as f64 + 0.5 - c[a]).powi(2)).sum();
+                    count += usize::from(d2.sqrt() < reach);
+                }
+            }
+        }
+        count
+    }
+
+    #[test]
+    fn covered_fraction_counts_the_cells_with_a_solid_fraction() {
+        for (r, tolerance) in [(2.0, 0.08), (4.0, 0.03), (8.0, 0.01)] {
+            let centres = [
+                [10.0, 10.0, 10.0],
+                [10.3, 10.7, 10.1],
+                [10.5, 10.5, 10.5],
+                [10.9, 10.2, 10.6],
+            ];
+            let counted: usize = centres.iter().map(|&c| cells_covered(c, r)).sum();
+            let estimate = covered_fraction(std::iter::repeat_n(r, centres.len()), 1000) * 1000.0;
+            let error = (estimate - counted as f64).abs() / counted as f64;
+            assert!(
+                error < tolerance,
+                "r {r}: {estimate:.1} against {counted} cells counted"
+            );
+        }
+    }
+
+    #[test]
+    fn auto_fuses_on_a_gpu_and_for_dense_beds_on_a_cpu() {
+        use wgpu::DeviceType::{Cpu, DiscreteGpu};
+        let auto = CoveredCells::Auto;
+        assert_eq!(auto.for_scene(DiscreteGpu, 0.0), CoveredCells::Fused);
+        assert_eq!(auto.for_scene(Cpu, 0.05), CoveredCells::Redo);
+        assert_eq!(auto.for_scene(Cpu, 0.3), CoveredCells::Fused);
+        assert_eq!(CoveredCells::Redo.for_scene(DiscreteGpu, 0.9), CoveredCells::Redo);
+        assert_eq!(CoveredCells::Fused.for_scene(Cpu, 0.0), CoveredCells::Fused);
+    }
 }
