@@ -76,8 +76,8 @@ impl CoveredCells {
 
 /// The covered fraction of the cells from which a CPU driver runs the coupled step faster with the
 /// solid term fused: lavapipe, 64 x 64 x 128, TRT, spheres of 4 cells (BENCHMARKS.md): the redo
-/// runs at 94 / 64 / 44 / 30 / 26% of LBM-only at 1 / 512 / 1728 / 2744 / 4096 spheres (about 0 /
-/// 5 / 18 / 29 / 44% of the cells covered), fused at 57 / 53 / 43 / 39 / 37%.
+/// runs at 94 / 64 / 44 / 30 / 26% of LBM-only at 1 / 512 / 1728 / 2744 / 4096 spheres (0.01 /
+/// 6 / 21 / 33 / 49% of the cells covered by [`covered_fraction`]), fused at 57 / 53 / 43 / 39 / 37%.
 pub const FUSED_ON_CPU_FROM: f64 = 0.2;
 
 /// The fraction of the cells that spheres of these radii (cells) cover: those whose centre lies
