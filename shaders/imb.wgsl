@@ -96,8 +96,25 @@ fn box_cell(origin: vec3<i32>, m: u32, t: u32) -> vec3<i32> {
     return origin + vec3<i32>(i32(t - row * m), i32(row - layer * m), i32(layer));
 }
 
-fn inside_domain(q: vec3<i32>) -> bool {
-    return all(q >= vec3<i32>(0)) && all(q < vec3<i32>(params.n.xyz));
+// The lattice cell of box cell q: wrapped along the periodic axes (a box spans at most the axis and
+// the host wraps the centres into the lattice, so q is less than one period outside), NO_CELL
+// outside the domain along the others.
+fn lattice_cell(q: vec3<i32>) -> u32 {
+    let n = vec3<i32>(params.n.xyz);
+    let periodic = vec3<bool>(face_type(0u) == PERIODIC, face_type(2u) == PERIODIC, face_type(4u) == PERIODIC);
+    let inside = (q >= vec3<i32>(0)) & (q < n);
+    if !all(inside | periodic) { return NO_CELL; }
+    let wrapped = vec3<i32>(vec3<u32>(wrap(q.x, n.x), wrap(q.y, n.y), wrap(q.z, n.z)));
+    return cell_at(select(q, wrapped, periodic));
+}
+
+// The box cell (offset from the box origin) that lattice cell k is in particle p's box: k's
+// coordinates, moved by one period where the box wraps.
+fn box_offset(k: u32, p: Particle) -> vec3<i32> {
+    let n = vec3<i32>(params.n.xyz);
+    let t = coords(k) - box_origin(p);
+    let up = select(t, t + n, t < vec3<i32>(0));
+    return select(up, up - n, up >= vec3<i32>(i32(p.box_.y)));
 }
 
 fn cell_at(q: vec3<i32>) -> u32 {
@@ -153,8 +170,8 @@ fn cover(
     for (var t = local; t < m * m * m; t += 64u) {
         let q = box_cell(origin, m, t);
         var covers = 0.0;
-        if inside_domain(q) {
-            let k = cell_at(q);
+        let k = lattice_cell(q);
+        if k != NO_CELL {
             let eps = solid_fraction(vec3<f32>(q) + 0.5, p.pos_r.xyz, p.pos_r.w);
             if eps > 0.0 && (flags[k] & SOLID) == 0u {
                 let slot = atomicAdd(&covered[k], 1u);
@@ -311,14 +328,17 @@ fn immersed_boundary(k: u32, f: array<f32, 19>, m: Moments, post: array<f32, 19>
     for (var s = 0u; s < count; s++) {
         ids[s] = slot_particle(atomicLoad(&slots[k * SLOTS + s]));
     }
-    // The solid fractions as `cover` computed them (the same function of the same values).
-    let q = coords(k);
-    let x = vec3<f32>(q) + 0.5;
+    // The solid fractions as `cover` computed them (the same function of the same values: the
+    // cell centre in the particle's box, one period away where the box wraps).
+    var t: array<vec3<i32>, 4>;
+    var x: array<vec3<f32>, 4>;
     var eps: array<f32, 4>;
     var eps_total = 0.0;
     for (var s = 0u; s < count; s++) {
         let p = particles[ids[s]];
-        eps[s] = solid_fraction(x, p.pos_r.xyz, p.pos_r.w);
+        t[s] = box_offset(k, p);
+        x[s] = vec3<f32>(box_origin(p) + t[s]) + 0.5;
+        eps[s] = solid_fraction(x[s], p.pos_r.xyz, p.pos_r.w);
         eps_total += eps[s];
     }
     // Total solid fraction capped at 1.
@@ -335,7 +355,7 @@ fn immersed_boundary(k: u32, f: array<f32, 19>, m: Moments, post: array<f32, 19>
     //#end
     for (var s = 0u; s < count; s++) {
         let p = particles[ids[s]];
-        let solid = p.vel.xyz + cross(p.omega.xyz, x - p.pos_r.xyz);
+        let solid = p.vel.xyz + cross(p.omega.xyz, x[s] - p.pos_r.xyz);
         // f_eq_i(rho, u_s) - f_eq_ibar(rho, u) = w_i rho (3 c.sum + 4.5 (c.sum)(c.diff) - 1.5 sum.diff)
         // with sum = u_s + u, diff = u_s - u.
         let sum = solid + m.u;
@@ -352,9 +372,9 @@ fn immersed_boundary(k: u32, f: array<f32, 19>, m: Moments, post: array<f32, 19>
             momentum += omega * c;
         }
         //#end
-        let t = vec3<u32>(q - box_origin(p));
+        let b_ = vec3<u32>(t[s]);
         let m_ = p.box_.y;
-        pairs[p.box_.x + t.x + m_ * (t.y + m_ * t.z)] = vec4<f32>(-momentum, 1.0);
+        pairs[p.box_.x + b_.x + m_ * (b_.y + m_ * b_.z)] = vec4<f32>(-momentum, 1.0);
     }
     return out;
 }
@@ -381,7 +401,7 @@ fn reduce(
             let arm = vec3<f32>(q) + 0.5 - p.pos_r.xyz;
             force += pair.xyz;
             torque += cross(arm, pair.xyz);
-            let k = cell_at(q);
+            let k = lattice_cell(q);
             atomicStore(&covered[k], 0u);
             if FUSED {
                 atomicAnd(&covered[mask_word(k)], ~mask_bit(k));

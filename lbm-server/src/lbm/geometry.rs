@@ -103,6 +103,11 @@ impl Setup {
         }
     }
 
+    /// Whether axis a (0 x, 1 y, 2 z) is periodic (its two faces come in a pair).
+    pub fn periodic(&self, axis: usize) -> bool {
+        self.faces[2 * axis] == Face::Periodic
+    }
+
     pub fn cells(&self) -> usize {
         self.n[0] * self.n[1] * self.n[2]
     }

@@ -1,6 +1,7 @@
 //! Host side of the immersed moving boundary (shaders/imb.wgsl): particle and pair buffers, the
 //! bounding boxes, and the coupled step that returns each particle's force and torque.
 
+use super::geometry::Setup;
 use super::gpu::{storage_buffer, vec4, Lattice};
 
 /// Settings of the coupling.
@@ -340,7 +341,22 @@ impl Lattice {
                 (MAX_BOX_EDGE - 1) / 2
             ));
         }
-        let (gpu_particles, pairs) = layout(particles);
+        if let Some((j, axis)) = particles.iter().enumerate().find_map(|(j, p)| {
+            (0..3)
+                .find(|&a| self.setup.periodic(a) && box_edge(p.radius) as usize > self.setup.n[a])
+                .map(|a| (j, a))
+        }) {
+            return Err(format!(
+                "particle {j}: radius {} cells spans more than the periodic {} axis of {} cells \
+                 (its box of {} cells would meet itself)",
+                particles[j].radius,
+                ["x", "y", "z"][axis],
+                self.setup.n[axis],
+                box_edge(particles[j].radius)
+            ));
+        }
+        let particles: Vec<SolidParticle> = particles.iter().map(|p| into_lattice(&self.setup, p)).collect();
+        let (gpu_particles, pairs) = layout(&particles);
         self.reserve(gpu_particles.len() as u64, pairs as u64)?;
         let coupling = self.imb.as_ref().expect("coupling");
         let passes = coupling
@@ -540,6 +556,20 @@ impl Lattice {
         }
         Ok(())
     }
+}
+
+/// The particle with its centre wrapped into the lattice along the periodic axes (a DEM with a
+/// periodic domain may send centres beyond it): its box then lies less than one period outside.
+pub(super) fn into_lattice(setup: &Setup, p: &SolidParticle) -> SolidParticle {
+    let position = std::array::from_fn(|a| {
+        let x = p.position[a];
+        if setup.periodic(a) {
+            x.rem_euclid(setup.n[a] as f64)
+        } else {
+            x
+        }
+    });
+    SolidParticle { position, ..*p }
 }
 
 /// The GPU records of the particles (with their pair ranges) and the total number of pairs.

@@ -2,7 +2,7 @@
 //! used by the tests to check every GPU kernel.
 
 use super::geometry::{Cell, Face, Link, Operator, Setup};
-use super::imb::{box_edge, ImbOptions, Load, SolidParticle};
+use super::imb::{box_edge, into_lattice, ImbOptions, Load, SolidParticle};
 use super::lattice::{self, opposite, C, W};
 use super::mrt;
 
@@ -19,6 +19,8 @@ pub fn step_with_particles(
     particles: &[SolidParticle],
     options: ImbOptions,
 ) -> (Vec<Cell>, Vec<Load>) {
+    let particles: Vec<SolidParticle> = particles.iter().map(|p| into_lattice(setup, p)).collect();
+    let particles = &particles[..];
     let covers = cover(setup, particles, options.slots as usize);
     let mut loads = vec![Load::default(); particles.len()];
     let mut next = f.to_vec();
@@ -31,7 +33,6 @@ pub fn step_with_particles(
                 &post,
                 rho,
                 u,
-                cell,
                 &covers[cell],
                 particles,
                 options,
@@ -110,19 +111,23 @@ pub fn solid_fraction(x: [f64; 3], centre: [f64; 3], r: f64) -> f64 {
     (r - 1.0 / (12.0 * r) + 0.5 - d).clamp(0.0, 1.0)
 }
 
-/// Per cell: (particle, solid fraction) of the particles covering it, at most `slots` of them: the
-/// largest solid fractions in 1/255ths, the lower index first among equals (imb.wgsl `slot_key`).
-fn cover(setup: &Setup, particles: &[SolidParticle], slots: usize) -> Vec<Vec<(usize, f64)>> {
+/// A particle covering a cell: its index, the solid fraction, and the cell's centre in the
+/// particle's box (one period away from the cell's own where the box wraps).
+type Cover = (usize, f64, [f64; 3]);
+
+/// Per cell: the particles covering it, at most `slots` of them: the largest solid fractions in
+/// 1/255ths, the lower index first among equals (imb.wgsl `slot_key`).
+fn cover(setup: &Setup, particles: &[SolidParticle], slots: usize) -> Vec<Vec<Cover>> {
     let mut covers = vec![Vec::new(); setup.cells()];
     for (j, p) in particles.iter().enumerate() {
         for (cell, x) in box_cells(setup, p) {
             let eps = solid_fraction(x, p.position, p.radius);
             if eps > 0.0 && !setup.solid[cell] {
-                covers[cell].push((j, eps));
+                covers[cell].push((j, eps, x));
             }
         }
     }
-    let rank = |&(j, eps): &(usize, f64)| (std::cmp::Reverse((eps * 255.0).ceil() as u32), j);
+    let rank = |&(j, eps, _): &Cover| (std::cmp::Reverse((eps * 255.0).ceil() as u32), j);
     for c in covers.iter_mut().filter(|c| c.len() > slots) {
         c.sort_by_key(rank);
         c.truncate(slots);
@@ -130,8 +135,8 @@ fn cover(setup: &Setup, particles: &[SolidParticle], slots: usize) -> Vec<Vec<(u
     covers
 }
 
-/// The cells of a particle's bounding box inside the domain, in the order of imb.wgsl, with
-/// their centres.
+/// The cells of a particle's bounding box inside the domain (wrapped along the periodic axes), in
+/// the order of imb.wgsl, with their centres in the box (unwrapped).
 pub(super) fn box_cells<'a>(
     setup: &'a Setup,
     p: &SolidParticle,
@@ -144,8 +149,10 @@ pub(super) fn box_cells<'a>(
             origin[1] + (t / m) % m,
             origin[2] + t / (m * m),
         ];
-        let inside = (0..3).all(|a| q[a] >= 0 && q[a] < setup.n[a] as i64);
-        inside.then(|| (setup.index(q.map(|v| v as usize)), q.map(|v| v as f64 + 0.5)))
+        let n = setup.n.map(|v| v as i64);
+        let inside = (0..3).all(|a| setup.periodic(a) || (q[a] >= 0 && q[a] < n[a]));
+        let cell = std::array::from_fn(|a| q[a].rem_euclid(n[a]) as usize);
+        inside.then(|| (setup.index(cell), q.map(|v| v as f64 + 0.5)))
     })
 }
 
@@ -157,8 +164,7 @@ fn solid_collision(
     post: &Cell,
     rho: f64,
     u: [f64; 3],
-    cell: usize,
-    covers: &[(usize, f64)],
+    covers: &[Cover],
     particles: &[SolidParticle],
     options: ImbOptions,
     loads: &mut [Load],
@@ -176,8 +182,7 @@ fn solid_collision(
     let b: Vec<f64> = covers.iter().map(|c| weight(c.1 * scale)).collect();
     let b_total: f64 = b.iter().sum();
     let mut out: Cell = std::array::from_fn(|i| f[i] - (1.0 - b_total) * (f[i] - post[i]));
-    let x = setup.coords(cell).map(|v| v as f64 + 0.5);
-    for (&(j, _), b) in covers.iter().zip(&b) {
+    for (&(j, _, x), b) in covers.iter().zip(&b) {
         let p = &particles[j];
         let arm: [f64; 3] = std::array::from_fn(|a| x[a] - p.position[a]);
         let w = p.angular_velocity;

@@ -404,6 +404,89 @@ mod immersed_boundary {
         }
     }
 
+    /// A sphere across periodic faces (its box wraps along x and y) feels what it feels inside the
+    /// box over the same fluid moved with it: the loads and the populations (moved back) agree,
+    /// fused and redone, over an even and an odd step; so does the sphere given one period away
+    /// (as a DEM with a periodic domain may send it). Until 2026-12-01 its box was clipped at the
+    /// faces, and the cells beyond were not covered.
+    #[test]
+    fn a_sphere_across_periodic_faces_feels_what_it_feels_inside() {
+        let n = [12, 11, 10];
+        let setup = Setup::new(n, [Face::Periodic; 6], 0.7, Operator::Trt { magic: 3.0 / 16.0 });
+        let shift = [5, 4, 0];
+        // moved[c] = f[c - shift]: the fluid moved by `shift` (and `back` undoes it).
+        let roll = |f: &[Cell], by: [usize; 3]| -> Vec<Cell> {
+            (0..setup.cells())
+                .map(|k| {
+                    let c = setup.coords(k);
+                    f[setup.index(std::array::from_fn(|a| (c[a] + n[a] - by[a]) % n[a]))]
+                })
+                .collect()
+        };
+        let back = std::array::from_fn(|a| n[a] - shift[a]);
+        let f0 = random_populations(&setup, 31);
+        let sphere = |x: [f64; 3]| {
+            vec![SolidParticle {
+                position: x,
+                radius: 2.3,
+                velocity: [0.02, -0.01, 0.005],
+                angular_velocity: [0.001, 0.002, -0.003],
+            }]
+        };
+        let across = [[0.7, 10.4, 4.9], [0.9, 10.1, 5.2]];
+        let run = |mode: CoveredCells, f: &[Cell], at: &dyn Fn(usize) -> [f64; 3]| {
+            let options = ImbOptions {
+                covered_cells: mode,
+                ..Default::default()
+            };
+            let mut lattice = Lattice::new(gpu(), setup.clone(), Health::default(), Some(options)).unwrap();
+            lattice.set_populations(f);
+            let loads: Vec<Vec<Load>> = (0..2)
+                .map(|s| lattice.step_coupled(&sphere(at(s))).unwrap())
+                .collect();
+            (loads, lattice.populations())
+        };
+        for mode in [CoveredCells::Redo, CoveredCells::Fused] {
+            let (edge, f_edge) = run(mode, &f0, &|s| across[s]);
+            let moved = |s: usize| std::array::from_fn(|a| (across[s][a] + shift[a] as f64) % n[a] as f64);
+            let (inside, f_inside) = run(mode, &roll(&f0, shift), &moved);
+            let (away, _) = run(mode, &f0, &|s| {
+                [across[s][0] - 12.0, across[s][1] + 11.0, across[s][2]]
+            });
+            let scale = edge[0][0].force.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            assert!(scale > 1e-2, "{mode:?}: the sphere feels a force: {edge:?}");
+            for s in 0..2 {
+                for (what, other) in [("inside", &inside), ("one period away", &away)] {
+                    let err = max_load_difference(&edge[s], &other[s]);
+                    assert!(
+                        err < 1e-4 * scale,
+                        "{mode:?}, step {s}: across the faces {:?}, {what} {:?}",
+                        edge[s],
+                        other[s]
+                    );
+                }
+            }
+            let err = max_difference(&f_edge, &roll(&f_inside, back));
+            assert!(err < TOLERANCE, "{mode:?}: populations differ by {err:e}");
+        }
+    }
+
+    #[test]
+    fn a_sphere_wider_than_a_periodic_axis_is_refused() {
+        let setup = Setup::new([12, 5, 10], [Face::Periodic; 6], 0.7, Operator::Bgk);
+        let mut lattice = coupled(&setup);
+        let sphere = SolidParticle {
+            position: [6.0, 2.5, 5.0],
+            radius: 2.3,
+            ..Default::default()
+        };
+        let err = lattice.step_coupled(&[sphere]).unwrap_err();
+        assert!(
+            err.contains("particle 0") && err.contains("periodic y axis of 5 cells"),
+            "{err}"
+        );
+    }
+
     #[test]
     fn trt_periodic_quads_next_to_particles_match_reference() {
         let setup = Setup::new(
