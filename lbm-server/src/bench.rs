@@ -366,18 +366,26 @@ fn coupled_sweep(
     println!("| particles | covered cells | MLUPS | ratio to LBM-only ({lbm_only:.1} MLUPS) |");
     println!("|---:|---|---:|---:|");
     // The lockstep's own cost: LBM-only steps, each submitted and waited for as a coupled step is.
-    gpu.wait();
-    let start = Instant::now();
-    for _ in 0..steps {
-        lattice.step(1);
-        gpu.wait();
-    }
-    let mlups = (n[0] * n[1] * n[2]) as f64 * steps as f64 / start.elapsed().as_secs_f64() / 1e6;
+    let mlups = lockstep_mlups(gpu, &mut lattice, steps);
     println!(
         "| 0 (no coupling: one submit and wait per step) | - | {mlups:.1} | {:.0}% |",
         100.0 * mlups / lbm_only
     );
     drop(lattice);
+    // The fused fluid kernels' own cost (no quads, one mask bit tested per cell), no particle.
+    if modes.iter().any(|m| m.fused_on(gpu.adapter.device_type)) {
+        let options = ImbOptions {
+            covered_cells: CoveredCells::Fused,
+            ..Default::default()
+        };
+        let setup = Setup::new(n, [Face::Periodic; 6], tau, operator);
+        let mut lattice = Lattice::new(gpu.clone(), setup, Health::default(), Some(options))?;
+        let mlups = lockstep_mlups(gpu, &mut lattice, steps);
+        println!(
+            "| 0 (fused fluid kernels, no particle: one submit and wait per step) | fused | {mlups:.1} | {:.0}% |",
+            100.0 * mlups / lbm_only
+        );
+    }
     for &count in counts {
         let side = (count as f64).cbrt().round().max(1.0) as usize;
         if side * side * side != count {
@@ -425,6 +433,17 @@ fn coupled_sweep(
         print_passes(&breakdown);
     }
     Ok(())
+}
+
+/// MLUPS of `steps` fluid steps, each submitted and waited for on its own.
+fn lockstep_mlups(gpu: &Gpu, lattice: &mut Lattice, steps: u64) -> f64 {
+    gpu.wait();
+    let start = Instant::now();
+    for _ in 0..steps {
+        lattice.step(1);
+        gpu.wait();
+    }
+    lattice.setup.cells() as f64 * steps as f64 / start.elapsed().as_secs_f64() / 1e6
 }
 
 /// side^3 spheres of radius 2 cells at the centres of a regular lattice of `spacing`.

@@ -7,7 +7,8 @@
 #
 # Writes under $OUT (default out/gpu): batch.log, system.txt, bench_<op>.txt (LBM-only, 256^3, with
 # the copy bandwidth and the naive kernel), coupled_trt.txt (256 x 256 x 512, 1 to 32^3 particles,
-# ratio to LBM-only, time per pass), default/ (the default scene), tencate/<run>/ (import with
+# ratio to LBM-only, time per pass, the covered cells fused and redone), coupled_dense.txt (64^3
+# particles, a dense bed), default/ (the default scene), tencate/<run>/ (import with
 # python3 validation/imb/ten_cate.py import DIR). The steps run in order of priority; a step that
 # would start with less time left than it needs is skipped and named in batch.log.
 set -u
@@ -55,9 +56,9 @@ mode=$(cat .gpu/mode 2>/dev/null || echo full)
 } > "$OUT/system.txt" 2>&1
 
 if [ "$mode" = small ]; then
-    cube=32x32x32 coupled=32x32x64 counts=1,8,64 steps=20
+    cube=32x32x32 coupled=32x32x64 counts=1,8,64 dense=512 steps=20
 else
-    cube=256x256x256 coupled=256x256x512 counts=1,8,64,512,4096,32768 steps=500
+    cube=256x256x256 coupled=256x256x512 counts=1,8,64,512,4096,32768 dense=262144 steps=500
 fi
 # LBM-only against the copy bandwidth and the naive kernel (issue 3's target: 85% of the copy bandwidth).
 for op in bgk trt mrt; do
@@ -66,6 +67,9 @@ done
 # Coupled, the seed's Fig. 5 sweep (issue 5's target: 90% of LBM-only at 32^3 particles).
 step coupled_trt 150 300 $bin/lbm-server bench --grid $coupled --operator trt --particles $counts \
     --steps $steps --rounds 2 --kernel ours --passes --covered-cells both
+# A dense bed: 64^3 spheres of 4 cells 4 x 4 x 8 cells apart, half the cells covered, both ways.
+step coupled_dense 60 150 $bin/lbm-server bench --grid $coupled --operator trt --particles $dense \
+    --steps $((steps / 5)) --rounds 1 --kernel ours --covered-cells both
 # The default scene, the whole coupled program (DEM process and lockstep included).
 step default/log 30 60 $bin/lbm-server run .gpu/default.toml --out "$OUT/default"
 rm -rf "$OUT/default/fields"
