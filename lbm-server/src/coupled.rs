@@ -243,6 +243,13 @@ fn lubrication_of(scene: &Scene, units: &LatticeUnits) -> Lubrication {
         viscosity: scene.fluid.dynamic_viscosity,
         cutoff: units.dx,
         walls,
+        periods: std::array::from_fn(|axis| {
+            if units.faces[2 * axis] == LatticeFace::Periodic {
+                scene.domain.max[axis] - scene.domain.min[axis]
+            } else {
+                0.0
+            }
+        }),
         density: scene.particles.density,
         dt: units.dt,
     }

@@ -33,6 +33,9 @@ pub struct Lubrication {
     pub cutoff: f64,
     /// Planes that are walls: (axis, coordinate [m], inward normal sign).
     pub walls: Vec<(usize, f64, f64)>,
+    /// Per axis the domain's length where it is periodic [m] (0: not periodic): pairs across the
+    /// faces of a periodic axis are found, at their nearest image.
+    pub periods: [f64; 3],
     /// Particle density [kg/m^3], for the masses.
     pub density: f64,
     /// The step over which the DEM holds the force [s].
@@ -52,7 +55,7 @@ impl Lubrication {
         }
         for (i, j) in self.close_pairs(states) {
             let (a, b) = (&states[i], &states[j]);
-            let d: [f64; 3] = std::array::from_fn(|k| b.position[k] - a.position[k]);
+            let d = self.separation(a, b);
             let dist = d.iter().map(|v| v * v).sum::<f64>().sqrt();
             if dist == 0.0 {
                 continue;
@@ -90,14 +93,41 @@ impl Lubrication {
         self.density * 4.0 / 3.0 * std::f64::consts::PI * s.radius.powi(3)
     }
 
-    /// Pairs closer than the cut-off, from a hashed cell grid (O(N)).
+    /// b's centre from a's, at the nearest image along the periodic axes.
+    fn separation(&self, a: &ParticleState, b: &ParticleState) -> [f64; 3] {
+        std::array::from_fn(|k| {
+            let d = b.position[k] - a.position[k];
+            let period = self.periods[k];
+            if period > 0.0 {
+                d - period * (d / period).round()
+            } else {
+                d
+            }
+        })
+    }
+
+    /// Pairs closer than the cut-off, from a hashed cell grid (O(N)); along a periodic axis the
+    /// grid wraps, with cells at least as long as along the others.
     fn close_pairs(&self, states: &[ParticleState]) -> Vec<(usize, usize)> {
         let r_max = states.iter().map(|s| s.radius).fold(0.0, f64::max);
         let cell = 2.0 * r_max + self.cutoff;
         if states.len() < 2 || cell <= 0.0 {
             return Vec::new();
         }
-        let key = |p: &[f64; 3]| p.map(|x| (x / cell).floor() as i64);
+        // Cells per periodic axis (0: not periodic).
+        let wraps = self.periods.map(|p| {
+            if p > 0.0 {
+                (p / cell).floor().max(1.0) as i64
+            } else {
+                0
+            }
+        });
+        let key = |p: &[f64; 3]| -> [i64; 3] {
+            std::array::from_fn(|a| match wraps[a] {
+                0 => (p[a] / cell).floor() as i64,
+                w => ((p[a] / self.periods[a] * w as f64).floor() as i64).rem_euclid(w),
+            })
+        };
         let mut grid: HashMap<[i64; 3], Vec<usize>> = HashMap::new();
         for (i, s) in states.iter().enumerate() {
             grid.entry(key(&s.position)).or_default().push(i);
@@ -105,19 +135,24 @@ impl Lubrication {
         let mut pairs = Vec::new();
         for (i, s) in states.iter().enumerate() {
             let k = key(&s.position);
-            for dx in -1..=1 {
-                for dy in -1..=1 {
-                    for dz in -1..=1 {
-                        let Some(list) = grid.get(&[k[0] + dx, k[1] + dy, k[2] + dz]) else {
-                            continue;
-                        };
-                        for &j in list.iter().filter(|&&j| j > i) {
-                            let t = &states[j];
-                            let d2: f64 = (0..3).map(|a| (t.position[a] - s.position[a]).powi(2)).sum();
-                            if d2.sqrt() - s.radius - t.radius < self.cutoff {
-                                pairs.push((i, j));
-                            }
-                        }
+            let mut near: Vec<[i64; 3]> = (0..27)
+                .map(|t| {
+                    let step = [t % 3 - 1, (t / 3) % 3 - 1, t / 9 - 1];
+                    std::array::from_fn(|a| match wraps[a] {
+                        0 => k[a] + step[a],
+                        w => (k[a] + step[a]).rem_euclid(w),
+                    })
+                })
+                .collect();
+            // A periodic axis of one or two cells visits a cell more than once.
+            near.sort_unstable();
+            near.dedup();
+            for list in near.iter().filter_map(|k| grid.get(k)) {
+                for &j in list.iter().filter(|&&j| j > i) {
+                    let t = &states[j];
+                    let d2: f64 = self.separation(s, t).iter().map(|v| v * v).sum();
+                    if d2.sqrt() - s.radius - t.radius < self.cutoff {
+                        pairs.push((i, j));
                     }
                 }
             }
@@ -147,6 +182,7 @@ mod tests {
             viscosity: 0.1,
             cutoff: 0.002,
             walls: Vec::new(),
+            periods: [0.0; 3],
             density: 2500.0,
             dt: 1e-13,
         };
@@ -170,12 +206,48 @@ mod tests {
         );
     }
 
+    /// Two spheres closing across the periodic faces x = 0 and x = 0.1 m feel the film of the same
+    /// pair inside the domain; without the period they are not a pair.
+    #[test]
+    fn spheres_across_periodic_faces_feel_the_film() {
+        let lub = |periods: [f64; 3]| Lubrication {
+            viscosity: 0.1,
+            cutoff: 0.002,
+            walls: Vec::new(),
+            periods,
+            density: 2500.0,
+            dt: 1e-13,
+        };
+        let gap = 0.0005;
+        let force = |lub: &Lubrication, a: f64, b: f64| {
+            let states = [sphere(0, a, 0.01), sphere(1, b, -0.01)];
+            let mut replies = [ParticleReply::default(); 2];
+            lub.apply(&states, &mut replies);
+            replies[1].force[0]
+        };
+        let periodic = lub([0.1, 0.0, 0.0]);
+        let inside = force(&periodic, 0.05, 0.05 + 0.02 + gap);
+        // a at x = 0.1 - 0.004, b 0.02 + gap further on, past x = 0.1: at 0.016 + gap.
+        let across = force(&periodic, 0.096, 0.016 + gap);
+        assert!(inside > 0.0);
+        assert!(
+            (across - inside).abs() < 1e-9 * inside,
+            "{across} against {inside}"
+        );
+        assert_eq!(force(&lub([0.0; 3]), 0.096, 0.016 + gap), 0.0);
+        // A period of one grid cell (0.03 m against cells of 0.022 m) finds the pair once.
+        let tight = lub([0.03, 0.0, 0.0]);
+        let states = [sphere(0, 0.001, 0.01), sphere(1, 0.001 + 0.02 + gap, -0.01)];
+        assert_eq!(tight.close_pairs(&states), vec![(0, 1)]);
+    }
+
     #[test]
     fn a_sphere_approaching_a_wall_is_slowed_until_the_contact_takes_over() {
         let lub = Lubrication {
             viscosity: 0.1,
             cutoff: 0.002,
             walls: vec![(0, 0.0, 1.0)],
+            periods: [0.0; 3],
             density: 2500.0,
             dt: 1e-3,
         };
@@ -204,6 +276,7 @@ mod tests {
             viscosity: 1.0,
             cutoff: 0.002,
             walls: vec![(0, 0.0, 1.0)],
+            periods: [0.0; 3],
             density: 2500.0,
             dt: 1e-2,
         };
