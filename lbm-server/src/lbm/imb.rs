@@ -324,37 +324,7 @@ impl Lattice {
     /// The coupled step; `split` receives the encoder after each pass (named) and returns the one
     /// to go on with.
     fn coupled_step(&mut self, particles: &[SolidParticle], split: Split) -> Result<Vec<Load>, String> {
-        if particles.len() > MAX_PARTICLES {
-            return Err(format!(
-                "{} particles exceed the coupling's {MAX_PARTICLES} (imb.wgsl's slot keys hold 24-bit indices)",
-                particles.len()
-            ));
-        }
-        if let Some((j, p)) = particles
-            .iter()
-            .enumerate()
-            .find(|(_, p)| box_edge(p.radius) > MAX_BOX_EDGE)
-        {
-            return Err(format!(
-                "particle {j}: radius {} cells exceeds the coupling's {} cells",
-                p.radius,
-                (MAX_BOX_EDGE - 1) / 2
-            ));
-        }
-        if let Some((j, axis)) = particles.iter().enumerate().find_map(|(j, p)| {
-            (0..3)
-                .find(|&a| self.setup.periodic(a) && box_edge(p.radius) as usize > self.setup.n[a])
-                .map(|a| (j, a))
-        }) {
-            return Err(format!(
-                "particle {j}: radius {} cells spans more than the periodic {} axis of {} cells \
-                 (its box of {} cells would meet itself)",
-                particles[j].radius,
-                ["x", "y", "z"][axis],
-                self.setup.n[axis],
-                box_edge(particles[j].radius)
-            ));
-        }
+        self.refuse_unfit(particles)?;
         let particles: Vec<SolidParticle> = particles.iter().map(|p| into_lattice(&self.setup, p)).collect();
         let (gpu_particles, pairs) = layout(&particles);
         self.reserve(gpu_particles.len() as u64, pairs as u64)?;
@@ -443,6 +413,43 @@ impl Lattice {
         };
         coupling.readback.unmap();
         Ok(loads)
+    }
+
+    /// Refuses particles the coupling cannot take, naming the first: more than its indices hold,
+    /// a radius beyond its box index, a box longer than a periodic axis.
+    fn refuse_unfit(&self, particles: &[SolidParticle]) -> Result<(), String> {
+        if particles.len() > MAX_PARTICLES {
+            return Err(format!(
+                "{} particles exceed the coupling's {MAX_PARTICLES} (imb.wgsl's slot keys hold 24-bit indices)",
+                particles.len()
+            ));
+        }
+        if let Some((j, p)) = particles
+            .iter()
+            .enumerate()
+            .find(|(_, p)| box_edge(p.radius) > MAX_BOX_EDGE)
+        {
+            return Err(format!(
+                "particle {j}: radius {} cells exceeds the coupling's {} cells",
+                p.radius,
+                (MAX_BOX_EDGE - 1) / 2
+            ));
+        }
+        if let Some((j, axis)) = particles.iter().enumerate().find_map(|(j, p)| {
+            (0..3)
+                .find(|&a| self.setup.periodic(a) && box_edge(p.radius) as usize > self.setup.n[a])
+                .map(|a| (j, a))
+        }) {
+            return Err(format!(
+                "particle {j}: radius {} cells spans more than the periodic {} axis of {} cells \
+                 (its box of {} cells would meet itself)",
+                particles[j].radius,
+                ["x", "y", "z"][axis],
+                self.setup.n[axis],
+                box_edge(particles[j].radius)
+            ));
+        }
+        Ok(())
     }
 
     /// Dispatches as many workgroups as `covered_groups` wrote to status[5..8] (offset 0) or
