@@ -347,3 +347,67 @@ fn crowded_cells_give_the_same_run_every_time() {
         "fused and redone covered cells give different particles.csv"
     );
 }
+
+/// A box periodic along x and y (lattice faces and DEM alike): beads thrown along +x leave through
+/// x_max and come back through x_min, every row of particles.csv inside the domain; one bead starts
+/// across the face x_max (allowed along a periodic axis). The DEM keeps only the floor and the lid
+/// as walls. The same beads in a box with walls stay on their side.
+#[test]
+fn beads_pass_through_periodic_faces() {
+    let scene = |faces: &str| {
+        format!(
+            "name = \"periodic\"\ngravity = [0.0, 0.0, -9.81]\n[domain]\nmin = [0.0, 0.0, 0.0]\n\
+             max = [0.016, 0.016, 0.016]\n[fluid]\ndensity = 1000.0\ndynamic_viscosity = 0.01\n\
+             [time]\nsteps = 80\n[lattice]\ndx = 0.001\noperator = \"trt\"\nvelocity_scale = 0.05\n\
+             mach = 0.1\n[lattice.faces]\n{faces}[output]\ninterval = 1\n[particles]\ndensity = 2500.0\n\
+             [[particles.sphere]]\nposition = [0.0155, 0.004, 0.008]\nradius = 0.0012\nvelocity = [0.1, 0.0, 0.0]\n\
+             [[particles.sphere]]\nposition = [0.013, 0.012, 0.008]\nradius = 0.0012\nvelocity = [0.1, 0.02, 0.0]\n"
+        )
+    };
+    let periodic = "x_min = \"periodic\"\nx_max = \"periodic\"\ny_min = \"periodic\"\ny_max = \"periodic\"\n\
+                    z_min = \"wall\"\nz_max = \"wall\"\n";
+    let (code, err, out) = run("periodic", &scene(periodic));
+    assert_eq!(code, Some(0), "{err}");
+    assert!(
+        err.contains(", 2 walls"),
+        "the DEM's walls: floor and lid only: {err}"
+    );
+    assert_eq!(
+        crossings(&out),
+        [true, true],
+        "both beads came back through x_min"
+    );
+    let (code, err, out) = run(
+        "walled",
+        &scene("").replace("position = [0.0155,", "position = [0.0145,"),
+    );
+    assert_eq!(code, Some(0), "{err}");
+    assert!(err.contains(", 6 walls"), "{err}");
+    assert_eq!(
+        crossings(&out),
+        [false, false],
+        "walls keep the beads on their side"
+    );
+}
+
+/// Per bead of a two-bead run: whether its x fell by more than half the 16 mm box between two rows
+/// (it left through x_max and came back through x_min); every row inside the domain.
+fn crossings(out: &Path) -> [bool; 2] {
+    let text = std::fs::read_to_string(out.join("particles.csv")).unwrap();
+    let header: Vec<&str> = text.lines().next().unwrap().split(',').collect();
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let (id, x, y) = (col("id"), col("x"), col("y"));
+    let mut last_x = [f64::NAN; 2];
+    let mut crossed = [false; 2];
+    for line in text.lines().skip(1) {
+        let v: Vec<f64> = line.split(',').map(|s| s.parse().unwrap()).collect();
+        let k = v[id] as usize;
+        assert!(
+            (0.0..=0.016).contains(&v[x]) && (0.0..=0.016).contains(&v[y]),
+            "inside: {line}"
+        );
+        crossed[k] |= last_x[k] - v[x] > 0.008;
+        last_x[k] = v[x];
+    }
+    crossed
+}

@@ -798,11 +798,12 @@ pub const MAX_INITIAL_WALL_OVERLAP: f64 = crate::MAX_INITIAL_OVERLAP;
 pub fn validate_placement(scene: &Scene, file: &str) -> Result<(), SceneError> {
     let base = scene.particle_count() as usize - scene.dem.generated.len();
     let particles = scene.initial_particles();
+    let periodic = scene.periodic_axes();
     for p in &particles[base..] {
         let (lo, hi) = (scene.domain.min, scene.domain.max);
-        if let Some(a) =
-            (0..3).find(|&a| p.position[a] - p.radius < lo[a] || p.position[a] + p.radius > hi[a])
-        {
+        // Along a periodic axis the centre must lie in the domain, the body may cross the faces.
+        let r = |a: usize| if periodic[a] { 0.0 } else { p.radius };
+        if let Some(a) = (0..3).find(|&a| p.position[a] - r(a) < lo[a] || p.position[a] + r(a) > hi[a]) {
             return Err(fail(
                 file,
                 format!("dem particle id {}", p.id),

@@ -336,6 +336,14 @@ impl Scene {
         Ok(())
     }
 
+    /// The axes (x, y, z) along which the domain is periodic: those whose lattice faces are
+    /// periodic (a scene without a `[lattice]` has none). Both physics wrap along them: the
+    /// lattice's links and particle covers, the DEM's spheres and pairs.
+    pub fn periodic_axes(&self) -> [bool; 3] {
+        let faces = self.lattice_units.as_ref().map(|u| u.faces);
+        std::array::from_fn(|a| faces.is_some_and(|f| f[2 * a] == lattice::LatticeFace::Periodic))
+    }
+
     /// All particles of the scene with ids 0, 1, 2, ... (spheres first, then blocks).
     pub fn initial_particles(&self) -> Vec<InitialParticle> {
         let spheres = self

@@ -232,10 +232,13 @@ impl Scene {
         Ok(())
     }
 
-    /// A sphere must lie wholly inside the domain.
+    /// A sphere must lie wholly inside the domain; along a periodic axis its centre (the body may
+    /// cross the faces).
     fn inside_domain(&self, c: &Checker, field: &str, p: [f64; 3], r: f64) -> Result<(), SceneError> {
         let (lo, hi) = (self.domain.min, self.domain.max);
+        let periodic = self.periodic_axes();
         for a in 0..3 {
+            let r = if periodic[a] { 0.0 } else { r };
             if p[a] - r < lo[a] || p[a] + r > hi[a] {
                 return Err(c.fail(
                     field,

@@ -14,6 +14,7 @@ mod tests;
 mod validation;
 
 use contact::{coefficients, Contact, ContactLaw};
+use neighbor::Periodic;
 use scene::dem::NormalLaw;
 use scene::{Scene, SceneError};
 use world::{Body, Shape, Wall, World};
@@ -38,8 +39,8 @@ fn v3(a: [f64; 3]) -> V3 {
 pub fn walls(scene: &Scene) -> Vec<Wall> {
     let dem = &scene.dem;
     let mut out = Vec::new();
-    let container = |out: &mut Vec<Wall>, min: [f64; 3], max: [f64; 3], material: usize| {
-        for a in 0..3 {
+    let container = |out: &mut Vec<Wall>, min: [f64; 3], max: [f64; 3], material: usize, open: [bool; 3]| {
+        for a in (0..3).filter(|&a| !open[a]) {
             let mut n = V3::zeros();
             n[a] = 1.0;
             out.push(Wall {
@@ -70,7 +71,7 @@ pub fn walls(scene: &Scene) -> Vec<Wall> {
     for b in &dem.boxes {
         let material = dem.material_index(b.material.as_deref());
         if b.inside {
-            container(&mut out, b.min, b.max, material);
+            container(&mut out, b.min, b.max, material, [false; 3]);
         } else {
             out.push(Wall {
                 shape: Shape::Solid {
@@ -83,7 +84,14 @@ pub fn walls(scene: &Scene) -> Vec<Wall> {
     }
     if dem.uses_domain_walls() {
         let material = dem.material_index(dem.domain_wall_material.as_deref());
-        container(&mut out, scene.domain.min, scene.domain.max, material);
+        // No walls on the periodic faces: the spheres pass through them.
+        container(
+            &mut out,
+            scene.domain.min,
+            scene.domain.max,
+            material,
+            scene.periodic_axes(),
+        );
     }
     out
 }
@@ -182,6 +190,14 @@ pub fn pair_contact_time(law: &ContactLaw, m: &contact::PairMaterial, r_eff: f64
     }
 }
 
+/// The domain's periodic axes as the DEM's periodic box (None when there are none).
+fn periodic(scene: &Scene) -> Option<Periodic> {
+    let axes = scene.periodic_axes();
+    let (min, max) = (scene.domain.min, scene.domain.max);
+    let len = std::array::from_fn(|a| if axes[a] { max[a] - min[a] } else { 0.0 });
+    axes.iter().any(|&p| p).then(|| Periodic { lo: v3(min), len })
+}
+
 /// Builds the world of a scene and its time step; refuses a `dem.dt` above t_c / 10.
 pub fn setup(scene: &Scene, file: &str) -> Result<Setup, SceneError> {
     let bodies = bodies(scene);
@@ -199,6 +215,16 @@ pub fn setup(scene: &Scene, file: &str) -> Result<Setup, SceneError> {
         0.0,
         skin,
     );
+    // The squeeze films of a coupled run reach one lattice cell further.
+    let cutoff = scene.lattice_units.as_ref().map_or(0.0, |u| u.dx);
+    world
+        .set_periodic(periodic(scene), cutoff)
+        .map_err(|problem| SceneError {
+            file: file.to_string(),
+            field: "lattice.faces".into(),
+            value: "periodic".into(),
+            problem,
+        })?;
     let contact_time = shortest_contact_time(&world, v_impact);
     let dt_max = match scene.dem.dt {
         Some(dt) if dt > contact_time / 10.0 => {

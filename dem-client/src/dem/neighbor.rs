@@ -117,6 +117,85 @@ pub fn verlet_pairs(x: &[V3], r: &[f64], skin: f64) -> Vec<(u32, u32)> {
         .collect()
 }
 
+/// A box periodic along some axes: its lower corner and, per axis, its length (0: not periodic).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Periodic {
+    pub lo: V3,
+    pub len: [f64; 3],
+}
+
+impl Periodic {
+    pub fn any(&self) -> bool {
+        self.len.iter().any(|&l| l > 0.0)
+    }
+
+    /// `x` moved by whole periods into [lo, lo + len) along the periodic axes.
+    pub fn wrap(&self, x: V3) -> V3 {
+        V3::from_fn(|a, _| {
+            let l = self.len[a];
+            if l > 0.0 {
+                self.lo[a] + (x[a] - self.lo[a]).rem_euclid(l)
+            } else {
+                x[a]
+            }
+        })
+    }
+}
+
+/// Pairs (i, j, shift), i < j, whose nearest images are closer than r_i + r_j + skin in a box
+/// periodic along some axes: |x_i - (x_j + shift)| < cut, shift a whole number of periods per
+/// axis, sorted by i then j. The centres must lie in the box, and each periodic length must exceed
+/// twice the largest cut (one image per pair). Images of the spheres near the periodic faces, one
+/// period away, join the cell search as ghosts.
+pub fn periodic_pairs(x: &[V3], r: &[f64], skin: f64, box_: &Periodic) -> Vec<(u32, u32, V3)> {
+    let r_max = r.iter().copied().fold(0.0, f64::max);
+    let reach = 2.0 * r_max + skin;
+    // (original, shift) of each point: the spheres, then their images.
+    let mut points: Vec<(usize, V3)> = (0..x.len()).map(|i| (i, V3::zeros())).collect();
+    for a in 0..3 {
+        let l = box_.len[a];
+        if l <= 0.0 {
+            continue;
+        }
+        for k in 0..points.len() {
+            let (i, shift) = points[k];
+            let at = x[i][a] + shift[a] - box_.lo[a];
+            for (near, sign) in [(at < reach, 1.0), (at > l - reach, -1.0)] {
+                if near {
+                    let mut s = shift;
+                    s[a] += sign * l;
+                    points.push((i, s));
+                }
+            }
+        }
+    }
+    let xs: Vec<V3> = points.iter().map(|&(i, s)| x[i] + s).collect();
+    let rs: Vec<f64> = points.iter().map(|&(i, _)| r[i]).collect();
+    let mut out: Vec<(u32, u32, V3)> = verlet_pairs(&xs, &rs, skin)
+        .into_iter()
+        .filter_map(|(p, q)| {
+            let ((i, si), (j, sj)) = (points[p as usize], points[q as usize]);
+            if i == j {
+                // A sphere and its own image (more than a period apart: never, with the length
+                // required).
+                return None;
+            }
+            // x_i + si - (x_j + sj) = x_i - (x_j + (sj - si)).
+            let shift = sj - si;
+            Some(if i < j {
+                (i as u32, j as u32, shift)
+            } else {
+                (j as u32, i as u32, -shift)
+            })
+        })
+        .collect();
+    // A pair is found once per pair of its copies that are close (e.g. both spheres and both
+    // their images near a face): the same shift each time, at the nearest image.
+    out.sort_by_key(|p| (p.0, p.1));
+    out.dedup();
+    out
+}
+
 /// Reference O(N^2) search, for tests only.
 #[cfg(test)]
 pub fn brute_force_pairs(x: &[V3], r: &[f64], skin: f64) -> Vec<(u32, u32)> {
@@ -132,9 +211,57 @@ pub fn brute_force_pairs(x: &[V3], r: &[f64], skin: f64) -> Vec<(u32, u32)> {
     out
 }
 
+/// Reference O(N^2) search at the nearest image, for tests only.
+#[cfg(test)]
+pub fn brute_force_periodic_pairs(x: &[V3], r: &[f64], skin: f64, box_: &Periodic) -> Vec<(u32, u32, V3)> {
+    let mut out = Vec::new();
+    for i in 0..x.len() {
+        for j in i + 1..x.len() {
+            let d = x[i] - x[j];
+            let shift = V3::from_fn(|a, _| {
+                let l = box_.len[a];
+                if l > 0.0 {
+                    l * (d[a] / l).round()
+                } else {
+                    0.0
+                }
+            });
+            let cut = r[i] + r[j] + skin;
+            if (d - shift).norm_squared() < cut * cut {
+                out.push((i as u32, j as u32, shift));
+            }
+        }
+    }
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn periodic_search_equals_brute_force_at_the_nearest_image() {
+        for (n, seed, size, len) in [
+            (2, 1, 0.04, [0.04, 0.0, 0.0]),
+            (500, 2, 0.1, [0.1, 0.1, 0.0]),
+            (2000, 3, 0.2, [0.2, 0.2, 0.1]),
+            (300, 5, 0.08, [0.08, 0.0, 0.04]),
+        ] {
+            let (x, r) = random_set(n, seed, size);
+            let box_ = Periodic { lo: V3::zeros(), len };
+            for skin in [0.0, 0.001] {
+                let fast = periodic_pairs(&x, &r, skin, &box_);
+                let slow = brute_force_periodic_pairs(&x, &r, skin, &box_);
+                assert_eq!(fast.len(), slow.len(), "n {n} skin {skin}");
+                for (f, s) in fast.iter().zip(&slow) {
+                    assert_eq!((f.0, f.1), (s.0, s.1), "n {n} skin {skin}");
+                    assert!((f.2 - s.2).norm() < 1e-12, "n {n} skin {skin}: {f:?} {s:?}");
+                }
+                let across = fast.iter().filter(|p| p.2 != V3::zeros()).count();
+                assert!(n < 100 || across > 0, "n {n}: some pairs across the faces");
+            }
+        }
+    }
 
     fn random_set(n: usize, seed: u64, box_size: f64) -> (Vec<V3>, Vec<f64>) {
         let mut s = seed;

@@ -676,3 +676,123 @@ fn two_stiff_films_on_one_sphere_damp_it_without_overshoot() {
         v = now;
     }
 }
+
+/// Two spheres meeting obliquely across the periodic face x = 0 of a 30 mm box collide as they
+/// do inside it: after the contact the same velocities and spins (to round-off) and positions one
+/// period apart where they crossed, all inside the box; for the general pair loop (YADE's Hertz)
+/// and the batched one (LIGGGHTS's). Without the period the pair never meets.
+#[test]
+fn spheres_collide_across_a_periodic_face_as_inside() {
+    use super::neighbor::Periodic;
+    let l = 0.03;
+    let box_ = Periodic {
+        lo: V3::zeros(),
+        len: [l, 0.0, 0.0],
+    };
+    let yade = law(
+        NormalLaw::Hertz,
+        TangentialLaw::History,
+        Switches::YADE,
+        Linear::default(),
+    );
+    for contact in [yade, ContactLaw::LIGGGHTS_HERTZ] {
+        // The pair centred at `centre` (wrapped into the box when `wrapped`), in a world periodic
+        // along x when `periodic`.
+        let run = |centre: f64, wrapped: bool, periodic: bool| {
+            let a = Body::sphere(
+                0,
+                V3::new(centre - 2.5 * R, 0.010, 0.010),
+                V3::new(0.4, 0.05, 0.0),
+                V3::zeros(),
+                R,
+                RHO,
+                0,
+            );
+            let b = Body::sphere(
+                1,
+                V3::new(centre + 2.5 * R, 0.0112, 0.010),
+                V3::new(-0.4, 0.0, 0.02),
+                V3::zeros(),
+                R,
+                RHO,
+                0,
+            );
+            let wrap = |x: V3| box_.wrap(x);
+            let (a, b) = if wrapped {
+                (Body { x: wrap(a.x), ..a }, Body { x: wrap(b.x), ..b })
+            } else {
+                (a, b)
+            };
+            let mut w = World::new(
+                vec![a, b],
+                vec![],
+                contact,
+                &[material(0.7, 0.5)],
+                V3::zeros(),
+                1e-6,
+                0.5 * R,
+            );
+            if periodic {
+                w.set_periodic(Some(box_), 0.0).unwrap();
+            }
+            let mut touched = 0;
+            for _ in 0..30_000 {
+                w.step();
+                touched += w.contact_count();
+            }
+            (w.bodies[0], w.bodies[1], touched)
+        };
+        let (a_in, b_in, touched) = run(0.015, false, false);
+        assert!(touched > 0, "{contact:?}: the spheres collide inside");
+        let (a_x, b_x, touched_x) = run(0.0, true, true);
+        assert!(touched_x > 0, "{contact:?}: they collide across the face");
+        for (inside, across) in [(a_in, a_x), (b_in, b_x)] {
+            assert!(
+                (inside.v - across.v).norm() < 1e-9,
+                "{contact:?}: {} against {}",
+                inside.v,
+                across.v
+            );
+            assert!(
+                (inside.w - across.w).norm() < 1e-6,
+                "{contact:?}: {} against {}",
+                inside.w,
+                across.w
+            );
+            let shifted = box_.wrap(inside.x - V3::new(0.015, 0.0, 0.0));
+            assert!(
+                (shifted - across.x).norm() < 1e-9,
+                "{contact:?}: {} against {}",
+                shifted,
+                across.x
+            );
+            assert!(
+                across.x.x >= 0.0 && across.x.x < l,
+                "inside the box: {}",
+                across.x
+            );
+        }
+        let (_, _, apart) = run(0.0, true, false);
+        assert_eq!(apart, 0, "{contact:?}: without the period they never meet");
+    }
+}
+
+#[test]
+fn a_periodic_axis_shorter_than_twice_the_pair_reach_is_refused() {
+    let a = Body::sphere(0, V3::new(0.005, 0.0, 0.0), V3::zeros(), V3::zeros(), R, RHO, 0);
+    let mut w = World::new(
+        vec![a],
+        vec![],
+        ContactLaw::LIGGGHTS_HERTZ,
+        &[material(0.7, 0.5)],
+        V3::zeros(),
+        1e-6,
+        0.5 * R,
+    );
+    let short = super::neighbor::Periodic {
+        lo: V3::zeros(),
+        len: [0.0, 0.009, 0.0],
+    };
+    let err = w.set_periodic(Some(short), 0.0).unwrap_err();
+    assert!(err.contains("periodic y axis is 0.009 m"), "{err}");
+}

@@ -9,7 +9,7 @@
 use super::batch::{Batch, LANES};
 use super::contact::{contact_force, Contact, ContactForce, ContactLaw, PairMaterial};
 use super::lubrication::Lubrication;
-use super::neighbor::verlet_pairs;
+use super::neighbor::{periodic_pairs, verlet_pairs, Periodic};
 use super::V3;
 use rayon::prelude::*;
 use std::collections::HashMap;
@@ -198,6 +198,8 @@ struct PairConst {
     m_eff: f64,
     /// Index into the pair materials.
     material: u32,
+    /// The periodic image of j that i meets: x_i - (x_j + shift) (zero without periodic axes).
+    shift: V3,
 }
 
 /// The particles, the walls and the contact model.
@@ -218,6 +220,8 @@ pub struct World {
     pub time: f64,
     /// Squeeze films of a coupled fluid (None: dry, the pure DEM). Set by `set_lubrication`.
     lubrication: Option<Lubrication>,
+    /// The axes along which the domain is periodic (none by default). Set by `set_periodic`.
+    periodic: Option<Periodic>,
     /// Film force on i of each pair at the last evaluation (empty without lubrication).
     films: Vec<V3>,
     /// The Verlet pairs (i < j), sorted by i then j.
@@ -267,6 +271,7 @@ impl World {
             skin,
             time: 0.0,
             lubrication: None,
+            periodic: None,
             films: Vec::new(),
             slots: Vec::new(),
             pair_const: Vec::new(),
@@ -296,6 +301,30 @@ impl World {
         self.lubrication = lubrication;
         self.stale = true;
         self.forces(0.0, Finish::Nothing);
+    }
+
+    /// Makes the domain periodic along the axes of `box_` with a length (spheres leaving through
+    /// one face come back through the other, pairs meet across the faces); refuses a length not
+    /// above twice the neighbour-list reach with a lubrication cut-off up to `cutoff` (a pair would
+    /// meet two images), naming the axis.
+    pub fn set_periodic(&mut self, box_: Option<Periodic>, cutoff: f64) -> Result<(), String> {
+        if let Some(p) = &box_ {
+            let r_max = self.bodies.iter().map(|b| b.r).fold(0.0, f64::max);
+            let reach = 2.0 * r_max + self.skin + self.reach().max(cutoff);
+            if let Some(a) = (0..3).find(|&a| p.len[a] > 0.0 && p.len[a] <= 2.0 * reach) {
+                return Err(format!(
+                    "the periodic {} axis is {} m long, not above twice the pair reach {reach} m \
+                     (largest diameter + skin + lubrication cut-off): a sphere would meet two images \
+                     of another",
+                    ["x", "y", "z"][a],
+                    p.len[a]
+                ));
+            }
+        }
+        self.periodic = box_.filter(|p| p.any());
+        self.stale = true;
+        self.forces(0.0, Finish::Nothing);
+        Ok(())
     }
 
     pub fn lubrication(&self) -> Option<&Lubrication> {
@@ -351,6 +380,27 @@ impl World {
                 }
             }
         });
+        self.wrap_into_domain();
+    }
+
+    /// Along the periodic axes, the spheres that left the domain come back by a period (between
+    /// neighbour-list builds they may drift out by up to skin / 2); the pairs' image shifts then
+    /// change, so the list is rebuilt before the next forces.
+    fn wrap_into_domain(&mut self) {
+        let Some(p) = self.periodic else {
+            return;
+        };
+        let mut wrapped = false;
+        for b in &mut self.bodies {
+            let x = p.wrap(b.x);
+            if x != b.x {
+                b.x = x;
+                wrapped = true;
+            }
+        }
+        if wrapped {
+            self.stale = true;
+        }
     }
 
     /// One velocity-Verlet step of `dt`: half kick and drift (one pass, which also finds the
@@ -398,6 +448,7 @@ impl World {
 
     /// Rebuilds the Verlet list, carrying the history of the pairs still listed.
     fn rebuild(&mut self) {
+        self.wrap_into_domain();
         let x: Vec<V3> = self.bodies.iter().map(|b| b.x).collect();
         let r: Vec<f64> = self.bodies.iter().map(|b| b.r).collect();
         let kept: HashMap<(u64, u64), V3> = self
@@ -411,9 +462,16 @@ impl World {
             .collect();
         let ids: Vec<u64> = self.bodies.iter().map(|b| b.id).collect();
         let reach = self.reach();
-        self.slots = verlet_pairs(&x, &r, self.skin + reach)
-            .into_iter()
-            .map(|(i, j)| {
+        let pairs: Vec<(u32, u32, V3)> = match &self.periodic {
+            Some(p) => periodic_pairs(&x, &r, self.skin + reach, p),
+            None => verlet_pairs(&x, &r, self.skin + reach)
+                .into_iter()
+                .map(|(i, j)| (i, j, V3::zeros()))
+                .collect(),
+        };
+        self.slots = pairs
+            .iter()
+            .map(|&(i, j, _)| {
                 let (a, b) = (ids[i as usize], ids[j as usize]);
                 let history = kept
                     .get(&(a, b))
@@ -429,17 +487,17 @@ impl World {
             })
             .collect();
         let nm = self.n_materials;
-        self.pair_const = self
-            .slots
+        self.pair_const = pairs
             .iter()
-            .map(|s| {
-                let (a, b) = (&self.bodies[s.i as usize], &self.bodies[s.j as usize]);
+            .map(|&(i, j, shift)| {
+                let (a, b) = (&self.bodies[i as usize], &self.bodies[j as usize]);
                 PairConst {
                     cut2: (a.r + b.r) * (a.r + b.r),
                     r_sum: a.r + b.r,
                     r_eff: a.r * b.r / (a.r + b.r),
                     m_eff: a.m * b.m / (a.m + b.m),
                     material: (a.material * nm + b.material) as u32,
+                    shift,
                 }
             })
             .collect();
@@ -553,7 +611,7 @@ impl World {
             .for_each(|((films, slots), consts)| {
                 for ((film, s), p) in films.iter_mut().zip(slots).zip(consts) {
                     let (a, b) = (&bodies[s.i as usize], &bodies[s.j as usize]);
-                    *film = lub.pair_force(a.x - b.x, a.v - b.v, p.r_sum, p.r_eff);
+                    *film = lub.pair_force(a.x - b.x - p.shift, a.v - b.v, p.r_sum, p.r_eff);
                 }
             });
     }
@@ -624,7 +682,7 @@ fn pair_force(
     dt: f64,
 ) -> usize {
     let (a, b) = (&bodies[s.i as usize], &bodies[s.j as usize]);
-    let d = a.x - b.x;
+    let d = a.x - b.x - p.shift;
     let dist2 = d.norm_squared();
     if dist2 >= p.cut2 {
         apart(s, out);
@@ -683,7 +741,7 @@ fn pair_forces_batched(
     for m in 0..slots.len() {
         let (s, p) = (&mut slots[m], &consts[m]);
         let (a, b) = (&bodies[s.i as usize], &bodies[s.j as usize]);
-        let d = a.x - b.x;
+        let d = a.x - b.x - p.shift;
         let dist2 = d.norm_squared();
         if dist2 >= p.cut2 {
             apart(s, &mut outs[m]);
