@@ -329,7 +329,52 @@ impl Lattice {
         };
         // wgpu zero-initialises every buffer: the shifted populations start at rest (f = w, rho = 1)
         // without an upload (which took a 5 GB host array at 256 x 256 x 512).
+        lattice.compile_kernels();
         Ok(lattice)
+    }
+
+    /// Dispatches every kernel once over no cell (zero counts in the parameters, no particle:
+    /// each returns at once, nothing is written but zero workgroup counts). CPU drivers such as
+    /// lavapipe compile a kernel at its first dispatch: without this the first steps of a run
+    /// stalled for seconds with a cold shader cache (5-9 s on this 2-core machine for 16^3 cells
+    /// with particles), while the run should be watching its peer (`tests/failures.rs`).
+    fn compile_kernels(&self) {
+        let d = &self.gpu.device;
+        let empty = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("params: no cell"),
+            contents: bytemuck::bytes_of(&<Params as bytemuck::Zeroable>::zeroed()),
+            usage: wgpu::BufferUsages::UNIFORM,
+        });
+        let coupling = self.imb.as_ref().expect("coupling buffers");
+        let bind_group = make_bind_group(
+            d,
+            &self.layout,
+            &empty,
+            &self.flags,
+            &self.mrt,
+            &self.fields,
+            &self.status,
+            &self.populations,
+            coupling,
+            &self.cell_list,
+        );
+        let mut kernels = vec![&self.stream_collide, &self.macroscopic];
+        kernels.extend(&self.stream_collide_fluid);
+        kernels.extend(
+            self.stream_collide_quads
+                .iter()
+                .chain(&self.stream_collide_quads_odd),
+        );
+        kernels.extend(coupling.kernels());
+        let mut encoder = d.create_command_encoder(&Default::default());
+        for kernel in kernels {
+            let mut pass = encoder.begin_compute_pass(&Default::default());
+            pass.set_pipeline(kernel);
+            pass.set_bind_group(0, &bind_group, &[]);
+            pass.dispatch_workgroups(1, 1, 1);
+        }
+        self.gpu.queue.submit([encoder.finish()]);
+        self.gpu.wait();
     }
 
     /// Name of the GPU adapter.

@@ -255,6 +255,19 @@ impl Coupling {
         self
     }
 
+    /// Every kernel of the coupling (none when it is off).
+    pub fn kernels(&self) -> Vec<&wgpu::ComputePipeline> {
+        let Some(p) = &self.pipelines else {
+            return Vec::new();
+        };
+        let mut all = vec![&p.cover, &p.reduce];
+        if let Some(r) = &p.redo {
+            all.push(&r.groups);
+            all.extend(r.save.iter().chain(&r.covered));
+        }
+        all
+    }
+
     /// Whether the covered cells take their solid term in the fluid kernels.
     pub fn fused(&self) -> bool {
         self.fused
