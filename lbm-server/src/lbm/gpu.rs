@@ -346,18 +346,7 @@ impl Lattice {
             usage: wgpu::BufferUsages::UNIFORM,
         });
         let coupling = self.imb.as_ref().expect("coupling buffers");
-        let bind_group = make_bind_group(
-            d,
-            &self.layout,
-            &empty,
-            &self.flags,
-            &self.mrt,
-            &self.fields,
-            &self.status,
-            &self.populations,
-            coupling,
-            &self.cell_list,
-        );
+        let bind_group = self.bind_group(&empty);
         let mut kernels = vec![&self.stream_collide, &self.macroscopic];
         kernels.extend(&self.stream_collide_fluid);
         kernels.extend(
@@ -384,22 +373,23 @@ impl Lattice {
 
     /// Rebuilds the bind groups (after the coupling's buffers grew).
     pub(super) fn rebind(&mut self) {
-        let d = &self.gpu.device;
-        let coupling = self.imb.as_ref().expect("coupling buffers");
-        self.bind_groups = [0, 1].map(|parity| {
-            make_bind_group(
-                d,
-                &self.layout,
-                &self.params[parity],
-                &self.flags,
-                &self.mrt,
-                &self.fields,
-                &self.status,
-                &self.populations,
-                coupling,
-                &self.cell_list,
-            )
-        });
+        self.bind_groups = [0, 1].map(|parity| self.bind_group(&self.params[parity]));
+    }
+
+    /// The lattice's buffers bound with `params`.
+    fn bind_group(&self, params: &wgpu::Buffer) -> wgpu::BindGroup {
+        make_bind_group(
+            &self.gpu.device,
+            &self.layout,
+            params,
+            &self.flags,
+            &self.mrt,
+            &self.fields,
+            &self.status,
+            &self.populations,
+            self.imb.as_ref().expect("coupling buffers"),
+            &self.cell_list,
+        )
     }
 
     /// Replaces the populations (shifted, natural layout) and restarts the AA phase at even.
