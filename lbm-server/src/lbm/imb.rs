@@ -338,8 +338,7 @@ impl Lattice {
     /// to go on with.
     fn coupled_step(&mut self, particles: &[SolidParticle], split: Split) -> Result<Vec<Load>, String> {
         self.refuse_unfit(particles)?;
-        let particles: Vec<SolidParticle> = particles.iter().map(|p| into_lattice(&self.setup, p)).collect();
-        let (gpu_particles, pairs) = layout(&particles);
+        let (gpu_particles, pairs) = layout(&self.setup, particles);
         self.reserve(gpu_particles.len() as u64, pairs as u64)?;
         let coupling = self.imb.as_ref().expect("coupling");
         let passes = coupling
@@ -553,19 +552,13 @@ impl Lattice {
             coupling.pairs = storage_buffer(&d, "pairs", coupling.pair_capacity * PAIR_BYTES);
             grew = true;
         }
-        if fused {
-            if grew {
-                self.rebind();
-            }
-            return Ok(());
-        }
-        // The redo's covered cells, at most min(cells, pairs), over the `fields` buffer.
+        // The redo's covered cells, at most min(cells, pairs), over the `fields` buffer (fused: none).
         let cells = self.setup.cells() as u64;
         let most = (limit.min(self.gpu.limits.max_buffer_size) / SAVED_BYTES)
             .min(cells)
             .min(coupling.saved_cap);
         let want = pairs.min(cells).next_power_of_two().min(most);
-        if want > coupling.saved_capacity as u64 {
+        if !fused && want > coupling.saved_capacity as u64 {
             let bytes = (want * SAVED_BYTES).max(cells * 16);
             self.fields = storage_buffer(&d, "fields", bytes);
             coupling.saved_capacity = (bytes / SAVED_BYTES).min(most) as u32;
@@ -592,12 +585,14 @@ pub(super) fn into_lattice(setup: &Setup, p: &SolidParticle) -> SolidParticle {
     SolidParticle { position, ..*p }
 }
 
-/// The GPU records of the particles (with their pair ranges) and the total number of pairs.
-fn layout(particles: &[SolidParticle]) -> (Vec<GpuParticle>, u32) {
+/// The GPU records of the particles (centres wrapped into the lattice, with their pair ranges) and
+/// the total number of pairs.
+fn layout(setup: &Setup, particles: &[SolidParticle]) -> (Vec<GpuParticle>, u32) {
     let mut first = 0u32;
     let records = particles
         .iter()
         .map(|p| {
+            let p = into_lattice(setup, p);
             let m = box_edge(p.radius);
             let record = GpuParticle {
                 pos_r: vec4(p.position, p.radius),
