@@ -25,17 +25,12 @@ override SEED_WEIGHTING: bool = false;
 struct Particle {
     // centre in lattice units (cell i spans [i, i + 1]) and radius
     pos_r: vec4<f32>,
-    vel: vec4<f32>,
-    omega: vec4<f32>,
-    // first pair index, bounding box edge m (cells), -, -
-    box_: vec4<u32>,
-}
-
-// Hydrodynamic force and torque about the centre (lattice units): the coupling's output, kept
-// apart from the states so that only these 32 bytes per particle are read back by the host.
-struct Load {
-    force: vec4<f32>,
-    torque: vec4<f32>,
+    vel: vec3<f32>,
+    // the particle's first pair (its bounding box's first cell in `pairs`)
+    first: u32,
+    omega: vec3<f32>,
+    // edge of the bounding box (cells)
+    edge: u32,
 }
 
 // A covered cell and its pre-collision populations (`save`).
@@ -45,7 +40,10 @@ struct Saved {
 }
 
 @group(0) @binding(24) var<storage, read_write> particles: array<Particle>;
-@group(0) @binding(30) var<storage, read_write> loads: array<Load>;
+// Hydrodynamic force and torque about the centre of each particle (lattice units), six numbers
+// per particle: the coupling's output, kept apart from the states so that only these 24 bytes per
+// particle are read back by the host.
+@group(0) @binding(30) var<storage, read_write> loads: array<f32>;
 // Per cell of each particle's bounding box (the particle's pair range, in the box order of
 // `box_cell`): xyz the momentum the fluid gave the particle in that cell during the step (0 where
 // it holds no slot), w 1 where the particle covers the cell, 0 elsewhere.
@@ -114,7 +112,7 @@ fn box_offset(k: u32, p: Particle) -> vec3<i32> {
     let n = vec3<i32>(params.n.xyz);
     let t = coords(k) - box_origin(p);
     let up = select(t, t + n, t < vec3<i32>(0));
-    return select(up, up - n, up >= vec3<i32>(i32(p.box_.y)));
+    return select(up, up - n, up >= vec3<i32>(i32(p.edge)));
 }
 
 fn cell_at(q: vec3<i32>) -> u32 {
@@ -165,7 +163,7 @@ fn cover(
     let j = wg.y * nwg.x + wg.x;
     if j >= imb_info.x { return; }
     let p = particles[j];
-    let m = p.box_.y;
+    let m = p.edge;
     let origin = box_origin(p);
     for (var t = local; t < m * m * m; t += 64u) {
         let q = box_cell(origin, m, t);
@@ -196,7 +194,7 @@ fn cover(
                 covers = 1.0;
             }
         }
-        pairs[p.box_.x + t] = vec4<f32>(0.0, 0.0, 0.0, covers);
+        pairs[p.first + t] = vec4<f32>(0.0, 0.0, 0.0, covers);
     }
 }
 
@@ -373,43 +371,87 @@ fn immersed_boundary(k: u32, f: array<f32, 19>, m: Moments, post: array<f32, 19>
         }
         //#end
         let b_ = vec3<u32>(t[s]);
-        let m_ = p.box_.y;
-        pairs[p.box_.x + b_.x + m_ * (b_.y + m_ * b_.z)] = vec4<f32>(-momentum, 1.0);
+        let m_ = p.edge;
+        pairs[p.first + b_.x + m_ * (b_.y + m_ * b_.z)] = vec4<f32>(-momentum, 1.0);
     }
     return out;
 }
 
-// One invocation per particle: force and torque summed over its bounding box in a fixed order
-// (no floating-point atomics), and the cover counts and slots of its cells cleared for the next step.
+// Invocations of `reduce` per particle, each over every SLICES-th cell of the particle's box.
+const SLICES: u32 = 8u;
+
+// The six numbers of particle j's load from `reduce`'s partial sums: after the N particles' loads,
+// SLICES partial loads per particle (`loads` holds 6 (1 + SLICES) numbers per particle).
+fn partial_load(j: u32, s: u32) -> u32 {
+    return 6u * (imb_info.x + SLICES * j + s);
+}
+
+// SLICES invocations per particle: each sums the force and torque of its slice of the particle's
+// bounding box (box cells s, s + SLICES, s + 2 SLICES, ...: neighbouring invocations read
+// neighbouring pairs) in a fixed order, and clears the cover counts, mask and slots of the covered
+// cells of its slice for the next step. `sum_loads` adds the slices. No floating-point atomics: the
+// same result every run. Many invocations of few cells each, rather than one per particle over its
+// whole box: a GPU waits on one memory access per cell, and overlaps those of its many invocations.
 @compute @workgroup_size(64)
 fn reduce(
     @builtin(workgroup_id) wg: vec3<u32>,
     @builtin(num_workgroups) nwg: vec3<u32>,
     @builtin(local_invocation_index) local: u32,
 ) {
-    let j = cell_index(wg, nwg, local);
+    let i = cell_index(wg, nwg, local);
+    let j = i / SLICES;
+    let slice = i % SLICES;
     if j >= imb_info.x { return; }
     let p = particles[j];
-    let m = p.box_.y;
+    let m = p.edge;
     let origin = box_origin(p);
     var force = vec3<f32>(0.0);
     var torque = vec3<f32>(0.0);
-    for (var t = 0u; t < m * m * m; t++) {
-        let pair = pairs[p.box_.x + t];
+    for (var t = slice; t < m * m * m; t += SLICES) {
+        let pair = pairs[p.first + t];
         if pair.w != 0.0 {
             let q = box_cell(origin, m, t);
             let arm = vec3<f32>(q) + 0.5 - p.pos_r.xyz;
             force += pair.xyz;
             torque += cross(arm, pair.xyz);
-            let k = lattice_cell(q);
-            atomicStore(&covered[k], 0u);
-            if FUSED {
-                atomicAnd(&covered[mask_word(k)], ~mask_bit(k));
-            }
-            for (var s = 0u; s < SLOTS; s++) {
-                atomicStore(&slots[k * SLOTS + s], 0u);
-            }
+            clear_cover(lattice_cell(q));
         }
     }
-    loads[j] = Load(vec4<f32>(force, 0.0), vec4<f32>(torque, 0.0));
+    let at = partial_load(j, slice);
+    let sum = array<f32, 6>(force.x, force.y, force.z, torque.x, torque.y, torque.z);
+    for (var k = 0u; k < 6u; k++) {
+        loads[at + k] = sum[k];
+    }
+}
+
+// One invocation per particle: its load, the sum of its slices' in slice order.
+@compute @workgroup_size(64)
+fn sum_loads(
+    @builtin(workgroup_id) wg: vec3<u32>,
+    @builtin(num_workgroups) nwg: vec3<u32>,
+    @builtin(local_invocation_index) local: u32,
+) {
+    let j = cell_index(wg, nwg, local);
+    if j >= imb_info.x { return; }
+    var sum = array<f32, 6>(0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+    for (var s = 0u; s < SLICES; s++) {
+        let at = partial_load(j, s);
+        for (var k = 0u; k < 6u; k++) {
+            sum[k] += loads[at + k];
+        }
+    }
+    for (var k = 0u; k < 6u; k++) {
+        loads[6u * j + k] = sum[k];
+    }
+}
+
+// Cell k's cover count, mask bit and slots back to zero.
+fn clear_cover(k: u32) {
+    atomicStore(&covered[k], 0u);
+    if FUSED {
+        atomicAnd(&covered[mask_word(k)], ~mask_bit(k));
+    }
+    for (var s = 0u; s < SLOTS; s++) {
+        atomicStore(&slots[k * SLOTS + s], 0u);
+    }
 }

@@ -11,7 +11,7 @@
 
 use crate::fluid::{health_of, setup_of};
 use crate::lbm::gpu::{Gpu, Lattice};
-use crate::lbm::imb::{covered_fraction, CoveredCells, ImbOptions, SolidParticle};
+use crate::lbm::imb::{covered_fraction, CoveredCells, ImbOptions, Particles, SolidParticle};
 use crate::lubrication::Lubrication;
 use protocol::{ParticleReply, ParticleState, Physics};
 use scene::lattice::{LatticeFace, LatticeUnits};
@@ -143,34 +143,31 @@ impl FluidSide {
 
     /// Advances the fluid one step with the particles `states` (SI) and returns their loads (SI).
     pub fn step(&mut self, states: &[ParticleState], out: &mut Vec<ParticleReply>) -> Result<(), String> {
-        out.clear();
         let (dx, dt) = (self.units.dx, self.units.dt);
-        let solids: Vec<SolidParticle> = states
-            .iter()
-            .map(|s| SolidParticle {
-                position: std::array::from_fn(|a| (s.position[a] - self.origin[a]) / dx),
-                radius: s.radius / dx,
-                velocity: s.velocity.map(|v| v * dt / dx),
-                angular_velocity: s.angular_velocity.map(|w| w * dt),
-            })
-            .collect();
-        let loads = self.lattice.step_coupled(&solids)?;
+        let lattice_states = LatticeStates {
+            states,
+            origin: self.origin,
+            dx,
+            dt,
+        };
         let force_unit = self.fluid_density * dx.powi(4) / (dt * dt);
         let torque_unit = force_unit * dx;
         // What the lattice does not carry: the hydrostatic gradient (buoyancy) and the mean
         // pressure gradient that the body acceleration stands for, as -grad p / rho_f.
         let pressure_acceleration: [f64; 3] =
             std::array::from_fn(|a| self.units.force[a] * dx / (dt * dt) - self.gravity[a]);
-        out.extend(states.iter().zip(&loads).map(|(s, l)| {
+        let fluid_density = self.fluid_density;
+        self.lattice.step_coupled_with(&lattice_states, out, |j, l| {
+            let s = &states[j];
             let volume = 4.0 / 3.0 * std::f64::consts::PI * s.radius.powi(3);
             ParticleReply {
                 id: s.id,
                 force: std::array::from_fn(|a| {
-                    l.force[a] * force_unit + self.fluid_density * volume * pressure_acceleration[a]
+                    l.force[a] * force_unit + fluid_density * volume * pressure_acceleration[a]
                 }),
                 torque: l.torque.map(|t| t * torque_unit),
             }
-        }));
+        })?;
         if let Some(lubrication) = &self.lubrication {
             lubrication.apply(states, out);
         }
@@ -252,5 +249,34 @@ fn lubrication_of(scene: &Scene, units: &LatticeUnits) -> Lubrication {
         }),
         density: scene.particles.density,
         dt: units.dt,
+    }
+}
+
+/// The DEM's states (SI) as the lattice reads them: each converted to lattice units where the
+/// coupled step reads it.
+struct LatticeStates<'a> {
+    states: &'a [ParticleState],
+    origin: [f64; 3],
+    dx: f64,
+    dt: f64,
+}
+
+impl Particles for LatticeStates<'_> {
+    fn count(&self) -> usize {
+        self.states.len()
+    }
+
+    fn particle(&self, j: usize) -> SolidParticle {
+        let (s, dx) = (&self.states[j], self.dx);
+        SolidParticle {
+            position: std::array::from_fn(|a| (s.position[a] - self.origin[a]) / dx),
+            radius: s.radius / dx,
+            velocity: s.velocity.map(|v| v * self.dt / dx),
+            angular_velocity: s.angular_velocity.map(|w| w * self.dt),
+        }
+    }
+
+    fn radius(&self, j: usize) -> f64 {
+        self.states[j].radius / self.dx
     }
 }

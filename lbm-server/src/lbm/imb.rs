@@ -119,26 +119,51 @@ pub struct Load {
     pub torque: [f64; 3],
 }
 
-/// The shader's `Particle`: what goes to the GPU each step.
+/// The particles of a coupled step in lattice units, by index: a slice of [`SolidParticle`]s, or
+/// a DEM's states converted as the step reads them (no copy in between: the host's passes over
+/// the particles are part of every coupled step, docs/imb.md "Speed").
+pub trait Particles: Sync {
+    fn count(&self) -> usize;
+    fn particle(&self, j: usize) -> SolidParticle;
+    /// Particle j's radius (the step sizes the pair ranges from the radii first).
+    fn radius(&self, j: usize) -> f64 {
+        self.particle(j).radius
+    }
+}
+
+impl Particles for [SolidParticle] {
+    fn count(&self) -> usize {
+        self.len()
+    }
+    fn particle(&self, j: usize) -> SolidParticle {
+        self[j]
+    }
+    fn radius(&self, j: usize) -> f64 {
+        self[j].radius
+    }
+}
+
+/// The shader's `Particle`: what goes to the GPU each step (48 bytes).
 #[repr(C)]
 #[derive(Clone, Copy, Default, bytemuck::Pod, bytemuck::Zeroable)]
 struct GpuParticle {
     pos_r: [f32; 4],
-    vel: [f32; 4],
-    omega: [f32; 4],
-    box_: [u32; 4],
+    vel: [f32; 3],
+    first: u32,
+    omega: [f32; 3],
+    edge: u32,
 }
 
-/// The shader's `Load`: what comes back each step.
-#[repr(C)]
-#[derive(Clone, Copy, Default, bytemuck::Pod, bytemuck::Zeroable)]
-struct GpuLoad {
-    force: [f32; 4],
-    torque: [f32; 4],
-}
+/// The shader's loads: force and torque, what comes back each step (24 bytes).
+type GpuLoad = [f32; 6];
 
 const PARTICLE_BYTES: u64 = std::mem::size_of::<GpuParticle>() as u64;
 const LOAD_BYTES: u64 = std::mem::size_of::<GpuLoad>() as u64;
+/// imb.wgsl's SLICES: `reduce`'s invocations per particle, each with its partial load after the
+/// particles' loads in the loads buffer.
+const REDUCE_SLICES: u32 = 8;
+/// Bytes of the loads buffer per particle: its load and its slices' partial loads.
+const LOADS_BUFFER_BYTES: u64 = LOAD_BYTES * (1 + REDUCE_SLICES as u64);
 /// The shader's pair: one vec4 per cell of a particle's bounding box.
 const PAIR_BYTES: u64 = 16;
 /// The shader's `Saved`: a covered cell and its 19 populations (over the `fields` buffer).
@@ -154,7 +179,16 @@ const MAX_BOX_EDGE: u32 = 255;
 /// the cell holding x - r to the one holding x + r, the cells whose centre lies within r + 1/2 of
 /// x along each axis (beyond, the solid fraction is 0; docs/imb.md).
 pub fn box_edge(radius: f64) -> u32 {
-    (2.0 * radius).ceil() as u32 + 1
+    // ceil(2 r) without `f64::ceil`, a libm call on baseline x86-64 that made it a third of the
+    // host's pass over the particles; saturating for radii beyond u32 (refused later).
+    let diameter = 2.0 * radius;
+    let whole = diameter as u32;
+    let ceil = if (whole as f64) < diameter {
+        whole.saturating_add(1)
+    } else {
+        whole
+    };
+    ceil.saturating_add(1)
 }
 
 /// Receives the encoder after each pass of a coupled step (named) and returns the one to go on
@@ -165,6 +199,7 @@ type Split<'a> = &'a mut dyn FnMut(&'static str, wgpu::CommandEncoder) -> wgpu::
 struct Passes {
     cover: wgpu::ComputePipeline,
     reduce: wgpu::ComputePipeline,
+    sum_loads: wgpu::ComputePipeline,
     redo: Option<Redo>,
 }
 
@@ -215,7 +250,7 @@ impl Coupling {
         let slots = options.map_or(1, |o| o.slots as u64);
         Coupling {
             particles: storage_buffer(d, "particles", PARTICLE_BYTES),
-            loads: storage_buffer(d, "loads", LOAD_BYTES),
+            loads: storage_buffer(d, "loads", LOADS_BUFFER_BYTES),
             pairs: storage_buffer(d, "pairs", PAIR_BYTES),
             covered: storage_buffer(d, "covered", per_cell(4) + per_cell(4).div_ceil(128) * 4),
             slots: storage_buffer(d, "slots", per_cell(4 * slots)),
@@ -249,6 +284,7 @@ impl Coupling {
             self.pipelines = Some(Passes {
                 cover: make("cover", 0),
                 reduce: make("reduce", 0),
+                sum_loads: make("sum_loads", 0),
                 redo,
             });
         }
@@ -260,7 +296,7 @@ impl Coupling {
         let Some(p) = &self.pipelines else {
             return Vec::new();
         };
-        let mut all = vec![&p.cover, &p.reduce];
+        let mut all = vec![&p.cover, &p.reduce, &p.sum_loads];
         if let Some(r) = &p.redo {
             all.push(&r.groups);
             all.extend(r.save.iter().chain(&r.covered));
@@ -303,12 +339,29 @@ impl Lattice {
     /// One coupled step: the particles cover the cells, the fluid streams and collides with the
     /// solid term, and the force and torque on each particle over the step come back.
     pub fn step_coupled(&mut self, particles: &[SolidParticle]) -> Result<Vec<Load>, String> {
-        self.coupled_step(particles, &mut |_, encoder| encoder)
+        let mut loads = Vec::new();
+        self.step_coupled_with(particles, &mut loads, |_, load| load)?;
+        Ok(loads)
+    }
+
+    /// A coupled step that reads the particles where they are and writes `load(j, load of j)` for
+    /// each particle j to `out` (replaced): the caller's unit conversions ride on the step's own
+    /// passes over the particles, which run in parallel chunks.
+    pub fn step_coupled_with<P: Particles + ?Sized, T: Send>(
+        &mut self,
+        particles: &P,
+        out: &mut Vec<T>,
+        load: impl Fn(usize, Load) -> T + Sync,
+    ) -> Result<(), String> {
+        self.coupled_step(particles, &mut |_, encoder| encoder, &mut |loads| {
+            convert_loads(loads, out, &load)
+        })
     }
 
     /// A coupled step with each pass submitted and waited for on its own: what `clock` advanced
     /// by over each pass (the submit round trip included), in the order of the step
-    /// (`lbm-server bench --passes`).
+    /// (`lbm-server bench --passes`). "upload" is the host's pass that writes the particles for
+    /// the GPU, "readback" the wait for the loads and the pass that converts them.
     pub fn step_coupled_timed<const N: usize>(
         &mut self,
         particles: &[SolidParticle],
@@ -329,23 +382,38 @@ impl Lattice {
             times.push((pass, elapsed(&mut mark)));
             gpu.device.create_command_encoder(&Default::default())
         };
-        self.coupled_step(particles, &mut split)?;
+        let mut loads = Vec::new();
+        self.coupled_step(particles, &mut split, &mut |l| {
+            convert_loads(l, &mut loads, &|_, l| l)
+        })?;
         times.push(("readback", elapsed(&mut mark)));
         Ok(times)
     }
 
     /// The coupled step; `split` receives the encoder after each pass (named) and returns the one
-    /// to go on with.
-    fn coupled_step(&mut self, particles: &[SolidParticle], split: Split) -> Result<Vec<Load>, String> {
-        self.refuse_unfit(particles)?;
-        let (gpu_particles, pairs) = layout(&self.setup, particles);
-        self.reserve(gpu_particles.len() as u64, pairs as u64)?;
+    /// to go on with; `read` receives the loads.
+    fn coupled_step<P: Particles + ?Sized>(
+        &mut self,
+        particles: &P,
+        split: Split,
+        read: &mut dyn FnMut(&[GpuLoad]) -> Result<(), String>,
+    ) -> Result<(), String> {
+        let n = particles.count();
+        let chunks = chunk_sizes(particles);
+        self.refuse_unfit(particles, &chunks)?;
+        let pairs: u64 = chunks.iter().map(|c| c.pairs).sum();
+        self.reserve(n as u64, pairs)?;
+        self.upload_particles(particles, &chunks)?;
         let coupling = self.imb.as_ref().expect("coupling");
         let passes = coupling
             .pipelines
             .as_ref()
             .ok_or("this lattice was made without particle coupling")?;
-        let (cover, reduce) = (passes.cover.clone(), passes.reduce.clone());
+        let (cover, reduce, sum_loads) = (
+            passes.cover.clone(),
+            passes.reduce.clone(),
+            passes.sum_loads.clone(),
+        );
         let redo = passes.redo.as_ref().map(|r| {
             // KIND = parity + 2 * (list of the cells with a link that leaves the fluid).
             let kind = |list: usize| (self.time % 2) as usize + 2 * list;
@@ -357,15 +425,13 @@ impl Lattice {
         });
         let parity = self.time % 2;
         let gpu = self.gpu.clone();
-        gpu.queue
-            .write_buffer(&coupling.particles, 0, bytemuck::cast_slice(&gpu_particles));
         gpu.queue.write_buffer(
             &coupling.info,
             0,
-            bytemuck::cast_slice(&[particles.len() as u32, pairs, 0, coupling.saved_capacity]),
+            bytemuck::cast_slice(&[n as u32, pairs as u32, 0, coupling.saved_capacity]),
         );
-        let mut encoder = gpu.device.create_command_encoder(&Default::default());
-        let n = particles.len() as u32;
+        let mut encoder = split("upload", gpu.device.create_command_encoder(&Default::default()));
+        let n = n as u32;
         // The cover counts, slots and mask are all 0 here: `reduce` clears them. With the redo the
         // covered cells are listed by `cover` (status[4], status[8]) and dispatched indirectly
         // (status[5..8], status[9..12]).
@@ -397,7 +463,8 @@ impl Lattice {
                 encoder = split("stream_collide_covered", encoder);
             }
         }
-        self.dispatch_groups(&mut encoder, &reduce, parity, n.div_ceil(64));
+        self.dispatch_groups(&mut encoder, &reduce, parity, (n * REDUCE_SLICES).div_ceil(64));
+        self.dispatch_groups(&mut encoder, &sum_loads, parity, n.div_ceil(64));
         encoder = split("reduce", encoder);
         let coupling = self.imb.as_ref().expect("coupling");
         let bytes = n as u64 * LOAD_BYTES;
@@ -406,59 +473,105 @@ impl Lattice {
         }
         gpu.queue.submit([encoder.finish()]);
         if bytes == 0 {
-            return Ok(Vec::new());
+            return read(&[]);
         }
         let slice = coupling.readback.slice(..bytes);
         slice.map_async(wgpu::MapMode::Read, |_| {});
         gpu.wait();
-        let loads = {
+        let read_out = {
             let data = slice
                 .get_mapped_range()
                 .map_err(|e| format!("particle readback: {e:?}"))?;
-            let out: &[GpuLoad] = bytemuck::cast_slice(&data);
-            out.iter()
-                .map(|p| Load {
-                    force: [p.force[0], p.force[1], p.force[2]].map(f64::from),
-                    torque: [p.torque[0], p.torque[1], p.torque[2]].map(f64::from),
-                })
-                .collect()
+            let loads: &[GpuLoad] =
+                bytemuck::try_cast_slice(&data).map_err(|e| format!("particle readback: {e}"))?;
+            read(loads)
         };
         coupling.readback.unmap();
-        Ok(loads)
+        read_out
+    }
+
+    /// Writes the particles' GPU records (centres wrapped into the lattice, pair ranges from
+    /// `chunks`) straight into the upload's staging memory, chunk by chunk in parallel.
+    fn upload_particles<P: Particles + ?Sized>(
+        &self,
+        particles: &P,
+        chunks: &[ChunkSize],
+    ) -> Result<(), String> {
+        let Some(bytes) = std::num::NonZeroU64::new(particles.count() as u64 * PARTICLE_BYTES) else {
+            return Ok(());
+        };
+        let coupling = self.imb.as_ref().expect("coupling");
+        let mut view = self
+            .gpu
+            .queue
+            .write_buffer_with(&coupling.particles, 0, bytes)
+            .ok_or("particle upload: no staging memory")?;
+        // Records as bytes: the staging memory may only be written (wgpu's `WriteOnly`), and each
+        // chunk's thread writes its own records.
+        let (mut records, _) = view.slice(..).into_chunks::<{ PARTICLE_BYTES as usize }>();
+        let staging = Staging(records.as_raw_element_ptr(), records.len());
+        let periods = Periods::of(&self.setup);
+        for_each_chunk(chunks.iter().collect(), |c, chunk: &ChunkSize| {
+            let mut first = chunk.first;
+            for j in c * CHUNK..(c * CHUNK + CHUNK).min(particles.count()) {
+                let p = periods.wrap(&particles.particle(j));
+                let edge = box_edge(p.radius);
+                staging.write(
+                    j,
+                    GpuParticle {
+                        pos_r: vec4(p.position, p.radius),
+                        vel: p.velocity.map(|v| v as f32),
+                        first,
+                        omega: p.angular_velocity.map(|w| w as f32),
+                        edge,
+                    },
+                );
+                first += edge * edge * edge;
+            }
+        });
+        Ok(())
     }
 
     /// Refuses particles the coupling cannot take, naming the first: more than its indices hold,
-    /// a radius beyond its box index, a box longer than a periodic axis.
-    fn refuse_unfit(&self, particles: &[SolidParticle]) -> Result<(), String> {
-        if particles.len() > MAX_PARTICLES {
+    /// a radius beyond its box index, a box longer than a periodic axis. `chunks` holds the
+    /// largest box edge of each chunk: the particles are looked at one by one only when one is
+    /// refused.
+    fn refuse_unfit<P: Particles + ?Sized>(&self, particles: &P, chunks: &[ChunkSize]) -> Result<(), String> {
+        let n = particles.count();
+        if n > MAX_PARTICLES {
             return Err(format!(
-                "{} particles exceed the coupling's {MAX_PARTICLES} (imb.wgsl's slot keys hold 24-bit indices)",
-                particles.len()
+                "{n} particles exceed the coupling's {MAX_PARTICLES} (imb.wgsl's slot keys hold 24-bit indices)"
             ));
         }
-        if let Some((j, p)) = particles
-            .iter()
-            .enumerate()
-            .find(|(_, p)| box_edge(p.radius) > MAX_BOX_EDGE)
-        {
+        let largest = chunks.iter().map(|c| c.largest_edge).max().unwrap_or(0);
+        let shortest_periodic = (0..3)
+            .filter(|&a| self.setup.periodic(a))
+            .map(|a| self.setup.n[a])
+            .min()
+            .unwrap_or(usize::MAX);
+        if largest <= MAX_BOX_EDGE && largest as usize <= shortest_periodic {
+            return Ok(());
+        }
+        let radius = |j: usize| particles.radius(j);
+        if let Some(j) = (0..n).find(|&j| box_edge(radius(j)) > MAX_BOX_EDGE) {
             return Err(format!(
                 "particle {j}: radius {} cells exceeds the coupling's {} cells",
-                p.radius,
+                radius(j),
                 (MAX_BOX_EDGE - 1) / 2
             ));
         }
-        if let Some((j, axis)) = particles.iter().enumerate().find_map(|(j, p)| {
+        if let Some((j, axis)) = (0..n).find_map(|j| {
             (0..3)
-                .find(|&a| self.setup.periodic(a) && box_edge(p.radius) as usize > self.setup.n[a])
+                .find(|&a| self.setup.periodic(a) && box_edge(radius(j)) as usize > self.setup.n[a])
                 .map(|a| (j, a))
         }) {
             return Err(format!(
                 "particle {j}: radius {} cells spans more than the periodic {} axis of {} cells \
                  (its box of {} cells would meet itself)",
-                particles[j].radius,
+                radius(j),
                 ["x", "y", "z"][axis],
                 self.setup.n[axis],
-                box_edge(particles[j].radius)
+                box_edge(radius(j))
             ));
         }
         Ok(())
@@ -543,7 +656,7 @@ impl Lattice {
         if particles > coupling.particle_capacity {
             coupling.particle_capacity = particles.next_power_of_two();
             coupling.particles = storage_buffer(&d, "particles", coupling.particle_capacity * PARTICLE_BYTES);
-            coupling.loads = storage_buffer(&d, "loads", coupling.particle_capacity * LOAD_BYTES);
+            coupling.loads = storage_buffer(&d, "loads", coupling.particle_capacity * LOADS_BUFFER_BYTES);
             coupling.readback = readback_buffer(&d, coupling.particle_capacity * LOAD_BYTES);
             grew = true;
         }
@@ -573,38 +686,129 @@ impl Lattice {
 
 /// The particle with its centre wrapped into the lattice along the periodic axes (a DEM with a
 /// periodic domain may send centres beyond it): its box then lies less than one period outside.
+#[cfg(test)]
 pub(super) fn into_lattice(setup: &Setup, p: &SolidParticle) -> SolidParticle {
-    let position = std::array::from_fn(|a| {
-        let x = p.position[a];
-        if setup.periodic(a) {
-            x.rem_euclid(setup.n[a] as f64)
-        } else {
-            x
-        }
-    });
-    SolidParticle { position, ..*p }
+    Periods::of(setup).wrap(p)
 }
 
-/// The GPU records of the particles (centres wrapped into the lattice, with their pair ranges) and
-/// the total number of pairs.
-fn layout(setup: &Setup, particles: &[SolidParticle]) -> (Vec<GpuParticle>, u32) {
-    let mut first = 0u32;
-    let records = particles
-        .iter()
-        .map(|p| {
-            let p = into_lattice(setup, p);
-            let m = box_edge(p.radius);
-            let record = GpuParticle {
-                pos_r: vec4(p.position, p.radius),
-                vel: vec4(p.velocity, 0.0),
-                omega: vec4(p.angular_velocity, 0.0),
-                box_: [first, m, 0, 0],
-            };
-            first += m * m * m;
-            record
-        })
+/// The lengths of the lattice's periodic axes, 0 along the others: what wraps the centres, looked
+/// up once per step rather than per particle.
+#[derive(Debug, Clone, Copy)]
+struct Periods([f64; 3]);
+
+impl Periods {
+    fn of(setup: &Setup) -> Periods {
+        Periods(std::array::from_fn(|a| {
+            if setup.periodic(a) {
+                setup.n[a] as f64
+            } else {
+                0.0
+            }
+        }))
+    }
+
+    /// `p` with its centre wrapped (`rem_euclid`, a libm `fmod`, only for a centre outside).
+    fn wrap(&self, p: &SolidParticle) -> SolidParticle {
+        let position = std::array::from_fn(|a| {
+            let (x, period) = (p.position[a], self.0[a]);
+            if period > 0.0 && !(0.0..period).contains(&x) {
+                x.rem_euclid(period)
+            } else {
+                x
+            }
+        });
+        SolidParticle { position, ..*p }
+    }
+}
+
+/// Particles per chunk of the host's passes over a step's particles: the chunks run in parallel
+/// (rayon); a step with fewer particles stays on the calling thread.
+pub(super) const CHUNK: usize = 4096;
+
+/// A chunk of [`CHUNK`] particles: the pair index of its first particle, its pairs (the cells of
+/// its particles' bounding boxes) and its largest box edge.
+#[derive(Debug, Clone, Copy, Default)]
+struct ChunkSize {
+    first: u32,
+    pairs: u64,
+    largest_edge: u32,
+}
+
+/// The chunks of a step's particles, sized from the radii (in parallel), with their first pairs.
+fn chunk_sizes<P: Particles + ?Sized>(particles: &P) -> Vec<ChunkSize> {
+    let n = particles.count();
+    let mut chunks = vec![ChunkSize::default(); n.div_ceil(CHUNK)];
+    for_each_chunk(chunks.iter_mut().collect(), |c, chunk: &mut ChunkSize| {
+        for j in c * CHUNK..(c * CHUNK + CHUNK).min(n) {
+            let edge = box_edge(particles.radius(j));
+            chunk.pairs += (edge as u64).pow(3);
+            chunk.largest_edge = chunk.largest_edge.max(edge);
+        }
+    });
+    let mut first = 0u64;
+    for chunk in &mut chunks {
+        // Past u32 only when the pairs exceed any binding (`reserve` refuses them).
+        chunk.first = first.min(u32::MAX as u64) as u32;
+        first += chunk.pairs;
+    }
+    chunks
+}
+
+/// The particle records of an upload's staging memory (`len` of them), written record by record
+/// from the threads of the chunks, never read.
+struct Staging(std::ptr::NonNull<[u8; PARTICLE_BYTES as usize]>, usize);
+
+// SAFETY: the threads write disjoint records (each its chunk's), while the view they point into
+// outlives them (`upload_particles`).
+unsafe impl Send for Staging {}
+unsafe impl Sync for Staging {}
+
+impl Staging {
+    fn write(&self, j: usize, record: GpuParticle) {
+        assert!(j < self.1, "particle record {j} beyond the upload's {}", self.1);
+        // SAFETY: j is within the staging memory (asserted), which the caller's view keeps alive;
+        // each record is written by one thread only; the pointee is bytes (alignment 1).
+        unsafe { self.0.add(j).write(bytemuck::cast(record)) }
+    }
+}
+
+/// `fill(c, chunk c)` for each chunk: in parallel when there is more than one, else on this
+/// thread.
+fn for_each_chunk<S: Send>(chunks: Vec<S>, fill: impl Fn(usize, S) + Sync) {
+    use rayon::prelude::*;
+    if chunks.len() <= 1 {
+        chunks.into_iter().enumerate().for_each(|(c, s)| fill(c, s));
+    } else {
+        chunks.into_par_iter().enumerate().for_each(|(c, s)| fill(c, s));
+    }
+}
+
+/// `out` (replaced) holds `load(j, load of j)` for every particle j of the GPU's loads.
+fn convert_loads<T: Send>(
+    loads: &[GpuLoad],
+    out: &mut Vec<T>,
+    load: &(impl Fn(usize, Load) -> T + Sync),
+) -> Result<(), String> {
+    out.clear();
+    out.reserve(loads.len());
+    let slots = out.spare_capacity_mut()[..loads.len()]
+        .chunks_mut(CHUNK)
         .collect();
-    (records, first)
+    for_each_chunk(slots, |c, chunk| {
+        for (j, slot) in (c * CHUNK..).zip(chunk) {
+            let l = loads[j].map(f64::from);
+            slot.write(load(
+                j,
+                Load {
+                    force: [l[0], l[1], l[2]],
+                    torque: [l[3], l[4], l[5]],
+                },
+            ));
+        }
+    });
+    // SAFETY: `for_each_chunk` wrote every one of the first loads.len() slots.
+    unsafe { out.set_len(loads.len()) };
+    Ok(())
 }
 
 #[cfg(test)]

@@ -225,7 +225,7 @@ mod validation_cases {
 }
 
 mod immersed_boundary {
-    use super::super::imb::{CoveredCells, ImbOptions, Load, SolidParticle};
+    use super::super::imb::{CoveredCells, ImbOptions, Load, SolidParticle, CHUNK};
     use super::*;
 
     /// Two overlapping moving, spinning spheres, moved by `shift` cells between steps.
@@ -258,10 +258,22 @@ mod immersed_boundary {
     }
 
     fn max_load_difference(a: &[Load], b: &[Load]) -> f64 {
+        worst_load(a, b).1
+    }
+
+    /// The particle whose load differs most between `a` and `b`, and by how much.
+    fn worst_load(a: &[Load], b: &[Load]) -> (usize, f64) {
+        assert_eq!(a.len(), b.len(), "loads of as many particles");
+        let difference = |x: &Load, y: &Load| {
+            (0..3)
+                .flat_map(|k| [x.force[k] - y.force[k], x.torque[k] - y.torque[k]])
+                .fold(0.0, |m: f64, d| m.max(d.abs()))
+        };
         a.iter()
             .zip(b)
-            .flat_map(|(x, y)| (0..3).flat_map(move |k| [x.force[k] - y.force[k], x.torque[k] - y.torque[k]]))
-            .fold(0.0, |m, d| m.max(d.abs()))
+            .map(|(x, y)| difference(x, y))
+            .enumerate()
+            .fold((0, 0.0), |worst, (j, d)| if d > worst.1 { (j, d) } else { worst })
     }
 
     fn check(setup: Setup, options: ImbOptions, seed: u64) {
@@ -321,12 +333,15 @@ mod immersed_boundary {
                 .iter()
                 .flat_map(|l| l.force)
                 .fold(0.0, |m: f64, v| m.max(v.abs()));
-            let err = max_load_difference(&got, &want);
+            let (j, err) = worst_load(&got, &want);
             let mode = options.covered_cells;
             assert!(scale > 1e-3, "the particles feel a force: {want:?}");
             assert!(
                 err < 1e-4 * scale.max(1.0),
-                "{mode:?}, step {step}: loads differ by {err:e}: {got:?} vs {want:?}"
+                "{mode:?}, step {step}: loads differ by {err:e} at particle {j} of {}: {:?} vs {:?}",
+                got.len(),
+                got[j],
+                want[j]
             );
             let pop_err = max_difference(&lattice.populations(), &next);
             assert!(
@@ -591,6 +606,47 @@ mod immersed_boundary {
         };
         let (a, b) = (run(), run());
         assert_eq!(a, b, "bitwise identical loads");
+    }
+
+    /// Particles enough for three chunks of the host's passes (run in parallel, each writing its
+    /// own records and pair ranges, and converting its own loads), of different radii (box edges
+    /// 2 to 5), crowded and across the periodic faces: the f64 reference's loads and populations,
+    /// fused and redone.
+    fn many_particles(shift: f64) -> Vec<SolidParticle> {
+        let mut r = Random::new(21);
+        let n = [40.0, 36.0, 32.0];
+        (0..2 * CHUNK + 321)
+            .map(|_| SolidParticle {
+                position: n.map(|n| (0.5 + 0.55 * r.next()) * n + shift),
+                radius: 1.05 + 0.55 * r.next(),
+                velocity: [0.02 * r.next(), 0.02 * r.next(), 0.02 * r.next()],
+                angular_velocity: [0.002 * r.next(), 0.002 * r.next(), 0.002 * r.next()],
+            })
+            .collect()
+    }
+
+    #[test]
+    fn particles_in_parallel_chunks_match_the_reference() {
+        let setup = Setup::new(
+            [40, 36, 32],
+            [Face::Periodic; 6],
+            0.7,
+            Operator::Trt { magic: 3.0 / 16.0 },
+        );
+        let (loads, dropped) = check_steps(setup, ImbOptions::default(), 22, &[0.0, 0.3], many_particles);
+        assert_eq!(loads[0].len(), 2 * CHUNK + 321);
+        assert!(dropped > 0, "crowded cells drop covers");
+    }
+
+    #[test]
+    fn a_particle_too_large_is_refused_by_id_in_any_chunk() {
+        let setup = Setup::new([40, 36, 32], [Face::Periodic; 6], 0.7, Operator::Bgk);
+        let mut lattice = coupled(&setup);
+        let mut particles = many_particles(0.0);
+        particles[2 * CHUNK + 7].radius = 17.0;
+        let err = lattice.step_coupled(&particles).unwrap_err();
+        let id = format!("particle {}:", 2 * CHUNK + 7);
+        assert!(err.contains(&id) && err.contains("periodic z axis"), "{err}");
     }
 
     #[test]
