@@ -29,6 +29,18 @@ const MISTAKES: &[(&str, &str, &str, &[&str])] = &[
         "max = [0.016, -0.016, 0.016]",
         &["domain.max[1] = -0.016 m", "greater than domain.min[1]"],
     ),
+    (
+        "unknown periodic axis",
+        "max = [0.016, 0.016, 0.016]",
+        "max = [0.016, 0.016, 0.016]\nperiodic = [\"w\"]",
+        &["domain.periodic[0] = \"w\"", "\"x\", \"y\" or \"z\""],
+    ),
+    (
+        "periodic axis the lattice's faces do not have",
+        "max = [0.016, 0.016, 0.016]",
+        "max = [0.016, 0.016, 0.016]\nperiodic = [\"x\"]",
+        &["domain.periodic = [\"x\"]", "lattice.faces", "are along []"],
+    ),
     ("overlapping block", "spacing = 0.004", "spacing = 0.002", &["particles.block[0].spacing = 0.002 m", "overlap"]),
     ("wrong type", "steps = 100", "steps = \"many\"", &["steps", "invalid type"]),
     ("missing section", "[fluid]\ndensity = 1000.0\ndynamic_viscosity = 1.0\n", "", &["missing field `fluid`"]),

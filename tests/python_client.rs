@@ -8,11 +8,18 @@ use std::time::Duration;
 /// A run with the Python DEM; with `lubrication` the scene asks for it, and as the Python DEM does
 /// not declare LUBRICATION the fluid applies its own correction.
 fn python_run(tag: &str, particles: u64, steps: u64, lubrication: bool) {
+    python_run_with(tag, particles, steps, lubrication, "");
+}
+
+/// `python_run` with `faces` as the scene's `[lattice.faces]`; the client must say it learnt the
+/// periodic ones from the Welcome.
+fn python_run_with(tag: &str, particles: u64, steps: u64, lubrication: bool, faces: &str) {
     let dir = temp_dir(tag);
     // The external DEM brings its own particles: the scene only sets the capacity.
     let text = scene_text(tag, [2, 2, 2], steps, 50, 10.0)
         .replace("timeout = 10", "timeout = 10\ncapacity = 4096")
-        .replace("lubrication = false", &format!("lubrication = {lubrication}"));
+        .replace("lubrication = false", &format!("lubrication = {lubrication}"))
+        .replace("[output]", &format!("{faces}[output]"));
     let scene = write_scene(&dir, &text);
     let out = dir.join("out");
     let (mut server, run) = start_external(&scene, &out);
@@ -35,6 +42,12 @@ fn python_run(tag: &str, particles: u64, steps: u64, lubrication: bool) {
         steps - 1
     );
     assert!(client_out.contains(&expected), "{client_out}\n{client_err}");
+    let along = if faces.contains("x_min = \"periodic\"") {
+        "periodic along ['x', 'y']"
+    } else {
+        "periodic along []"
+    };
+    assert!(client_err.contains(along), "{client_err}");
     let s = summary(&out);
     assert_eq!(s["steps_completed"], steps);
     assert_eq!(s["particles_initial"], particles);
@@ -58,4 +71,13 @@ fn python_client_completes_a_run() {
 #[test]
 fn python_client_with_2000_particles() {
     python_run("python2k", 2000, 60, false);
+}
+
+/// The Welcome names the periodic axes (PROTOCOL.md 4.4, 6.2): the Python DEM wraps its spheres
+/// along x and y and reflects them at the floor and lid.
+#[test]
+fn python_client_learns_the_periodic_axes_from_the_welcome() {
+    let faces = "[lattice.faces]\nx_min = \"periodic\"\nx_max = \"periodic\"\ny_min = \"periodic\"\n\
+                 y_max = \"periodic\"\nz_min = \"wall\"\nz_max = \"wall\"\n";
+    python_run_with("python-periodic", 64, 60, false, faces);
 }

@@ -5,7 +5,8 @@
     python3 clients/python/example_dem.py --service RUN [--particles N] [--density KG_M3]
 
 Every step it sends the particle states, receives the hydrodynamic forces, and advances with
-symplectic Euler (v += dt (F/m + g); x += dt v), reflecting elastically at the domain faces. It
+symplectic Euler (v += dt (F/m + g); x += dt v), reflecting elastically at the domain faces but
+the periodic ones (Welcome.periodic), through which the spheres pass. It
 applies gravity itself (Physics GRAVITY | BALLISTIC_STANDIN), so the fluid side must not.
 Ctrl-C (or SIGTERM) sends STOP with the next states; the run then ends cleanly after that step.
 """
@@ -88,9 +89,11 @@ def main() -> int:
         lo = np.array(welcome.domain_min[:])
         hi = np.array(welcome.domain_max[:])
         g = np.array(welcome.gravity[:])
+        periodic = np.array(welcome.periodic_axes())
+        axes = [name for name, p in zip("xyz", periodic) if p]
         print(f"python-dem: connected to {welcome.software_text()} (pid {welcome.pid}): "
               f"{welcome.steps} steps of {dt:g} s, domain {lo.tolist()} .. {hi.tolist()}, "
-              f"capacity {welcome.capacity}", file=sys.stderr, flush=True)
+              f"periodic along {axes}, capacity {welcome.capacity}", file=sys.stderr, flush=True)
 
         radius = 0.02 * float(np.min(hi - lo))
         mass = args.density * 4.0 / 3.0 * math.pi * radius ** 3
@@ -117,14 +120,16 @@ def main() -> int:
             if step + 1 >= welcome.steps:
                 raise lbmdem.BadReply(f"the {lbmdem.FLUID} did not mark the reply to step {step}, "
                                       f"the last of {welcome.steps}, FINAL", last)
-            # Symplectic Euler, then elastic reflection at the faces.
+            # Symplectic Euler, then elastic reflection at the faces; along the periodic axes
+            # (Welcome.periodic) the spheres pass through and come back on the other side.
             v += dt * (forces["force"] / mass + g)
             x += dt * v
-            below, above = x < low, x > high
+            x[:] = np.where(periodic, lo + np.mod(x - lo, hi - lo), x)
+            below, above = (x < low) & ~periodic, (x > high) & ~periodic
             x[below] = 2.0 * np.broadcast_to(low, x.shape)[below] - x[below]
             x[above] = 2.0 * np.broadcast_to(high, x.shape)[above] - x[above]
             v[below | above] *= -1.0
-            np.clip(x, low, high, out=x)
+            x[:] = np.where(periodic, x, np.clip(x, low, high))
             step += 1
     except KeyboardInterrupt:
         link.close()

@@ -253,7 +253,7 @@ class Welcome(ctypes.Structure):
         ("kind", _u32),
         ("pid", _u64),
         ("status", _u32),
-        ("reserved", _u32),
+        ("periodic", _u32),  # periodic axes: bit 0 x, 1 y, 2 z (0 none; reserved before 2026-12-01)
         ("capacity", _u64),
         ("steps", _u64),
         ("dt", _f64),
@@ -286,6 +286,10 @@ class Welcome(ctypes.Structure):
     def reason_text(self) -> str:
         return _field_text(self.reason)
 
+    def periodic_axes(self) -> tuple:
+        """(x, y, z): whether the domain is periodic along each axis (PROTOCOL.md 6.2)."""
+        return tuple(bool(self.periodic & (1 << a)) for a in range(3))
+
 
 def _check_layouts() -> None:
     """The layouts of PROTOCOL.md; a mismatch here is a bug in this file."""
@@ -296,7 +300,7 @@ def _check_layouts() -> None:
         Units: (24, {"time_s": 8, "mass_kg": 16}),
         Hello: (144, {"pid": 16, "state_size": 24, "reply_size": 28, "header_size": 32,
                       "units": 40, "physics": 64, "initial_count": 72, "software": 80}),
-        Welcome: (344, {"pid": 16, "status": 24, "capacity": 32, "steps": 40, "dt": 48,
+        Welcome: (344, {"pid": 16, "status": 24, "periodic": 28, "capacity": 32, "steps": 40, "dt": 48,
                         "domain_min": 56, "domain_max": 80, "gravity": 104,
                         "fluid_density": 128, "fluid_viscosity": 136, "physics": 144,
                         "software": 152, "reason": 216}),

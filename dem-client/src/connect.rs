@@ -125,6 +125,17 @@ pub fn main(args: ConnectArgs) -> ExitCode {
             return ExitCode::from(1);
         }
     };
+    if welcome.periodic_axes() != scene.periodic_axes() {
+        let names =
+            |axes: [bool; 3]| -> Vec<&str> { (0..3).filter(|&a| axes[a]).map(|a| scene::AXES[a]).collect() };
+        protocol::say!(
+            "dem-client: error: the fluid's domain is periodic along {:?} (Welcome.periodic), this scene's along {:?}: \
+             both sides must wrap the same axes",
+            names(welcome.periodic_axes()),
+            names(scene.periodic_axes())
+        );
+        return ExitCode::from(1);
+    }
     let mut last = None;
     let faults = Faults {
         churn: args.churn,

@@ -436,6 +436,7 @@ fn welcome_for(scene: &Scene, steps: u64, hello: &Hello, physics: u64) -> Welcom
     w.fluid_density = scene.fluid.density / (u.mass_kg / u.length_m.powi(3));
     w.fluid_viscosity = scene.fluid.dynamic_viscosity / (u.mass_kg / (u.length_m * u.time_s));
     w.physics = physics;
+    w.periodic = Welcome::periodic_bits(scene.periodic_axes());
     w
 }
 
@@ -498,6 +499,7 @@ mod tests {
         let domain = scene::Domain {
             min: [0.0; 3],
             max: [0.1, 0.1, 0.2],
+            periodic: Vec::new(),
         };
         let state = |id: u64, z: f64| ParticleState {
             id,

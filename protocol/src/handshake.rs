@@ -187,7 +187,9 @@ pub struct Welcome {
     pub pid: u64,
     /// A [`Status`]; anything but `Accepted` ends the run, `reason` says why.
     pub status: u32,
-    pub reserved: u32,
+    /// The axes along which the domain is periodic: bit 0 x, bit 1 y, bit 2 z (0: none). A DEM
+    /// wraps its spheres and pairs along them (PROTOCOL.md 6.2). Reserved (0) before 2026-12-01.
+    pub periodic: u32,
     /// Most particles a step may carry.
     pub capacity: u64,
     /// Number of steps of the run (steps 0 .. steps-1).
@@ -338,7 +340,7 @@ impl Welcome {
             kind: KIND_WELCOME,
             pid: std::process::id() as u64,
             status: Status::Accepted as u32,
-            reserved: 0,
+            periodic: 0,
             capacity: 0,
             steps: 0,
             dt: 0.0,
@@ -364,6 +366,16 @@ impl Welcome {
     pub fn reason_text(&self) -> String {
         field_text(&self.reason)
     }
+
+    /// The periodic axes (x, y, z) of [`Welcome::periodic`].
+    pub fn periodic_axes(&self) -> [bool; 3] {
+        std::array::from_fn(|a| self.periodic & (1 << a) != 0)
+    }
+
+    /// [`Welcome::periodic`] of the periodic axes (x, y, z).
+    pub fn periodic_bits(axes: [bool; 3]) -> u32 {
+        (0..3).filter(|&a| axes[a]).map(|a| 1 << a).sum()
+    }
 }
 
 #[cfg(test)]
@@ -386,6 +398,7 @@ mod tests {
     fn welcome_layout() {
         assert_eq!(size_of::<Welcome>(), 344);
         assert_eq!(offset_of!(Welcome, status), 24);
+        assert_eq!(offset_of!(Welcome, periodic), 28);
         assert_eq!(offset_of!(Welcome, capacity), 32);
         assert_eq!(offset_of!(Welcome, steps), 40);
         assert_eq!(offset_of!(Welcome, dt), 48);

@@ -47,7 +47,21 @@ pub struct Scene {
 pub struct Domain {
     pub min: [f64; 3],
     pub max: [f64; 3],
+    /// Axes ("x", "y", "z") along which a granular scene alone (no `[lattice]`) is periodic; with
+    /// a lattice its periodic faces decide, and this list, if given, must name the same axes.
+    #[serde(default)]
+    pub periodic: Vec<String>,
 }
+
+impl Domain {
+    /// The axes `periodic` names (unknown names are refused by the scene's checks).
+    pub fn periodic_axes(&self) -> [bool; 3] {
+        std::array::from_fn(|a| self.periodic.iter().any(|name| name == AXES[a]))
+    }
+}
+
+/// The names of the axes in scene fields.
+pub const AXES: [&str; 3] = ["x", "y", "z"];
 
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -337,11 +351,23 @@ impl Scene {
     }
 
     /// The axes (x, y, z) along which the domain is periodic: those whose lattice faces are
-    /// periodic (a scene without a `[lattice]` has none). Both physics wrap along them: the
-    /// lattice's links and particle covers, the DEM's spheres and pairs.
+    /// periodic, or without a `[lattice]` those `domain.periodic` names. Both physics wrap along
+    /// them: the lattice's links and particle covers, the DEM's spheres and pairs.
     pub fn periodic_axes(&self) -> [bool; 3] {
-        let faces = self.lattice_units.as_ref().map(|u| u.faces);
-        std::array::from_fn(|a| faces.is_some_and(|f| f[2 * a] == lattice::LatticeFace::Periodic))
+        match self.lattice_units.as_ref().map(|u| u.faces) {
+            Some(faces) => std::array::from_fn(|a| faces[2 * a] == lattice::LatticeFace::Periodic),
+            None => self.domain.periodic_axes(),
+        }
+    }
+
+    /// The periodic axes' lower faces and lengths (length 0 along the others).
+    pub fn periods(&self) -> overlap::Periods {
+        let axes = self.periodic_axes();
+        let (min, max) = (self.domain.min, self.domain.max);
+        overlap::Periods {
+            lo: min,
+            len: std::array::from_fn(|a| if axes[a] { max[a] - min[a] } else { 0.0 }),
+        }
     }
 
     /// All particles of the scene with ids 0, 1, 2, ... (spheres first, then blocks).
@@ -411,5 +437,5 @@ fn block_centres(b: &Block) -> impl Iterator<Item = [f64; 3]> + '_ {
 
 pub mod dem;
 pub mod lattice;
-mod overlap;
+pub mod overlap;
 mod validate;

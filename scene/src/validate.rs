@@ -86,7 +86,44 @@ impl Scene {
                 ));
             }
         }
+        self.validate_periodic(c)?;
         c.finite3("gravity", self.gravity, "m/s^2")
+    }
+
+    /// `domain.periodic` names each axis at most once, and with a `[lattice]` the axes of its
+    /// periodic faces (which decide).
+    fn validate_periodic(&self, c: &Checker) -> Result<(), SceneError> {
+        let names = &self.domain.periodic;
+        for (i, name) in names.iter().enumerate() {
+            if !crate::AXES.contains(&name.as_str()) {
+                return Err(c.fail(
+                    format!("domain.periodic[{i}]"),
+                    format!("{name:?}"),
+                    "must be \"x\", \"y\" or \"z\"",
+                ));
+            }
+            if names[..i].contains(name) {
+                return Err(c.fail(
+                    format!("domain.periodic[{i}]"),
+                    format!("{name:?}"),
+                    "names an axis twice",
+                ));
+            }
+        }
+        let lattice = self.periodic_axes();
+        if self.lattice_units.is_some() && !names.is_empty() && self.domain.periodic_axes() != lattice {
+            let along: Vec<&str> = (0..3).filter(|&a| lattice[a]).map(|a| crate::AXES[a]).collect();
+            return Err(c.fail(
+                "domain.periodic",
+                format!("{names:?}"),
+                format!(
+                    "the lattice's periodic faces (lattice.faces), which decide, are along [{}]: name the \
+                     same axes or leave domain.periodic out",
+                    along.join(", ")
+                ),
+            ));
+        }
+        Ok(())
     }
 
     fn validate_fluid_and_time(&self, c: &Checker) -> Result<(), SceneError> {
@@ -257,7 +294,7 @@ impl Scene {
     /// (Blocks are checked through their spacing; spheres against blocks through a cell grid.)
     fn no_overlap(&self, c: &Checker) -> Result<(), SceneError> {
         let particles = self.initial_particles();
-        let pairs = crate::overlap::overlapping_pairs(&particles, MAX_INITIAL_OVERLAP);
+        let pairs = crate::overlap::overlapping_pairs(&particles, MAX_INITIAL_OVERLAP, &self.periods());
         match pairs.first() {
             None => Ok(()),
             Some(&(a, b, depth)) => Err(c.fail(

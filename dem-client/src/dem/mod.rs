@@ -221,8 +221,19 @@ pub fn setup(scene: &Scene, file: &str) -> Result<Setup, SceneError> {
         .set_periodic(periodic(scene), cutoff)
         .map_err(|problem| SceneError {
             file: file.to_string(),
-            field: "lattice.faces".into(),
-            value: "periodic".into(),
+            // What made the domain periodic: the lattice's faces, or for a granular scene alone
+            // `domain.periodic`.
+            field: if scene.lattice.is_some() {
+                "lattice.faces"
+            } else {
+                "domain.periodic"
+            }
+            .into(),
+            value: if scene.lattice.is_some() {
+                "periodic".into()
+            } else {
+                format!("{:?}", scene.domain.periodic)
+            },
             problem,
         })?;
     let contact_time = shortest_contact_time(&world, v_impact);
