@@ -11,17 +11,20 @@ pub struct Periods {
 }
 
 impl Periods {
-    /// The separation a - b of the nearest images along each axis.
-    fn separation(&self, a: &[f64; 3], b: &[f64; 3]) -> [f64; 3] {
-        std::array::from_fn(|k| {
-            let d = a[k] - b[k];
-            let l = self.len[k];
-            if l > 0.0 {
-                d - l * (d / l).round()
-            } else {
-                d
-            }
-        })
+    /// The distance between the nearest images of a and b.
+    fn distance(&self, a: &[f64; 3], b: &[f64; 3]) -> f64 {
+        (0..3)
+            .map(|k| {
+                let (d, l) = (a[k] - b[k], self.len[k]);
+                if l > 0.0 {
+                    d - l * (d / l).round()
+                } else {
+                    d
+                }
+            })
+            .map(|s| s * s)
+            .sum::<f64>()
+            .sqrt()
     }
 }
 
@@ -50,13 +53,7 @@ pub fn overlapping_pairs(
             };
             for &j in cell.iter().filter(|&&j| j > i) {
                 let q = &particles[j];
-                let d = periods
-                    .separation(&p.position, &q.position)
-                    .iter()
-                    .map(|s| s * s)
-                    .sum::<f64>()
-                    .sqrt();
-                let depth = p.radius + q.radius - d;
+                let depth = p.radius + q.radius - periods.distance(&p.position, &q.position);
                 if depth > fraction * p.radius.min(q.radius) {
                     pairs.push((p.id, q.id, depth));
                 }
@@ -168,13 +165,7 @@ mod tests {
             let mut want = Vec::new();
             for (i, p) in particles.iter().enumerate() {
                 for q in &particles[i + 1..] {
-                    let d = periods
-                        .separation(&p.position, &q.position)
-                        .iter()
-                        .map(|s| s * s)
-                        .sum::<f64>()
-                        .sqrt();
-                    let depth = p.radius + q.radius - d;
+                    let depth = p.radius + q.radius - periods.distance(&p.position, &q.position);
                     if depth > 0.1 * p.radius.min(q.radius) {
                         want.push((p.id, q.id, depth));
                     }
