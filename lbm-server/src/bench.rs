@@ -362,6 +362,7 @@ fn coupled_sweep(
     modes: &[CoveredCells],
 ) -> Result<(), String> {
     let mut breakdown = Vec::new();
+    let mut host = Vec::new();
     println!("coupled (spheres of 4 cells diameter, immersed moving boundary, one readback per step):");
     println!("| particles | covered cells | MLUPS | ratio to LBM-only ({lbm_only:.1} MLUPS) |");
     println!("|---:|---|---:|---:|");
@@ -426,13 +427,30 @@ fn coupled_sweep(
             );
             if passes {
                 breakdown.push((count, name, time_passes(&mut lattice, &particles, steps)?));
+                if host.last().is_none_or(|(c, _)| *c != count) {
+                    host.push((count, lattice.host_pass_times(&particles, 21)?));
+                }
             }
         }
     }
     if passes {
         print_passes(&breakdown);
+        print_host_passes(&host);
     }
     Ok(())
+}
+
+/// The host's passes per particle count (`Lattice::host_pass_times`).
+fn print_host_passes(host: &[(usize, [f64; 2])]) {
+    println!(
+        "host passes of a coupled step ({} threads, no device; median of 21):",
+        rayon::current_num_threads()
+    );
+    println!("| particles | sizes, checks, records into staging (ms) | loads converted (ms) |");
+    println!("|---:|---:|---:|");
+    for (count, [upload, loads]) in host {
+        println!("| {count} | {upload:.3} | {loads:.3} |");
+    }
 }
 
 /// MLUPS of `steps` fluid steps, each submitted and waited for on its own.

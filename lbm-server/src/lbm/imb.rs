@@ -390,6 +390,39 @@ impl Lattice {
         Ok(times)
     }
 
+    /// The host's own passes of a coupled step over `particles`, timed without the device:
+    /// milliseconds (median of `repeats`) to size, check and write the records into staging
+    /// memory, and to convert as many loads (`lbm-server bench --passes`: on a GPU machine they
+    /// run on its CPU, in series with every step).
+    pub fn host_pass_times(
+        &mut self,
+        particles: &[SolidParticle],
+        repeats: usize,
+    ) -> Result<[f64; 2], String> {
+        let zeros = vec![GpuLoad::default(); particles.len()];
+        let mut loads: Vec<Load> = Vec::new();
+        let mut times = Vec::new();
+        for _ in 0..repeats.max(1) {
+            let start = std::time::Instant::now();
+            let chunks = chunk_sizes(particles);
+            self.refuse_unfit(particles, &chunks)?;
+            self.reserve(particles.len() as u64, chunks.iter().map(|c| c.pairs).sum())?;
+            self.upload_particles(particles, &chunks)?;
+            let upload = start.elapsed().as_secs_f64();
+            let start = std::time::Instant::now();
+            convert_loads(&zeros, &mut loads, &|_, l| l)?;
+            times.push([upload, start.elapsed().as_secs_f64()]);
+            // The staged records go to the device (the same as the next step's).
+            self.gpu.queue.submit([]);
+            self.gpu.wait();
+        }
+        Ok(std::array::from_fn(|k| {
+            let mut column: Vec<f64> = times.iter().map(|t| t[k]).collect();
+            column.sort_by(f64::total_cmp);
+            column[column.len() / 2] * 1e3
+        }))
+    }
+
     /// The coupled step; `split` receives the encoder after each pass (named) and returns the one
     /// to go on with; `read` receives the loads.
     fn coupled_step<P: Particles + ?Sized>(
@@ -723,7 +756,7 @@ impl Periods {
 
 /// Particles per chunk of the host's passes over a step's particles: the chunks run in parallel
 /// (rayon); a step with fewer particles stays on the calling thread.
-pub(super) const CHUNK: usize = 4096;
+pub(super) const CHUNK: usize = 2048;
 
 /// A chunk of [`CHUNK`] particles: the pair index of its first particle, its pairs (the cells of
 /// its particles' bounding boxes) and its largest box edge.
