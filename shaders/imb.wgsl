@@ -4,9 +4,10 @@
 // Per step: `cover` computes the solid fraction of every cell in each particle's bounding box
 // (work = particles x cells covered, never cells x particles) and registers up to SLOTS particles
 // per cell; the fluid kernels of lbm.wgsl stream and collide; `reduce` sums each particle's force
-// and torque in a fixed order (no floating-point atomics: the result is the same every run) and
-// clears the cover counts of its cells for the next step. The covered cells get their solid term
-// in one of two ways (the same result):
+// and torque over slices of its box and `sum_loads` adds the slices, each in a fixed order (no
+// floating-point atomics: the result is the same every run), and `reduce` clears the cover counts
+// of its cells for the next step. The covered cells get their solid term in one of two ways (the
+// same result):
 // - FUSED: `cover` sets the cell's bit in a cover mask, and the fluid kernels, which test the bit
 //   of every cell, apply the solid term where it is set (`solid_term`);
 // - otherwise (the redo): `cover` lists the covered cells, `save` keeps their pre-collision

@@ -215,7 +215,8 @@ struct Redo {
 /// Buffers and pipelines of the coupling (tiny placeholders when the scene has no particles).
 pub struct Coupling {
     particles: wgpu::Buffer,
-    /// Force and torque per particle, apart from the states so that only they are read back.
+    /// Force and torque per particle, apart from the states so that only they are read back; after
+    /// them `reduce`'s partial loads (REDUCE_SLICES per particle).
     loads: wgpu::Buffer,
     pairs: wgpu::Buffer,
     /// Per cell the count of its particles, then the cover mask (one bit per cell, 32 to a word).
