@@ -35,13 +35,7 @@ fn a_granular_scene_runs_alone_and_writes_csv_energy_and_vtk() {
     let dir = temp_dir("dem-run");
     let scene = write_scene(&dir, POUR);
     let out = dir.join("out");
-    let run = Command::new(bin("dem-client"))
-        .arg("run")
-        .arg(&scene)
-        .arg("--out")
-        .arg(&out)
-        .output()
-        .unwrap();
+    let run = dem_run(&scene, &out);
     let stderr = String::from_utf8_lossy(&run.stderr);
     assert!(run.status.success(), "{stderr}");
     assert!(stderr.contains("particle-steps/s"), "{stderr}");

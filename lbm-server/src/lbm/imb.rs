@@ -405,10 +405,7 @@ impl Lattice {
         let mut times = Vec::new();
         for _ in 0..repeats.max(1) {
             let start = std::time::Instant::now();
-            let chunks = chunk_sizes(particles);
-            self.refuse_unfit(particles, &chunks)?;
-            self.reserve(particles.len() as u64, chunks.iter().map(|c| c.pairs).sum())?;
-            self.upload_particles(particles, &chunks)?;
+            self.stage_particles(particles)?;
             let upload = start.elapsed().as_secs_f64();
             let start = std::time::Instant::now();
             convert_loads(&zeros, &mut loads, &|_, l| l)?;
@@ -433,11 +430,7 @@ impl Lattice {
         read: &mut dyn FnMut(&[GpuLoad]) -> Result<(), String>,
     ) -> Result<(), String> {
         let n = particles.count();
-        let chunks = chunk_sizes(particles);
-        self.refuse_unfit(particles, &chunks)?;
-        let pairs: u64 = chunks.iter().map(|c| c.pairs).sum();
-        self.reserve(n as u64, pairs)?;
-        self.upload_particles(particles, &chunks)?;
+        let pairs = self.stage_particles(particles)?;
         let coupling = self.imb.as_ref().expect("coupling");
         let passes = coupling
             .pipelines
@@ -522,6 +515,17 @@ impl Lattice {
         };
         coupling.readback.unmap();
         read_out
+    }
+
+    /// The host's part before the device's: the particles sized, checked and written into staging
+    /// memory (the buffers grown to hold them); their pairs.
+    fn stage_particles<P: Particles + ?Sized>(&mut self, particles: &P) -> Result<u64, String> {
+        let chunks = chunk_sizes(particles);
+        self.refuse_unfit(particles, &chunks)?;
+        let pairs: u64 = chunks.iter().map(|c| c.pairs).sum();
+        self.reserve(particles.count() as u64, pairs)?;
+        self.upload_particles(particles, &chunks)?;
+        Ok(pairs)
     }
 
     /// Writes the particles' GPU records (centres wrapped into the lattice, pair ranges from
