@@ -276,6 +276,7 @@ fn the_default_scene_is_a_coupled_run() {
     let dem = s["peer"]["physics"].to_string();
     assert!(dem.contains("lubrication") && dem.contains("gravity"), "{dem}");
     assert!(err.contains("lubrication below"), "{err}");
+    assert_time_split(&s, &err, 60);
     let text = std::fs::read_to_string(out.join("particles.csv")).unwrap();
     let first: Vec<Vec<f64>> = text
         .lines()
@@ -298,6 +299,44 @@ fn the_default_scene_is_a_coupled_run() {
         -vz[3] > 0.03 && -vz[3] < 0.055,
         "first bead at {} m/s: expected about 0.047 m/s",
         -vz[3]
+    );
+}
+
+/// summary.json's `time_s` accounts for the wall time of a coupled run of `steps` steps: every part
+/// measured (the fluid's step and the wait for the DEM take time every step), the parts adding up
+/// to the wall time, `fluid_mlups` the lattice's cells x steps over the fluid part, and the run's
+/// last line giving the split.
+fn assert_time_split(s: &serde_json::Value, err: &str, steps: u64) {
+    let t = &s["time_s"];
+    let part = |name: &str| {
+        t[name]
+            .as_f64()
+            .unwrap_or_else(|| panic!("time_s.{name} missing: {s}"))
+    };
+    let parts = ["waiting_for_dem", "fluid", "exchange", "output", "other"];
+    let sum: f64 = parts.iter().map(|p| part(p)).sum();
+    let wall = s["wall_time_s"].as_f64().unwrap();
+    assert!(parts.iter().all(|p| part(p) >= 0.0), "{t}");
+    assert!(part("fluid") > 0.0 && part("waiting_for_dem") > 0.0, "{t}");
+    assert!(
+        (sum - wall).abs() < 1e-6 * wall.max(1.0),
+        "parts {sum} s, wall {wall} s: {t}"
+    );
+    let cells: u64 = s["lattice"]["cells"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|n| n.as_u64().unwrap())
+        .product();
+    let mlups = s["fluid_mlups"].as_f64().unwrap();
+    let expected = (cells * steps) as f64 / part("fluid") / 1e6;
+    assert!(
+        (mlups - expected).abs() < 1e-9 * expected,
+        "fluid_mlups {mlups}, expected {expected}"
+    );
+    assert!(
+        err.contains("waiting for the DEM") && err.contains("MLUPS"),
+        "{err}"
     );
 }
 

@@ -69,6 +69,11 @@ pub struct Summary {
     pub last_completed_step: Option<u64>,
     pub particles_initial: u64,
     pub wall_time_s: f64,
+    /// Where the wall time went.
+    pub time_s: TimeSplit,
+    /// Lattice cell updates per second of the fluid's own step, in millions (cells x steps / the
+    /// `fluid` part of `time_s`): the coupled fluid's speed inside the whole program.
+    pub fluid_mlups: f64,
     pub steps_per_second: f64,
     pub particle_steps_per_second: f64,
     pub fluid_physics: Vec<&'static str>,
@@ -78,6 +83,39 @@ pub struct Summary {
     /// "completed", "interrupted", "stopped by the DEM client", or "error: ..."
     pub exit_reason: String,
     pub exit_code: u8,
+}
+
+/// Where a coupled run's wall time went, in seconds (summary.json `time_s`). The lockstep runs the
+/// two processes in turn, so these add up to the wall time less the start and the end (`other`).
+#[derive(Debug, Clone, Copy, Default, Serialize)]
+pub struct TimeSplit {
+    /// Waiting for the DEM's states of each step: the DEM's own step (its sub-steps, contacts and
+    /// output) and the states crossing over.
+    pub waiting_for_dem: f64,
+    /// The fluid's step with the particles: the host's passes over them, the GPU's kernels, the
+    /// loads read back, the health checks.
+    pub fluid: f64,
+    /// The states read, converted and checked, and the replies converted and sent.
+    pub exchange: f64,
+    /// particles.csv.
+    pub output: f64,
+    /// The rest of the wall time: the loop's start and end, the DEM process's exit.
+    pub other: f64,
+}
+
+impl TimeSplit {
+    /// The split line of a run's last message: each part's share of `wall` seconds.
+    pub fn describe(&self, wall: f64) -> String {
+        let share = |t: f64| 100.0 * t / wall.max(1e-9);
+        format!(
+            "fluid {:.0}%, waiting for the DEM {:.0}%, exchange {:.0}%, output {:.0}%, other {:.0}%",
+            share(self.fluid),
+            share(self.waiting_for_dem),
+            share(self.exchange),
+            share(self.output),
+            share(self.other)
+        )
+    }
 }
 
 /// The lattice of a coupled run, as summary.json reports it.

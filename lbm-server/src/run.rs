@@ -2,7 +2,7 @@
 
 use crate::coupled::FluidSide;
 use crate::launch;
-use crate::output::{LatticeSummary, ParticleCsv, PeerInfo, Progress, Summary};
+use crate::output::{LatticeSummary, ParticleCsv, PeerInfo, Progress, Summary, TimeSplit};
 use protocol::transport::{new_run_name, LinkOptions};
 use protocol::{
     FluidLink, Hello, LinkError, ParticleReply, ParticleState, Physics, StepFlags, StepHeader, Welcome,
@@ -167,6 +167,7 @@ struct Session {
     last_completed: Option<u64>,
     particle_steps: u64,
     started: Instant,
+    times: TimeSplit,
 }
 
 impl Session {
@@ -216,6 +217,7 @@ impl Session {
             last_completed: None,
             particle_steps: 0,
             started: Instant::now(),
+            times: TimeSplit::default(),
         };
         let result = session.connect(mode).and_then(|()| session.step_loop());
         session.finish(result)
@@ -279,19 +281,22 @@ impl Session {
         Ok(())
     }
 
-    /// The lockstep loop: states(n) in, forces(n) out.
+    /// The lockstep loop: states(n) in, forces(n) out, each part timed (`TimeSplit`).
     fn step_loop(&mut self) -> Result<Ending, String> {
         let units = self.hello.expect("connected").units;
         let mut progress = Progress::new(self.p.steps);
         let (mut si, mut replies): (Vec<ParticleState>, Vec<ParticleReply>) = (Vec::new(), Vec::new());
         self.started = Instant::now();
+        let mut clock = Clock::new();
         for step in 0..self.p.steps {
             let received = self.link.receive_states(step).map_err(|e| self.describe(e))?;
+            self.times.waiting_for_dem += clock.lap();
             let header = received.header();
             si.clear();
             si.extend(received.particles().iter().map(|s| units.state_to_si(s)));
             drop(received);
             let bad = check_states(&si, step, &self.p.scene.domain);
+            self.times.exchange += clock.lap();
             replies.clear();
             self.fluid
                 .step(&si, &mut replies)
@@ -300,6 +305,7 @@ impl Session {
             if last {
                 self.fluid.check_last_step().map_err(|e| self.describe_fluid(e))?;
             }
+            self.times.fluid += clock.lap();
             let stop =
                 header.has(StepFlags::STOP) || self.interrupted.load(Ordering::SeqCst) || bad.is_some();
             let flags = if last { StepFlags::FINAL } else { 0 } | if stop { StepFlags::STOP } else { 0 };
@@ -309,6 +315,7 @@ impl Session {
                 .map_err(|e| self.describe(e))?;
             self.last_completed = Some(step);
             self.particle_steps += si.len() as u64;
+            self.times.exchange += clock.lap();
             if step % self.p.scene.output.interval == 0 || last || stop {
                 let time = header.time * units.time_s;
                 self.csv
@@ -316,6 +323,7 @@ impl Session {
                     .map_err(|e| format!("particles.csv: {e}"))?;
             }
             progress.update(step + 1);
+            self.times.output += clock.lap();
             if let Some(why) = bad {
                 return Err(why);
             }
@@ -378,10 +386,13 @@ impl Session {
         }
         if code == 0 {
             protocol::say!(
-                "lbm-server: {} steps in {:.2} s ({:.0} steps/s); output in {}",
+                "lbm-server: {} steps in {:.2} s ({:.0} steps/s; {}; the fluid's step at {:.1} \
+                 MLUPS); output in {}",
                 summary.steps_completed,
                 summary.wall_time_s,
                 summary.steps_per_second,
+                summary.time_s.describe(summary.wall_time_s),
+                summary.fluid_mlups,
                 self.p.out.display()
             );
         }
@@ -391,6 +402,9 @@ impl Session {
     fn summary(&self, exit_reason: String, exit_code: u8) -> Summary {
         let wall = self.started.elapsed().as_secs_f64();
         let steps_completed = self.last_completed.map_or(0, |s| s + 1);
+        let t = self.times;
+        let other = wall - (t.waiting_for_dem + t.fluid + t.exchange + t.output);
+        let cells: usize = self.fluid.units().n.iter().product();
         Summary {
             software: crate::output::software(),
             written_unix_s: crate::output::unix_seconds(),
@@ -402,6 +416,11 @@ impl Session {
             last_completed_step: self.last_completed,
             particles_initial: self.hello.map_or(0, |h| h.initial_count),
             wall_time_s: wall,
+            time_s: TimeSplit {
+                other: other.max(0.0),
+                ..t
+            },
+            fluid_mlups: cells as f64 * steps_completed as f64 / t.fluid.max(1e-9) / 1e6,
             steps_per_second: steps_completed as f64 / wall.max(1e-9),
             particle_steps_per_second: self.particle_steps as f64 / wall.max(1e-9),
             fluid_physics: Physics::names(self.fluid.physics()),
@@ -410,6 +429,22 @@ impl Session {
             exit_reason,
             exit_code,
         }
+    }
+}
+
+/// Laps of the lockstep loop: each call returns the seconds since the last.
+struct Clock(Instant);
+
+impl Clock {
+    fn new() -> Self {
+        Clock(Instant::now())
+    }
+
+    fn lap(&mut self) -> f64 {
+        let now = Instant::now();
+        let lap = now.duration_since(self.0).as_secs_f64();
+        self.0 = now;
+        lap
     }
 }
 
