@@ -104,6 +104,8 @@ pub fn main(args: ConnectArgs) -> ExitCode {
         density: scene.particles.density,
         next_id: scene.particle_count(),
         covered_mass_rate: 0.0,
+        dem_steps: 0,
+        free_steps: 0,
     };
     let mut hello = Hello::new(
         Units::SI,
@@ -151,14 +153,23 @@ pub fn main(args: ConnectArgs) -> ExitCode {
     ];
     let (k, dt) = substeps(welcome.dt, limits.into_iter().fold(f64::INFINITY, f64::min));
     particles.world.dt = dt;
+    let sub = Substeps {
+        contact: k,
+        free_flight: scene.coupling.free_flight && scene.lattice.is_some(),
+    };
     particles.world.gravity = V3::from(welcome.gravity);
     protocol::say!(
         "dem-client: DEM step {dt:.3e} s = fluid step / {k} (shortest contact time {:.3e} s, step limits: \
-         contacts {:.3e} s, sub-step drag {:.3e} s, squeeze films {:.3e} s), {} walls{}",
+         contacts {:.3e} s, sub-step drag {:.3e} s, squeeze films {:.3e} s){}, {} walls{}",
         setup.contact_time,
         limits[0],
         limits[1],
         limits[2],
+        if sub.free_flight {
+            "; a step in free flight in one exact step"
+        } else {
+            ""
+        },
         particles.world.walls.len(),
         match particles.world.lubrication() {
             Some(l) => format!(", lubrication below {:.3e} m", l.cutoff),
@@ -169,16 +180,18 @@ pub fn main(args: ConnectArgs) -> ExitCode {
         &link,
         &welcome,
         &mut particles,
-        k,
+        sub,
         &interrupted,
         faults,
         &mut last,
     ) {
         Ok(steps) => {
             protocol::say!(
-                "dem-client: finished after {steps} steps ({} DEM steps, {} neighbour-list builds)",
-                steps * k,
-                particles.world.builds
+                "dem-client: finished after {steps} steps ({} DEM steps, {} neighbour-list builds, {} steps \
+                 in free flight)",
+                particles.dem_steps,
+                particles.world.builds,
+                particles.free_steps
             );
             ExitCode::SUCCESS
         }
@@ -195,7 +208,7 @@ fn step_loop(
     link: &DemLink,
     welcome: &Welcome,
     particles: &mut Particles,
-    substeps: u64,
+    substeps: Substeps,
     interrupted: &AtomicBool,
     faults: Faults,
     last: &mut Option<u64>,
@@ -270,6 +283,15 @@ fn substep_drag(covered_mass_rate: f64, r: f64) -> (f64, f64) {
     (drag, 0.4 * drag * r * r)
 }
 
+/// How a fluid step is advanced: in `contact` DEM sub-steps, or, with `free_flight`
+/// (`coupling.free_flight`) when nothing can touch within it (`World::free_flight`), in one exact
+/// step of the free motion (`World::fly`).
+#[derive(Debug, Clone, Copy)]
+struct Substeps {
+    contact: u64,
+    free_flight: bool,
+}
+
 /// The DEM side's particles in a coupled run.
 struct Particles {
     world: World,
@@ -278,6 +300,9 @@ struct Particles {
     /// Fluid density / fluid step [kg/m^3/s] for the drag within a fluid step (0: the force is
     /// held constant).
     covered_mass_rate: f64,
+    /// DEM steps taken, and fluid steps taken in free flight.
+    dem_steps: u64,
+    free_steps: u64,
 }
 
 impl Particles {
@@ -294,8 +319,10 @@ impl Particles {
 
     /// Takes the fluid's force and torque (same order as the states), held over the fluid step
     /// (following the velocity change since the states were sent at the immersed boundary's own
-    /// rate, when `coupling.substep_drag` is on), and advances `k` DEM steps: dt_fluid = k dt_dem.
-    fn advance(&mut self, replies: &[ParticleReply], k: u64, dt: f64) {
+    /// rate, when `coupling.substep_drag` is on), and advances the fluid step `dt`: in one exact
+    /// step when nothing can touch within it and `substeps.free_flight` allows it, else in
+    /// `substeps.contact` DEM steps.
+    fn advance(&mut self, replies: &[ParticleReply], substeps: Substeps, dt: f64) {
         let g = self.world.gravity;
         for (b, r) in self.world.bodies.iter_mut().zip(replies) {
             let (force, torque) = (V3::from(r.force), V3::from(r.torque));
@@ -312,7 +339,15 @@ impl Particles {
             b.contact_impulse = V3::zeros();
             b.contact_angular_impulse = V3::zeros();
         }
-        self.world.advance(k);
+        if substeps.free_flight && self.world.free_flight(dt) {
+            self.world.fly(dt);
+            self.free_steps += 1;
+            self.dem_steps += 1;
+            return;
+        }
+        self.world.dt = dt / substeps.contact as f64;
+        self.world.advance(substeps.contact);
+        self.dem_steps += substeps.contact;
     }
 
     /// The longest DEM step at which the drag within a fluid step stays accurate: a tenth of the

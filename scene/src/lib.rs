@@ -141,6 +141,12 @@ pub struct Coupling {
     /// (docs/imb.md; default on; off: held constant).
     #[serde(default = "default_substep_drag")]
     pub substep_drag: bool,
+    /// With a `[lattice]`: a fluid step in which no sphere can touch another or a wall, nor come
+    /// within the squeeze films' cut-off, takes the fewest DEM sub-steps the drag within the step
+    /// allows instead of the contacts' (docs/dem.md, "Free flight"; default on; off: the contacts'
+    /// step throughout).
+    #[serde(default = "default_free_flight")]
+    pub free_flight: bool,
     /// With a `[lattice]`: where the covered cells get their solid term (docs/imb.md, "Speed"):
     /// "fused" in the fluid kernels (each cell tests one bit; suits a GPU, and dense beds),
     /// "redo" saved and redone after them (the fluid kernels stay branch-free; suits a CPU driver
@@ -154,6 +160,10 @@ fn default_lubrication() -> bool {
 }
 
 fn default_substep_drag() -> bool {
+    true
+}
+
+fn default_free_flight() -> bool {
     true
 }
 
@@ -178,6 +188,7 @@ impl Default for Coupling {
             weighting: default_weighting(),
             lubrication: default_lubrication(),
             substep_drag: default_substep_drag(),
+            free_flight: default_free_flight(),
             covered_cells: default_covered_cells(),
         }
     }

@@ -57,6 +57,9 @@ impl LawRef for LiggghtsHertz {
 const CHUNK: usize = 256;
 /// Verlet pairs per parallel task.
 const PAIR_CHUNK: usize = 1024;
+/// Safety factor on a sphere's travel bound in `World::free_flight` (the bound is exact for the
+/// motion it assumes; the margin covers the step's discretisation).
+const FREE_FLIGHT_MARGIN: f64 = 1.5;
 
 /// One sphere.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -125,6 +128,43 @@ impl Body {
         (half_dt * (f / self.m + g), half_dt * t / self.inertia)
     }
 
+    /// A bound on |dv/dt| over a held fluid step in which the sphere touches nothing: with the
+    /// external force F_ext + t F_ext_rate - drag v, v(t) = v_0 + a_r t + u(t), a_r = F_ext_rate /
+    /// drag the reference's acceleration and u' = (a_0 - a_r) exp(-drag t / m), a_0 the
+    /// acceleration at t = 0; so |dv/dt| <= |a_r| + |a_0 - a_r| (|a_0| without drag).
+    fn acceleration_bound(&self, g: V3) -> f64 {
+        let reference = if self.drag > 0.0 {
+            self.f_ext_rate / self.drag
+        } else {
+            V3::zeros()
+        };
+        let start = (self.f_ext - self.drag * self.v) / self.m + g;
+        reference.norm() + (start - reference).norm()
+    }
+
+    /// Moves the sphere over `span` touching nothing, exactly: with a = (F_ext + s F_ext_rate -
+    /// drag v) / m + g, v(s) = v_0 + a_r s + (a_0 - a_r) (1 - exp(-lambda s)) / lambda and x(s) =
+    /// x_0 + v_0 s + a_r s^2 / 2 + (a_0 - a_r) (s / lambda - (1 - exp(-lambda s)) / lambda^2),
+    /// lambda = drag / m, a_r = F_ext_rate / drag (see `acceleration_bound`); the same for the spin
+    /// with spin_drag / I (a sphere's orientation is not tracked). Then the external loads are
+    /// where k sub-steps would have left them.
+    fn fly(&mut self, span: f64, g: V3) {
+        let (v0, w0) = (self.v, self.w);
+        let (a_r, a_0) = (
+            rate_over(self.f_ext_rate, self.drag),
+            (self.f_ext - self.drag * v0) / self.m + g,
+        );
+        let (phi1, phi2) = relaxation_integrals(self.drag / self.m, span);
+        self.v = v0 + a_r * span + (a_0 - a_r) * phi1;
+        self.x += v0 * span + a_r * (0.5 * span * span) + (a_0 - a_r) * phi2;
+        let alpha_r = rate_over(self.t_ext_rate, self.spin_drag);
+        let alpha_0 = (self.t_ext - self.spin_drag * w0) / self.inertia;
+        let (psi1, _) = relaxation_integrals(self.spin_drag / self.inertia, span);
+        self.w = w0 + alpha_r * span + (alpha_0 - alpha_r) * psi1;
+        self.f_ext += span * self.f_ext_rate;
+        self.t_ext += span * self.t_ext_rate;
+    }
+
     /// v += dt/2 a, w += dt/2 alpha.
     fn kick(&mut self, half_dt: f64, g: V3) {
         let (dv, dw) = self.half_kick(half_dt, g);
@@ -135,6 +175,30 @@ impl Body {
     pub fn kinetic_energy(&self) -> f64 {
         0.5 * self.m * self.v.norm_squared() + 0.5 * self.inertia * self.w.norm_squared()
     }
+}
+
+/// The reference's acceleration rate / drag (0 without drag).
+fn rate_over(rate: V3, drag: f64) -> V3 {
+    if drag > 0.0 {
+        rate / drag
+    } else {
+        V3::zeros()
+    }
+}
+
+/// (int_0^s exp(-lambda t) dt, int_0^s int_0^t exp(-lambda u) du dt) = ((1 - e) / lambda, (lambda s -
+/// (1 - e)) / lambda^2), e = exp(-lambda s); their series where lambda s is small (s and s^2 / 2
+/// without drag).
+fn relaxation_integrals(lambda: f64, s: f64) -> (f64, f64) {
+    let x = lambda * s;
+    if x < 1e-4 {
+        return (
+            s * (1.0 - 0.5 * x + x * x / 6.0),
+            s * s * (0.5 - x / 6.0 + x * x / 24.0),
+        );
+    }
+    let one_minus_e = -(-x).exp_m1();
+    (one_minus_e / lambda, (x - one_minus_e) / (lambda * lambda))
 }
 
 /// A fixed wall.
@@ -334,6 +398,96 @@ impl World {
     /// How much further than contact the neighbour lists must reach: the film cut-off.
     fn reach(&self) -> f64 {
         self.lubrication.map_or(0.0, |l| l.cutoff)
+    }
+
+    /// Can no sphere touch another sphere or a wall, nor come within the squeeze films' cut-off,
+    /// within the next `span` seconds, whatever the step? Then no contact or film needs short
+    /// steps over the span (the coupled DEM's free flight, docs/dem.md). Each sphere's travel over
+    /// the span is taken as `FREE_FLIGHT_MARGIN` span (|v| + span a_max) (a_max:
+    /// `Body::acceleration_bound`, valid while nothing touches: the premise). The neighbour lists
+    /// must hold every pair and wall the spheres can reach: rebuilt first when a sphere's travel
+    /// since the last build plus over the span could exceed skin / 2; no free flight when the
+    /// travel over the span alone could.
+    pub fn free_flight(&mut self, span: f64) -> bool {
+        if self.contacts > 0 {
+            return false;
+        }
+        let g = self.gravity;
+        let travel: Vec<f64> = self
+            .bodies
+            .par_iter()
+            .with_min_len(CHUNK)
+            .map(|b| FREE_FLIGHT_MARGIN * span * (b.v.norm() + span * b.acceleration_bound(g)))
+            .collect();
+        let longest = travel.iter().copied().fold(0.0, f64::max);
+        let half_skin = 0.5 * self.skin;
+        let lists_hold = longest.is_finite() && longest < half_skin;
+        if !lists_hold {
+            return false;
+        }
+        if self.needs_rebuild() || self.drift_since_build() + longest >= half_skin {
+            self.rebuild();
+        }
+        self.pairs_clear(&travel) && self.walls_clear(&travel)
+    }
+
+    /// Advances `span` seconds in one exact step of every sphere's free motion (gravity and its
+    /// external load with their drag: `Body::fly`). Only after `free_flight(span)` said that
+    /// nothing touches nor comes within the films' reach over the span: the contact and film
+    /// forces stay zero.
+    pub fn fly(&mut self, span: f64) {
+        let g = self.gravity;
+        self.bodies
+            .par_iter_mut()
+            .with_min_len(CHUNK)
+            .for_each(|b| b.fly(span, g));
+        self.time += span;
+        if self.drift_since_build() > 0.5 * self.skin {
+            self.stale = true;
+        }
+        self.wrap_into_domain();
+    }
+
+    /// The largest distance a sphere moved since the last neighbour-list build.
+    fn drift_since_build(&self) -> f64 {
+        self.bodies
+            .par_iter()
+            .with_min_len(CHUNK)
+            .zip(&self.x_at_build)
+            .map(|(b, x0)| (b.x - x0).norm_squared())
+            .reduce(|| 0.0, f64::max)
+            .sqrt()
+    }
+
+    /// Every listed pair's gap exceeds the films' reach by more than the two spheres' travel.
+    fn pairs_clear(&self, travel: &[f64]) -> bool {
+        let (bodies, reach) = (&self.bodies, self.reach());
+        self.slots
+            .par_iter()
+            .with_min_len(PAIR_CHUNK)
+            .zip(&self.pair_const)
+            .all(|(s, p)| {
+                let (i, j) = (s.i as usize, s.j as usize);
+                let gap = (bodies[i].x - bodies[j].x - p.shift).norm() - p.r_sum;
+                gap - travel[i] - travel[j] > reach
+            })
+    }
+
+    /// Every sphere's gap to each wall it lists exceeds the films' reach by more than its travel.
+    fn walls_clear(&self, travel: &[f64]) -> bool {
+        let reach = self.reach();
+        self.bodies
+            .par_iter()
+            .with_min_len(CHUNK)
+            .enumerate()
+            .all(|(k, b)| {
+                let listed = &self.near[self.near_start[k] as usize..self.near_start[k + 1] as usize];
+                listed.iter().all(|&l| {
+                    self.walls[l as usize]
+                        .separation(b.x, b.r)
+                        .is_some_and(|(_, gap)| gap - travel[k] > reach)
+                })
+            })
     }
 
     /// Contacts (sphere-sphere and sphere-wall) at the last force evaluation.
