@@ -25,6 +25,16 @@ mkdir -p .gpu/bin .gpu/scenes
 cp target/release/lbm-server target/release/dem-client .gpu/bin/
 strip .gpu/bin/*
 cp validation/scenes/default.toml .gpu/
+# The whole program at the seed's 32^3 particles (a copy of 4^3 beads in a 40 x 40 x 80 mm box for
+# --small), and the same with the DEM sub-stepped throughout (free flight off).
+if $small; then
+    sed 's/max = \[0.256, 0.256, 0.512\]/max = [0.040, 0.040, 0.080]/; s/count = \[32, 32, 32\]/count = [4, 4, 4]/;
+         s/origin = \[0.0071, 0.0071, 0.128\]/origin = [0.0071, 0.0071, 0.024]/' \
+        validation/scenes/suspension.toml > .gpu/suspension.toml
+else
+    cp validation/scenes/suspension.toml .gpu/
+fi
+sed 's/^free_flight = true/free_flight = false/' .gpu/suspension.toml > .gpu/suspension_substeps.toml
 # One line per scene, in the order run.sh runs them (its priority): name, cells, tau, steps.
 scenes() { python3 validation/imb/ten_cate.py scenes .gpu/scenes "$@" >> .gpu/plan.txt; }
 if $small; then

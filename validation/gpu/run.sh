@@ -8,7 +8,8 @@
 # Writes under $OUT (default out/gpu): batch.log, system.txt, bench_<op>.txt (LBM-only, 256^3, with
 # the copy bandwidth and the naive kernel), coupled_trt.txt (256 x 256 x 512, 1 to 32^3 particles,
 # ratio to LBM-only, time per pass, the covered cells fused and redone), coupled_dense.txt (64^3
-# particles, a dense bed), default/ (the default scene), tencate/<run>/ (import with
+# particles, a dense bed), default/ (the default scene), suspension/ and suspension_substeps/ (32^3
+# beads settling, the whole program, free flight on and off: summary.json), tencate/<run>/ (import with
 # python3 validation/imb/ten_cate.py import DIR). The steps run in order of priority; a step that
 # would start with less time left than it needs is skipped and named in batch.log.
 set -u
@@ -73,6 +74,12 @@ step coupled_dense 60 150 $bin/lbm-server bench --grid $coupled --operator trt -
 # The default scene, the whole coupled program (DEM process and lockstep included).
 step default/log 30 60 $bin/lbm-server run .gpu/default.toml --out "$OUT/default"
 rm -rf "$OUT/default/fields"
+# The whole program at 32^3 particles (a dilute suspension on the coupled sweep's grid): where the
+# time goes (summary.json time_s), the DEM flying its steps and sub-stepped throughout.
+for s in suspension suspension_substeps; do
+    step $s/log 40 120 $bin/lbm-server run .gpu/$s.toml --out "$OUT/$s"
+    rm -f "$OUT/$s/particles.csv"
+done
 # Ten Cate, in the order of .gpu/plan.txt.
 while read -r name _; do
     [ -f ".gpu/scenes/$name/scene.toml" ] || continue
