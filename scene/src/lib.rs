@@ -450,3 +450,32 @@ pub mod dem;
 pub mod lattice;
 pub mod overlap;
 mod validate;
+
+#[cfg(test)]
+mod shipped_scenes {
+    use super::Scene;
+
+    /// Every scene under validation/scenes loads (parsed, derived and validated as `lbm-server run`
+    /// and `dem-client run` load it); the suspension is the seed's 32^3 beads on the coupled
+    /// sweep's 256 x 256 x 512 grid.
+    #[test]
+    fn every_shipped_scene_is_valid() {
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../validation/scenes");
+        let mut loaded = Vec::new();
+        for entry in std::fs::read_dir(&dir).unwrap() {
+            let path = entry.unwrap().path();
+            if path.extension().is_some_and(|e| e == "toml") {
+                let scene = Scene::load(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+                loaded.push((scene.name.clone(), scene));
+            }
+        }
+        assert!(loaded.len() >= 6, "{} scenes", loaded.len());
+        let (_, suspension) = loaded
+            .iter()
+            .find(|(n, _)| n == "suspension")
+            .expect("suspension.toml");
+        assert_eq!(suspension.particle_count(), 32768);
+        assert_eq!(suspension.lattice_units.as_ref().unwrap().n, [256, 256, 512]);
+        assert!(suspension.coupling.free_flight);
+    }
+}
