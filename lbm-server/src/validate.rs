@@ -269,7 +269,10 @@ fn sphere_drag(gpu: &Arc<Gpu>) -> String {
          box a confined stream: where several W were run, the row \"W -> inf\" is the fit \
          C_d(W) = C_inf + a (d/W)^p through the three widest boxes (p in the steps column), the \
          sphere's drag without confinement at that resolution. Re 100 runs at 12 cells per diameter (tau \
-         0.529): at 8 (tau 0.519) it blew up after the impulsive start.\n\n\
+         0.529): at 8 (tau 0.519) it blows up by step 1400, also with the start smoothed (the sphere \
+         slowed from the stream's speed to rest over half a pass; 2026-12-01), while the same box without \
+         the sphere runs steadily: the wake at tau 0.519 is beyond the TRT lattice's stable range, not \
+         the start.\n\n\
          | Re | d | W | L | u0 | tau | steps | C_d measured | C_d Schiller-Naumann | error |\n\
          |---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
     );
