@@ -166,7 +166,7 @@ pub fn main(args: ConnectArgs) -> ExitCode {
         limits[1],
         limits[2],
         if sub.free_flight {
-            "; a step in free flight in one exact step"
+            "; a fluid step in free flight: one exact step"
         } else {
             ""
         },
