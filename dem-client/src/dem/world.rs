@@ -437,12 +437,25 @@ impl World {
     /// forces stay zero.
     pub fn fly(&mut self, span: f64) {
         let g = self.gravity;
-        self.bodies
-            .par_iter_mut()
-            .with_min_len(CHUNK)
-            .for_each(|b| b.fly(span, g));
+        let moved = if self.x_at_build.len() == self.bodies.len() {
+            self.bodies
+                .par_iter_mut()
+                .with_min_len(CHUNK)
+                .zip(&self.x_at_build)
+                .map(|(b, x0)| {
+                    b.fly(span, g);
+                    (b.x - x0).norm_squared()
+                })
+                .reduce(|| 0.0, f64::max)
+        } else {
+            self.bodies
+                .par_iter_mut()
+                .with_min_len(CHUNK)
+                .for_each(|b| b.fly(span, g));
+            f64::INFINITY
+        };
         self.time += span;
-        if self.drift_since_build() > 0.5 * self.skin {
+        if moved > 0.25 * self.skin * self.skin {
             self.stale = true;
         }
         self.wrap_into_domain();
