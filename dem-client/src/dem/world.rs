@@ -437,27 +437,8 @@ impl World {
     /// forces stay zero.
     pub fn fly(&mut self, span: f64) {
         let g = self.gravity;
-        let moved = if self.x_at_build.len() == self.bodies.len() {
-            self.bodies
-                .par_iter_mut()
-                .with_min_len(CHUNK)
-                .zip(&self.x_at_build)
-                .map(|(b, x0)| {
-                    b.fly(span, g);
-                    (b.x - x0).norm_squared()
-                })
-                .reduce(|| 0.0, f64::max)
-        } else {
-            self.bodies
-                .par_iter_mut()
-                .with_min_len(CHUNK)
-                .for_each(|b| b.fly(span, g));
-            f64::INFINITY
-        };
+        self.move_bodies(|b| b.fly(span, g));
         self.time += span;
-        if moved > 0.25 * self.skin * self.skin {
-            self.stale = true;
-        }
         self.wrap_into_domain();
     }
 
@@ -581,22 +562,27 @@ impl World {
     /// Half kick and drift; marks the neighbour list stale when some sphere moved more than skin / 2.
     fn open_step(&mut self) {
         let (dt, g) = (self.dt, self.gravity);
+        self.move_bodies(|b| {
+            b.kick(0.5 * dt, g);
+            b.x += dt * b.v;
+        });
+    }
+
+    /// Applies `motion` to every sphere in one parallel pass that also finds the largest
+    /// displacement since the last neighbour-list build, and marks the list stale beyond skin / 2.
+    fn move_bodies(&mut self, motion: impl Fn(&mut Body) + Sync + Send) {
         let moved = if self.x_at_build.len() == self.bodies.len() {
             self.bodies
                 .par_iter_mut()
                 .with_min_len(CHUNK)
                 .zip(&self.x_at_build)
                 .map(|(b, x0)| {
-                    b.kick(0.5 * dt, g);
-                    b.x += dt * b.v;
+                    motion(b);
                     (b.x - x0).norm_squared()
                 })
                 .reduce(|| 0.0, f64::max)
         } else {
-            self.bodies.par_iter_mut().with_min_len(CHUNK).for_each(|b| {
-                b.kick(0.5 * dt, g);
-                b.x += dt * b.v;
-            });
+            self.bodies.par_iter_mut().with_min_len(CHUNK).for_each(motion);
             f64::INFINITY
         };
         if moved > 0.25 * self.skin * self.skin {
