@@ -345,7 +345,6 @@ impl Particles {
             self.dem_steps += 1;
             return;
         }
-        self.world.dt = dt / substeps.contact as f64;
         self.world.advance(substeps.contact);
         self.dem_steps += substeps.contact;
     }
