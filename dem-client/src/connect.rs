@@ -106,6 +106,9 @@ pub fn main(args: ConnectArgs) -> ExitCode {
         covered_mass_rate: 0.0,
         dem_steps: 0,
         free_steps: 0,
+        island_steps: 0,
+        flown_sphere_steps: 0,
+        sphere_steps: 0,
     };
     let mut hello = Hello::new(
         Units::SI,
@@ -188,10 +191,12 @@ pub fn main(args: ConnectArgs) -> ExitCode {
         Ok(steps) => {
             protocol::say!(
                 "dem-client: finished after {steps} steps ({} DEM steps, {} neighbour-list builds, {} steps \
-                 in free flight)",
+                 in free flight, {} with an island; {:.1}% of the sphere-steps flown)",
                 particles.dem_steps,
                 particles.world.builds,
-                particles.free_steps
+                particles.free_steps,
+                particles.island_steps,
+                100.0 * particles.flown_sphere_steps as f64 / particles.sphere_steps.max(1) as f64
             );
             ExitCode::SUCCESS
         }
@@ -284,8 +289,8 @@ fn substep_drag(covered_mass_rate: f64, r: f64) -> (f64, f64) {
 }
 
 /// How a fluid step is advanced: in `contact` DEM sub-steps, or, with `free_flight`
-/// (`coupling.free_flight`) when nothing can touch within it (`World::free_flight`), in one exact
-/// step of the free motion (`World::fly`).
+/// (`coupling.free_flight`), the spheres that can touch nothing within it in one exact step of
+/// their free motion and the others in the sub-steps (`World::advance_span`).
 #[derive(Debug, Clone, Copy)]
 struct Substeps {
     contact: u64,
@@ -300,9 +305,13 @@ struct Particles {
     /// Fluid density / fluid step [kg/m^3/s] for the drag within a fluid step (0: the force is
     /// held constant).
     covered_mass_rate: f64,
-    /// DEM steps taken, and fluid steps taken in free flight.
+    /// DEM steps taken, fluid steps taken in free flight (every sphere flown) and with an island
+    /// (some spheres flown, the others sub-stepped), sphere-steps flown of all.
     dem_steps: u64,
     free_steps: u64,
+    island_steps: u64,
+    flown_sphere_steps: u64,
+    sphere_steps: u64,
 }
 
 impl Particles {
@@ -319,9 +328,9 @@ impl Particles {
 
     /// Takes the fluid's force and torque (same order as the states), held over the fluid step
     /// (following the velocity change since the states were sent at the immersed boundary's own
-    /// rate, when `coupling.substep_drag` is on), and advances the fluid step `dt`: in one exact
-    /// step when nothing can touch within it and `substeps.free_flight` allows it, else in
-    /// `substeps.contact` DEM steps.
+    /// rate, when `coupling.substep_drag` is on), and advances the fluid step `dt` in
+    /// `substeps.contact` DEM steps; with `substeps.free_flight`, each sphere that can touch
+    /// nothing within it in one exact step.
     fn advance(&mut self, replies: &[ParticleReply], substeps: Substeps, dt: f64) {
         let g = self.world.gravity;
         for (b, r) in self.world.bodies.iter_mut().zip(replies) {
@@ -339,14 +348,22 @@ impl Particles {
             b.contact_impulse = V3::zeros();
             b.contact_angular_impulse = V3::zeros();
         }
-        if substeps.free_flight && self.world.free_flight(dt) {
-            self.world.fly(dt);
-            self.free_steps += 1;
-            self.dem_steps += 1;
+        if !substeps.free_flight {
+            self.world.advance(substeps.contact);
+            self.dem_steps += substeps.contact;
             return;
         }
-        self.world.advance(substeps.contact);
-        self.dem_steps += substeps.contact;
+        let flown = self.world.advance_span(dt, substeps.contact);
+        let n = self.world.bodies.len();
+        self.sphere_steps += n as u64;
+        self.flown_sphere_steps += flown as u64;
+        if flown == n {
+            self.free_steps += 1;
+            self.dem_steps += 1;
+        } else {
+            self.dem_steps += substeps.contact;
+            self.island_steps += u64::from(flown > 0);
+        }
     }
 
     /// The longest DEM step at which the drag within a fluid step stays accurate: a tenth of the

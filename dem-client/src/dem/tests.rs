@@ -593,13 +593,7 @@ fn a_sphere_sinks_onto_a_wall_through_the_squeeze_film_as_reynolds_law_says() {
     let weight = body.m * g;
     body.v.z = -weight / (k * (1.0 / h0 - 1.0 / FILM_CUTOFF));
     let reference = film_closing_reference(body.m, k, weight, h0, body.v.z);
-    let floor = Wall {
-        shape: Shape::Plane {
-            point: V3::zeros(),
-            normal: V3::z(),
-        },
-        material: 0,
-    };
+    let floor = floor();
     let mut w = film_world(vec![body], vec![floor], V3::new(0.0, 0.0, -g), 1e-5);
     let errors = film_closing_errors(&mut w, &reference, |w| w.bodies[0].x.z - R);
     assert!(
@@ -826,8 +820,7 @@ fn free_flight_moves_a_sphere_as_fine_steps_do() {
     };
     for drag in [true, false] {
         let (mut exact, mut stepped) = (start(drag), start(drag));
-        assert!(exact.free_flight(span), "nothing to touch");
-        exact.fly(span);
+        assert_eq!(exact.advance_span(span, 1), 1, "nothing to touch");
         stepped.advance(100_000);
         let (a, b) = (exact.bodies[0], stepped.bodies[0]);
         let what = format!("drag {drag}");
@@ -863,12 +856,11 @@ fn fluid_steps(w: &mut World, span: f64, k: u64, steps: u64, free: bool, period:
     };
     let (mut flown, mut closest) = (0, f64::INFINITY);
     for _ in 0..steps {
-        if free && w.free_flight(span) {
-            w.fly(span);
+        if !free {
+            w.advance(k);
+        } else if w.advance_span(span, k) == w.bodies.len() {
             flown += 1;
             assert!(gap(w) > FILM_CUTOFF, "flew into the films' reach: gap {}", gap(w));
-        } else {
-            w.advance(k);
         }
         closest = closest.min(gap(w));
     }
@@ -881,13 +873,7 @@ fn fluid_steps(w: &mut World, span: f64, k: u64, steps: u64, free: bool, period:
 /// it: the same closest approach (an overlap for the pairs) and the same speeds after it.
 #[test]
 fn free_flight_stops_before_every_contact_and_film() {
-    let floor = Wall {
-        shape: Shape::Plane {
-            point: V3::zeros(),
-            normal: V3::z(),
-        },
-        material: 0,
-    };
+    let floor = floor();
     let (span, k) = (2e-4, 200);
     let drop = || {
         let b = Body::sphere(
@@ -971,4 +957,188 @@ fn free_flight_stops_before_every_contact_and_film() {
             );
         }
     }
+}
+
+/// The plane z = 0, spheres above it.
+fn floor() -> Wall {
+    Wall {
+        shape: Shape::Plane {
+            point: V3::zeros(),
+            normal: V3::z(),
+        },
+        material: 0,
+    }
+}
+
+/// A sphere of the test sets of free flight: radius `R`, density `RHO`, not spinning.
+fn ball(id: u64, x: [f64; 3], v: [f64; 3]) -> Body {
+    Body::sphere(id, V3::from(x), V3::from(v), V3::zeros(), R, RHO, 0)
+}
+
+/// Three groups in one world: a sphere falling onto the floor through its squeeze film, two
+/// spheres meeting head-on through theirs above it, six spheres falling far from anything. With
+/// free flight the group that can touch something takes the DEM steps while the others fly
+/// (the fluid steps with an island), and every sphere ends as without free flight: the same
+/// closest approach to the floor and between the pair, the same speeds after the impacts.
+#[test]
+fn an_island_takes_the_dem_steps_while_the_other_spheres_fly() {
+    let floor = floor();
+    let (span, k) = (2e-4, 200);
+    let world = || {
+        let mut bodies = vec![
+            ball(0, [0.01, 0.01, 0.006], [0.0, 0.0, -0.3]),
+            ball(1, [0.04 - 2.0 * R - 3e-3, 0.01, 0.03], [0.4, 0.0, 0.0]),
+            ball(2, [0.04 + 2.0 * R + 3e-3, 0.01, 0.03], [-0.4, 0.0, 0.0]),
+        ];
+        bodies.extend((0..6).map(|m| ball(3 + m, [0.07 + 0.01 * m as f64, 0.03, 0.04], [0.0, 0.0, 0.1])));
+        film_world(bodies, vec![floor], V3::new(0.0, 0.0, -9.81), span / k as f64)
+    };
+    let gaps = |w: &World| {
+        let pair = (w.bodies[1].x - w.bodies[2].x).norm() - 2.0 * R;
+        (w.bodies[0].x.z - R, pair)
+    };
+    let (mut free, mut fixed) = (world(), world());
+    let (mut all, mut some) = (0, 0);
+    let (mut closest, mut closest_fixed) = ((f64::INFINITY, f64::INFINITY), (f64::INFINITY, f64::INFINITY));
+    for _ in 0..150 {
+        let flown = free.advance_span(span, k);
+        all += usize::from(flown == free.bodies.len());
+        some += usize::from(flown > 0 && flown < free.bodies.len());
+        fixed.advance(k);
+        let (a, b) = (gaps(&free), gaps(&fixed));
+        closest = (closest.0.min(a.0), closest.1.min(a.1));
+        closest_fixed = (closest_fixed.0.min(b.0), closest_fixed.1.min(b.1));
+    }
+    assert!(
+        all >= 10 && some >= 50,
+        "{all} steps flown, {some} with an island"
+    );
+    // The films stop both approaches short of contact.
+    assert!(
+        [closest_fixed.0, closest_fixed.1]
+            .iter()
+            .all(|g| *g > 0.0 && *g < FILM_CUTOFF),
+        "{closest_fixed:?}"
+    );
+    for (what, a, b) in [
+        ("floor", closest.0, closest_fixed.0),
+        ("pair", closest.1, closest_fixed.1),
+    ] {
+        assert!(
+            (a - b).abs() < 1e-3 * b.abs(),
+            "{what}: closest gap {a} m, without free flight {b} m"
+        );
+    }
+    for (a, b) in free.bodies.iter().zip(&fixed.bodies) {
+        assert!(
+            (a.v - b.v).norm() < 1e-3 * 0.3 && (a.x - b.x).norm() < 1e-6,
+            "sphere {}: v {} x {} against {} {}",
+            a.id,
+            a.v,
+            a.x,
+            b.v,
+            b.x
+        );
+    }
+}
+
+/// A sphere C hits a sphere A at rest, B rests beyond A. Far from B (0.76 mm, more than an
+/// island sphere's reach skin / 4 = 0.75 mm), B flies while C and A take the DEM steps: when C is
+/// slow enough that A moves less than that reach, the island's result stands (C and A exactly as
+/// without free flight); when A is thrown further, into B, the fluid step is taken again with
+/// every sphere sub-stepped (B is hit exactly as without free flight). Nearer (0.55 mm), B is in
+/// the island and is hit there. The four spheres far away fly when an island stands.
+#[test]
+fn an_island_sphere_thrown_beyond_its_reach_makes_every_sphere_take_the_dem_steps() {
+    let (span, k) = (2.4e-3, 2400);
+    let world = |v: f64, gap: f64| {
+        let mut bodies = vec![
+            ball(0, [0.01, 0.01, 0.01], [v, 0.0, 0.0]),
+            ball(1, [0.01 + 2.0 * R, 0.01, 0.01], [0.0; 3]),
+            ball(2, [0.01 + 4.0 * R + gap, 0.01, 0.01], [0.0; 3]),
+        ];
+        bodies.extend((0..4).map(|m| ball(3 + m, [0.03 + 0.01 * m as f64, 0.03, 0.03], [0.0, 0.1, 0.0])));
+        let l = law(
+            NormalLaw::Hertz,
+            TangentialLaw::None,
+            Switches::LIGGGHTS,
+            Linear::default(),
+        );
+        World::new(
+            bodies,
+            vec![],
+            l,
+            &[material(0.9, 0.0)],
+            V3::zeros(),
+            span / k as f64,
+            1.5 * R,
+        )
+    };
+    // (C's speed, gap from A to B, B hit, spheres flown, spheres as without free flight)
+    let cases = [
+        (0.2, 0.76e-3, false, 5, 0..2),
+        (0.3, 0.55e-3, true, 4, 0..3),
+        (0.4, 0.76e-3, true, 0, 0..7),
+    ];
+    for (v, gap, hit, flies, same) in cases {
+        let (mut free, mut fixed) = (world(v, gap), world(v, gap));
+        let flown = free.advance_span(span, k);
+        fixed.advance(k);
+        let moved = (fixed.bodies[1].x - world(v, gap).bodies[1].x).norm();
+        let what = format!("v {v}, gap {gap}: A moved {moved} m");
+        assert_eq!(fixed.bodies[2].v.norm() > 0.0, hit, "{what}");
+        assert_eq!(flown, flies, "{what}");
+        for m in same {
+            assert_eq!(free.bodies[m], fixed.bodies[m], "{what}, sphere {m}");
+        }
+    }
+}
+
+/// Spheres in lasting contact take the DEM steps as an island over many fluid steps while the
+/// others fly: one sliding on the floor, two on the floor pressed together and sliding past each
+/// other (friction with history: the tangential springs of the floor and of the pair carry
+/// over from one fluid step to the next). They end exactly as without free flight.
+#[test]
+fn contact_histories_carry_over_between_the_fluid_steps_of_an_island() {
+    let floor = floor();
+    let (span, k) = (2e-4, 200);
+    let world = || {
+        let mut bodies = vec![
+            ball(0, [0.01, 0.01, R], [0.05, 0.0, 0.0]),
+            ball(1, [0.03, 0.01, R], [0.0, 0.02, 0.0]),
+            ball(2, [0.03 + 2.0 * R - 1e-6, 0.01, R], [0.0, -0.02, 0.0]),
+        ];
+        bodies[1].f_ext = V3::new(1e-3, 0.0, 0.0);
+        bodies[2].f_ext = V3::new(-1e-3, 0.0, 0.0);
+        bodies.extend((0..5).map(|m| ball(3 + m, [0.06 + 0.01 * m as f64, 0.03, 0.05], [0.0; 3])));
+        let l = law(
+            NormalLaw::Hertz,
+            TangentialLaw::History,
+            Switches::LIGGGHTS,
+            Linear::default(),
+        );
+        let g = V3::new(0.0, 0.0, -9.81);
+        World::new(
+            bodies,
+            vec![floor],
+            l,
+            &[material(0.5, 0.5)],
+            g,
+            span / k as f64,
+            0.5 * R,
+        )
+    };
+    let (mut free, mut fixed) = (world(), world());
+    for step in 0..40 {
+        assert_eq!(free.advance_span(span, k), 5, "step {step}");
+        fixed.advance(k);
+    }
+    for m in 0..3 {
+        assert_eq!(free.bodies[m], fixed.bodies[m], "sphere {m}");
+    }
+    assert!(
+        fixed.bodies[1].w.norm() > 1.0,
+        "the pair rolls: {}",
+        fixed.bodies[1].w
+    );
 }

@@ -14,6 +14,8 @@ use super::V3;
 use rayon::prelude::*;
 use std::collections::HashMap;
 
+mod flight;
+
 /// What the force-gathering pass does after the forces.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Finish {
@@ -57,7 +59,7 @@ impl LawRef for LiggghtsHertz {
 const CHUNK: usize = 256;
 /// Verlet pairs per parallel task.
 const PAIR_CHUNK: usize = 1024;
-/// Safety factor on a sphere's travel bound in `World::free_flight` (the bound is exact for the
+/// Safety factor on a sphere's travel bound in free flight (`flight`; the bound is exact for the
 /// motion it assumes; the margin covers the step's discretisation).
 const FREE_FLIGHT_MARGIN: f64 = 1.5;
 
@@ -308,6 +310,8 @@ pub struct World {
     /// Number of neighbour-list builds so far.
     pub builds: u64,
     contacts: usize,
+    /// The largest squared distance a sphere was seen from `x_at_build` (after each drift).
+    peak_drift2: f64,
 }
 
 impl World {
@@ -350,6 +354,7 @@ impl World {
             stale: true,
             builds: 0,
             contacts: 0,
+            peak_drift2: 0.0,
         };
         world.forces(0.0, Finish::Nothing);
         world
@@ -400,90 +405,6 @@ impl World {
         self.lubrication.map_or(0.0, |l| l.cutoff)
     }
 
-    /// Can no sphere touch another sphere or a wall, nor come within the squeeze films' cut-off,
-    /// within the next `span` seconds, whatever the step? Then no contact or film needs short
-    /// steps over the span (the coupled DEM's free flight, docs/dem.md). Each sphere's travel over
-    /// the span is taken as `FREE_FLIGHT_MARGIN` span (|v| + span a_max) (a_max:
-    /// `Body::acceleration_bound`, valid while nothing touches: the premise). The neighbour lists
-    /// must hold every pair and wall the spheres can reach: rebuilt first when a sphere's travel
-    /// since the last build plus over the span could exceed skin / 2; no free flight when the
-    /// travel over the span alone could.
-    pub fn free_flight(&mut self, span: f64) -> bool {
-        if self.contacts > 0 {
-            return false;
-        }
-        let g = self.gravity;
-        let travel: Vec<f64> = self
-            .bodies
-            .par_iter()
-            .with_min_len(CHUNK)
-            .map(|b| FREE_FLIGHT_MARGIN * span * (b.v.norm() + span * b.acceleration_bound(g)))
-            .collect();
-        let longest = travel.iter().copied().fold(0.0, f64::max);
-        let half_skin = 0.5 * self.skin;
-        let lists_hold = longest.is_finite() && longest < half_skin;
-        if !lists_hold {
-            return false;
-        }
-        if self.needs_rebuild() || self.drift_since_build() + longest >= half_skin {
-            self.rebuild();
-        }
-        self.pairs_clear(&travel) && self.walls_clear(&travel)
-    }
-
-    /// Advances `span` seconds in one exact step of every sphere's free motion (gravity and its
-    /// external load with their drag: `Body::fly`). Only after `free_flight(span)` said that
-    /// nothing touches nor comes within the films' reach over the span: the contact and film
-    /// forces stay zero.
-    pub fn fly(&mut self, span: f64) {
-        let g = self.gravity;
-        self.move_bodies(|b| b.fly(span, g));
-        self.time += span;
-        self.wrap_into_domain();
-    }
-
-    /// The largest distance a sphere moved since the last neighbour-list build.
-    fn drift_since_build(&self) -> f64 {
-        self.bodies
-            .par_iter()
-            .with_min_len(CHUNK)
-            .zip(&self.x_at_build)
-            .map(|(b, x0)| (b.x - x0).norm_squared())
-            .reduce(|| 0.0, f64::max)
-            .sqrt()
-    }
-
-    /// Every listed pair's gap exceeds the films' reach by more than the two spheres' travel.
-    fn pairs_clear(&self, travel: &[f64]) -> bool {
-        let (bodies, reach) = (&self.bodies, self.reach());
-        self.slots
-            .par_iter()
-            .with_min_len(PAIR_CHUNK)
-            .zip(&self.pair_const)
-            .all(|(s, p)| {
-                let (i, j) = (s.i as usize, s.j as usize);
-                let gap = (bodies[i].x - bodies[j].x - p.shift).norm() - p.r_sum;
-                gap - travel[i] - travel[j] > reach
-            })
-    }
-
-    /// Every sphere's gap to each wall it lists exceeds the films' reach by more than its travel.
-    fn walls_clear(&self, travel: &[f64]) -> bool {
-        let reach = self.reach();
-        self.bodies
-            .par_iter()
-            .with_min_len(CHUNK)
-            .enumerate()
-            .all(|(k, b)| {
-                let listed = &self.near[self.near_start[k] as usize..self.near_start[k + 1] as usize];
-                listed.iter().all(|&l| {
-                    self.walls[l as usize]
-                        .separation(b.x, b.r)
-                        .is_some_and(|(_, gap)| gap - travel[k] > reach)
-                })
-            })
-    }
-
     /// Contacts (sphere-sphere and sphere-wall) at the last force evaluation.
     pub fn contact_count(&self) -> usize {
         self.contacts
@@ -523,9 +444,7 @@ impl World {
                 let finish = if last { Finish::HalfKick } else { Finish::KickDrift };
                 let moved = self.forces(self.dt, finish);
                 self.time += self.dt;
-                if moved > 0.25 * self.skin * self.skin {
-                    self.stale = true;
-                }
+                self.note_drift(moved);
             }
         });
         self.wrap_into_domain();
@@ -585,6 +504,13 @@ impl World {
             self.bodies.par_iter_mut().with_min_len(CHUNK).for_each(motion);
             f64::INFINITY
         };
+        self.note_drift(moved);
+    }
+
+    /// Records the largest squared displacement since the last build after a drift, and marks
+    /// the neighbour list stale beyond skin / 2.
+    fn note_drift(&mut self, moved: f64) {
+        self.peak_drift2 = self.peak_drift2.max(moved);
         if moved > 0.25 * self.skin * self.skin {
             self.stale = true;
         }
@@ -680,6 +606,7 @@ impl World {
             self.near_start.push(self.near.len() as u32);
         }
         self.x_at_build = x;
+        self.peak_drift2 = 0.0;
         self.stale = false;
         self.builds += 1;
     }

@@ -1,0 +1,333 @@
+//! Free flight (docs/dem.md "Free flight"): in a fluid step a sphere that can touch nothing (no
+//! sphere, no wall, no squeeze film within reach) moves in one exact step of its free motion
+//! (`Body::fly`); the spheres that can touch something, the island, take the DEM's sub-steps among
+//! themselves.
+//!
+//! Each sphere's travel over the step is bounded by `FREE_FLIGHT_MARGIN` span (|v| + span a_max)
+//! (a_max: `Body::acceleration_bound`, valid while it touches nothing). A sphere of the island can
+//! be thrown by its contacts, so it is given a reach, `ISLAND_REACH` skin, and a sphere flies only
+//! when its gap to every island sphere exceeds the films' cut-off by its travel plus that reach;
+//! after the island's sub-steps, if one of its spheres went further, the step is taken again with
+//! every sphere sub-stepped (the island is a copy: nothing to undo).
+
+use super::{Body, World, CHUNK, FREE_FLIGHT_MARGIN, PAIR_CHUNK};
+use rayon::prelude::*;
+
+/// How far a sphere of the island may move within a fluid step in which others fly, as a
+/// fraction of the skin (below half the skin, where the neighbour lists end).
+const ISLAND_REACH: f64 = 0.25;
+/// The largest share of the spheres sub-stepped as an island; above it every sphere is
+/// sub-stepped (copying the island out and back would cost more than flying the rest saves).
+const ISLAND_SHARE: f64 = 0.5;
+/// A sphere outside the island.
+const FLYING: u32 = u32::MAX;
+
+/// a > b, false when a is NaN (a NaN gap is never clear).
+fn exceeds(a: f64, b: f64) -> bool {
+    a > b
+}
+
+/// How a fluid step is advanced.
+enum Plan {
+    /// Every sphere in one exact step.
+    Fly,
+    /// These spheres (ascending) in sub-steps among themselves, the others in one exact step.
+    Island(Vec<u32>),
+    /// Every sphere in sub-steps.
+    Substep,
+}
+
+impl World {
+    /// Advances a fluid step of `span` seconds: the spheres that can touch nothing within it in
+    /// one exact step of their free motion, the others (the island) in `steps` DEM steps among
+    /// themselves, or every sphere in DEM steps when the island holds more than
+    /// `ISLAND_SHARE` of them or one of its spheres went further than its reach. Returns how
+    /// many spheres flew.
+    pub fn advance_span(&mut self, span: f64, steps: u64) -> usize {
+        match self.flight_plan(span) {
+            Plan::Fly => {
+                self.fly(span);
+                self.bodies.len()
+            }
+            Plan::Island(island) if self.advance_island(&island, span, steps) => {
+                self.bodies.len() - island.len()
+            }
+            Plan::Island(_) | Plan::Substep => {
+                self.advance(steps);
+                0
+            }
+        }
+    }
+
+    /// Who flies over the next `span` seconds. The neighbour lists must hold every pair and wall
+    /// a sphere can reach: they are rebuilt first when a sphere's drift since the last build plus
+    /// its travel could exceed skin / 2, and again when an island sphere's drift plus the
+    /// island's reach could; nobody flies when the travel over the span alone could.
+    fn flight_plan(&mut self, span: f64) -> Plan {
+        let g = self.gravity;
+        let travel: Vec<f64> = self
+            .bodies
+            .par_iter()
+            .with_min_len(CHUNK)
+            .map(|b| FREE_FLIGHT_MARGIN * span * (b.v.norm() + span * b.acceleration_bound(g)))
+            .collect();
+        let longest = travel.iter().copied().fold(0.0, f64::max);
+        let half_skin = 0.5 * self.skin;
+        if !(longest.is_finite() && longest < half_skin) {
+            return Plan::Substep;
+        }
+        let all: Vec<u32> = (0..self.bodies.len() as u32).collect();
+        if self.needs_rebuild() || self.farthest(&all, |k| travel[k]) >= half_skin {
+            self.rebuild();
+        }
+        let reach = ISLAND_REACH * self.skin;
+        let mut rebuilt = false;
+        loop {
+            let seeds = self.seeds(&travel);
+            if seeds.is_empty() {
+                return Plan::Fly;
+            }
+            let Some(island) = self.island(seeds, &travel, reach) else {
+                return Plan::Substep;
+            };
+            if rebuilt || self.farthest(&island, |_| reach) < half_skin {
+                return Plan::Island(island);
+            }
+            self.rebuild();
+            rebuilt = true;
+        }
+    }
+
+    /// The largest distance one of `spheres` can be from where it was at the last
+    /// neighbour-list build: its drift since then plus `ahead(k)`. The lists hold every pair and
+    /// wall that can come within reach while it stays below skin / 2 for every sphere.
+    fn farthest(&self, spheres: &[u32], ahead: impl Fn(usize) -> f64 + Sync) -> f64 {
+        spheres
+            .par_iter()
+            .with_min_len(CHUNK)
+            .map(|&k| {
+                let k = k as usize;
+                (self.bodies[k].x - self.x_at_build[k]).norm() + ahead(k)
+            })
+            .reduce(|| 0.0, f64::max)
+    }
+
+    /// The gap between the spheres of slot `s` (negative: overlap).
+    fn slot_gap(&self, s: usize) -> f64 {
+        let (slot, p) = (&self.slots[s], &self.pair_const[s]);
+        let (a, b) = (&self.bodies[slot.i as usize], &self.bodies[slot.j as usize]);
+        (a.x - b.x - p.shift).norm() - p.r_sum
+    }
+
+    /// The spheres that could touch something, or come within the films' cut-off, if every sphere
+    /// flew: both spheres of each listed pair whose gap does not exceed the cut-off by their two
+    /// travels, and each sphere whose gap to a listed wall does not by its travel (with repeats).
+    fn seeds(&self, travel: &[f64]) -> Vec<u32> {
+        let reach = self.reach();
+        let mut seeds: Vec<u32> = (0..self.slots.len())
+            .into_par_iter()
+            .with_min_len(PAIR_CHUNK)
+            .filter(|&s| {
+                let (i, j) = (self.slots[s].i as usize, self.slots[s].j as usize);
+                !exceeds(self.slot_gap(s) - travel[i] - travel[j], reach)
+            })
+            .flat_map_iter(|s| [self.slots[s].i, self.slots[s].j])
+            .collect();
+        let by_walls: Vec<u32> = self
+            .bodies
+            .par_iter()
+            .with_min_len(CHUNK)
+            .enumerate()
+            .filter(|&(k, b)| !self.walls_clear(k, b, travel[k] + reach))
+            .map(|(k, _)| k as u32)
+            .collect();
+        seeds.extend(by_walls);
+        seeds
+    }
+
+    /// Is sphere k's gap to every wall it lists above `margin`?
+    fn walls_clear(&self, k: usize, b: &Body, margin: f64) -> bool {
+        let listed = &self.near[self.near_start[k] as usize..self.near_start[k + 1] as usize];
+        listed.iter().all(|&l| {
+            self.walls[l as usize]
+                .separation(b.x, b.r)
+                .is_some_and(|(_, gap)| gap > margin)
+        })
+    }
+
+    /// The island grown from `seeds`: a listed neighbour of an island sphere joins it unless their
+    /// gap exceeds the films' cut-off by its travel plus the island's `reach`. Ascending; None when
+    /// it would hold more than `ISLAND_SHARE` of the spheres.
+    fn island(&self, seeds: Vec<u32>, travel: &[f64], reach: f64) -> Option<Vec<u32>> {
+        let most = (ISLAND_SHARE * self.bodies.len() as f64) as usize;
+        let cutoff = self.reach();
+        let mut inside = vec![false; self.bodies.len()];
+        let mut island = Vec::new();
+        for k in seeds {
+            if !std::mem::replace(&mut inside[k as usize], true) {
+                island.push(k);
+            }
+        }
+        let mut next = 0;
+        while next < island.len() && island.len() <= most {
+            let a = island[next] as usize;
+            next += 1;
+            let as_i = self.first_i[a]..self.first_i[a + 1];
+            let as_j = &self.as_j[self.as_j_start[a] as usize..self.as_j_start[a + 1] as usize];
+            for s in as_i.chain(as_j.iter().copied()).map(|s| s as usize) {
+                let (i, j) = (self.slots[s].i, self.slots[s].j);
+                let other = if i as usize == a { j } else { i };
+                let o = other as usize;
+                if !inside[o] && !exceeds(self.slot_gap(s) - travel[o] - reach, cutoff) {
+                    inside[o] = true;
+                    island.push(other);
+                }
+            }
+        }
+        if island.len() > most {
+            return None;
+        }
+        island.sort_unstable();
+        Some(island)
+    }
+
+    /// The island's `steps` DEM steps in a world of its own (its spheres, their pairs with each
+    /// other, their walls), then its spheres back and the others flown over `span`; false, with
+    /// nothing changed, when an island sphere went further than `ISLAND_REACH` skin from where it
+    /// started (or the island's lists ran out).
+    fn advance_island(&mut self, island: &[u32], span: f64, steps: u64) -> bool {
+        let mut local = vec![FLYING; self.bodies.len()];
+        for (l, &k) in island.iter().enumerate() {
+            local[k as usize] = l as u32;
+        }
+        let (mut part, slots) = self.split_off(island, &local);
+        let builds = part.builds;
+        part.advance(steps);
+        let reach = ISLAND_REACH * self.skin;
+        if part.builds != builds || exceeds(part.peak_drift2, reach * reach) || part.peak_drift2.is_nan() {
+            return false;
+        }
+        self.merge(&part, island, &local, &slots, span);
+        true
+    }
+
+    /// A world of the island's spheres (`local`: each sphere's index in it, or `FLYING`) with
+    /// their pairs among themselves (state and history), their walls, and lists measured from
+    /// where they are now; and the slots of those pairs here.
+    fn split_off(&self, island: &[u32], local: &[u32]) -> (World, Vec<u32>) {
+        let slots: Vec<u32> = island
+            .iter()
+            .flat_map(|&k| self.first_i[k as usize]..self.first_i[k as usize + 1])
+            .filter(|&s| local[self.slots[s as usize].j as usize] != FLYING)
+            .collect();
+        let w = self.walls.len().max(1);
+        let mut near_start = vec![0];
+        let mut near = Vec::new();
+        for k in island.iter().map(|&k| k as usize) {
+            near.extend_from_slice(&self.near[self.near_start[k] as usize..self.near_start[k + 1] as usize]);
+            near_start.push(near.len() as u32);
+        }
+        let bodies: Vec<Body> = island.iter().map(|&k| self.bodies[k as usize]).collect();
+        let pick = |s: &u32| *s as usize;
+        let mut part = World {
+            x_at_build: bodies.iter().map(|b| b.x).collect(),
+            bodies,
+            walls: self.walls.clone(),
+            law: self.law,
+            pair_materials: self.pair_materials.clone(),
+            n_materials: self.n_materials,
+            gravity: self.gravity,
+            dt: self.dt,
+            skin: self.skin,
+            time: self.time,
+            lubrication: self.lubrication,
+            periodic: self.periodic,
+            films: if self.films.is_empty() {
+                Vec::new()
+            } else {
+                slots.iter().map(|s| self.films[pick(s)]).collect()
+            },
+            slots: slots
+                .iter()
+                .map(|s| {
+                    let slot = self.slots[pick(s)];
+                    super::Slot {
+                        i: local[slot.i as usize],
+                        j: local[slot.j as usize],
+                        ..slot
+                    }
+                })
+                .collect(),
+            pair_const: slots.iter().map(|s| self.pair_const[pick(s)]).collect(),
+            out: slots.iter().map(|s| self.out[pick(s)]).collect(),
+            first_i: Vec::new(),
+            as_j_start: Vec::new(),
+            as_j: Vec::new(),
+            wall_history: island
+                .iter()
+                .flat_map(|&k| {
+                    self.wall_history[k as usize * w..(k as usize + 1) * w]
+                        .iter()
+                        .copied()
+                })
+                .collect(),
+            near_start,
+            near,
+            stale: false,
+            builds: self.builds,
+            contacts: self.contacts,
+            peak_drift2: 0.0,
+        };
+        part.build_adjacency();
+        (part, slots)
+    }
+
+    /// Takes the island's spheres, pair and wall histories back, and flies every other sphere
+    /// over `span`.
+    fn merge(&mut self, part: &World, island: &[u32], local: &[u32], slots: &[u32], span: f64) {
+        let g = self.gravity;
+        let moved = self
+            .bodies
+            .par_iter_mut()
+            .with_min_len(CHUNK)
+            .zip(&self.x_at_build)
+            .zip(local)
+            .map(|((b, x0), &l)| {
+                if l == FLYING {
+                    b.fly(span, g);
+                } else {
+                    *b = part.bodies[l as usize];
+                }
+                (b.x - x0).norm_squared()
+            })
+            .reduce(|| 0.0, f64::max);
+        for (l, &s) in slots.iter().enumerate() {
+            let s = s as usize;
+            self.slots[s].touching = part.slots[l].touching;
+            self.slots[s].history = part.slots[l].history;
+            self.out[s] = part.out[l];
+            if !self.films.is_empty() {
+                self.films[s] = part.films[l];
+            }
+        }
+        let w = self.walls.len().max(1);
+        for (l, &k) in island.iter().enumerate() {
+            let k = k as usize;
+            self.wall_history[k * w..(k + 1) * w].copy_from_slice(&part.wall_history[l * w..(l + 1) * w]);
+        }
+        self.contacts = part.contacts;
+        self.time += span;
+        self.note_drift(moved);
+        self.wrap_into_domain();
+    }
+
+    /// Advances `span` seconds in one exact step of every sphere's free motion (gravity and its
+    /// external load with their drag: `Body::fly`). Only when nothing touches nor comes within
+    /// the films' reach over the span (`flight_plan`): the contact and film forces stay zero.
+    fn fly(&mut self, span: f64) {
+        let g = self.gravity;
+        self.move_bodies(|b| b.fly(span, g));
+        self.time += span;
+        self.wrap_into_domain();
+    }
+}
