@@ -141,10 +141,10 @@ pub struct Coupling {
     /// (docs/imb.md; default on; off: held constant).
     #[serde(default = "default_substep_drag")]
     pub substep_drag: bool,
-    /// With a `[lattice]`: a fluid step in which no sphere can touch another or a wall, nor come
-    /// within the squeeze films' cut-off, takes the fewest DEM sub-steps the drag within the step
-    /// allows instead of the contacts' (docs/dem.md, "Free flight"; default on; off: the contacts'
-    /// step throughout).
+    /// With a `[lattice]`: in each fluid step the spheres that can touch no sphere or wall, nor
+    /// come within the squeeze films' cut-off, move in one exact step of their free motion, the
+    /// others in the contacts' DEM sub-steps (docs/dem.md, "Free flight"; default on; off: every
+    /// sphere in the contacts' sub-steps throughout).
     #[serde(default = "default_free_flight")]
     pub free_flight: bool,
     /// With a `[lattice]`: where the covered cells get their solid term (docs/imb.md, "Speed"):
