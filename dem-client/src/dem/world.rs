@@ -306,6 +306,8 @@ pub struct World {
     near_start: Vec<u32>,
     near: Vec<u32>,
     x_at_build: Vec<V3>,
+    /// The spheres' ids at the last build, in order (how the contact histories are carried).
+    ids_at_build: Vec<u64>,
     stale: bool,
     /// Number of neighbour-list builds so far.
     pub builds: u64,
@@ -351,6 +353,7 @@ impl World {
             near_start: Vec::new(),
             near: Vec::new(),
             x_at_build: Vec::new(),
+            ids_at_build: Vec::new(),
             stale: true,
             builds: 0,
             contacts: 0,
@@ -537,15 +540,6 @@ impl World {
         self.wrap_into_domain();
         let x: Vec<V3> = self.bodies.iter().map(|b| b.x).collect();
         let r: Vec<f64> = self.bodies.iter().map(|b| b.r).collect();
-        let kept: HashMap<(u64, u64), V3> = self
-            .slots
-            .iter()
-            .filter(|s| s.touching)
-            .filter_map(|s| {
-                let (a, b) = (self.bodies.get(s.i as usize)?, self.bodies.get(s.j as usize)?);
-                Some(((a.id, b.id), s.history))
-            })
-            .collect();
         let ids: Vec<u64> = self.bodies.iter().map(|b| b.id).collect();
         let reach = self.reach();
         let pairs: Vec<(u32, u32, V3)> = match &self.periodic {
@@ -555,38 +549,34 @@ impl World {
                 .map(|(i, j)| (i, j, V3::zeros()))
                 .collect(),
         };
-        self.slots = pairs
-            .iter()
-            .map(|&(i, j, _)| {
-                let (a, b) = (ids[i as usize], ids[j as usize]);
-                let history = kept
-                    .get(&(a, b))
-                    .copied()
-                    .or_else(|| kept.get(&(b, a)).map(|h| -h))
-                    .unwrap_or_else(V3::zeros);
-                Slot {
+        let history = self.carried_history(&ids);
+        let nm = self.n_materials;
+        let bodies = &self.bodies;
+        let (slots, pair_const): (Vec<Slot>, Vec<PairConst>) = pairs
+            .par_iter()
+            .with_min_len(PAIR_CHUNK)
+            .map(|&(i, j, shift)| {
+                let (a, b) = (&bodies[i as usize], &bodies[j as usize]);
+                let history = history(i, j);
+                let slot = Slot {
                     i,
                     j,
                     touching: history != V3::zeros(),
                     history,
-                }
-            })
-            .collect();
-        let nm = self.n_materials;
-        self.pair_const = pairs
-            .iter()
-            .map(|&(i, j, shift)| {
-                let (a, b) = (&self.bodies[i as usize], &self.bodies[j as usize]);
-                PairConst {
+                };
+                let constants = PairConst {
                     cut2: (a.r + b.r) * (a.r + b.r),
                     r_sum: a.r + b.r,
                     r_eff: a.r * b.r / (a.r + b.r),
                     m_eff: a.m * b.m / (a.m + b.m),
                     material: (a.material * nm + b.material) as u32,
                     shift,
-                }
+                };
+                (slot, constants)
             })
-            .collect();
+            .unzip();
+        drop(history);
+        (self.slots, self.pair_const) = (slots, pair_const);
         self.out.clear();
         self.out.resize(self.slots.len(), ContactForce::default());
         self.films.clear();
@@ -594,28 +584,94 @@ impl World {
             self.films.resize(self.slots.len(), V3::zeros());
         }
         self.build_adjacency();
-        let w = self.walls.len();
-        self.wall_history
-            .resize(self.bodies.len() * w.max(1), V3::zeros());
-        // Walls out of reach until the next build are apart now: their history is zero, as the
-        // contact loop would set it.
-        self.near_start.clear();
-        self.near_start.push(0);
-        self.near.clear();
-        for (k, b) in self.bodies.iter().enumerate() {
-            for (l, wall) in self.walls.iter().enumerate() {
-                if wall.near(b.x, b.r, self.skin + reach) {
-                    self.near.push(l as u32);
-                } else {
-                    self.wall_history[k * w + l] = V3::zeros();
-                }
-            }
-            self.near_start.push(self.near.len() as u32);
-        }
+        self.list_walls(self.skin + reach);
         self.x_at_build = x;
+        self.ids_at_build = ids;
         self.peak_drift2 = 0.0;
         self.stale = false;
         self.builds += 1;
+    }
+
+    /// The contact history a new pair (i, j) carries over from the pairs touching at the last
+    /// build (zero for the others): looked up by index in the old lists when every sphere kept
+    /// its index (`insert` and `pop` add and remove at the end), else by the spheres' ids (the
+    /// history's sign turned when their order did).
+    fn carried_history(&self, ids: &[u64]) -> impl Fn(u32, u32) -> V3 + Sync + '_ {
+        let common = ids.len().min(self.ids_at_build.len());
+        let in_place = ids[..common] == self.ids_at_build[..common];
+        let by_ids: HashMap<(u64, u64), V3> = if in_place {
+            HashMap::new()
+        } else {
+            self.slots
+                .iter()
+                .filter(|s| s.touching)
+                .filter_map(|s| {
+                    let (a, b) = (
+                        self.ids_at_build.get(s.i as usize)?,
+                        self.ids_at_build.get(s.j as usize)?,
+                    );
+                    Some(((*a, *b), s.history))
+                })
+                .collect()
+        };
+        let ids = ids.to_vec();
+        move |i, j| {
+            if in_place {
+                if j as usize >= common {
+                    return V3::zeros();
+                }
+                let own =
+                    &self.slots[self.first_i[i as usize] as usize..self.first_i[i as usize + 1] as usize];
+                return own
+                    .binary_search_by_key(&j, |s| s.j)
+                    .map_or_else(|_| V3::zeros(), |k| own[k].history);
+            }
+            let (a, b) = (ids[i as usize], ids[j as usize]);
+            by_ids
+                .get(&(a, b))
+                .copied()
+                .or_else(|| by_ids.get(&(b, a)).map(|h| -h))
+                .unwrap_or_else(V3::zeros)
+        }
+    }
+
+    /// Lists per sphere the walls it can reach after moving less than `margin`; the walls out of
+    /// reach until the next build are apart now: their history is zero, as the contact loop would
+    /// set it.
+    fn list_walls(&mut self, margin: f64) {
+        let w = self.walls.len();
+        self.wall_history
+            .resize(self.bodies.len() * w.max(1), V3::zeros());
+        let walls = &self.walls;
+        let lists: Vec<(Vec<u32>, Vec<u32>)> = self
+            .bodies
+            .par_chunks(CHUNK)
+            .zip(self.wall_history.par_chunks_mut(CHUNK * w.max(1)))
+            .map(|(bodies, history)| {
+                let (mut near, mut counts) = (Vec::new(), Vec::with_capacity(bodies.len()));
+                for (b, h) in bodies.iter().zip(history.chunks_mut(w.max(1))) {
+                    let before = near.len();
+                    for (l, wall) in walls.iter().enumerate() {
+                        if wall.near(b.x, b.r, margin) {
+                            near.push(l as u32);
+                        } else {
+                            h[l] = V3::zeros();
+                        }
+                    }
+                    counts.push((near.len() - before) as u32);
+                }
+                (near, counts)
+            })
+            .collect();
+        self.near_start.clear();
+        self.near_start.push(0);
+        self.near.clear();
+        for (near, counts) in lists {
+            self.near.extend_from_slice(&near);
+            for c in counts {
+                self.near_start.push(self.near_start.last().unwrap() + c);
+            }
+        }
     }
 
     /// The slots of each body: as i a contiguous range (the slots are sorted by i), as j a list.

@@ -231,6 +231,7 @@ impl World {
         let pick = |s: &u32| *s as usize;
         let mut part = World {
             x_at_build: bodies.iter().map(|b| b.x).collect(),
+            ids_at_build: bodies.iter().map(|b| b.id).collect(),
             bodies,
             walls: self.walls.clone(),
             law: self.law,
