@@ -976,69 +976,99 @@ fn ball(id: u64, x: [f64; 3], v: [f64; 3]) -> Body {
 }
 
 /// Three groups in one world: a sphere falling onto the floor through its squeeze film, two
-/// spheres meeting head-on through theirs above it, six spheres falling far from anything. With
-/// free flight the group that can touch something takes the DEM steps while the others fly
-/// (the fluid steps with an island), and every sphere ends as without free flight: the same
-/// closest approach to the floor and between the pair, the same speeds after the impacts.
+/// spheres meeting head-on through theirs above it (inside, and across a periodic face), six
+/// spheres falling far from anything. With free flight the group that can touch something takes
+/// the DEM steps while the others fly (the fluid steps with an island), and every sphere ends as
+/// without free flight: the same closest approach to the floor and between the pair, the same
+/// speeds after the impacts.
 #[test]
 fn an_island_takes_the_dem_steps_while_the_other_spheres_fly() {
-    let floor = floor();
     let (span, k) = (2e-4, 200);
-    let world = || {
-        let mut bodies = vec![
-            ball(0, [0.01, 0.01, 0.006], [0.0, 0.0, -0.3]),
-            ball(1, [0.04 - 2.0 * R - 3e-3, 0.01, 0.03], [0.4, 0.0, 0.0]),
-            ball(2, [0.04 + 2.0 * R + 3e-3, 0.01, 0.03], [-0.4, 0.0, 0.0]),
-        ];
-        bodies.extend((0..6).map(|m| ball(3 + m, [0.07 + 0.01 * m as f64, 0.03, 0.04], [0.0, 0.0, 0.1])));
-        film_world(bodies, vec![floor], V3::new(0.0, 0.0, -9.81), span / k as f64)
-    };
-    let gaps = |w: &World| {
-        let pair = (w.bodies[1].x - w.bodies[2].x).norm() - 2.0 * R;
-        (w.bodies[0].x.z - R, pair)
-    };
-    let (mut free, mut fixed) = (world(), world());
-    let (mut all, mut some) = (0, 0);
-    let (mut closest, mut closest_fixed) = ((f64::INFINITY, f64::INFINITY), (f64::INFINITY, f64::INFINITY));
-    for _ in 0..150 {
-        let flown = free.advance_span(span, k);
-        all += usize::from(flown == free.bodies.len());
-        some += usize::from(flown > 0 && flown < free.bodies.len());
-        fixed.advance(k);
-        let (a, b) = (gaps(&free), gaps(&fixed));
-        closest = (closest.0.min(a.0), closest.1.min(a.1));
-        closest_fixed = (closest_fixed.0.min(b.0), closest_fixed.1.min(b.1));
-    }
-    assert!(
-        all >= 10 && some >= 50,
-        "{all} steps flown, {some} with an island"
-    );
-    // The films stop both approaches short of contact.
-    assert!(
-        [closest_fixed.0, closest_fixed.1]
-            .iter()
-            .all(|g| *g > 0.0 && *g < FILM_CUTOFF),
-        "{closest_fixed:?}"
-    );
-    for (what, a, b) in [
-        ("floor", closest.0, closest_fixed.0),
-        ("pair", closest.1, closest_fixed.1),
-    ] {
+    for period in [0.0, 0.06] {
+        let box_ = super::neighbor::Periodic {
+            lo: V3::zeros(),
+            len: [period, 0.0, 0.0],
+        };
+        // The nearest image along x.
+        let image = |d: V3| {
+            let shift = if period > 0.0 {
+                period * (d.x / period).round()
+            } else {
+                0.0
+            };
+            V3::new(d.x - shift, d.y, d.z)
+        };
+        let world = || {
+            let at = if period > 0.0 { 0.0 } else { 0.04 };
+            let mut bodies = vec![
+                ball(0, [0.01, 0.01, 0.006], [0.0, 0.0, -0.3]),
+                ball(1, [at - 2.0 * R - 3e-3, 0.01, 0.03], [0.4, 0.0, 0.0]),
+                ball(2, [at + 2.0 * R + 3e-3, 0.01, 0.03], [-0.4, 0.0, 0.0]),
+            ];
+            bodies
+                .extend((0..6).map(|m| ball(3 + m, [0.075 + 0.01 * m as f64, 0.03, 0.04], [0.0, 0.0, 0.1])));
+            let bodies = bodies
+                .into_iter()
+                .map(|b| Body {
+                    x: box_.wrap(b.x),
+                    ..b
+                })
+                .collect();
+            let mut w = film_world(bodies, vec![floor()], V3::new(0.0, 0.0, -9.81), span / k as f64);
+            if period > 0.0 {
+                w.set_periodic(Some(box_), 0.0).unwrap();
+            }
+            w
+        };
+        let gaps = |w: &World| {
+            let pair = image(w.bodies[1].x - w.bodies[2].x).norm() - 2.0 * R;
+            (w.bodies[0].x.z - R, pair)
+        };
+        let (mut free, mut fixed) = (world(), world());
+        let (mut all, mut some) = (0, 0);
+        let (mut closest, mut closest_fixed) =
+            ((f64::INFINITY, f64::INFINITY), (f64::INFINITY, f64::INFINITY));
+        for _ in 0..150 {
+            let flown = free.advance_span(span, k);
+            all += usize::from(flown == free.bodies.len());
+            some += usize::from(flown > 0 && flown < free.bodies.len());
+            fixed.advance(k);
+            let (a, b) = (gaps(&free), gaps(&fixed));
+            closest = (closest.0.min(a.0), closest.1.min(a.1));
+            closest_fixed = (closest_fixed.0.min(b.0), closest_fixed.1.min(b.1));
+        }
+        let case = format!("period {period}");
         assert!(
-            (a - b).abs() < 1e-3 * b.abs(),
-            "{what}: closest gap {a} m, without free flight {b} m"
+            all >= 10 && some >= 50,
+            "{case}: {all} steps flown, {some} with an island"
         );
-    }
-    for (a, b) in free.bodies.iter().zip(&fixed.bodies) {
+        // The films stop both approaches short of contact.
         assert!(
-            (a.v - b.v).norm() < 1e-3 * 0.3 && (a.x - b.x).norm() < 1e-6,
-            "sphere {}: v {} x {} against {} {}",
-            a.id,
-            a.v,
-            a.x,
-            b.v,
-            b.x
+            [closest_fixed.0, closest_fixed.1]
+                .iter()
+                .all(|g| *g > 0.0 && *g < FILM_CUTOFF),
+            "{case}: {closest_fixed:?}"
         );
+        for (what, a, b) in [
+            ("floor", closest.0, closest_fixed.0),
+            ("pair", closest.1, closest_fixed.1),
+        ] {
+            assert!(
+                (a - b).abs() < 1e-3 * b.abs(),
+                "{case}, {what}: closest gap {a} m, without free flight {b} m"
+            );
+        }
+        for (a, b) in free.bodies.iter().zip(&fixed.bodies) {
+            assert!(
+                (a.v - b.v).norm() < 1e-3 * 0.3 && image(a.x - b.x).norm() < 1e-6,
+                "{case}, sphere {}: v {} x {} against {} {}",
+                a.id,
+                a.v,
+                a.x,
+                b.v,
+                b.x
+            );
+        }
     }
 }
 
