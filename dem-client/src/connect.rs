@@ -169,7 +169,7 @@ pub fn main(args: ConnectArgs) -> ExitCode {
         limits[1],
         limits[2],
         if sub.free_flight {
-            "; a fluid step in free flight: one exact step"
+            "; free flight: a sphere that can touch nothing within a fluid step moves in one exact step"
         } else {
             ""
         },

@@ -204,7 +204,7 @@ impl World {
         let builds = part.builds;
         part.advance(steps);
         let reach = ISLAND_REACH * self.skin;
-        if part.builds != builds || exceeds(part.peak_drift2, reach * reach) || part.peak_drift2.is_nan() {
+        if part.builds != builds || part.peak_drift2 > reach * reach {
             return false;
         }
         self.merge(&part, island, &local, &slots, span);
