@@ -76,8 +76,9 @@ impl World {
         if !(longest.is_finite() && longest < half_skin) {
             return Plan::Substep;
         }
-        let all: Vec<u32> = (0..self.bodies.len() as u32).collect();
-        if self.needs_rebuild() || self.farthest(&all, |k| travel[k]) >= half_skin {
+        if self.needs_rebuild()
+            || self.farthest((0..self.bodies.len()).into_par_iter(), |k| travel[k]) >= half_skin
+        {
             self.rebuild();
         }
         let reach = ISLAND_REACH * self.skin;
@@ -90,7 +91,8 @@ impl World {
             let Some(island) = self.island(seeds, &travel, reach) else {
                 return Plan::Substep;
             };
-            if rebuilt || self.farthest(&island, |_| reach) < half_skin {
+            let members = island.par_iter().map(|&k| k as usize);
+            if rebuilt || self.farthest(members, |_| reach) < half_skin {
                 return Plan::Island(island);
             }
             self.rebuild();
@@ -101,14 +103,14 @@ impl World {
     /// The largest distance one of `spheres` can be from where it was at the last
     /// neighbour-list build: its drift since then plus `ahead(k)`. The lists hold every pair and
     /// wall that can come within reach while it stays below skin / 2 for every sphere.
-    fn farthest(&self, spheres: &[u32], ahead: impl Fn(usize) -> f64 + Sync) -> f64 {
+    fn farthest(
+        &self,
+        spheres: impl IndexedParallelIterator<Item = usize>,
+        ahead: impl Fn(usize) -> f64 + Sync + Send,
+    ) -> f64 {
         spheres
-            .par_iter()
             .with_min_len(CHUNK)
-            .map(|&k| {
-                let k = k as usize;
-                (self.bodies[k].x - self.x_at_build[k]).norm() + ahead(k)
-            })
+            .map(|k| (self.bodies[k].x - self.x_at_build[k]).norm() + ahead(k))
             .reduce(|| 0.0, f64::max)
     }
 
