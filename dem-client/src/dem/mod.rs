@@ -190,12 +190,15 @@ pub fn pair_contact_time(law: &ContactLaw, m: &contact::PairMaterial, r_eff: f64
     }
 }
 
-/// The domain's periodic axes as the DEM's periodic box (None when there are none).
+/// The scene's periodic axes (`Scene::periods`) as the DEM's periodic box (None when there are
+/// none).
 fn periodic(scene: &Scene) -> Option<Periodic> {
-    let axes = scene.periodic_axes();
-    let (min, max) = (scene.domain.min, scene.domain.max);
-    let len = std::array::from_fn(|a| if axes[a] { max[a] - min[a] } else { 0.0 });
-    axes.iter().any(|&p| p).then(|| Periodic { lo: v3(min), len })
+    let periods = scene.periods();
+    let box_ = Periodic {
+        lo: v3(periods.lo),
+        len: periods.len,
+    };
+    box_.any().then_some(box_)
 }
 
 /// Builds the world of a scene and its time step; refuses a `dem.dt` above t_c / 10.
