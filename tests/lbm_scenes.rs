@@ -35,6 +35,16 @@ fn last_profile(path: &Path) -> Vec<(f64, f64)> {
         .collect()
 }
 
+/// Every row of a run's particles.csv as numbers (step, time, id, x, y, z, vx, vy, vz, ...).
+fn particle_rows(out: &Path) -> Vec<Vec<f64>> {
+    std::fs::read_to_string(out.join("particles.csv"))
+        .unwrap()
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
+        .collect()
+}
+
 #[test]
 fn poiseuille_in_si_units_matches_the_analytic_profile() {
     let (code, err, out) = run("pois", POISEUILLE);
@@ -164,12 +174,7 @@ fn settling_sphere_approaches_ten_cates_terminal_velocity() {
         err.contains("warning: lattice tau = 1.201: above 1 the immersed boundary's drag"),
         "{err}"
     );
-    let text = std::fs::read_to_string(out.join("particles.csv")).unwrap();
-    let rows: Vec<Vec<f64>> = text
-        .lines()
-        .skip(1)
-        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
-        .collect();
+    let rows = particle_rows(&out);
     let vz: Vec<f64> = rows.iter().map(|r| r[8]).collect();
     let fz: Vec<f64> = rows.iter().map(|r| r[14]).collect();
     // Falls, faster and faster, with a growing upward fluid force (drag + buoyancy).
@@ -283,13 +288,7 @@ fn the_default_scene_is_a_coupled_run() {
         err.contains("(59 DEM steps") && err.contains("59 steps in free flight"),
         "{err}"
     );
-    let text = std::fs::read_to_string(out.join("particles.csv")).unwrap();
-    let first: Vec<Vec<f64>> = text
-        .lines()
-        .skip(1)
-        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect::<Vec<f64>>())
-        .filter(|r| r[2] == 0.0)
-        .collect();
+    let first: Vec<Vec<f64>> = particle_rows(&out).into_iter().filter(|r| r[2] == 0.0).collect();
     assert_eq!(first.len(), 4, "steps 0, 20, 40 and 59");
     let vz: Vec<f64> = first.iter().map(|r| r[8]).collect();
     let fz: Vec<f64> = first.iter().map(|r| r[14]).collect();
@@ -488,26 +487,19 @@ fn resting_beads_take_the_sub_steps_while_the_falling_ones_fly() {
              [particles]\ndensity = 2500.0\n{beads}"
         )
     };
-    let rows = |out: &Path| -> Vec<Vec<f64>> {
-        std::fs::read_to_string(out.join("particles.csv"))
-            .unwrap()
-            .lines()
-            .skip(1)
-            .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
-            .filter(|r: &Vec<f64>| r[0] == 39.0)
-            .collect()
-    };
+    let last =
+        |out: &Path| -> Vec<Vec<f64>> { particle_rows(out).into_iter().filter(|r| r[0] == 39.0).collect() };
     let (code, err, out) = run("islands", &scene(true));
     assert_eq!(code, Some(0), "{err}");
     assert!(
         err.contains("0 steps in free flight, 39 with an island; 60.0% of the sphere-steps flown"),
         "{err}"
     );
-    let flown = rows(&out);
+    let flown = last(&out);
     let (code, err, out) = run("islands_off", &scene(false));
     assert_eq!(code, Some(0), "{err}");
     assert!(err.contains("0 with an island"), "{err}");
-    let stepped = rows(&out);
+    let stepped = last(&out);
     assert_eq!(flown.len(), 10);
     // (bead, distance, velocity difference) from the sub-stepped run's.
     let apart: Vec<(f64, f64, f64)> = flown
