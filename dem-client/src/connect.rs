@@ -99,17 +99,7 @@ pub fn main(args: ConnectArgs) -> ExitCode {
             return ExitCode::from(2);
         }
     };
-    let mut particles = Particles {
-        world: setup.world,
-        density: scene.particles.density,
-        next_id: scene.particle_count(),
-        covered_mass_rate: 0.0,
-        dem_steps: 0,
-        free_steps: 0,
-        island_steps: 0,
-        flown_sphere_steps: 0,
-        sphere_steps: 0,
-    };
+    let mut particles = Particles::new(setup.world, &scene);
     let mut hello = Hello::new(
         Units::SI,
         physics(&scene),
@@ -147,23 +137,12 @@ pub fn main(args: ConnectArgs) -> ExitCode {
         skip_step: args.skip_step,
         stall_at: args.stall_at,
     };
-    particles.covered_mass_rate = covered_mass_rate(&scene, &welcome);
-    particles.world.set_lubrication(lubrication(&scene, &welcome));
-    let limits = [
-        setup.dt_max,
-        particles.drag_step_limit(),
-        particles.film_step_limit(),
-    ];
-    let (k, dt) = substeps(welcome.dt, limits.into_iter().fold(f64::INFINITY, f64::min));
-    particles.world.dt = dt;
-    let sub = Substeps {
-        contact: k,
-        free_flight: scene.coupling.free_flight && scene.lattice.is_some(),
-    };
-    particles.world.gravity = V3::from(welcome.gravity);
+    let (sub, limits) = particles.couple(&scene, &welcome, setup.dt_max);
+    let dt = particles.world.dt;
     protocol::say!(
-        "dem-client: DEM step {dt:.3e} s = fluid step / {k} (shortest contact time {:.3e} s, step limits: \
+        "dem-client: DEM step {dt:.3e} s = fluid step / {} (shortest contact time {:.3e} s, step limits: \
          contacts {:.3e} s, sub-step drag {:.3e} s, squeeze films {:.3e} s){}, {} walls{}",
+        sub.contact,
         setup.contact_time,
         limits[0],
         limits[1],
@@ -191,12 +170,14 @@ pub fn main(args: ConnectArgs) -> ExitCode {
         Ok(steps) => {
             protocol::say!(
                 "dem-client: finished after {steps} steps ({} DEM steps, {} neighbour-list builds, {} steps \
-                 in free flight, {} with an island; {:.1}% of the sphere-steps flown)",
+                 in free flight, {} with an island ({} dropped for a sphere beyond its reach); {:.1}% of the \
+                 sphere-steps flown)",
                 particles.dem_steps,
                 particles.world.builds,
                 particles.free_steps,
-                particles.island_steps,
-                100.0 * particles.flown_sphere_steps as f64 / particles.sphere_steps.max(1) as f64
+                particles.world.islands,
+                particles.world.dropped_islands,
+                particles.flown_percent()
             );
             ExitCode::SUCCESS
         }
@@ -292,14 +273,14 @@ fn substep_drag(covered_mass_rate: f64, r: f64) -> (f64, f64) {
 /// (`coupling.free_flight`), the spheres that can touch nothing within it in one exact step of
 /// their free motion and the others in the sub-steps (`World::advance_span`).
 #[derive(Debug, Clone, Copy)]
-struct Substeps {
-    contact: u64,
-    free_flight: bool,
+pub(crate) struct Substeps {
+    pub contact: u64,
+    pub free_flight: bool,
 }
 
 /// The DEM side's particles in a coupled run.
-struct Particles {
-    world: World,
+pub(crate) struct Particles {
+    pub world: World,
     density: f64,
     next_id: u64,
     /// Fluid density / fluid step [kg/m^3/s] for the drag within a fluid step (0: the force is
@@ -307,15 +288,50 @@ struct Particles {
     covered_mass_rate: f64,
     /// DEM steps taken, fluid steps taken in free flight (every sphere flown) and with an island
     /// (some spheres flown, the others sub-stepped), sphere-steps flown of all.
-    dem_steps: u64,
-    free_steps: u64,
-    island_steps: u64,
-    flown_sphere_steps: u64,
-    sphere_steps: u64,
+    pub dem_steps: u64,
+    pub free_steps: u64,
+    pub flown_sphere_steps: u64,
+    pub sphere_steps: u64,
 }
 
 impl Particles {
-    fn states_into(&self, out: &mut Vec<ParticleState>) {
+    pub fn new(world: World, scene: &scene::Scene) -> Particles {
+        Particles {
+            world,
+            density: scene.particles.density,
+            next_id: scene.particle_count(),
+            covered_mass_rate: 0.0,
+            dem_steps: 0,
+            free_steps: 0,
+            flown_sphere_steps: 0,
+            sphere_steps: 0,
+        }
+    }
+
+    /// Takes the fluid's terms from its Welcome (time step, gravity, density and viscosity): the
+    /// drag within a fluid step, the squeeze films, the DEM step (the largest that divides the
+    /// fluid step and keeps within `dt_max` and the limits of the drag and the films). Returns how
+    /// a fluid step is advanced and the three step limits [s].
+    pub fn couple(&mut self, scene: &scene::Scene, welcome: &Welcome, dt_max: f64) -> (Substeps, [f64; 3]) {
+        self.covered_mass_rate = covered_mass_rate(scene, welcome);
+        self.world.set_lubrication(lubrication(scene, welcome));
+        let limits = [dt_max, self.drag_step_limit(), self.film_step_limit()];
+        let (k, dt) = substeps(welcome.dt, limits.into_iter().fold(f64::INFINITY, f64::min));
+        self.world.dt = dt;
+        self.world.gravity = V3::from(welcome.gravity);
+        let sub = Substeps {
+            contact: k,
+            free_flight: scene.coupling.free_flight && scene.lattice.is_some(),
+        };
+        (sub, limits)
+    }
+
+    /// The fraction of the sphere-steps flown so far [%].
+    pub fn flown_percent(&self) -> f64 {
+        100.0 * self.flown_sphere_steps as f64 / self.sphere_steps.max(1) as f64
+    }
+
+    pub(crate) fn states_into(&self, out: &mut Vec<ParticleState>) {
         out.clear();
         out.extend(self.world.bodies.iter().map(|b| ParticleState {
             id: b.id,
@@ -331,7 +347,7 @@ impl Particles {
     /// rate, when `coupling.substep_drag` is on), and advances the fluid step `dt` in
     /// `substeps.contact` DEM steps; with `substeps.free_flight`, each sphere that can touch
     /// nothing within it in one exact step.
-    fn advance(&mut self, replies: &[ParticleReply], substeps: Substeps, dt: f64) {
+    pub(crate) fn advance(&mut self, replies: &[ParticleReply], substeps: Substeps, dt: f64) {
         let g = self.world.gravity;
         for (b, r) in self.world.bodies.iter_mut().zip(replies) {
             let (force, torque) = (V3::from(r.force), V3::from(r.torque));
@@ -362,7 +378,6 @@ impl Particles {
             self.dem_steps += 1;
         } else {
             self.dem_steps += substeps.contact;
-            self.island_steps += u64::from(flown > 0);
         }
     }
 

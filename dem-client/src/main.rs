@@ -3,6 +3,7 @@
 //! A soft-sphere DEM in f64 (nalgebra, rayon): `run` steps a granular scene alone, `connect` joins
 //! a running `lbm-server` as the DEM side of the co-simulation. See docs/dem.md.
 
+mod bench;
 mod connect;
 mod dem;
 mod output;
@@ -29,6 +30,8 @@ enum Command {
     Connect(connect::ConnectArgs),
     /// Run a granular scene alone (no fluid): particles.csv, energy.csv, VTK polydata.
     Run(run::RunArgs),
+    /// Time the DEM side of a coupled scene, the fluid replaced by a stand-in.
+    Bench(bench::BenchArgs),
 }
 
 /// Scene file argument shared by subcommands.
@@ -44,5 +47,6 @@ fn main() -> ExitCode {
     match cli.command {
         Command::Connect(args) => connect::main(args),
         Command::Run(args) => run::main(args),
+        Command::Bench(args) => bench::main(args),
     }
 }

@@ -1124,6 +1124,49 @@ fn an_island_sphere_thrown_beyond_its_reach_makes_every_sphere_take_the_dem_step
     }
 }
 
+/// Every sphere in one island (no sphere flies): two spheres closing a gap of 0.85 mm at 0.1 m/s
+/// each, so that they come within the films' cut-off (0.5 mm) while each moves 0.2 mm, less than
+/// its reach (skin / 4 = 0.25 mm); and two pairs at rest in their films, listed 1.2 mm from each
+/// other, beyond the cut-off plus two reaches (1 mm): those two pairs across are left out of the
+/// island's world. Each fluid step the island stands and every sphere ends exactly as when every
+/// sphere takes the DEM steps with the whole lists (fails when the closing pair is left out too).
+#[test]
+fn an_island_of_every_sphere_leaves_out_only_the_pairs_that_cannot_meet() {
+    let (span, k) = (2e-3, 400);
+    let world = || {
+        let bodies = vec![
+            ball(0, [0.01, 0.01, 0.01], [0.1, 0.0, 0.0]),
+            ball(1, [0.01 + 2.0 * R + 0.85e-3, 0.01, 0.01], [-0.1, 0.0, 0.0]),
+            ball(2, [0.01, 0.02, 0.01], [0.0; 3]),
+            ball(3, [0.01 + 2.0 * R + 0.3e-3, 0.02, 0.01], [0.0; 3]),
+            ball(4, [0.01, 0.02 + 2.0 * R + 1.2e-3, 0.01], [0.0; 3]),
+            ball(
+                5,
+                [0.01 + 2.0 * R + 0.3e-3, 0.02 + 2.0 * R + 1.2e-3, 0.01],
+                [0.0; 3],
+            ),
+        ];
+        film_world(bodies, vec![], V3::zeros(), span / k as f64)
+    };
+    let (mut free, mut fixed) = (world(), world());
+    let gap = |w: &World| (w.bodies[0].x - w.bodies[1].x).norm() - 2.0 * R;
+    for step in 0..3 {
+        assert_eq!(free.advance_span(span, k), 0, "step {step}");
+        fixed.advance(k);
+        assert_eq!((free.islands, free.dropped_islands), (step + 1, 0), "step {step}");
+        for (a, b) in free.bodies.iter().zip(&fixed.bodies) {
+            assert_eq!(a, b, "step {step}, sphere {}", a.id);
+        }
+        if step == 0 {
+            assert!(
+                gap(&fixed) < FILM_CUTOFF,
+                "the pair closes into its film: {}",
+                gap(&fixed)
+            );
+        }
+    }
+}
+
 /// Spheres in lasting contact take the DEM steps as an island over many fluid steps while the
 /// others fly: one sliding on the floor, two on the floor pressed together and sliding past each
 /// other (friction with history: the tangential springs of the floor and of the pair carry

@@ -309,8 +309,14 @@ pub struct World {
     /// The spheres' ids at the last build, in order (how the contact histories are carried).
     ids_at_build: Vec<u64>,
     stale: bool,
-    /// Number of neighbour-list builds so far.
+    /// Number of neighbour-list builds so far, and the wall time they took [s].
     pub builds: u64,
+    pub build_seconds: f64,
+    /// Fluid steps advanced with an island (`advance_span`: some or all spheres in the DEM steps
+    /// among themselves), and islands dropped (a sphere went beyond its reach: every sphere took
+    /// the DEM steps with the whole lists).
+    pub islands: u64,
+    pub dropped_islands: u64,
     contacts: usize,
     /// The largest squared distance a sphere was seen from `x_at_build` (after each drift).
     peak_drift2: f64,
@@ -356,6 +362,9 @@ impl World {
             ids_at_build: Vec::new(),
             stale: true,
             builds: 0,
+            build_seconds: 0.0,
+            islands: 0,
+            dropped_islands: 0,
             contacts: 0,
             peak_drift2: 0.0,
         };
@@ -537,6 +546,7 @@ impl World {
 
     /// Rebuilds the Verlet list, carrying the history of the pairs still listed.
     fn rebuild(&mut self) {
+        let start = std::time::Instant::now();
         self.wrap_into_domain();
         let x: Vec<V3> = self.bodies.iter().map(|b| b.x).collect();
         let r: Vec<f64> = self.bodies.iter().map(|b| b.r).collect();
@@ -590,6 +600,7 @@ impl World {
         self.peak_drift2 = 0.0;
         self.stale = false;
         self.builds += 1;
+        self.build_seconds += start.elapsed().as_secs_f64();
     }
 
     /// The contact history a new pair (i, j) carries over from the pairs touching at the last

@@ -7,18 +7,17 @@
 //! (a_max: `Body::acceleration_bound`, valid while it touches nothing). A sphere of the island can
 //! be thrown by its contacts, so it is given a reach, `ISLAND_REACH` skin, and a sphere flies only
 //! when its gap to every island sphere exceeds the films' cut-off by its travel plus that reach;
-//! after the island's sub-steps, if one of its spheres went further, the step is taken again with
-//! every sphere sub-stepped (the island is a copy: nothing to undo).
+//! the island's own world leaves out its pairs farther apart than the cut-off plus two reaches
+//! (they cannot meet); after the island's sub-steps, if one of its spheres went further than its
+//! reach, the step is taken again with every sphere sub-stepped (the island is a copy: nothing to
+//! undo).
 
 use super::{Body, World, CHUNK, FREE_FLIGHT_MARGIN, PAIR_CHUNK};
 use rayon::prelude::*;
 
-/// How far a sphere of the island may move within a fluid step in which others fly, as a
-/// fraction of the skin (below half the skin, where the neighbour lists end).
+/// How far a sphere of the island may move within a fluid step, as a fraction of the skin (below
+/// half the skin, where the neighbour lists end).
 const ISLAND_REACH: f64 = 0.25;
-/// The largest share of the spheres sub-stepped as an island; above it every sphere is
-/// sub-stepped (copying the island out and back would cost more than flying the rest saves).
-const ISLAND_SHARE: f64 = 0.5;
 /// A sphere outside the island.
 const FLYING: u32 = u32::MAX;
 
@@ -40,19 +39,25 @@ enum Plan {
 impl World {
     /// Advances a fluid step of `span` seconds: the spheres that can touch nothing within it in
     /// one exact step of their free motion, the others (the island) in `steps` DEM steps among
-    /// themselves, or every sphere in DEM steps when the island holds more than
-    /// `ISLAND_SHARE` of them or one of its spheres went further than its reach. Returns how
-    /// many spheres flew.
+    /// themselves (possibly every sphere), or every sphere in DEM steps with the whole lists when
+    /// one of the island's spheres went, or would by its speed alone go, further than its reach.
+    /// Returns how many spheres flew.
     pub fn advance_span(&mut self, span: f64, steps: u64) -> usize {
         match self.flight_plan(span) {
             Plan::Fly => {
                 self.fly(span);
                 self.bodies.len()
             }
-            Plan::Island(island) if self.advance_island(&island, span, steps) => {
-                self.bodies.len() - island.len()
+            Plan::Island(island) => {
+                if self.advance_island(&island, span, steps) {
+                    self.islands += 1;
+                    return self.bodies.len() - island.len();
+                }
+                self.dropped_islands += 1;
+                self.advance(steps);
+                0
             }
-            Plan::Island(_) | Plan::Substep => {
+            Plan::Substep => {
                 self.advance(steps);
                 0
             }
@@ -88,9 +93,13 @@ impl World {
             if seeds.is_empty() {
                 return Plan::Fly;
             }
-            let Some(island) = self.island(seeds, &travel, reach) else {
+            let island = self.island(seeds, &travel, reach);
+            if island
+                .iter()
+                .any(|&k| span * self.bodies[k as usize].v.norm() > reach)
+            {
                 return Plan::Substep;
-            };
+            }
             let members = island.par_iter().map(|&k| k as usize);
             if rebuilt || self.farthest(members, |_| reach) < half_skin {
                 return Plan::Island(island);
@@ -158,10 +167,8 @@ impl World {
     }
 
     /// The island grown from `seeds`: a listed neighbour of an island sphere joins it unless their
-    /// gap exceeds the films' cut-off by its travel plus the island's `reach`. Ascending; None when
-    /// it would hold more than `ISLAND_SHARE` of the spheres.
-    fn island(&self, seeds: Vec<u32>, travel: &[f64], reach: f64) -> Option<Vec<u32>> {
-        let most = (ISLAND_SHARE * self.bodies.len() as f64) as usize;
+    /// gap exceeds the films' cut-off by its travel plus the island's `reach`. Ascending.
+    fn island(&self, seeds: Vec<u32>, travel: &[f64], reach: f64) -> Vec<u32> {
         let cutoff = self.reach();
         let mut inside = vec![false; self.bodies.len()];
         let mut island = Vec::new();
@@ -171,7 +178,7 @@ impl World {
             }
         }
         let mut next = 0;
-        while next < island.len() && island.len() <= most {
+        while next < island.len() {
             let a = island[next] as usize;
             next += 1;
             let as_i = self.first_i[a]..self.first_i[a + 1];
@@ -186,15 +193,13 @@ impl World {
                 }
             }
         }
-        if island.len() > most {
-            return None;
-        }
         island.sort_unstable();
-        Some(island)
+        island
     }
 
     /// The island's `steps` DEM steps in a world of its own (its spheres, their pairs with each
-    /// other, their walls), then its spheres back and the others flown over `span`; false, with
+    /// other that can meet, their walls), then its spheres back and the others flown over `span`;
+    /// false, with
     /// nothing changed, when an island sphere went further than `ISLAND_REACH` skin from where it
     /// started (or the island's lists ran out).
     fn advance_island(&mut self, island: &[u32], span: f64, steps: u64) -> bool {
@@ -214,13 +219,19 @@ impl World {
     }
 
     /// A world of the island's spheres (`local`: each sphere's index in it, or `FLYING`) with
-    /// their pairs among themselves (state and history), their walls, and lists measured from
-    /// where they are now; and the slots of those pairs here.
+    /// their pairs among themselves that can come within the films' cut-off while each sphere
+    /// stays within its reach (state and history), their walls, and lists measured from where they
+    /// are now; and the slots of those pairs here. A pair left out is apart and stays so, as
+    /// `advance_island` checks: its force is an exact zero either way.
     fn split_off(&self, island: &[u32], local: &[u32]) -> (World, Vec<u32>) {
+        let apart = self.reach() + 2.0 * ISLAND_REACH * self.skin;
         let slots: Vec<u32> = island
             .iter()
             .flat_map(|&k| self.first_i[k as usize]..self.first_i[k as usize + 1])
-            .filter(|&s| local[self.slots[s as usize].j as usize] != FLYING)
+            .filter(|&s| {
+                local[self.slots[s as usize].j as usize] != FLYING
+                    && !exceeds(self.slot_gap(s as usize), apart)
+            })
             .collect();
         let w = self.walls.len().max(1);
         let mut near_start = vec![0];
@@ -278,6 +289,9 @@ impl World {
             near,
             stale: false,
             builds: self.builds,
+            build_seconds: 0.0,
+            islands: 0,
+            dropped_islands: 0,
             contacts: self.contacts,
             peak_drift2: 0.0,
         };
