@@ -35,6 +35,12 @@ else
     cp validation/scenes/suspension.toml .gpu/
 fi
 sed 's/^free_flight = true/free_flight = false/' .gpu/suspension.toml > .gpu/suspension_substeps.toml
+# The DEM side alone (dem-client bench) on a bed of 32^3 beads in contact (4^3 for --small).
+if $small; then
+    sed 's/count = \[32, 32, 32\]/count = [4, 4, 4]/' validation/scenes/bed.toml > .gpu/bed.toml
+else
+    cp validation/scenes/bed.toml .gpu/
+fi
 # One line per scene, in the order run.sh runs them (its priority): name, cells, tau, steps.
 scenes() { python3 validation/imb/ten_cate.py scenes .gpu/scenes "$@" >> .gpu/plan.txt; }
 if $small; then

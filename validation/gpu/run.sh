@@ -9,7 +9,8 @@
 # the copy bandwidth and the naive kernel), coupled_trt.txt (256 x 256 x 512, 1 to 32^3 particles,
 # ratio to LBM-only, time per pass, the covered cells fused and redone), coupled_dense.txt (64^3
 # particles, a dense bed), default/ (the default scene), suspension/ and suspension_substeps/ (32^3
-# beads settling, the whole program, free flight on and off: summary.json), tencate/<run>/ (import with
+# beads settling, the whole program, free flight on and off: summary.json), dem_bench_{suspension,bed}.txt
+# (the DEM side alone on this machine's cores, 32^3 beads dilute and in a bed), tencate/<run>/ (import with
 # python3 validation/imb/ten_cate.py import DIR). The steps run in order of priority; a step that
 # would start with less time left than it needs is skipped and named in batch.log.
 set -u
@@ -80,6 +81,11 @@ for s in suspension suspension_substeps; do
     step $s/log 40 120 $bin/lbm-server run .gpu/$s.toml --out "$OUT/$s"
     rm -f "$OUT/$s/particles.csv"
 done
+# The DEM side alone on this machine's cores, the fluid a stand-in (dem-client bench): 32^3 beads
+# dilute (flown) and in a bed (every bead in the DEM steps), free flight on and off. With the
+# fluid's step above, what a whole coupled step costs between these two extremes.
+step dem_bench_suspension 20 60 $bin/dem-client bench .gpu/suspension.toml --steps 40 --free-flight both
+step dem_bench_bed 20 90 $bin/dem-client bench .gpu/bed.toml --steps 4 --free-flight both
 # Ten Cate, in the order of .gpu/plan.txt.
 while read -r name _; do
     [ -f ".gpu/scenes/$name/scene.toml" ] || continue
