@@ -128,6 +128,10 @@ fn silent_live_dem_is_caught_by_the_timeout() {
     assert!(waited < 1.5, "timeout of 0.5 s took {waited:.3} s");
     let stderr = assert_failure_reported(&mut server, &out, "did not answer within 0.5 s");
     assert!(stderr.contains("last completed step: 19"), "{stderr}");
+    assert!(
+        stderr.contains("raise coupling.timeout"),
+        "names the setting: {stderr}"
+    );
     let _ = client.child.kill();
     client.wait_exit(Duration::from_secs(5));
 }

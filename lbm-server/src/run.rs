@@ -349,7 +349,13 @@ impl Session {
 
     fn describe(&self, e: LinkError) -> String {
         let last = self.last_completed.map_or("none".to_string(), |s| s.to_string());
-        format!("{e}; last completed step: {last}")
+        let hint = if matches!(e, LinkError::Timeout { .. }) {
+            " (a DEM step with many spheres in contact can take that long on a few cores: raise \
+             coupling.timeout in the scene)"
+        } else {
+            ""
+        };
+        format!("{e}{hint}; last completed step: {last}")
     }
 
     /// Flushes output, ends the DEM process, writes summary.json; returns the exit code.
