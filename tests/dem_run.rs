@@ -1,4 +1,5 @@
 //! `dem-client run`: a granular scene alone writes its outputs; a bad DEM scene is refused by name.
+//! `dem-client bench`: the DEM side of a coupled scene timed.
 
 mod common;
 use common::*;
@@ -210,4 +211,68 @@ fn a_periodic_granular_scene_is_checked_across_its_faces() {
             assert!(stderr.contains(w), "{what}: {w:?} missing from {stderr}");
         }
     }
+}
+
+/// `dem-client bench` times the DEM side of a coupled scene (validation/scenes/bed.toml, 4 x 4 x 2
+/// of its beads): with free flight the beads in their films are one island in every fluid step,
+/// without it they take every DEM step with the whole lists; a scene without a lattice is refused.
+#[test]
+fn the_dem_bench_times_a_coupled_scene_with_free_flight_on_and_off() {
+    let dir = temp_dir("dem-bench");
+    let bed =
+        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/validation/scenes/bed.toml")).unwrap();
+    let small = bed.replace("count = [32, 32, 32]", "count = [4, 4, 2]");
+    assert_ne!(
+        small, bed,
+        "validation/scenes/bed.toml holds the count this test shrinks"
+    );
+    let scene = write_scene(&dir, &small);
+    let run = Command::new(bin("dem-client"))
+        .args(["bench", "--steps", "3"])
+        .arg(&scene)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(run.status.success(), "{stderr}");
+    let lines: Vec<&str> = stderr.lines().collect();
+    let on = lines
+        .iter()
+        .position(|l| l.contains("free flight on"))
+        .expect(&stderr);
+    let off = lines
+        .iter()
+        .position(|l| l.contains("free flight off"))
+        .expect(&stderr);
+    let k: u64 = lines[on]
+        .split(" DEM steps of ")
+        .next()
+        .and_then(|head| head.rsplit(' ').next())
+        .and_then(|k| k.parse().ok())
+        .expect(&stderr);
+    assert!(lines[on].contains("32 spheres, 3 fluid steps"), "{stderr}");
+    assert!(
+        lines[on + 2].contains(&format!(
+            "{} DEM steps, 0 fluid steps flown whole, 3 with an island (0 dropped)",
+            3 * k
+        )),
+        "{stderr}"
+    );
+    assert!(
+        lines[off + 2].contains(&format!(
+            "{} DEM steps, 0 fluid steps flown whole, 0 with an island",
+            3 * k
+        )),
+        "{stderr}"
+    );
+    assert!(lines[on + 1].contains(" ms per fluid step"), "{stderr}");
+
+    let granular = write_scene(&dir, POUR);
+    let refused = Command::new(bin("dem-client"))
+        .arg("bench")
+        .arg(&granular)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&refused.stderr);
+    assert_eq!(refused.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("the scene has no [lattice]"), "{stderr}");
 }
