@@ -5,7 +5,7 @@ use crate::launch;
 use crate::output::{LatticeSummary, ParticleCsv, PeerInfo, Progress, Summary, TimeSplit};
 use protocol::transport::{new_run_name, LinkOptions};
 use protocol::{
-    FluidLink, Hello, LinkError, ParticleReply, ParticleState, Physics, StepFlags, StepHeader, Welcome,
+    FluidLink, Hello, LinkError, ParticleReply, ParticleState, Physics, StepFlags, StepHeader, Units, Welcome,
 };
 use scene::Scene;
 use std::path::PathBuf;
@@ -288,35 +288,54 @@ impl Session {
         let (mut si, mut replies): (Vec<ParticleState>, Vec<ParticleReply>) = (Vec::new(), Vec::new());
         self.started = Instant::now();
         let mut clock = Clock::new();
+        // A DEM that speaks SI: its states are read where it wrote them (the shared memory, no
+        // copy) and the replies go out as they are; other units are converted both ways.
+        let in_si = units == Units::SI;
         for step in 0..self.p.steps {
             let received = self.link.receive_states(step).map_err(|e| self.describe(e))?;
             self.times.waiting_for_dem += clock.lap();
             let header = received.header();
-            si.clear();
-            si.extend(received.particles().iter().map(|s| units.state_to_si(s)));
-            drop(received);
-            let bad = check_states(&si, step, &self.p.scene.domain);
-            self.times.exchange += clock.lap();
-            replies.clear();
-            self.fluid
-                .step(&si, &mut replies)
-                .map_err(|e| self.describe_fluid(e))?;
-            let last = step + 1 == self.p.steps;
-            if last {
-                self.fluid.check_last_step().map_err(|e| self.describe_fluid(e))?;
+            if !in_si {
+                si.clear();
+                si.extend(received.particles().iter().map(|s| units.state_to_si(s)));
             }
-            self.times.fluid += clock.lap();
+            let last = step + 1 == self.p.steps;
+            let (bad, count) = {
+                let states = if in_si { received.particles() } else { &si[..] };
+                let bad = check_states(states, step, &self.p.scene.domain);
+                self.times.exchange += clock.lap();
+                replies.clear();
+                self.fluid
+                    .step(states, &mut replies)
+                    .map_err(|e| self.describe_fluid(e))?;
+                if last {
+                    self.fluid.check_last_step().map_err(|e| self.describe_fluid(e))?;
+                }
+                self.times.fluid += clock.lap();
+                (bad, states.len())
+            };
             let stop =
                 header.has(StepFlags::STOP) || self.interrupted.load(Ordering::SeqCst) || bad.is_some();
+            let output = step % self.p.scene.output.interval == 0 || last || stop;
+            // The sample goes back before the reply (the DEM loans the next one once it has the
+            // forces); particles.csv, written after the reply, gets a copy of its states.
+            if in_si && output {
+                si.clear();
+                si.extend_from_slice(received.particles());
+            }
+            drop(received);
             let flags = if last { StepFlags::FINAL } else { 0 } | if stop { StepFlags::STOP } else { 0 };
-            let reply = StepHeader::new(step, header.time, si.len(), flags);
-            self.link
-                .send_forces(reply, |i| units.reply_from_si(&replies[i]))
-                .map_err(|e| self.describe(e))?;
+            let reply = StepHeader::new(step, header.time, count, flags);
+            let sent = if in_si {
+                self.link.send_forces(reply, |i| replies[i])
+            } else {
+                self.link.send_forces(reply, |i| units.reply_from_si(&replies[i]))
+            };
+            sent.map_err(|e| self.describe(e))?;
             self.last_completed = Some(step);
-            self.particle_steps += si.len() as u64;
+            self.particle_steps += count as u64;
             self.times.exchange += clock.lap();
-            if step % self.p.scene.output.interval == 0 || last || stop {
+            if output {
                 let time = header.time * units.time_s;
                 self.csv
                     .write_step(step, time, &si, &replies)
