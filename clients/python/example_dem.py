@@ -3,6 +3,7 @@
 
     lbm-server run SCENE.toml --dem external          # prints "DEM service: RUN"
     python3 clients/python/example_dem.py --service RUN [--particles N] [--density KG_M3]
+                                          [--units LENGTH_M,TIME_S,MASS_KG]
 
 Every step it sends the particle states, receives the hydrodynamic forces, and advances with
 symplectic Euler (v += dt (F/m + g); x += dt v), reflecting elastically at the domain faces but
@@ -51,6 +52,9 @@ def main() -> int:
     ap.add_argument("--particles", type=int, default=64, help="number of spheres (default 64)")
     ap.add_argument("--density", type=float, default=2500.0,
                     help="particle density [kg/m^3] (default 2500)")
+    ap.add_argument("--units", default="1,1,1",
+                    help="the units this DEM speaks, each as its size in SI: length [m], time [s], "
+                         "mass [kg] (default SI: 1,1,1; e.g. 1e-3,1e-3,1e-3 for mm, ms, g)")
     ap.add_argument("--timeout", type=float, default=10.0,
                     help="longest wait for a live but silent fluid server [s] (default 10)")
     args = ap.parse_args()
@@ -60,6 +64,13 @@ def main() -> int:
     if not (args.density > 0.0 and math.isfinite(args.density)):
         print("python-dem: error: --density must be a positive number", file=sys.stderr)
         return 1
+    try:
+        length_m, time_s, mass_kg = (float(u) for u in args.units.split(","))
+    except ValueError:
+        print(f"python-dem: error: --units {args.units!r}: must be three numbers LENGTH_M,TIME_S,MASS_KG",
+              file=sys.stderr)
+        return 1
+    units = lbmdem.Units(length_m, time_s, mass_kg)
 
     stop_requested = {"flag": False}
 
@@ -75,7 +86,7 @@ def main() -> int:
 
     n = args.particles
     hello = lbmdem.Hello.new(
-        lbmdem.Units.si(),
+        units,
         lbmdem.Physics.GRAVITY | lbmdem.Physics.BALLISTIC_STANDIN,
         initial_count=n,
         software=SOFTWARE,
@@ -96,7 +107,9 @@ def main() -> int:
               f"periodic along {axes}, capacity {welcome.capacity}", file=sys.stderr, flush=True)
 
         radius = 0.02 * float(np.min(hi - lo))
-        mass = args.density * 4.0 / 3.0 * math.pi * radius ** 3
+        # Everything from the Welcome is in our units already; the density is given in SI.
+        density = args.density * length_m ** 3 / mass_kg
+        mass = density * 4.0 / 3.0 * math.pi * radius ** 3
         states = np.zeros(n, lbmdem.STATE_DTYPE)
         states["id"] = np.arange(n, dtype=np.uint64)
         states["position"] = grid_positions(n, lo, hi, radius)
