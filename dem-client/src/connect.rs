@@ -286,8 +286,8 @@ pub(crate) struct Particles {
     /// Fluid density / fluid step [kg/m^3/s] for the drag within a fluid step (0: the force is
     /// held constant).
     covered_mass_rate: f64,
-    /// DEM steps taken, fluid steps taken in free flight (every sphere flown) and with an island
-    /// (some spheres flown, the others sub-stepped), sphere-steps flown of all.
+    /// DEM steps taken, fluid steps taken in free flight (every sphere flown), sphere-steps flown
+    /// of all (the steps with an island are counted by the world).
     pub dem_steps: u64,
     pub free_steps: u64,
     pub flown_sphere_steps: u64,

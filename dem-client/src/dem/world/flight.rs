@@ -94,6 +94,8 @@ impl World {
                 return Plan::Fly;
             }
             let island = self.island(seeds, &travel, reach);
+            // An island sphere that its speed alone takes beyond its reach would have the island
+            // dropped after all its sub-steps: sub-step everything at once.
             if island
                 .iter()
                 .any(|&k| span * self.bodies[k as usize].v.norm() > reach)
@@ -199,9 +201,8 @@ impl World {
 
     /// The island's `steps` DEM steps in a world of its own (its spheres, their pairs with each
     /// other that can meet, their walls), then its spheres back and the others flown over `span`;
-    /// false, with
-    /// nothing changed, when an island sphere went further than `ISLAND_REACH` skin from where it
-    /// started (or the island's lists ran out).
+    /// false, with nothing changed, when an island sphere went further than `ISLAND_REACH` skin
+    /// from where it started (or the island's lists ran out).
     fn advance_island(&mut self, island: &[u32], span: f64, steps: u64) -> bool {
         let mut local = vec![FLYING; self.bodies.len()];
         for (l, &k) in island.iter().enumerate() {
