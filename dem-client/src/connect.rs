@@ -2,12 +2,13 @@
 
 use crate::dem::lubrication::Lubrication;
 use crate::dem::timestep::substeps;
-use crate::dem::world::{Body, World};
+use crate::dem::world::{Body, World, CHUNK};
 use crate::dem::V3;
 use protocol::transport::LinkOptions;
 use protocol::{
     DemLink, Hello, LinkError, ParticleReply, ParticleState, Physics, StepFlags, StepHeader, Units, Welcome,
 };
+use rayon::prelude::*;
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -333,13 +334,19 @@ impl Particles {
 
     pub(crate) fn states_into(&self, out: &mut Vec<ParticleState>) {
         out.clear();
-        out.extend(self.world.bodies.iter().map(|b| ParticleState {
-            id: b.id,
-            position: b.x.into(),
-            velocity: b.v.into(),
-            angular_velocity: b.w.into(),
-            radius: b.r,
-        }));
+        out.par_extend(
+            self.world
+                .bodies
+                .par_iter()
+                .with_min_len(CHUNK)
+                .map(|b| ParticleState {
+                    id: b.id,
+                    position: b.x.into(),
+                    velocity: b.v.into(),
+                    angular_velocity: b.w.into(),
+                    radius: b.r,
+                }),
+        );
     }
 
     /// Takes the fluid's force and torque (same order as the states), held over the fluid step
@@ -348,10 +355,11 @@ impl Particles {
     /// `substeps.contact` DEM steps; with `substeps.free_flight`, each sphere that can touch
     /// nothing within it in one exact step.
     pub(crate) fn advance(&mut self, replies: &[ParticleReply], substeps: Substeps, dt: f64) {
-        let g = self.world.gravity;
-        for (b, r) in self.world.bodies.iter_mut().zip(replies) {
+        let (g, rate) = (self.world.gravity, self.covered_mass_rate);
+        let bodies = self.world.bodies.par_iter_mut().with_min_len(CHUNK);
+        bodies.zip(replies).for_each(|(b, r)| {
             let (force, torque) = (V3::from(r.force), V3::from(r.torque));
-            (b.drag, b.spin_drag) = substep_drag(self.covered_mass_rate, b.r);
+            (b.drag, b.spin_drag) = substep_drag(rate, b.r);
             b.f_ext = force + b.drag * b.v;
             b.t_ext = torque + b.spin_drag * b.w;
             // The reference velocity moves as the held force, gravity and the previous step's mean
@@ -363,7 +371,7 @@ impl Particles {
             b.t_ext_rate = b.spin_drag * (torque + contact_torque) / b.inertia;
             b.contact_impulse = V3::zeros();
             b.contact_angular_impulse = V3::zeros();
-        }
+        });
         if !substeps.free_flight {
             self.world.advance(substeps.contact);
             self.dem_steps += substeps.contact;

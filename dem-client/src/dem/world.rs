@@ -56,7 +56,7 @@ impl LawRef for LiggghtsHertz {
 }
 
 /// Fewest bodies per parallel task (tasks of a few microseconds at least).
-const CHUNK: usize = 256;
+pub(crate) const CHUNK: usize = 256;
 /// Verlet pairs per parallel task.
 const PAIR_CHUNK: usize = 1024;
 /// Safety factor on a sphere's travel bound in free flight (`flight`; the bound is exact for the
