@@ -35,16 +35,6 @@ fn last_profile(path: &Path) -> Vec<(f64, f64)> {
         .collect()
 }
 
-/// Every row of a run's particles.csv as numbers (step, time, id, x, y, z, vx, vy, vz, ...).
-fn particle_rows(out: &Path) -> Vec<Vec<f64>> {
-    std::fs::read_to_string(out.join("particles.csv"))
-        .unwrap()
-        .lines()
-        .skip(1)
-        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
-        .collect()
-}
-
 #[test]
 fn poiseuille_in_si_units_matches_the_analytic_profile() {
     let (code, err, out) = run("pois", POISEUILLE);

@@ -82,15 +82,6 @@ fn python_client_learns_the_periodic_axes_from_the_welcome() {
     python_run_with("python-periodic", 64, 60, false, faces);
 }
 
-/// Rows of particles.csv (written by the fluid side, in SI) as numbers, in file order.
-fn csv_rows(out: &std::path::Path) -> Vec<Vec<f64>> {
-    let text = std::fs::read_to_string(out.join("particles.csv")).expect("particles.csv");
-    text.lines()
-        .skip(1)
-        .map(|l| l.split(',').map(|v| v.parse().expect("a number")).collect())
-        .collect()
-}
-
 /// A DEM may speak any units (PROTOCOL.md 4.3): the fluid converts what it receives to SI and what
 /// it sends back to the DEM's units. The Python DEM in mm, half-seconds and grams runs the same
 /// physics as in SI: the same positions, velocities, spins, forces and torques in the fluid's
@@ -116,7 +107,7 @@ fn a_dem_in_other_units_runs_the_same_physics_as_in_si() {
         assert!(client.status.success(), "{units}: {err}");
         let (code, _) = server.wait_exit(Duration::from_secs(60));
         assert_eq!(code, Some(0), "{units}: {}", Proc::drain(&server.stderr));
-        csv_rows(&out)
+        particle_rows(&out)
     };
     let si = run_in("units-si", "1,1,1");
     let other = run_in("units-other", "1e-3,0.5,2e-3");

@@ -263,6 +263,16 @@ pub fn is_gone(pid: u32) -> bool {
     }
 }
 
+/// Every row of a run's particles.csv as numbers (step, time, id, x, y, z, vx, vy, vz, ...).
+pub fn particle_rows(out: &Path) -> Vec<Vec<f64>> {
+    std::fs::read_to_string(out.join("particles.csv"))
+        .expect("particles.csv")
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').map(|v| v.parse().expect("a number")).collect())
+        .collect()
+}
+
 /// Rows of particles.csv grouped by step: step -> ids.
 pub fn csv_steps(out: &Path) -> std::collections::BTreeMap<u64, Vec<u64>> {
     let text = std::fs::read_to_string(out.join("particles.csv")).expect("particles.csv");
