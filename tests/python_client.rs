@@ -11,32 +11,42 @@ fn python_run(tag: &str, particles: u64, steps: u64, lubrication: bool) {
     python_run_with(tag, particles, steps, lubrication, "");
 }
 
-/// `python_run` with `faces` as the scene's `[lattice.faces]`; the client must say it learnt the
-/// periodic ones from the Welcome.
-fn python_run_with(tag: &str, particles: u64, steps: u64, lubrication: bool, faces: &str) {
+/// Starts `lbm-server` on the scene `text` for an external DEM and runs the Python example DEM
+/// against it with `args` after `--service RUN`; both must succeed. Returns the client's stdout
+/// and stderr, the run's output folder and the run name.
+fn with_python_dem(tag: &str, text: &str, args: &[&str]) -> (String, String, std::path::PathBuf, String) {
     let dir = temp_dir(tag);
-    // The external DEM brings its own particles: the scene only sets the capacity.
-    let text = scene_text(tag, [2, 2, 2], steps, 50, 10.0)
-        .replace("timeout = 10", "timeout = 10\ncapacity = 4096")
-        .replace("lubrication = false", &format!("lubrication = {lubrication}"))
-        .replace("[output]", &format!("{faces}[output]"));
-    let scene = write_scene(&dir, &text);
+    let scene = write_scene(&dir, text);
     let out = dir.join("out");
     let (mut server, run) = start_external(&scene, &out);
     let script = concat!(env!("CARGO_MANIFEST_DIR"), "/clients/python/example_dem.py");
     let client = Command::new("python3")
         .arg(script)
-        .args(["--service", &run, "--particles", &particles.to_string()])
+        .args(["--service", &run])
+        .args(args)
         .output()
         .expect("python3 runs");
-    let client_out = String::from_utf8_lossy(&client.stdout);
-    let client_err = String::from_utf8_lossy(&client.stderr);
+    let client_out = String::from_utf8_lossy(&client.stdout).into_owned();
+    let client_err = String::from_utf8_lossy(&client.stderr).into_owned();
     assert!(
         client.status.success(),
-        "python client failed:\n{client_out}\n{client_err}"
+        "python client failed ({args:?}):\n{client_out}\n{client_err}"
     );
     let (code, _) = server.wait_exit(Duration::from_secs(60));
-    assert_eq!(code, Some(0), "{}", Proc::drain(&server.stderr));
+    assert_eq!(code, Some(0), "{args:?}: {}", Proc::drain(&server.stderr));
+    (client_out, client_err, out, run)
+}
+
+/// `python_run` with `faces` as the scene's `[lattice.faces]`; the client must say it learnt the
+/// periodic ones from the Welcome.
+fn python_run_with(tag: &str, particles: u64, steps: u64, lubrication: bool, faces: &str) {
+    // The external DEM brings its own particles: the scene only sets the capacity.
+    let text = scene_text(tag, [2, 2, 2], steps, 50, 10.0)
+        .replace("timeout = 10", "timeout = 10\ncapacity = 4096")
+        .replace("lubrication = false", &format!("lubrication = {lubrication}"))
+        .replace("[output]", &format!("{faces}[output]"));
+    let (client_out, client_err, out, run) =
+        with_python_dem(tag, &text, &["--particles", &particles.to_string()]);
     let expected = format!(
         "python-dem: completed {steps} steps, {particles} particles, last step {}",
         steps - 1
@@ -91,22 +101,9 @@ fn python_client_learns_the_periodic_axes_from_the_welcome() {
 fn a_dem_in_other_units_runs_the_same_physics_as_in_si() {
     let steps = 40;
     let run_in = |tag: &str, units: &str| {
-        let dir = temp_dir(tag);
         let text = scene_text(tag, [2, 2, 2], steps, 10, 10.0)
             .replace("timeout = 10", "timeout = 10\ncapacity = 64");
-        let scene = write_scene(&dir, &text);
-        let out = dir.join("out");
-        let (mut server, run) = start_external(&scene, &out);
-        let script = concat!(env!("CARGO_MANIFEST_DIR"), "/clients/python/example_dem.py");
-        let client = Command::new("python3")
-            .arg(script)
-            .args(["--service", &run, "--particles", "27", "--units", units])
-            .output()
-            .expect("python3 runs");
-        let err = String::from_utf8_lossy(&client.stderr);
-        assert!(client.status.success(), "{units}: {err}");
-        let (code, _) = server.wait_exit(Duration::from_secs(60));
-        assert_eq!(code, Some(0), "{units}: {}", Proc::drain(&server.stderr));
+        let (_, _, out, _) = with_python_dem(tag, &text, &["--particles", "27", "--units", units]);
         particle_rows(&out)
     };
     let si = run_in("units-si", "1,1,1");
