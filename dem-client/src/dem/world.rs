@@ -11,6 +11,7 @@ use super::contact::{contact_force, Contact, ContactForce, ContactLaw, PairMater
 use super::lubrication::Lubrication;
 use super::neighbor::{periodic_pairs, verlet_pairs, Periodic};
 use super::V3;
+use rayon::iter::Either;
 use rayon::prelude::*;
 use std::collections::HashMap;
 
@@ -719,55 +720,48 @@ impl World {
         let law = self.law;
         let (pair_contacts, (wall_contacts, moved)) = if law == ContactLaw::LIGGGHTS_HERTZ {
             let pair_contacts = self.pair_forces(LiggghtsHertz, dt);
-            self.film_forces();
             (pair_contacts, self.gather(LiggghtsHertz, dt, finish))
         } else {
             let pair_contacts = self.pair_forces(AnyLaw(&law), dt);
-            self.film_forces();
             (pair_contacts, self.gather(AnyLaw(&law), dt, finish))
         };
         self.contacts = pair_contacts + wall_contacts;
         moved
     }
 
-    /// Sphere-sphere contacts, in parallel over chunks of the Verlet pairs (a plain loop in each
-    /// chunk); returns how many touch.
+    /// Sphere-sphere contacts and squeeze films, in parallel over chunks of the Verlet pairs (a
+    /// plain loop in each chunk; the film of a pair from the same separation and velocities as
+    /// its contact, in the same pass); returns how many touch.
     fn pair_forces<L: LawRef>(&mut self, law: L, dt: f64) -> usize {
-        let bodies = &self.bodies;
-        let pm = &self.pair_materials;
+        let pass = PairPass {
+            bodies: &self.bodies,
+            law,
+            pm: &self.pair_materials,
+            lubrication: self.lubrication,
+            dt,
+        };
+        // A dry world has no films: each chunk gets an empty slice.
+        let chunks = self.slots.len().div_ceil(PAIR_CHUNK);
+        let films = match self.lubrication {
+            Some(_) => Either::Left(self.films.par_chunks_mut(PAIR_CHUNK)),
+            None => Either::Right((0..chunks).into_par_iter().map(|_| &mut [][..])),
+        };
         self.slots
             .par_chunks_mut(PAIR_CHUNK)
             .zip(self.pair_const.par_chunks(PAIR_CHUNK))
             .zip(self.out.par_chunks_mut(PAIR_CHUNK))
-            .map(|((slots, consts), outs)| {
+            .zip(films)
+            .map(|(((slots, consts), outs), films)| {
                 if L::BATCHED {
-                    return pair_forces_batched(bodies, pm, slots, consts, outs, dt);
+                    return pair_forces_batched(&pass, slots, consts, outs, films);
                 }
                 let mut touching = 0;
-                for ((s, p), out) in slots.iter_mut().zip(consts).zip(outs) {
-                    touching += pair_force(bodies, law, pm, s, p, out, dt);
+                for (m, ((s, p), out)) in slots.iter_mut().zip(consts).zip(outs).enumerate() {
+                    touching += pass.pair_force(s, p, out, films, m);
                 }
                 touching
             })
             .sum()
-    }
-
-    /// Squeeze-film force of every listed pair into `films` (nothing without lubrication).
-    fn film_forces(&mut self) {
-        let Some(lub) = self.lubrication else {
-            return;
-        };
-        let bodies = &self.bodies;
-        self.films
-            .par_chunks_mut(PAIR_CHUNK)
-            .zip(self.slots.par_chunks(PAIR_CHUNK))
-            .zip(self.pair_const.par_chunks(PAIR_CHUNK))
-            .for_each(|((films, slots), consts)| {
-                for ((film, s), p) in films.iter_mut().zip(slots).zip(consts) {
-                    let (a, b) = (&bodies[s.i as usize], &bodies[s.j as usize]);
-                    *film = lub.pair_force(a.x - b.x - p.shift, a.v - b.v, p.r_sum, p.r_eff);
-                }
-            });
     }
 
     /// Sums the pair forces and adds the wall contacts, in parallel over chunks of the bodies;
@@ -824,57 +818,80 @@ fn apart(s: &mut Slot, out: &mut ContactForce) {
     }
 }
 
-/// One Verlet pair: its contact force into `out` (zero when apart); 1 when touching.
-#[inline(always)]
-fn pair_force(
-    bodies: &[Body],
-    law: impl LawRef,
-    pm: &[PairMaterial],
-    s: &mut Slot,
-    p: &PairConst,
-    out: &mut ContactForce,
+/// What the pair pass reads.
+struct PairPass<'a, L> {
+    bodies: &'a [Body],
+    law: L,
+    pm: &'a [PairMaterial],
+    lubrication: Option<Lubrication>,
     dt: f64,
-) -> usize {
-    let (a, b) = (&bodies[s.i as usize], &bodies[s.j as usize]);
-    let d = a.x - b.x - p.shift;
-    let dist2 = d.norm_squared();
-    if dist2 >= p.cut2 {
-        apart(s, out);
-        return 0;
+}
+
+impl<L: LawRef> PairPass<'_, L> {
+    /// The separation x_i - x_j of a pair, and with lubrication its squeeze film into
+    /// `films[m]`.
+    #[inline(always)]
+    fn separation(&self, a: &Body, b: &Body, p: &PairConst, films: &mut [V3], m: usize) -> V3 {
+        let d = a.x - b.x - p.shift;
+        if let Some(lub) = &self.lubrication {
+            films[m] = lub.pair_force(d, a.v - b.v, p.r_sum, p.r_eff);
+        }
+        d
     }
-    let dist = dist2.sqrt();
-    let overlap = p.r_sum - dist;
-    if overlap <= 0.0 {
-        apart(s, out);
-        return 0;
+
+    /// One Verlet pair: its contact force into `out` (zero when apart), its film into `films[m]`;
+    /// 1 when touching.
+    #[inline(always)]
+    fn pair_force(
+        &self,
+        s: &mut Slot,
+        p: &PairConst,
+        out: &mut ContactForce,
+        films: &mut [V3],
+        m: usize,
+    ) -> usize {
+        let (a, b) = (&self.bodies[s.i as usize], &self.bodies[s.j as usize]);
+        let d = self.separation(a, b, p, films, m);
+        let dist2 = d.norm_squared();
+        if dist2 >= p.cut2 {
+            apart(s, out);
+            return 0;
+        }
+        let dist = dist2.sqrt();
+        let overlap = p.r_sum - dist;
+        if overlap <= 0.0 {
+            apart(s, out);
+            return 0;
+        }
+        let n = if dist > 0.0 { d / dist } else { V3::z() };
+        let c = Contact {
+            n,
+            overlap,
+            r_i: a.r,
+            r_j: b.r,
+            r_eff: p.r_eff,
+            m_eff: p.m_eff,
+            dv: a.v - b.v,
+            w_i: a.w,
+            w_j: b.w,
+        };
+        s.touching = true;
+        let law = self.law.law();
+        *out = contact_force(law, &self.pm[p.material as usize], &c, &mut s.history, self.dt);
+        1
     }
-    let n = if dist > 0.0 { d / dist } else { V3::z() };
-    let c = Contact {
-        n,
-        overlap,
-        r_i: a.r,
-        r_j: b.r,
-        r_eff: p.r_eff,
-        m_eff: p.m_eff,
-        dv: a.v - b.v,
-        w_i: a.w,
-        w_j: b.w,
-    };
-    s.touching = true;
-    *out = contact_force(law.law(), &pm[p.material as usize], &c, &mut s.history, dt);
-    1
 }
 
 /// The pairs of a chunk with `ContactLaw::LIGGGHTS_HERTZ`: the geometry per pair, the law in
 /// batches of touching pairs (`batch.rs`, the same bits as `pair_force`); returns how many touch.
-fn pair_forces_batched(
-    bodies: &[Body],
-    pm: &[PairMaterial],
+fn pair_forces_batched<L: LawRef>(
+    pass: &PairPass<L>,
     slots: &mut [Slot],
     consts: &[PairConst],
     outs: &mut [ContactForce],
-    dt: f64,
+    films: &mut [V3],
 ) -> usize {
+    let (bodies, pm, dt) = (pass.bodies, pass.pm, pass.dt);
     let damping = ContactLaw::LIGGGHTS_HERTZ.switches.damping as usize;
     let mut batch = Batch::default();
     let flush = |batch: &mut Batch, slots: &mut [Slot], outs: &mut [ContactForce]| {
@@ -895,7 +912,7 @@ fn pair_forces_batched(
     for m in 0..slots.len() {
         let (s, p) = (&mut slots[m], &consts[m]);
         let (a, b) = (&bodies[s.i as usize], &bodies[s.j as usize]);
-        let d = a.x - b.x - p.shift;
+        let d = pass.separation(a, b, p, films, m);
         let dist2 = d.norm_squared();
         if dist2 >= p.cut2 {
             apart(s, &mut outs[m]);
