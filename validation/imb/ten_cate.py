@@ -38,7 +38,9 @@ import time
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.abspath(os.path.join(HERE, "..", ".."))
 TEMPLATE = os.path.join(ROOT, "validation", "scenes", "ten-cate-e1.toml")
-BINARY = os.path.join(ROOT, "target", "release", "lbm-server")
+# LBM_SERVER: another lbm-server (with its dem-client beside it), e.g. a copy that a rebuild of
+# target/ during a long run cannot replace.
+BINARY = os.environ.get("LBM_SERVER", os.path.join(ROOT, "target", "release", "lbm-server"))
 RUNS = os.path.join(HERE, "runs")
 
 D = 0.015            # m
@@ -1107,10 +1109,9 @@ at N = {fmt(nmax, "%g")} cells per diameter or less. {headline}
 - Code: every run here except the larger-box runs of E1 at N = 12, E2 (N = 6, 9, 12), E3 at N = 12
   and E4 at N = 12 (200 and 150 mm wide) and N = 16 (made last, with the current fluid code; the E1
   and E2 N = 12 and E4 150 mm runs also with the squeeze films integrated in the DEM, which act only
-  below one cell of gap) and the experiment's-box runs at N = 15 (E2, E3, E4, 2026-12-02, with
-  everything of the current code: the squeeze films and free flight in the DEM; E1 at N = 15 was
-  stopped at its start for lack of session time; these N = 15 runs shared the 2 cores with other
-  work, so their MLUPS are low)
+  below one cell of gap) and the experiment's-box runs at N = 15 (E2, E3, E4 and, in a later
+  session, E1, 2026-12-02, with everything of the current code: the squeeze films and free flight
+  in the DEM; these N = 15 runs shared the 2 cores with other work, so their MLUPS are low)
   predates two changes of 2026-11-24: the
   solid fraction by a distance ramp instead of 4^3 sub-samples, which moves the Zick-Homsy and
   Schiller-Naumann errors by at most 0.9 points (docs/imb.md), and the force within a fluid step
