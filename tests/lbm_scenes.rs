@@ -188,6 +188,66 @@ fn settling_sphere_approaches_ten_cates_terminal_velocity() {
     }
 }
 
+/// `coupling.radius_correction = "calibrated"`: Ten Cate E1 at 6 cells per diameter (TRT, tau
+/// 1.2, where the drag is ~13% low) draws the sphere larger by the measured deficit, says so
+/// instead of the tau warning, and the sphere feels more drag (it falls slower than drawn at its
+/// radius); the DEM's sphere and the buoyancy keep the radius. Refused with the seed's weighting
+/// and beyond the calibrated taus, naming the field.
+#[test]
+fn a_calibrated_radius_correction_draws_the_sphere_larger_and_slows_it() {
+    const SCENE: &str = include_str!("../validation/scenes/ten-cate-e1.toml");
+    let short = SCENE.replace("steps = 400", "steps = 60");
+    let calibrated = format!("{short}\n[coupling]\nradius_correction = \"calibrated\"\n");
+    let speed = |tag: &str, scene: &str| {
+        let (code, err, out) = run(tag, scene);
+        assert_eq!(code, Some(0), "{err}");
+        let rows = particle_rows(&out);
+        (-rows.last().unwrap()[8], err)
+    };
+    let (nominal, err) = speed("radius_none", &short);
+    assert!(
+        err.contains("warning: lattice tau = 1.201") && !err.contains("spheres drawn"),
+        "{err}"
+    );
+    let (drawn, err) = speed("radius_calibrated", &calibrated);
+    let product = err
+        .split("spheres drawn larger by ")
+        .nth(1)
+        .and_then(|t| t.split(' ').next())
+        .and_then(|g| g.parse::<f64>().ok())
+        .unwrap_or_else(|| panic!("no deficit in {err}"));
+    // TRT at tau 1.2: 0.238 cells at 4.96 cells radius (1.18 cells^2), 0.39 cells at this 3.
+    assert!(
+        product > 1.0 && product < 1.4,
+        "deficit x radius {product} cells^2"
+    );
+    assert!(!err.contains("warning: lattice tau"), "{err}");
+    assert!(
+        drawn < 0.97 * nominal,
+        "drawn larger {drawn} m/s against {nominal} m/s at its radius"
+    );
+    let seed = calibrated.replace("[coupling]\n", "[coupling]\nweighting = \"seed\"\n");
+    let (code, err, _) = run("radius_seed", &seed);
+    assert_eq!(code, Some(2), "{err}");
+    assert!(
+        err.contains("coupling.radius_correction") && err.contains("noble-torczynski"),
+        "{err}"
+    );
+    let (code, err, _) = run(
+        "radius_typo",
+        &calibrated.replace("\"calibrated\"", "\"calibrate\""),
+    );
+    assert_eq!(code, Some(2), "{err}");
+    assert!(
+        err.contains("coupling.radius_correction") && err.contains("\"calibrate\""),
+        "{err}"
+    );
+    let viscous = calibrated.replace("mach = 0.1", "mach = 0.25");
+    let (code, err, _) = run("radius_beyond", &viscous);
+    assert_ne!(code, Some(0), "{err}");
+    assert!(err.contains("beyond the calibrated taus"), "{err}");
+}
+
 /// A sphere (Ten Cate E1's, at 3 and 6 cells per diameter) released 2 mm above the floor of a
 /// small box comes to rest and stays there. With the fluid force held constant over the 80-150 DEM
 /// steps of a fluid step (`coupling.substep_drag = false`) it does not: the force answers the

@@ -153,6 +153,16 @@ pub struct Coupling {
     /// with sparse particles), "auto" (default): fused on a GPU, redo on a CPU driver.
     #[serde(default = "default_covered_cells")]
     pub covered_cells: String,
+    /// With a `[lattice]`: "none" (default) draws each sphere on the lattice at its radius;
+    /// "calibrated" draws it larger by the immersed boundary's measured hydrodynamic radius
+    /// deficit at the lattice's tau and operator (docs/imb.md, "Radius correction"; Noble-Torczynski
+    /// weighting only). Buoyancy and the DEM keep the radius.
+    #[serde(default = "default_radius_correction")]
+    pub radius_correction: String,
+}
+
+fn default_radius_correction() -> String {
+    "none".into()
 }
 
 fn default_lubrication() -> bool {
@@ -190,6 +200,7 @@ impl Default for Coupling {
             substep_drag: default_substep_drag(),
             free_flight: default_free_flight(),
             covered_cells: default_covered_cells(),
+            radius_correction: default_radius_correction(),
         }
     }
 }

@@ -172,6 +172,21 @@ impl Scene {
                 "expected \"noble-torczynski\" or \"seed\"",
             ));
         }
+        if !["none", "calibrated"].contains(&self.coupling.radius_correction.as_str()) {
+            let value = format!("{:?}", self.coupling.radius_correction);
+            return Err(c.fail(
+                "coupling.radius_correction",
+                value,
+                "expected \"none\" or \"calibrated\"",
+            ));
+        }
+        if self.coupling.radius_correction == "calibrated" && self.coupling.weighting == "seed" {
+            return Err(c.fail(
+                "coupling.radius_correction",
+                "\"calibrated\"",
+                "is measured with coupling.weighting = \"noble-torczynski\", not \"seed\"",
+            ));
+        }
         if !["auto", "fused", "redo"].contains(&self.coupling.covered_cells.as_str()) {
             let value = format!("{:?}", self.coupling.covered_cells);
             return Err(c.fail(

@@ -217,6 +217,55 @@ pub fn zick_homsy_with(
     operator: Operator,
     options: super::imb::ImbOptions,
 ) -> ArrayDrag {
+    array_drag(gpu, n, [radius, radius], tau, operator, options)
+}
+
+/// How much larger (`delta`, cells) the immersed boundary must draw a sphere for the array to
+/// have Zick & Homsy's drag: the boundary's hydrodynamic radius falls short of the nominal one by
+/// an amount that grows with tau (validation/lbm/REPORT.md, "drag against tau").
+#[derive(Debug, Clone, Copy)]
+pub struct RadiusDeficit {
+    pub delta: f64,
+    /// K drawn at the nominal radius, and at the nominal radius + delta (both normalised with
+    /// the nominal radius).
+    pub k_nominal: f64,
+    pub k_drawn: f64,
+    pub steps: u64,
+}
+
+/// [`RadiusDeficit`] of a sphere of nominal `radius` in an n^3 array at this tau: the drag at
+/// delta = 0 and 0.25 cells, delta from the secant through them, and the drag drawn with it.
+pub fn radius_deficit(
+    gpu: &Arc<Gpu>,
+    n: usize,
+    radius: f64,
+    k_ref: f64,
+    tau: f64,
+    operator: Operator,
+) -> RadiusDeficit {
+    let options = super::imb::ImbOptions::default();
+    let k_at = |delta: f64| array_drag(gpu, n, [radius + delta, radius], tau, operator, options);
+    let (nominal, probe) = (k_at(0.0), k_at(0.25));
+    let delta = 0.25 * (k_ref - nominal.k) / (probe.k - nominal.k);
+    let drawn = k_at(delta);
+    RadiusDeficit {
+        delta,
+        k_nominal: nominal.k,
+        k_drawn: drawn.k,
+        steps: nominal.steps,
+    }
+}
+
+/// The array of [`zick_homsy_with`] with the sphere drawn at `[drawn, nominal]` radius: the
+/// lattice covers the drawn one, K and the pressure-gradient share are the nominal one's.
+fn array_drag(
+    gpu: &Arc<Gpu>,
+    n: usize,
+    [drawn, radius]: [f64; 2],
+    tau: f64,
+    operator: Operator,
+    options: super::imb::ImbOptions,
+) -> ArrayDrag {
     use super::imb::SolidParticle;
     let mut setup = Setup::new([n, n, n], [Face::Periodic; 6], tau, operator);
     let nu = setup.viscosity();
@@ -225,7 +274,7 @@ pub fn zick_homsy_with(
     setup.force = [f, 0.0, 0.0];
     let sphere = SolidParticle {
         position: [n as f64 / 2.0; 3],
-        radius,
+        radius: drawn,
         ..Default::default()
     };
     let mut lattice = coupled_lattice(gpu, &setup, options);
