@@ -426,42 +426,44 @@ mod tests {
         assert_eq!(drag_error_at("lbgk", 1.0), None);
     }
 
-    #[test]
-    fn the_drag_table_is_the_reports() {
+    /// The rows of the 16^3 box in a section of validation/lbm/REPORT.md: (tau, operator, the
+    /// number in column `column` without its % sign).
+    fn report_rows(heading: &str, column: usize) -> Vec<(f64, String, f64)> {
         let report = include_str!("../../validation/lbm/REPORT.md");
         let section = report
-            .split("## Immersed moving boundary: drag against tau")
+            .split(heading)
             .nth(1)
             .and_then(|rest| rest.split("\n## ").next())
-            .expect("the report has the section");
-        let mut rows = 0;
-        for line in section.lines().filter(|l| l.starts_with("| 16 |")) {
+            .unwrap_or_else(|| panic!("the report has no section {heading:?}"));
+        let rows = section.lines().filter(|l| l.starts_with("| 16 |")).map(|line| {
             let cells: Vec<&str> = line.split('|').map(str::trim).collect();
-            let (tau, op) = (cells[3].parse::<f64>().unwrap(), cells[4]);
-            let error: f64 = cells[8].trim_end_matches('%').parse().unwrap();
-            assert_eq!(drag_error_at(op, tau), Some(error), "{line}");
-            rows += 1;
+            let number = cells[column].trim_end_matches('%').parse().unwrap();
+            (cells[3].parse().unwrap(), cells[4].to_string(), number)
+        });
+        rows.collect()
+    }
+
+    #[test]
+    fn the_drag_table_is_the_reports() {
+        let rows = report_rows("## Immersed moving boundary: drag against tau", 8);
+        for (tau, op, error) in &rows {
+            assert_eq!(drag_error_at(op, *tau), Some(*error), "{op} at tau {tau}");
         }
-        assert_eq!(rows, 3 * DRAG_AGAINST_TAU.len());
+        assert_eq!(rows.len(), 3 * DRAG_AGAINST_TAU.len());
     }
 
     #[test]
     fn the_radius_deficit_table_is_the_reports() {
-        let report = include_str!("../../validation/lbm/REPORT.md");
-        let section = report
-            .split("## Immersed moving boundary: hydrodynamic radius deficit against tau")
-            .nth(1)
-            .and_then(|rest| rest.split("\n## ").next())
-            .expect("the report has the section");
-        let mut rows = 0;
-        for line in section.lines().filter(|l| l.starts_with("| 16 |")) {
-            let cells: Vec<&str> = line.split('|').map(str::trim).collect();
-            let (tau, op) = (cells[3].parse::<f64>().unwrap(), cells[4]);
-            let delta: f64 = cells[7].parse().unwrap();
-            assert_eq!(measured_at(&RADIUS_DEFICIT, op, tau), Some(delta), "{line}");
-            rows += 1;
+        let heading = "## Immersed moving boundary: hydrodynamic radius deficit against tau";
+        let rows = report_rows(heading, 7);
+        for (tau, op, delta) in &rows {
+            assert_eq!(
+                measured_at(&RADIUS_DEFICIT, op, *tau),
+                Some(*delta),
+                "{op} at tau {tau}"
+            );
         }
-        assert_eq!(rows, 3 * RADIUS_DEFICIT.len());
+        assert_eq!(rows.len(), 3 * RADIUS_DEFICIT.len());
     }
 
     #[test]
