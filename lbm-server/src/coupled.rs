@@ -141,7 +141,7 @@ fn tau_warning(operator: &str, tau: f64) -> Option<String> {
          of 5 cells radius in the Zick-Homsy array measured {measured}, about half of it at 7.4 cells \
          (validation/lbm/REPORT.md, \"drag against tau\"); a settling sphere falls about that much too \
          fast. Lower lattice.mach (or lattice.velocity_scale) or set lattice.tau: {operator} at tau \
-         {best_tau} measured {best:+.1}%"
+         {best_tau} measured {best:+.1}%; or coupling.radius_correction = \"calibrated\" (docs/imb.md)"
     ))
 }
 
