@@ -27,7 +27,8 @@ pub struct FluidSide {
     fluid_density: f64,
     gravity: [f64; 3],
     lubrication: Option<Lubrication>,
-    /// Each sphere of r cells is drawn r + this / r (`coupling.radius_correction`).
+    /// Each sphere of r cells is drawn r + this / max(r, 2) (`coupling.radius_correction`; 0
+    /// without it).
     deficit_product: f64,
     steps: u64,
 }
@@ -67,6 +68,9 @@ fn deficit_radius() -> f64 {
     (0.125 * 4096.0 * 3.0 / (4.0 * std::f64::consts::PI)).cbrt()
 }
 
+/// The smallest radius (cells) whose deficit the correction scales to (1 / radius).
+const MIN_DEFICIT_RADIUS: f64 = 2.0;
+
 /// Largest tau of the calibration per operator (BGK, TRT, MRT): BGK's deficit grows too fast
 /// beyond tau 1 for the calibration's one secant step (drawn with it, the array's drag is 5.3%
 /// high at tau 1.5 and 14.3% at 2; TRT and MRT within 1.8%).
@@ -97,7 +101,7 @@ fn drag_error_at(operator: &str, tau: f64) -> Option<f64> {
 }
 
 /// `coupling.radius_correction` as the product deficit x radius (cells^2): a sphere of r cells is
-/// drawn r + product / r. 0 for "none"; for "calibrated" the measured deficit at the lattice's
+/// drawn r + product / max(r, 2). 0 for "none"; for "calibrated" the measured deficit at the lattice's
 /// tau times its radius (refused beyond the operator's calibrated taus).
 fn radius_deficit_product(correction: &str, operator: &str, tau: f64) -> Result<f64, String> {
     if correction != "calibrated" {
@@ -182,7 +186,7 @@ impl FluidSide {
         let lubrication = scene.coupling.lubrication.then(|| lubrication_of(scene, &units));
         let deficit_product =
             radius_deficit_product(&scene.coupling.radius_correction, &units.operator, units.tau)?;
-        if deficit_product == 0.0 {
+        if scene.coupling.radius_correction == "none" {
             if let Some(warning) = tau_warning(&units.operator, units.tau) {
                 protocol::say!("lbm-server: warning: {warning}");
             }
@@ -373,18 +377,19 @@ struct LatticeStates<'a> {
     origin: [f64; 3],
     dx: f64,
     dt: f64,
-    /// Cells added to each radius (`coupling.radius_correction`).
+    /// Each radius of r cells is drawn r + this / max(r, 2) (`coupling.radius_correction`).
     deficit_product: f64,
 }
 
 impl LatticeStates<'_> {
-    /// The radius particle j is drawn with (cells).
+    /// The radius particle j is drawn with (cells): below 2 cells, where nothing was measured,
+    /// the deficit of 2 cells.
     fn drawn_radius(&self, j: usize) -> f64 {
         let r = self.states[j].radius / self.dx;
         if self.deficit_product == 0.0 {
             return r;
         }
-        r + self.deficit_product / r
+        r + self.deficit_product / r.max(MIN_DEFICIT_RADIUS)
     }
 }
 
@@ -496,6 +501,15 @@ mod tests {
         };
         assert_eq!(lattice.particle(0).radius, 3.25, "3 cells + 0.75 / 3");
         assert_eq!(lattice.radius(1), 6.125, "the deficit falls as 1 / radius");
+        let small = [ParticleState {
+            radius: 0.001,
+            ..Default::default()
+        }];
+        let lattice = LatticeStates {
+            states: &small,
+            ..lattice
+        };
+        assert_eq!(lattice.radius(0), 1.375, "below 2 cells, the deficit of 2");
     }
 
     #[test]
