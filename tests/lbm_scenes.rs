@@ -191,8 +191,8 @@ fn settling_sphere_approaches_ten_cates_terminal_velocity() {
 /// `coupling.radius_correction = "calibrated"`: Ten Cate E1 at 6 cells per diameter (TRT, tau
 /// 1.2, where the drag is ~13% low) draws the sphere larger by the measured deficit, says so
 /// instead of the tau warning, and the sphere feels more drag (it falls slower than drawn at its
-/// radius); the DEM's sphere and the buoyancy keep the radius. Refused with the seed's weighting
-/// and beyond the calibrated taus, naming the field.
+/// radius). Refused with the seed's weighting, a misspelt value and beyond the calibrated taus,
+/// naming the field.
 #[test]
 fn a_calibrated_radius_correction_draws_the_sphere_larger_and_slows_it() {
     const SCENE: &str = include_str!("../validation/scenes/ten-cate-e1.toml");
