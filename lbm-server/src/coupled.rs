@@ -76,10 +76,15 @@ const MIN_DEFICIT_RADIUS: f64 = 2.0;
 /// high at tau 1.5 and 14.3% at 2; TRT and MRT within 1.8%).
 const CALIBRATED_TAU: [f64; 3] = [1.0, 2.0, 2.0];
 
+/// The column of `operator` in the measured tables (BGK, TRT, MRT).
+fn operator_index(operator: &str) -> Option<usize> {
+    ["bgk", "trt", "mrt"].iter().position(|o| *o == operator)
+}
+
 /// A measured table's value for `operator` at `tau`, interpolated linearly between the measured
 /// taus (the first one's below them); None beyond the last measured tau.
 fn measured_at(table: &[(f64, [f64; 3])], operator: &str, tau: f64) -> Option<f64> {
-    let k = ["bgk", "trt", "mrt"].iter().position(|o| *o == operator)?;
+    let k = operator_index(operator)?;
     let (first, last) = (table[0], table[table.len() - 1]);
     if tau <= first.0 {
         return Some(first.1[k]);
@@ -107,7 +112,7 @@ fn radius_deficit_product(correction: &str, operator: &str, tau: f64) -> Result<
     if correction != "calibrated" {
         return Ok(0.0);
     }
-    let k = ["bgk", "trt", "mrt"].iter().position(|o| *o == operator);
+    let k = operator_index(operator);
     let limit = k.map_or(0.0, |k| CALIBRATED_TAU[k]);
     match measured_at(&RADIUS_DEFICIT, operator, tau) {
         Some(deficit) if tau <= limit => Ok(deficit * deficit_radius()),
@@ -127,7 +132,7 @@ fn tau_warning(operator: &str, tau: f64) -> Option<String> {
     if error.is_some_and(|e| e.abs() <= DRAG_ERROR_WARN) {
         return None;
     }
-    let k = ["bgk", "trt", "mrt"].iter().position(|o| *o == operator)?;
+    let k = operator_index(operator)?;
     let (best_tau, best) = DRAG_AGAINST_TAU
         .iter()
         .map(|&(t, e)| (t, e[k]))

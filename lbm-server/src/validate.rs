@@ -260,6 +260,19 @@ fn array_drag(gpu: &Arc<Gpu>) -> String {
     t
 }
 
+/// The array runs of the tau sections: (box n, tau, operator), the three operators in a 16^3 box at
+/// `taus`, TRT in a 24^3 box at 0.6-2.
+fn runs_over_tau(taus: &[f64]) -> Vec<(usize, f64, Operator)> {
+    let mrt = |tau: f64| Operator::Mrt {
+        rates: Rates::dhumieres(1.0 / tau),
+    };
+    let coarse = taus
+        .iter()
+        .flat_map(|&tau| [(16, tau, Operator::Bgk), (16, tau, TRT), (16, tau, mrt(tau))]);
+    let fine = [0.6, 0.8, 1.0, 1.5, 2.0].into_iter().map(|tau| (24, tau, TRT));
+    coarse.chain(fine).collect()
+}
+
 /// The array's drag against tau for each operator (Noble-Torczynski weighting), at two resolutions.
 fn drag_against_tau(gpu: &Arc<Gpu>) -> String {
     let mut t = String::from(
@@ -273,14 +286,7 @@ fn drag_against_tau(gpu: &Arc<Gpu>) -> String {
          |---:|---:|---:|---|---:|---:|---:|---:|\n",
     );
     let (phi, k_ref) = validation::ZICK_HOMSY[1];
-    let mrt = |tau: f64| Operator::Mrt {
-        rates: Rates::dhumieres(1.0 / tau),
-    };
-    let runs = [0.55, 0.6, 0.7, 0.8, 1.0, 1.5, 2.0]
-        .into_iter()
-        .flat_map(|tau| [(16, tau, Operator::Bgk), (16, tau, TRT), (16, tau, mrt(tau))])
-        .chain([0.6, 0.8, 1.0, 1.5, 2.0].into_iter().map(|tau| (24, tau, TRT)));
-    for (n, tau, op) in runs {
+    for (n, tau, op) in runs_over_tau(&[0.55, 0.6, 0.7, 0.8, 1.0, 1.5, 2.0]) {
         let options = crate::lbm::imb::ImbOptions {
             slots: 2,
             ..Default::default()
@@ -313,14 +319,7 @@ fn radius_deficit(gpu: &Arc<Gpu>) -> String {
          |---:|---:|---:|---|---:|---:|---:|---:|---:|---:|\n",
     );
     let (phi, k_ref) = validation::ZICK_HOMSY[1];
-    let mrt = |tau: f64| Operator::Mrt {
-        rates: Rates::dhumieres(1.0 / tau),
-    };
-    let runs = [0.6, 0.7, 0.8, 1.0, 1.5, 2.0]
-        .into_iter()
-        .flat_map(|tau| [(16, tau, Operator::Bgk), (16, tau, TRT), (16, tau, mrt(tau))])
-        .chain([0.6, 0.8, 1.0, 1.5, 2.0].into_iter().map(|tau| (24, tau, TRT)));
-    for (n, tau, op) in runs {
+    for (n, tau, op) in runs_over_tau(&[0.6, 0.7, 0.8, 1.0, 1.5, 2.0]) {
         let radius = validation::radius_for(phi, n);
         let d = validation::radius_deficit(gpu, n, radius, k_ref, tau, op);
         let _ = writeln!(

@@ -17,6 +17,21 @@ impl Checker<'_> {
         }
     }
 
+    /// `value` must be one of `choices` ("expected \"a\", \"b\" or \"c\"").
+    fn one_of(&self, field: &str, value: &str, choices: &[&str]) -> Result<(), SceneError> {
+        if choices.contains(&value) {
+            return Ok(());
+        }
+        let quoted: Vec<String> = choices.iter().map(|c| format!("{c:?}")).collect();
+        let (last, rest) = quoted.split_last().expect("choices");
+        let list = if rest.is_empty() {
+            last.clone()
+        } else {
+            format!("{} or {last}", rest.join(", "))
+        };
+        Err(self.fail(field, format!("{value:?}"), format!("expected {list}")))
+    }
+
     fn positive(&self, field: &str, value: f64, unit: &str) -> Result<(), SceneError> {
         if value.is_finite() && value > 0.0 {
             Ok(())
@@ -164,22 +179,16 @@ impl Scene {
                 "must be 1, 2, 3 or 4 particles per cell",
             ));
         }
-        if !["noble-torczynski", "seed"].contains(&self.coupling.weighting.as_str()) {
-            let value = format!("{:?}", self.coupling.weighting);
-            return Err(c.fail(
-                "coupling.weighting",
-                value,
-                "expected \"noble-torczynski\" or \"seed\"",
-            ));
-        }
-        if !["none", "calibrated"].contains(&self.coupling.radius_correction.as_str()) {
-            let value = format!("{:?}", self.coupling.radius_correction);
-            return Err(c.fail(
-                "coupling.radius_correction",
-                value,
-                "expected \"none\" or \"calibrated\"",
-            ));
-        }
+        c.one_of(
+            "coupling.weighting",
+            &self.coupling.weighting,
+            &["noble-torczynski", "seed"],
+        )?;
+        c.one_of(
+            "coupling.radius_correction",
+            &self.coupling.radius_correction,
+            &["none", "calibrated"],
+        )?;
         if self.coupling.radius_correction == "calibrated" && self.coupling.weighting == "seed" {
             return Err(c.fail(
                 "coupling.radius_correction",
@@ -187,14 +196,11 @@ impl Scene {
                 "is measured with coupling.weighting = \"noble-torczynski\", not \"seed\"",
             ));
         }
-        if !["auto", "fused", "redo"].contains(&self.coupling.covered_cells.as_str()) {
-            let value = format!("{:?}", self.coupling.covered_cells);
-            return Err(c.fail(
-                "coupling.covered_cells",
-                value,
-                "expected \"auto\", \"fused\" or \"redo\"",
-            ));
-        }
+        c.one_of(
+            "coupling.covered_cells",
+            &self.coupling.covered_cells,
+            &["auto", "fused", "redo"],
+        )?;
         if self.coupling.timeout > 86_400.0 {
             return Err(c.fail(
                 "coupling.timeout",
