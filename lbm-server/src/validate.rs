@@ -261,7 +261,7 @@ fn array_drag(gpu: &Arc<Gpu>) -> String {
 }
 
 /// The array runs of the tau sections: (box n, tau, operator), the three operators in a 16^3 box at
-/// `taus`, TRT in a 24^3 box at 0.6-2.
+/// `taus`, TRT in a 24^3 box at 0.55-2.
 fn runs_over_tau(taus: &[f64]) -> Vec<(usize, f64, Operator)> {
     let mrt = |tau: f64| Operator::Mrt {
         rates: Rates::dhumieres(1.0 / tau),
@@ -269,7 +269,9 @@ fn runs_over_tau(taus: &[f64]) -> Vec<(usize, f64, Operator)> {
     let coarse = taus
         .iter()
         .flat_map(|&tau| [(16, tau, Operator::Bgk), (16, tau, TRT), (16, tau, mrt(tau))]);
-    let fine = [0.6, 0.8, 1.0, 1.5, 2.0].into_iter().map(|tau| (24, tau, TRT));
+    let fine = [0.55, 0.6, 0.8, 1.0, 1.5, 2.0]
+        .into_iter()
+        .map(|tau| (24, tau, TRT));
     coarse.chain(fine).collect()
 }
 
@@ -319,7 +321,7 @@ fn radius_deficit(gpu: &Arc<Gpu>) -> String {
          |---:|---:|---:|---|---:|---:|---:|---:|---:|---:|\n",
     );
     let (phi, k_ref) = validation::ZICK_HOMSY[1];
-    for (n, tau, op) in runs_over_tau(&[0.6, 0.7, 0.8, 1.0, 1.5, 2.0]) {
+    for (n, tau, op) in runs_over_tau(&[0.55, 0.6, 0.7, 0.8, 1.0, 1.5, 2.0]) {
         let radius = validation::radius_for(phi, n);
         let d = validation::radius_deficit(gpu, n, radius, k_ref, tau, op);
         let _ = writeln!(
