@@ -183,10 +183,50 @@ pub fn main(args: ConnectArgs) -> ExitCode {
             ExitCode::SUCCESS
         }
         Err(e) => {
-            let last = last.map_or("none".to_string(), |s: u64| s.to_string());
-            protocol::say!("dem-client: error: {e}; last completed step: {last}");
+            protocol::say!("dem-client: error: {}", failure(&e, last));
             ExitCode::from(1)
         }
+    }
+}
+
+/// What the DEM says when the lockstep fails: the error, for a silent fluid server what to raise,
+/// and the last completed step.
+fn failure(e: &LinkError, last: Option<u64>) -> String {
+    let last = last.map_or("none".to_string(), |s| s.to_string());
+    let hint = if matches!(e, LinkError::Timeout { .. }) {
+        " (a fluid step of a large lattice on a CPU Vulkan driver, or on a loaded machine, can take \
+         that long: raise coupling.timeout in the scene, or --timeout)"
+    } else {
+        ""
+    };
+    format!("{e}{hint}; last completed step: {last}")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use protocol::transport::Peer;
+
+    #[test]
+    fn a_silent_fluid_server_names_the_setting_to_raise() {
+        let waited = std::time::Duration::from_secs_f64(10.1);
+        let silent = LinkError::Timeout {
+            peer: Peer::Fluid,
+            waited,
+        };
+        let said = failure(&silent, Some(136));
+        assert!(
+            said.contains("did not answer within 10.1 s")
+                && said.contains("raise coupling.timeout")
+                && said.ends_with("last completed step: 136"),
+            "{said}"
+        );
+        let died = LinkError::PeerDied {
+            peer: Peer::Fluid,
+            pid: 7,
+        };
+        assert!(!failure(&died, None).contains("raise"));
+        assert!(failure(&died, None).ends_with("last completed step: none"));
     }
 }
 

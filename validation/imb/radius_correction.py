@@ -69,8 +69,30 @@ def terminal(folder):
     return case, float(m.group(2).replace("p", ".")), tau, p["terminal_speed"], 100.0 * (p["terminal_speed"] - u_inf) / u_inf
 
 
+def box_of(name):
+    """The case, Mach number and box of a run folder's name, without its resolution."""
+    return re.sub(r"_N[0-9p]+", "", name)
+
+
+def refinement(series):
+    """Per case and box run at two or more resolutions: the error at the radius and corrected against
+    N, and how far each moves over the resolutions (max - min, in points)."""
+    lines = []
+    for box, points in sorted(series.items()):
+        if len(points) < 2:
+            continue
+        points.sort()
+        at = [e for _, e, _ in points]
+        rc = [e for _, _, e in points]
+        lines.append("| %s | %s | %s | %s | %.1f | %.1f |" % (
+            box, ", ".join("%g" % n for n, _, _ in points), ", ".join("%+.1f" % e for e in at),
+            ", ".join("%+.1f" % e for e in rc), max(at) - min(at), max(rc) - min(rc)))
+    return lines
+
+
 def report():
     rows = []
+    series = {}
     for name in sorted(os.listdir(OUT)):
         corrected = os.path.join(OUT, name)
         if not os.path.exists(os.path.join(corrected, "summary.json")):
@@ -83,6 +105,7 @@ def report():
         r_cells = n / 2.0
         rows.append("| %s | %s | %g | %.3f | %.3f | %.4f | %+.1f | %.4f | %+.1f |" % (
             name, case, n, tau, product / r_cells, v, e, v_rc, e_rc))
+        series.setdefault(box_of(name), []).append((n, e, e_rc))
     text = ("# Ten Cate in larger boxes with the calibrated radius correction\n\n"
             "Written by `python3 validation/imb/radius_correction.py` (lavapipe, this repository's CPU "
             "machine). Each run of validation/imb/runs/ named in the first column run again with "
@@ -94,6 +117,21 @@ def report():
             "| run | case | cells per diameter | tau | drawn larger by (cells) | terminal, at its radius [m/s] | "
             "error [%] | terminal, corrected [m/s] | error [%] |\n"
             "|---|---|---:|---:|---:|---:|---:|---:|---:|\n" + "\n".join(rows) + "\n")
+    lines = refinement(series)
+    if lines:
+        text += ("\n## Refinement\n\nThe same case in the same box at several resolutions: if the "
+                 "sphere's error at its radius is the boundary's deficit (falling as 1 / N^2, the relative "
+                 "radius error), the corrected error stays put as N grows while the error at the radius "
+                 "moves; if the deficit does not act in that flow, the corrected error moves instead. "
+                 "Errors against u_inf in %, the spread is max - min over the resolutions in points.\n\n"
+                 "| case and box | cells per diameter | error at the radius | error corrected | "
+                 "spread at the radius | spread corrected |\n|---|---|---|---|---:|---:|\n"
+                 + "\n".join(lines) + "\n")
+        alone = sorted({b.split("_")[0] for b, p in series.items() if len(p) < 2}
+                       - {b.split("_")[0] for b, p in series.items() if len(p) >= 2})
+        if alone:
+            text += ("\nNot in this table (each box at one resolution only; see the table above): %s.\n"
+                     % ", ".join(alone))
     with open(REPORT, "w") as f:
         f.write(text)
     print(text)
