@@ -30,21 +30,23 @@ OUT = os.path.join(HERE, "runs_rc")
 REPORT = os.path.join(HERE, "RADIUS_CORRECTION.md")
 
 
-def corrected_scene(text):
-    """The scene with the calibrated correction (refused if it already has a [coupling] table)."""
+def corrected_scene(text, timeout=None):
+    """The scene with the calibrated correction (refused if it already has a [coupling] table) and,
+    if given, a longer coupling.timeout (a run niced behind other work waits long for a step)."""
     if re.search(r"^\[coupling\]", text, flags=re.M):
         raise SystemExit("the scene already has a [coupling] table: add the correction by hand")
-    return text.rstrip("\n") + "\n\n[coupling]\nradius_correction = \"calibrated\"\n"
+    extra = "timeout = %g\n" % timeout if timeout else ""
+    return text.rstrip("\n") + "\n\n[coupling]\nradius_correction = \"calibrated\"\n" + extra
 
 
-def run(name):
+def run(name, timeout=None):
     src = os.path.join(ten_cate.RUNS, name)
     scene = open(os.path.join(src, "scene.toml")).read()
     out = os.path.join(OUT, name)
     os.makedirs(out, exist_ok=True)
     path = os.path.join(out, "scene.toml")
     with open(path, "w") as f:
-        f.write(corrected_scene(scene))
+        f.write(corrected_scene(scene, timeout))
     work = os.path.join(out, "work")
     with open(os.path.join(out, "log.txt"), "w") as log:
         code = subprocess.call([ten_cate.BINARY, "run", path, "--out", work], stderr=log, stdout=log)
@@ -141,6 +143,7 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("runs", nargs="*", help="run folders of validation/imb/runs/ (larger boxes)")
     ap.add_argument("--report", action="store_true", help="only write the report from runs_rc/")
+    ap.add_argument("--timeout", type=float, help="coupling.timeout [s] of the runs (default: the scene's)")
     args = ap.parse_args()
     if not args.report:
         for name in args.runs:
@@ -148,7 +151,7 @@ def main():
                 print("%s: already run, skipped" % name)
                 continue
             print("%s: running" % name, flush=True)
-            run(name)
+            run(name, args.timeout)
     report()
 
 
