@@ -193,13 +193,7 @@ pub fn main(args: ConnectArgs) -> ExitCode {
 /// and the last completed step.
 fn failure(e: &LinkError, last: Option<u64>) -> String {
     let last = last.map_or("none".to_string(), |s| s.to_string());
-    let hint = if matches!(e, LinkError::Timeout { .. }) {
-        " (a fluid step of a large lattice on a CPU Vulkan driver, or on a loaded machine, can take \
-         that long: raise coupling.timeout in the scene, or --timeout)"
-    } else {
-        ""
-    };
-    format!("{e}{hint}; last completed step: {last}")
+    format!("{e}{}; last completed step: {last}", e.hint())
 }
 
 #[cfg(test)]

@@ -177,10 +177,11 @@ fn correction_warning(units: &LatticeUnits, diameter: f64) -> Option<String> {
 }
 
 /// The scene's `coupling.covered_cells`, "auto" made definite for this device and the scene's
-/// initial particles (their covered fraction of the lattice).
+/// initial particles (their covered fraction of the lattice; `radii` in m).
 fn covered_cells(
     scene: &Scene,
     units: &LatticeUnits,
+    radii: &[f64],
     device: wgpu::DeviceType,
 ) -> Result<CoveredCells, String> {
     let mode = CoveredCells::from_name(&scene.coupling.covered_cells).ok_or_else(|| {
@@ -189,7 +190,7 @@ fn covered_cells(
             scene.coupling.covered_cells
         )
     })?;
-    let radii = scene.initial_particles().into_iter().map(|p| p.radius / units.dx);
+    let radii = radii.iter().map(|r| r / units.dx);
     let cells = units.n.iter().product();
     Ok(mode.for_scene(device, covered_fraction(radii, cells)))
 }
@@ -204,10 +205,11 @@ impl FluidSide {
             ));
         };
         let gpu = Arc::new(Gpu::new()?);
+        let radii: Vec<f64> = scene.initial_particles().iter().map(|p| p.radius).collect();
         let options = ImbOptions {
             slots: scene.coupling.slots,
             seed_weighting: scene.coupling.weighting == "seed",
-            covered_cells: covered_cells(scene, &units, gpu.adapter.device_type)?,
+            covered_cells: covered_cells(scene, &units, &radii, gpu.adapter.device_type)?,
         };
         let lattice = Lattice::new(gpu, setup_of(&units), health_of(&units), Some(options))?;
         let lubrication = scene.coupling.lubrication.then(|| lubrication_of(scene, &units));
@@ -216,8 +218,7 @@ impl FluidSide {
         let warning = if scene.coupling.radius_correction == "none" {
             tau_warning(&units.operator, units.tau)
         } else {
-            let diameter = scene.initial_particles().into_iter().map(|p| 2.0 * p.radius);
-            correction_warning(&units, diameter.fold(0.0, f64::max))
+            correction_warning(&units, 2.0 * radii.iter().fold(0.0, |a, &r| r.max(a)))
         };
         if let Some(warning) = warning {
             protocol::say!("lbm-server: warning: {warning}");
@@ -465,12 +466,7 @@ mod tests {
     /// The rows of the 16^3 box in a section of validation/lbm/REPORT.md: (tau, operator, the
     /// number in column `column` without its % sign).
     fn report_rows(heading: &str, column: usize) -> Vec<(f64, String, f64)> {
-        let report = include_str!("../../validation/lbm/REPORT.md");
-        let section = report
-            .split(heading)
-            .nth(1)
-            .and_then(|rest| rest.split("\n## ").next())
-            .unwrap_or_else(|| panic!("the report has no section {heading:?}"));
+        let section = crate::validate::report_section(heading);
         let rows = section.lines().filter(|l| l.starts_with("| 16 |")).map(|line| {
             let cells: Vec<&str> = line.split('|').map(str::trim).collect();
             let number = cells[column].trim_end_matches('%').parse().unwrap();

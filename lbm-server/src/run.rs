@@ -368,13 +368,7 @@ impl Session {
 
     fn describe(&self, e: LinkError) -> String {
         let last = self.last_completed.map_or("none".to_string(), |s| s.to_string());
-        let hint = if matches!(e, LinkError::Timeout { .. }) {
-            " (a DEM step with many spheres in contact can take that long on a few cores: raise \
-             coupling.timeout in the scene)"
-        } else {
-            ""
-        };
-        format!("{e}{hint}; last completed step: {last}")
+        format!("{e}{}; last completed step: {last}", e.hint())
     }
 
     /// Flushes output, ends the DEM process, writes summary.json; returns the exit code.

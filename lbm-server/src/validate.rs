@@ -416,25 +416,30 @@ fn momentum(gpu: &Arc<Gpu>) -> String {
     )
 }
 
+/// The section of validation/lbm/REPORT.md under `heading` ("## ..."), up to the next heading.
+#[cfg(test)]
+pub(crate) fn report_section(heading: &str) -> &'static str {
+    include_str!("../../validation/lbm/REPORT.md")
+        .split(heading)
+        .nth(1)
+        .and_then(|rest| rest.split("\n## ").next())
+        .unwrap_or_else(|| panic!("the report has no section {heading:?}"))
+}
+
 #[cfg(test)]
 mod tests {
-    use super::{replace_section, runs_over_tau};
+    use super::{replace_section, report_section, runs_over_tau};
 
     /// The tau sections of validation/lbm/REPORT.md list their runs in the order of
     /// `runs_over_tau` (box n, tau, operator), row by row.
     #[test]
     fn the_tau_sections_of_the_report_are_the_runs_over_tau() {
-        let report = include_str!("../../validation/lbm/REPORT.md");
         let runs: Vec<String> = runs_over_tau()
             .into_iter()
             .map(|(n, tau, op)| format!("| {n} | {tau} | {} |", op.name()))
             .collect();
         for heading in ["drag against tau", "hydrodynamic radius deficit against tau"] {
-            let title = format!("Immersed moving boundary: {heading}");
-            let section = report
-                .split("\n## ")
-                .find(|s| s.starts_with(&title))
-                .unwrap_or_else(|| panic!("no section {heading}"));
+            let section = report_section(&format!("## Immersed moving boundary: {heading}"));
             let rows: Vec<String> = section
                 .lines()
                 .filter(|l| l.starts_with("| 16 |") || l.starts_with("| 24 |"))

@@ -121,6 +121,26 @@ impl Display for LinkError {
 
 impl std::error::Error for LinkError {}
 
+impl LinkError {
+    /// For a peer silent beyond the timeout, why a live one can take that long and what to raise
+    /// (empty for every other error).
+    pub fn hint(&self) -> &'static str {
+        match self {
+            LinkError::Timeout { peer: Peer::Dem, .. } => {
+                " (a DEM step with many spheres in contact can take that long on a few cores: raise \
+                 coupling.timeout in the scene)"
+            }
+            LinkError::Timeout {
+                peer: Peer::Fluid, ..
+            } => {
+                " (a fluid step of a large lattice on a CPU Vulkan driver, or on a loaded machine, can \
+                 take that long: raise coupling.timeout in the scene, or --timeout)"
+            }
+            _ => "",
+        }
+    }
+}
+
 fn ipc_err<E: Debug>(what: &str) -> impl FnOnce(E) -> LinkError + '_ {
     move |e| LinkError::Ipc(format!("{what}: {e:?}"))
 }
