@@ -3,7 +3,20 @@
 
 mod common;
 use common::*;
+use std::sync::{RwLock, RwLockReadGuard, RwLockWriteGuard};
 use std::time::Duration;
+
+/// The tests that keep a core spinning for seconds run alone; the others, which time how fast a
+/// failure is noticed, together.
+static CORES: RwLock<()> = RwLock::new(());
+
+fn shared_cores() -> RwLockReadGuard<'static, ()> {
+    CORES.read().unwrap_or_else(|e| e.into_inner())
+}
+
+fn a_core_to_spin() -> RwLockWriteGuard<'static, ()> {
+    CORES.write().unwrap_or_else(|e| e.into_inner())
+}
 
 /// Starts a long run (spawned DEM) and waits until it is stepping; returns (server, dem pid, out).
 fn long_run(tag: &str, timeout_s: f64) -> (Proc, u32, std::path::PathBuf) {
@@ -38,6 +51,7 @@ fn assert_failure_reported(server: &mut Proc, out: &std::path::Path, words: &str
 
 #[test]
 fn killed_dem_is_noticed_within_a_second() {
+    let _cores = shared_cores();
     let (mut server, dem, out) = long_run("kill-dem", 30.0);
     signal(dem, libc::SIGKILL);
     let (code, waited) = server.wait_exit(Duration::from_secs(10));
@@ -48,6 +62,7 @@ fn killed_dem_is_noticed_within_a_second() {
 
 #[test]
 fn killed_server_is_noticed_by_the_dem_within_a_second() {
+    let _cores = shared_cores();
     let (mut server, dem, out) = long_run("kill-server", 30.0);
     let run = wait_summary_run(&out, &mut server);
     signal(server.child.id(), libc::SIGKILL);
@@ -99,6 +114,7 @@ fn start_and_wait(cmd: std::process::Command) -> (Option<i32>, String) {
 
 #[test]
 fn suspended_dem_is_caught_within_a_second() {
+    let _cores = shared_cores();
     let (mut server, dem, out) = long_run("stop-dem", 30.0);
     signal(dem, libc::SIGSTOP);
     let (code, waited) = server.wait_exit(Duration::from_secs(10));
@@ -114,19 +130,13 @@ fn suspended_dem_is_caught_within_a_second() {
 
 #[test]
 fn silent_live_dem_is_caught_by_the_timeout() {
-    let dir = temp_dir("stall");
-    let scene = write_scene(&dir, &scene_text("stall", [2, 2, 2], 1000, 10, 0.5));
-    let out = dir.join("out");
-    let (mut server, run) = start_external(&scene, &out);
-    let mut client = std::process::Command::new(bin("dem-client"));
-    client
-        .args(["connect", "--service", &run, "--stall-at", "20", "--scene"])
-        .arg(&scene);
-    let mut client = start(client);
+    let _cores = shared_cores();
+    let (mut server, mut client, out) = stalled_run("stall", 0.5, &[]);
     let (code, waited) = server.wait_exit(Duration::from_secs(10));
     assert_eq!(code, Some(1));
     assert!(waited < 1.5, "timeout of 0.5 s took {waited:.3} s");
     let stderr = assert_failure_reported(&mut server, &out, "did not answer within 0.5 s");
+    assert!(stderr.contains("used no CPU"), "{stderr}");
     assert!(stderr.contains("last completed step: 19"), "{stderr}");
     assert!(
         stderr.contains("raise coupling.timeout"),
@@ -136,8 +146,55 @@ fn silent_live_dem_is_caught_by_the_timeout() {
     client.wait_exit(Duration::from_secs(5));
 }
 
+/// Starts a 1000-step run with an external DEM that stalls at step 20 with `stall` (its
+/// `--stall-*` options); returns (server, DEM, out).
+fn stalled_run(tag: &str, timeout_s: f64, stall: &[&str]) -> (Proc, Proc, std::path::PathBuf) {
+    let dir = temp_dir(tag);
+    let scene = write_scene(&dir, &scene_text(tag, [2, 2, 2], 1000, 10, timeout_s));
+    let out = dir.join("out");
+    let (server, run) = start_external(&scene, &out);
+    let mut client = std::process::Command::new(bin("dem-client"));
+    client
+        .args(["connect", "--service", &run, "--stall-at", "20"])
+        .args(stall)
+        .arg("--scene")
+        .arg(&scene);
+    (server, start(client), out)
+}
+
+#[test]
+fn a_working_dem_is_waited_for_beyond_the_timeout() {
+    let _cores = a_core_to_spin();
+    // Silent for 2 s, four times the timeout, but using the CPU all along: a long step.
+    let (mut server, mut client, out) = stalled_run("busy", 0.5, &["--stall-for", "2", "--stall-busy"]);
+    let (code, _) = server.wait_exit(Duration::from_secs(60));
+    let stderr = Proc::drain(&server.stderr);
+    assert_eq!(code, Some(0), "{stderr}");
+    assert_eq!(client.wait_exit(Duration::from_secs(10)).0, Some(0));
+    assert_eq!(summary(&out)["steps_completed"], 1000);
+}
+
+#[test]
+fn a_dem_that_works_without_answering_is_caught_at_the_busy_limit() {
+    let _cores = a_core_to_spin();
+    let timeout = 0.1;
+    let (mut server, mut client, out) = stalled_run("spin", timeout, &["--stall-busy"]);
+    let (code, waited) = server.wait_exit(Duration::from_secs(30));
+    assert_eq!(code, Some(1));
+    let limit = timeout * protocol::transport::BUSY_FACTOR as f64;
+    assert!(
+        waited >= limit,
+        "caught after {waited:.2} s, before the {limit} s limit"
+    );
+    let stderr = assert_failure_reported(&mut server, &out, "worked for");
+    assert!(stderr.contains("without answering"), "{stderr}");
+    let _ = client.child.kill();
+    client.wait_exit(Duration::from_secs(5));
+}
+
 #[test]
 fn ctrl_c_stops_both_cleanly() {
+    let _cores = shared_cores();
     let (mut server, dem, out) = long_run("ctrl-c", 30.0);
     // A terminal's Ctrl-C reaches the foreground process group: lbm-server (the DEM has its own).
     assert_eq!(

@@ -23,7 +23,8 @@ pub struct ConnectArgs {
     /// Scene file holding the particles (default: the built-in default scene).
     #[arg(long)]
     scene: Option<PathBuf>,
-    /// Longest wait for a live but silent fluid server [s].
+    /// Longest wait for a live fluid server that is silent and idle (no CPU) [s]; one that works
+    /// is waited for up to 60 times as long.
     #[arg(long, default_value_t = 10.0)]
     timeout: f64,
     /// Testing: announce this protocol version instead of ours.
@@ -38,6 +39,12 @@ pub struct ConnectArgs {
     /// Testing: stop answering (stay alive, silent) at this step.
     #[arg(long, hide = true)]
     stall_at: Option<u64>,
+    /// Testing: the stall ends after this many seconds (else never).
+    #[arg(long, hide = true)]
+    stall_for: Option<f64>,
+    /// Testing: the stall spins on the CPU (a long step, an endless loop) instead of sleeping.
+    #[arg(long, hide = true)]
+    stall_busy: bool,
 }
 
 /// Deliberate misbehaviour, for the tests of the failure rules.
@@ -46,6 +53,26 @@ struct Faults {
     churn: bool,
     skip_step: Option<u64>,
     stall_at: Option<u64>,
+    stall_for: Option<Duration>,
+    stall_busy: bool,
+}
+
+impl Faults {
+    /// Stays silent at `stall_at`: asleep or spinning, for `stall_for` or for ever.
+    fn stall(&self, step: u64) {
+        if self.stall_at != Some(step) {
+            return;
+        }
+        let start = std::time::Instant::now();
+        let mut x = 0u64;
+        while self.stall_for.is_none_or(|d| start.elapsed() < d) {
+            if self.stall_busy {
+                x = std::hint::black_box(x.wrapping_mul(6364136223846793005).wrapping_add(1));
+            } else {
+                std::thread::sleep(Duration::from_millis(10));
+            }
+        }
+    }
 }
 
 /// Physics this side applies: gravity and contacts (buoyancy is the fluid's), and the squeeze
@@ -137,6 +164,8 @@ pub fn main(args: ConnectArgs) -> ExitCode {
         churn: args.churn,
         skip_step: args.skip_step,
         stall_at: args.stall_at,
+        stall_for: args.stall_for.map(Duration::from_secs_f64),
+        stall_busy: args.stall_busy,
     };
     let (sub, limits) = particles.couple(&scene, &welcome, setup.dt_max);
     let dt = particles.world.dt;
@@ -207,6 +236,7 @@ mod tests {
         let silent = LinkError::Timeout {
             peer: Peer::Fluid,
             waited,
+            idle: None,
         };
         let said = failure(&silent, Some(136));
         assert!(
@@ -240,9 +270,7 @@ fn step_loop(
         if faults.churn && step > 0 {
             particles.churn(step);
         }
-        while faults.stall_at == Some(step) {
-            std::thread::sleep(Duration::from_secs(1));
-        }
+        faults.stall(step);
         let stop = interrupted.load(Ordering::SeqCst);
         let flags = if stop { StepFlags::STOP } else { 0 };
         let sent_step = if faults.skip_step == Some(step) {

@@ -1,6 +1,8 @@
 //! Is the peer process alive, dead, or suspended? Both sides share memory, so they share a host
 //! and a process table: `/proc/PID/stat` answers without any cooperation from the peer.
 
+use std::time::{Duration, Instant};
+
 /// What the process table says about a peer.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum ProcessState {
@@ -26,9 +28,121 @@ pub fn process_state(pid: u32) -> ProcessState {
     }
 }
 
+/// The CPU time the process has used so far, all its threads (`utime + stime` of
+/// `/proc/PID/stat`, in clock ticks of usually 10 ms); None when it cannot be read.
+pub fn cpu_time(pid: u32) -> Option<Duration> {
+    let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).ok()?;
+    // Fields after the command name: state (3rd field of the line) ... utime (14th), stime (15th).
+    let mut fields = stat[stat.rfind(')')? + 1..].split_whitespace().skip(11);
+    let utime: u64 = fields.next()?.parse().ok()?;
+    let stime: u64 = fields.next()?.parse().ok()?;
+    Some(Duration::from_secs_f64(
+        (utime + stime) as f64 / clock_ticks_per_second(),
+    ))
+}
+
+fn clock_ticks_per_second() -> f64 {
+    // SAFETY: sysconf reads a constant of the system; it has no preconditions.
+    match unsafe { libc::sysconf(libc::_SC_CLK_TCK) } {
+        t if t > 0 => t as f64,
+        _ => 100.0,
+    }
+}
+
+/// Is a silent peer working (answering late) or idle (hung in a wait, a deadlock)? It works
+/// while its CPU time grows: at least [`BUSY_SHARE`] of a core, and two clock ticks, over each
+/// window of the wait.
+#[derive(Debug)]
+pub struct Activity {
+    pid: u32,
+    window: Duration,
+    window_start: Instant,
+    cpu_at_start: Option<Duration>,
+    last_busy: Instant,
+}
+
+/// The share of one core a peer must use over a window to count as working: a waiting peer
+/// (waking every 50 ms to look) uses a few thousandths.
+pub const BUSY_SHARE: f64 = 0.02;
+
+impl Activity {
+    /// Starts watching `pid` now; windows of `window` (at least 0.1 s).
+    pub fn new(pid: u32, window: Duration) -> Self {
+        let now = Instant::now();
+        Activity {
+            pid,
+            window: window.max(Duration::from_millis(100)),
+            window_start: now,
+            cpu_at_start: cpu_time(pid),
+            last_busy: now,
+        }
+    }
+
+    /// Looks at the peer's CPU time if a window has passed; returns the end of the last window
+    /// in which it worked (the start of the watch if none).
+    pub fn last_busy(&mut self) -> Instant {
+        let now = Instant::now();
+        let span = now - self.window_start;
+        if span >= self.window {
+            let cpu = cpu_time(self.pid);
+            if let (Some(before), Some(after)) = (self.cpu_at_start, cpu) {
+                let used = after.saturating_sub(before).as_secs_f64();
+                let tick = 1.0 / clock_ticks_per_second();
+                if used >= (BUSY_SHARE * span.as_secs_f64()).max(2.0 * tick) {
+                    self.last_busy = now;
+                }
+            }
+            self.window_start = now;
+            self.cpu_at_start = cpu;
+        }
+        self.last_busy
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A child process that spins (a shell's endless loop) or sleeps, killed when dropped.
+    struct Child(std::process::Child);
+
+    impl Child {
+        fn spinning() -> Self {
+            let c = std::process::Command::new("sh")
+                .args(["-c", "while :; do :; done"])
+                .spawn();
+            Child(c.unwrap())
+        }
+        fn sleeping() -> Self {
+            Child(std::process::Command::new("sleep").arg("10").spawn().unwrap())
+        }
+    }
+
+    impl Drop for Child {
+        fn drop(&mut self) {
+            let _ = self.0.kill();
+            let _ = self.0.wait();
+        }
+    }
+
+    #[test]
+    fn a_spinning_peer_works_and_a_sleeping_one_idles() {
+        let busy = Child::spinning();
+        let before = cpu_time(busy.0.id()).unwrap();
+        let mut activity = Activity::new(busy.0.id(), Duration::from_millis(100));
+        let start = Instant::now();
+        std::thread::sleep(Duration::from_millis(300));
+        let used = cpu_time(busy.0.id()).unwrap() - before;
+        assert!(used >= Duration::from_millis(30), "{used:?} of CPU in 0.3 s");
+        assert!(activity.last_busy() > start, "spinning counts as working");
+
+        let idle = Child::sleeping();
+        let mut activity = Activity::new(idle.0.id(), Duration::from_millis(100));
+        let start = Instant::now();
+        std::thread::sleep(Duration::from_millis(300));
+        assert!(activity.last_busy() <= start, "sleeping does not");
+        assert_eq!(cpu_time(u32::MAX), None);
+    }
 
     #[test]
     fn this_process_runs_and_a_reaped_child_is_dead() {

@@ -9,7 +9,7 @@
 //! | `RUN/forces`     | `[ParticleReply]`     | `StepHeader` | fluid → DEM |
 
 use crate::handshake::{DecodeError, Hello, Message, Physics, Status, Welcome};
-use crate::liveness::{process_state, ProcessState};
+use crate::liveness::{process_state, Activity, ProcessState};
 use crate::wire::{ParticleReply, ParticleState, StepHeader};
 use core::fmt::{self, Debug, Display};
 use core::time::Duration;
@@ -31,6 +31,10 @@ pub const LINGER: Duration = Duration::from_secs(1);
 
 /// How long a peer may stay suspended (SIGSTOP) before it counts as hung.
 pub const STOPPED_GRACE: Duration = Duration::from_millis(400);
+
+/// A peer that works (uses CPU) without answering is waited for up to this many times the
+/// timeout; one that is silent and idle only for the timeout.
+pub const BUSY_FACTOR: u32 = 60;
 
 /// Which side of the link the other process is.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -62,8 +66,16 @@ pub enum LinkError {
         peer: Peer,
         pid: u32,
     },
+    /// Silent beyond the timeout; `idle`: for how long it used no CPU, where its pid is known.
     Timeout {
         peer: Peer,
+        waited: Duration,
+        idle: Option<Duration>,
+    },
+    /// Working (using CPU) without answering for [`BUSY_FACTOR`] times the timeout.
+    Busy {
+        peer: Peer,
+        pid: u32,
         waited: Duration,
     },
     StepMismatch {
@@ -93,9 +105,29 @@ impl Display for LinkError {
                 )
             }
             LinkError::PeerLeft { peer } => write!(f, "the {peer} left the run (its port closed)"),
-            LinkError::Timeout { peer, waited } => write!(
+            LinkError::Timeout {
+                peer,
+                waited,
+                idle: None,
+            } => write!(
                 f,
                 "the {peer} did not answer within {:.1} s (hung?)",
+                waited.as_secs_f64()
+            ),
+            LinkError::Timeout {
+                peer,
+                waited,
+                idle: Some(idle),
+            } => write!(
+                f,
+                "the {peer} did not answer within {:.1} s and used no CPU for the last {:.1} s (hung?)",
+                waited.as_secs_f64(),
+                idle.as_secs_f64()
+            ),
+            LinkError::Busy { peer, pid, waited } => write!(
+                f,
+                "the {peer} (pid {pid}) worked for {:.1} s without answering ({BUSY_FACTOR} x the \
+                 timeout; an endless loop?)",
                 waited.as_secs_f64()
             ),
             LinkError::StepMismatch { peer, expected, got } => write!(
@@ -126,11 +158,31 @@ impl LinkError {
     /// (empty for every other error).
     pub fn hint(&self) -> &'static str {
         match self {
-            LinkError::Timeout { peer: Peer::Dem, .. } => {
+            LinkError::Timeout {
+                peer: Peer::Fluid,
+                idle: Some(_),
+                ..
+            } => {
+                " (a fluid step on a GPU waits without using the CPU: if its steps take that long, \
+                 raise coupling.timeout in the scene, or --timeout; a step that works on the CPU is \
+                 waited for up to 60 x it)"
+            }
+            LinkError::Timeout {
+                peer: Peer::Dem,
+                idle: Some(_),
+                ..
+            } => {
+                " (a DEM that works is waited for up to 60 x coupling.timeout; this one used no CPU: \
+                 raise coupling.timeout in the scene only if its steps wait that long on something else)"
+            }
+            LinkError::Timeout { peer: Peer::Dem, .. } | LinkError::Busy { peer: Peer::Dem, .. } => {
                 " (a DEM step with many spheres in contact can take that long on a few cores: raise \
                  coupling.timeout in the scene)"
             }
             LinkError::Timeout {
+                peer: Peer::Fluid, ..
+            }
+            | LinkError::Busy {
                 peer: Peer::Fluid, ..
             } => {
                 " (a fluid step of a large lattice on a CPU Vulkan driver, or on a loaded machine, can \
@@ -329,7 +381,8 @@ struct Watch {
 }
 
 impl Watch {
-    /// Blocks until `take` yields, the peer dies or hangs, or `timeout` passes.
+    /// Blocks until `take` yields, the peer dies or hangs, or it stays idle (no CPU) for `timeout`
+    /// or works without answering for [`BUSY_FACTOR`] x `timeout`.
     fn wait<T, H, R>(
         &self,
         inbox: &Inbox<T, H>,
@@ -343,6 +396,8 @@ impl Watch {
     {
         let start = Instant::now();
         let mut stopped_since: Option<Instant> = None;
+        let window = (timeout / 2).clamp(Duration::from_millis(100), Duration::from_secs(1));
+        let mut activity = self.pid.map(|pid| Activity::new(pid, window));
         loop {
             if let Some(r) = take(inbox)? {
                 return Ok(r);
@@ -373,9 +428,18 @@ impl Watch {
             if interrupt() {
                 return Err(LinkError::Interrupted);
             }
-            if start.elapsed() >= timeout {
+            let last_busy = activity.as_mut().map_or(start, |a| a.last_busy());
+            if last_busy.elapsed() >= timeout {
                 return Err(LinkError::Timeout {
                     peer: self.peer,
+                    waited: start.elapsed(),
+                    idle: activity.is_some().then(|| last_busy.elapsed()),
+                });
+            }
+            if let Some(pid) = self.pid.filter(|_| start.elapsed() >= timeout * BUSY_FACTOR) {
+                return Err(LinkError::Busy {
+                    peer: self.peer,
+                    pid,
                     waited: start.elapsed(),
                 });
             }
@@ -643,6 +707,7 @@ impl DemLink {
                     return Err(LinkError::Timeout {
                         peer: Peer::Fluid,
                         waited: start.elapsed(),
+                        idle: None,
                     })
                 }
                 Err(e) => {
@@ -731,5 +796,42 @@ fn decode_welcome(bytes: &[u8]) -> Result<Welcome, LinkError> {
              version {theirs}"
         ))),
         Err(e) => Err(LinkError::Refused(e.to_string())),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_timeout_messages_say_whether_the_peer_worked_and_name_the_busy_limit() {
+        let waited = Duration::from_secs(12);
+        let factor = format!("{BUSY_FACTOR} x");
+        for peer in [Peer::Fluid, Peer::Dem] {
+            let idle = LinkError::Timeout {
+                peer,
+                waited,
+                idle: Some(Duration::from_secs(10)),
+            };
+            assert!(
+                idle.to_string()
+                    .ends_with("used no CPU for the last 10.0 s (hung?)"),
+                "{idle}"
+            );
+            assert!(idle.hint().contains(&factor), "{}", idle.hint());
+            let busy = LinkError::Busy { peer, pid: 7, waited };
+            assert!(
+                busy.to_string().contains(&format!("({factor} the timeout")),
+                "{busy}"
+            );
+            let unknown = LinkError::Timeout {
+                peer,
+                waited,
+                idle: None,
+            };
+            for e in [idle, busy, unknown] {
+                assert!(e.hint().contains("raise coupling.timeout"), "{e}: {}", e.hint());
+            }
+        }
     }
 }

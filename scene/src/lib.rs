@@ -118,7 +118,8 @@ pub struct ProbeLine {
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Coupling {
-    /// Longest wait for a peer that is alive but silent [s].
+    /// Longest wait for a peer that is alive, silent and idle (no CPU) [s]; one that works is
+    /// waited for up to `protocol::transport::BUSY_FACTOR` (60) times as long.
     #[serde(default = "default_timeout")]
     pub timeout: f64,
     /// Most particles one step may carry (default: the initial count).
