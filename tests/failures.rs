@@ -1,5 +1,6 @@
-//! A dead, suspended or silent peer ends the run within a second, named, with outputs kept;
-//! Ctrl-C stops both processes cleanly; shared-memory files never outlive a run.
+//! A dead, suspended or silent and idle peer ends the run within a second, named, with outputs kept;
+//! a silent peer that works is waited for, up to 60 x the timeout; Ctrl-C stops both processes
+//! cleanly; shared-memory files never outlive a run.
 
 mod common;
 use common::*;
