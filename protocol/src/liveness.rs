@@ -13,14 +13,17 @@ pub enum ProcessState {
     Dead,
 }
 
-/// Reads the state letter of `/proc/PID/stat` (the field after the parenthesised command name).
+/// The fields of `/proc/PID/stat` after the parenthesised command name (which may hold spaces),
+/// from the state letter (the line's third field) on; None when the process is gone.
+fn stat_fields(pid: u32) -> Option<Vec<String>> {
+    let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).ok()?;
+    let rest = &stat[stat.rfind(')')? + 1..];
+    Some(rest.split_whitespace().map(str::to_owned).collect())
+}
+
+/// Reads the state letter of `/proc/PID/stat`.
 pub fn process_state(pid: u32) -> ProcessState {
-    let Ok(stat) = std::fs::read_to_string(format!("/proc/{pid}/stat")) else {
-        return ProcessState::Dead;
-    };
-    let state = stat
-        .rfind(')')
-        .and_then(|i| stat[i + 1..].trim_start().chars().next());
+    let state = stat_fields(pid).and_then(|f| f.first().and_then(|s| s.chars().next()));
     match state {
         Some('T') | Some('t') => ProcessState::Stopped,
         Some('Z') | Some('X') | Some('x') | None => ProcessState::Dead,
@@ -31,11 +34,10 @@ pub fn process_state(pid: u32) -> ProcessState {
 /// The CPU time the process has used so far, all its threads (`utime + stime` of
 /// `/proc/PID/stat`, in clock ticks of usually 10 ms); None when it cannot be read.
 pub fn cpu_time(pid: u32) -> Option<Duration> {
-    let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).ok()?;
-    // Fields after the command name: state (3rd field of the line) ... utime (14th), stime (15th).
-    let mut fields = stat[stat.rfind(')')? + 1..].split_whitespace().skip(11);
-    let utime: u64 = fields.next()?.parse().ok()?;
-    let stime: u64 = fields.next()?.parse().ok()?;
+    // utime and stime are the line's 14th and 15th fields, 12 and 13 after the state letter.
+    let fields = stat_fields(pid)?;
+    let utime: u64 = fields.get(11)?.parse().ok()?;
+    let stime: u64 = fields.get(12)?.parse().ok()?;
     Some(Duration::from_secs_f64(
         (utime + stime) as f64 / clock_ticks_per_second(),
     ))
@@ -66,20 +68,20 @@ pub struct Activity {
 pub const BUSY_SHARE: f64 = 0.02;
 
 impl Activity {
-    /// Starts watching `pid` now; windows of `window` (at least 0.1 s).
-    pub fn new(pid: u32, window: Duration) -> Self {
-        let now = Instant::now();
+    /// Starts watching `pid` now, for a wait that began at `since` with `timeout`: windows of half
+    /// the timeout, 0.1 to 1 s (below 0.2 s the first window ends after the timeout).
+    pub fn for_timeout(pid: u32, timeout: Duration, since: Instant) -> Self {
         Activity {
             pid,
-            window: window.max(Duration::from_millis(100)),
-            window_start: now,
+            window: (timeout / 2).clamp(Duration::from_millis(100), Duration::from_secs(1)),
+            window_start: Instant::now(),
             cpu_at_start: cpu_time(pid),
-            last_busy: now,
+            last_busy: since,
         }
     }
 
     /// Looks at the peer's CPU time if a window has passed; returns the end of the last window
-    /// in which it worked (the start of the watch if none).
+    /// in which it worked (the start of the wait if none).
     pub fn last_busy(&mut self) -> Instant {
         let now = Instant::now();
         let span = now - self.window_start;
@@ -129,16 +131,16 @@ mod tests {
     fn a_spinning_peer_works_and_a_sleeping_one_idles() {
         let busy = Child::spinning();
         let before = cpu_time(busy.0.id()).unwrap();
-        let mut activity = Activity::new(busy.0.id(), Duration::from_millis(100));
         let start = Instant::now();
+        let mut activity = Activity::for_timeout(busy.0.id(), Duration::from_millis(200), start);
         std::thread::sleep(Duration::from_millis(300));
         let used = cpu_time(busy.0.id()).unwrap() - before;
         assert!(used >= Duration::from_millis(30), "{used:?} of CPU in 0.3 s");
         assert!(activity.last_busy() > start, "spinning counts as working");
 
         let idle = Child::sleeping();
-        let mut activity = Activity::new(idle.0.id(), Duration::from_millis(100));
         let start = Instant::now();
+        let mut activity = Activity::for_timeout(idle.0.id(), Duration::from_millis(200), start);
         std::thread::sleep(Duration::from_millis(300));
         assert!(activity.last_busy() <= start, "sleeping does not");
         assert_eq!(cpu_time(u32::MAX), None);

@@ -396,8 +396,8 @@ impl Watch {
     {
         let start = Instant::now();
         let mut stopped_since: Option<Instant> = None;
-        let window = (timeout / 2).clamp(Duration::from_millis(100), Duration::from_secs(1));
-        let mut activity = self.pid.map(|pid| Activity::new(pid, window));
+        // Started at the first look at the peer: an answer that is there at once costs no read.
+        let mut activity: Option<Activity> = None;
         loop {
             if let Some(r) = take(inbox)? {
                 return Ok(r);
@@ -421,6 +421,7 @@ impl Watch {
                     }
                     ProcessState::Running => stopped_since = None,
                 }
+                activity.get_or_insert_with(|| Activity::for_timeout(pid, timeout, start));
             }
             if self.connected && !inbox.has_publisher() {
                 return Err(LinkError::PeerLeft { peer: self.peer });
