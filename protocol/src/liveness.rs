@@ -68,20 +68,21 @@ pub struct Activity {
 pub const BUSY_SHARE: f64 = 0.02;
 
 impl Activity {
-    /// Starts watching `pid` now, for a wait that began at `since` with `timeout`: windows of half
-    /// the timeout, 0.1 to 1 s (below 0.2 s the first window ends after the timeout).
+    /// Watches `pid` for a wait with `timeout` that began at `since`: windows of half the timeout,
+    /// 0.1 to 1 s (below 0.2 s the first window ends with the timeout), from `since`. The CPU time
+    /// is read from now on: started later than `since`, the first window counts less of it.
     pub fn for_timeout(pid: u32, timeout: Duration, since: Instant) -> Self {
         Activity {
             pid,
             window: (timeout / 2).clamp(Duration::from_millis(100), Duration::from_secs(1)),
-            window_start: Instant::now(),
+            window_start: since,
             cpu_at_start: cpu_time(pid),
             last_busy: since,
         }
     }
 
     /// Looks at the peer's CPU time if a window has passed; returns the end of the last window
-    /// in which it worked (the start of the wait if none).
+    /// in which it worked (the start of the watch if none).
     pub fn last_busy(&mut self) -> Instant {
         let now = Instant::now();
         let span = now - self.window_start;

@@ -396,7 +396,8 @@ impl Watch {
     {
         let start = Instant::now();
         let mut stopped_since: Option<Instant> = None;
-        // Started at the first look at the peer: an answer that is there at once costs no read.
+        // Started at the first look at the peer, one poll into the wait (its windows and idle time
+        // still count from the wait's start): an answer that is there at once costs no read.
         let mut activity: Option<Activity> = None;
         loop {
             if let Some(r) = take(inbox)? {
