@@ -181,6 +181,9 @@ fn a_dem_that_works_without_answering_is_caught_at_the_busy_limit() {
     let timeout = 0.1;
     let (mut server, mut client, out) = stalled_run("spin", timeout, &["--stall-busy"]);
     let (code, waited) = server.wait_exit(Duration::from_secs(30));
+    // Ended before any assertion: a DEM left spinning for ever would slow every later test.
+    let _ = client.child.kill();
+    client.wait_exit(Duration::from_secs(5));
     assert_eq!(code, Some(1));
     let limit = timeout * protocol::transport::BUSY_FACTOR as f64;
     assert!(
@@ -189,8 +192,6 @@ fn a_dem_that_works_without_answering_is_caught_at_the_busy_limit() {
     );
     let stderr = assert_failure_reported(&mut server, &out, "worked for");
     assert!(stderr.contains("without answering"), "{stderr}");
-    let _ = client.child.kill();
-    client.wait_exit(Duration::from_secs(5));
 }
 
 #[test]
