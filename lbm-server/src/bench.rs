@@ -494,8 +494,8 @@ fn time_passes(
             sums = times.iter().map(|(name, _)| (*name, [0.0; 2])).collect();
         }
         for (sum, (_, t)) in sums.iter_mut().zip(&times) {
-            for k in 0..2 {
-                sum.1[k] += t[k] * 1e3 / steps as f64;
+            for (total, t) in sum.1.iter_mut().zip(t) {
+                *total += t * 1e3 / steps as f64;
             }
         }
     }

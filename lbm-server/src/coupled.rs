@@ -126,6 +126,25 @@ fn radius_deficit_product(correction: &str, operator: &str, tau: f64) -> Result<
     }
 }
 
+/// How much larger (cells) a sphere of `radius` cells is drawn for the deficit product
+/// `product` (cells^2, [`radius_deficit_product`]); below [`MIN_DEFICIT_RADIUS`], where nothing
+/// was measured, the deficit of that radius.
+fn drawn_larger_by(product: f64, radius: f64) -> f64 {
+    if product == 0.0 {
+        return 0.0;
+    }
+    product / radius.max(MIN_DEFICIT_RADIUS)
+}
+
+/// How much larger (cells) `coupling.radius_correction = "calibrated"` draws a sphere of
+/// `radius` cells on a lattice of `operator` at `tau`.
+pub(crate) fn calibrated_drawn_larger(operator: &str, tau: f64, radius: f64) -> Result<f64, String> {
+    Ok(drawn_larger_by(
+        radius_deficit_product("calibrated", operator, tau)?,
+        radius,
+    ))
+}
+
 /// The warning for a coupled lattice whose tau makes the immersed boundary's drag measurably
 /// low (more than [`DRAG_ERROR_WARN`] at 5 cells radius, or beyond the measured taus), if it does.
 fn tau_warning(operator: &str, tau: f64) -> Option<String> {
@@ -170,8 +189,10 @@ fn correction_warning(units: &LatticeUnits, diameter: f64) -> Option<String> {
              (lattice.velocity_scale x the largest diameter / viscosity): it was checked on settling \
              spheres up to Re 11.6 (Ten Cate E1-E3: the corrected error holds within a point from 6 \
              to 9 cells per diameter); at Re 32 (E4, 6 cells per diameter) it moved the \
-             terminal velocity's error from -3.5% to -7.0% (validation/imb/RADIUS_CORRECTION.md): \
-             compare with coupling.radius_correction = \"none\" at the scene's resolution"
+             terminal velocity's error from -3.5% to -7.0% (validation/imb/RADIUS_CORRECTION.md; \
+             a moving sphere's immersed boundary adds drag of about the deficit's size there, \
+             docs/imb.md \"Radius correction\"): compare with coupling.radius_correction = \"none\" \
+             at the scene's resolution"
         )
     })
 }
@@ -418,10 +439,7 @@ impl LatticeStates<'_> {
     /// the deficit of 2 cells.
     fn drawn_radius(&self, j: usize) -> f64 {
         let r = self.states[j].radius / self.dx;
-        if self.deficit_product == 0.0 {
-            return r;
-        }
-        r + self.deficit_product / r.max(MIN_DEFICIT_RADIUS)
+        r + drawn_larger_by(self.deficit_product, r)
     }
 }
 
@@ -515,6 +533,11 @@ mod tests {
             "{err}"
         );
         assert!(product("bgk", 1.2).unwrap_err().contains("of bgk (up to 1;"));
+        let held = calibrated_drawn_larger("trt", 1.0, 4.0).unwrap();
+        assert!(
+            (held - trt / 4.0).abs() < 1e-12,
+            "a held sphere of 4 cells: {held}"
+        );
         let states = [0.003, 0.006].map(|radius| ParticleState {
             radius,
             ..Default::default()

@@ -16,15 +16,15 @@ pub struct ValidateArgs {
     #[arg(long, default_value = "validation/lbm")]
     out: PathBuf,
     /// Run only these sections (channel, wall, taylor-green, mass, array-drag, drag-tau,
-    /// radius-deficit, sphere-drag, momentum), print them and replace them in an existing REPORT.md (the other
-    /// sections are kept as they are).
+    /// radius-deficit, sphere-drag, sphere-correction, momentum), print them and replace them in
+    /// an existing REPORT.md (the other sections are kept as they are).
     #[arg(long, value_delimiter = ',')]
     only: Vec<String>,
 }
 
 type Section = fn(&Arc<Gpu>) -> String;
 
-const SECTIONS: [(&str, Section); 9] = [
+const SECTIONS: [(&str, Section); 10] = [
     ("channel", channel_convergence),
     ("wall", wall_location),
     ("taylor-green", taylor_green),
@@ -33,6 +33,7 @@ const SECTIONS: [(&str, Section); 9] = [
     ("drag-tau", drag_against_tau),
     ("radius-deficit", radius_deficit),
     ("sphere-drag", sphere_drag),
+    ("sphere-correction", sphere_correction),
     ("momentum", momentum),
 ];
 
@@ -405,6 +406,229 @@ const SPHERE_DRAG_CASES: &[(f64, f64, &[usize], usize)] = &[
     (100.0, 12.0, &[72], 120),
 ];
 
+/// Ten Cate E4's Reynolds number and its lattice's tau at 6, 9 and 12 cells per diameter (Mach
+/// 0.1; validation/imb/RADIUS_CORRECTION.md).
+const E4_REYNOLDS: f64 = 32.2;
+const E4_TAUS: [(f64, f64); 3] = [(6.0, 0.533), (9.0, 0.549), (12.0, 0.565)];
+
+/// The boxes (W, L in diameters) of [`sphere_correction`] at `d` cells per diameter: 6 x 6 x
+/// 10 at every resolution, at 6 cells also 8 and 10 wide (confinement) and 8 x 8 x 15 (inlet and
+/// outlet).
+fn correction_boxes(d: f64) -> &'static [(f64, f64)] {
+    if d == 6.0 {
+        &[(6.0, 10.0), (8.0, 10.0), (10.0, 10.0), (8.0, 15.0)]
+    } else {
+        &[(6.0, 10.0)]
+    }
+}
+
+/// The held sphere at E4's Reynolds number and taus, at its radius and drawn larger by the
+/// calibrated correction, in the boxes of [`correction_boxes`].
+fn sphere_correction(gpu: &Arc<Gpu>) -> String {
+    let mut t = String::from(
+        "\n## Immersed moving boundary: the radius correction on a held sphere at Re 32\n\n\
+         The sphere of the section above at Ten Cate E4's Reynolds number (32.2) and at the taus E4 ran \
+         at with 6, 9 and 12 cells per diameter (Mach 0.1), in a box of 6 x 6 x 10 diameters (W x W x L, \
+         the sphere L/3 from the inlet), drawn at its radius and drawn larger by \
+         `coupling.radius_correction = \"calibrated\"` (the deficit of the Zick-Homsy array at that \
+         tau, scaled as 1 / radius). C_d with the nominal diameter. A boundary whose deficit acts in this \
+         flow makes C_d at the radius rise towards its limit as 1 / N^2 and the corrected C_d hold; a \
+         deficit that does not act leaves C_d at the radius flat and the corrected C_d above it by the \
+         correction's share. At 6 cells also boxes 8 and 10 diameters wide (confinement) and one of 8 x 8 \
+         x 15 (the inlet 5 diameters upstream instead of 3.3). References: Schiller-Naumann and the \
+         experiment's drag, C_d = 4/3 (rho_p / rho_f - 1) g d / u_inf^2 = 1.996 (E4's u_inf 0.128 m/s).\n\n\
+         | d | W | L | tau | u0 | drawn larger by | steps | C_d | C_d Schiller-Naumann | error | against the experiment |\n\
+         |---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
+    );
+    let experiment = e4_experiment_cd();
+    let mut rows = Vec::new();
+    for &(d, tau) in &E4_TAUS {
+        for &(w, l) in correction_boxes(d) {
+            for corrected in [false, true] {
+                let case = correction_case(d, tau, (w, l), corrected);
+                let drag = match case.and_then(|c| validation::held_sphere(gpu, &c)) {
+                    Ok(s) => s,
+                    Err(e) => {
+                        let _ = writeln!(t, "| {d} | {w} d | {l} d | {tau} | | | | {e} | | | |");
+                        continue;
+                    }
+                };
+                protocol::say!("lbm-server: sphere-correction: {drag:?}");
+                let _ = writeln!(
+                    t,
+                    "| {d} | {} | {} | {tau} | {:.4} | {:.3} | {} | {:.3} | {:.3} | {:+.1}% | {:+.1}% |",
+                    drag.width,
+                    drag.length,
+                    drag.u0,
+                    drag.drawn_larger,
+                    drag.steps,
+                    drag.cd,
+                    drag.schiller_naumann(),
+                    100.0 * (drag.cd / drag.schiller_naumann() - 1.0),
+                    100.0 * (drag.cd / experiment - 1.0)
+                );
+                rows.push(drag);
+            }
+        }
+    }
+    t + &correction_summary(&rows, experiment) + &towed_spheres(gpu, &rows)
+}
+
+/// The held spheres of the 6 x 6 box at 6 and 9 cells towed through fluid at rest instead
+/// ([`validation::towed_sphere`]), against their held C_d.
+fn towed_spheres(gpu: &Arc<Gpu>, held: &[validation::SphereDrag]) -> String {
+    let mut t = String::from(
+        "\nThe same spheres towed at u0 through fluid at rest between walls at rest (the held box seen \
+         from the far fluid; box 6 x 6 x 24 diameters, the sphere from 19 to 5 diameters from the closed \
+         end it moves towards, started impulsively), so that its cells are covered and uncovered as it \
+         moves as a settling sphere's are. C_d averaged over its travel from 10 to 12 and 12 to 14 \
+         diameters; against the held sphere's C_d in the 6 x 6 x 10 box.\n\n\
+         | d | tau | u0 | drawn larger by | steps | C_d over 10-12 d | C_d over 12-14 d | held | towed against held |\n\
+         |---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
+    );
+    for &(d, tau) in &E4_TAUS[..2] {
+        for corrected in [false, true] {
+            let towed = correction_case(d, tau, (6.0, 10.0), corrected)
+                .and_then(|c| validation::towed_sphere(gpu, &c));
+            let towed = match towed {
+                Ok(towed) => towed,
+                Err(e) => {
+                    let _ = writeln!(t, "| {d} | {tau} | | | | {e} | | | |");
+                    continue;
+                }
+            };
+            protocol::say!("lbm-server: sphere-correction: {towed:?}");
+            let held = drag_in_box(held, (6.0, 10.0), corrected)
+                .into_iter()
+                .find(|c| c.0 == d)
+                .map_or(f64::NAN, |c| c.1);
+            let _ = writeln!(
+                t,
+                "| {d} | {:.3} | {:.4} | {:.3} | {} | {:.3} | {:.3} | {held:.3} | {:+.1}% |",
+                towed.tau,
+                towed.u0,
+                towed.case.drawn_larger,
+                towed.steps,
+                towed.cd_early,
+                towed.cd,
+                100.0 * (towed.cd / held - 1.0)
+            );
+        }
+    }
+    t
+}
+
+/// The held sphere of [`sphere_correction`]: `d` cells, a box (W, L) in diameters.
+fn correction_case(
+    d: f64,
+    tau: f64,
+    (w, l): (f64, f64),
+    corrected: bool,
+) -> Result<validation::HeldSphere, String> {
+    let drawn_larger = if corrected {
+        crate::coupled::calibrated_drawn_larger("trt", tau, d / 2.0)?
+    } else {
+        0.0
+    };
+    Ok(validation::HeldSphere {
+        reynolds: E4_REYNOLDS,
+        diameter: d,
+        width: (w * d).round() as usize,
+        length: (l * d).round() as usize,
+        tau: Some(tau),
+        drawn_larger,
+    })
+}
+
+/// Ten Cate E4's drag from its terminal velocity: C_d = 4/3 (rho_p / rho_f - 1) g d / u_inf^2.
+fn e4_experiment_cd() -> f64 {
+    let (rho_p, rho_f, g, d, u_inf) = (1120.0, 960.0, 9.81, 0.015, 0.128);
+    4.0 / 3.0 * (rho_p / rho_f - 1.0) * g * d / (u_inf * u_inf)
+}
+
+/// C_d of the rows in a box of (W, L) diameters, drawn larger or not, as (d, C_d) by resolution.
+fn drag_in_box(rows: &[validation::SphereDrag], (w, l): (f64, f64), corrected: bool) -> Vec<(f64, f64)> {
+    rows.iter()
+        .filter(|r| (r.width as f64 - w * r.diameter).abs() < 0.5)
+        .filter(|r| (r.length as f64 - l * r.diameter).abs() < 0.5)
+        .filter(|r| (r.drawn_larger > 0.0) == corrected)
+        .map(|r| (r.diameter, r.cd))
+        .collect()
+}
+
+/// The limit N -> inf of a value that converges as 1 / N^2, from its two finest (N, value).
+fn second_order_limit(v: &[(f64, f64)]) -> Option<f64> {
+    let [.., (n1, c1), (n2, c2)] = *v else {
+        return None;
+    };
+    Some(c2 + (c2 - c1) / ((n2 / n1).powi(2) - 1.0))
+}
+
+/// The rows of [`sphere_correction`] summed up: per resolution in the 6 x 6 x 10 box, C_d at the
+/// radius (and its limit N -> inf) and corrected, with their spreads; at 6 cells the box's share.
+fn correction_summary(rows: &[validation::SphereDrag], experiment: f64) -> String {
+    let spread = |v: &[(f64, f64)]| {
+        let (lo, hi) = v
+            .iter()
+            .fold((f64::MAX, f64::MIN), |(a, b), &(_, c)| (a.min(c), b.max(c)));
+        100.0 * (hi - lo) / experiment
+    };
+    let list = |v: &[(f64, f64)]| {
+        v.iter()
+            .map(|(d, c)| format!("{c:.3} ({d})"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    let (plain, corrected) = (
+        drag_in_box(rows, (6.0, 10.0), false),
+        drag_in_box(rows, (6.0, 10.0), true),
+    );
+    let mut t = format!(
+        "\nIn the 6 x 6 x 10 box, C_d (cells per diameter): at the radius {}, spread {:.1}% of the \
+         experiment's C_d; corrected {}, spread {:.1}%.\n",
+        list(&plain),
+        spread(&plain),
+        list(&corrected),
+        spread(&corrected)
+    );
+    if let Some(limit) = second_order_limit(&plain) {
+        let _ = writeln!(
+            t,
+            "C_d at the radius taken to N -> inf as 1 / N^2 from its two finest rows: {limit:.3} \
+             ({:+.1}% of the finest corrected C_d).",
+            100.0 * (limit / corrected.last().map_or(f64::NAN, |c| c.1) - 1.0)
+        );
+    }
+    t + &box_share(rows)
+}
+
+/// At 6 cells, how C_d moves from the 6 x 6 x 10 box to wider and longer ones.
+fn box_share(rows: &[validation::SphereDrag]) -> String {
+    let mut t = String::new();
+    for corrected in [false, true] {
+        let at = |b| {
+            drag_in_box(rows, b, corrected)
+                .first()
+                .filter(|c| c.0 == 6.0)
+                .map(|c| c.1)
+        };
+        let (Some(base), Some(wide), Some(long)) = (at((6.0, 10.0)), at((10.0, 10.0)), at((8.0, 15.0)))
+        else {
+            continue;
+        };
+        let eight = at((8.0, 10.0)).unwrap_or(f64::NAN);
+        let _ = writeln!(
+            t,
+            "At 6 cells {}: W 6 -> 10 diameters {:+.1}% (8: {:+.1}%), L 10 -> 15 diameters at W 8 {:+.1}%.",
+            if corrected { "corrected" } else { "at the radius" },
+            100.0 * (wide / base - 1.0),
+            100.0 * (eight / base - 1.0),
+            100.0 * (long / eight - 1.0)
+        );
+    }
+    t
+}
+
 fn momentum(gpu: &Arc<Gpu>) -> String {
     let m = validation::momentum_exchange(gpu, 16, 300);
     format!(
@@ -428,7 +652,9 @@ pub(crate) fn report_section(heading: &str) -> &'static str {
 
 #[cfg(test)]
 mod tests {
-    use super::{replace_section, report_section, runs_over_tau};
+    use super::{
+        correction_boxes, replace_section, report_section, runs_over_tau, second_order_limit, E4_TAUS,
+    };
 
     /// The tau sections of validation/lbm/REPORT.md list their runs in the order of
     /// `runs_over_tau` (box n, tau, operator), row by row.
@@ -450,6 +676,38 @@ mod tests {
                 .collect();
             assert_eq!(rows, runs, "{heading}");
         }
+    }
+
+    /// The held spheres of the report's sphere-correction section are the cases of
+    /// `correction_boxes` at E4's taus, each at its radius and corrected, in that order.
+    #[test]
+    fn the_sphere_correction_section_holds_the_boxes_run() {
+        let section = report_section("## Immersed moving boundary: the radius correction on a held sphere");
+        let rows: Vec<String> = section
+            .lines()
+            .filter(|l| l.split(" | ").count() == 11 && l.starts_with("| ") && !l.starts_with("| d"))
+            .map(|l| l.split(" | ").take(4).collect::<Vec<_>>().join(" | "))
+            .collect();
+        let cases: Vec<String> = E4_TAUS
+            .iter()
+            .flat_map(|&(d, tau)| correction_boxes(d).iter().map(move |&(w, l)| (d, tau, w, l)))
+            .flat_map(|(d, tau, w, l)| {
+                let row = format!("| {d} | {} | {} | {tau}", w * d, l * d);
+                [row.clone(), row]
+            })
+            .collect();
+        assert_eq!(rows, cases);
+    }
+
+    #[test]
+    fn a_second_order_limit_is_exact_for_values_falling_as_one_over_n_squared() {
+        let values: Vec<(f64, f64)> = [6.0, 9.0, 12.0]
+            .iter()
+            .map(|&n: &f64| (n, 2.0 - 3.0 / (n * n)))
+            .collect();
+        let limit = second_order_limit(&values).unwrap();
+        assert!((limit - 2.0).abs() < 1e-12, "{limit}");
+        assert_eq!(second_order_limit(&values[..1]), None);
     }
 
     #[test]

@@ -314,6 +314,8 @@ pub struct SphereDrag {
     pub length: usize,
     pub u0: f64,
     pub tau: f64,
+    /// The radius it was drawn larger by, cells.
+    pub drawn_larger: f64,
     pub steps: u64,
     /// C_d = F / (1/2 rho u0^2 pi d^2 / 4), measured.
     pub cd: f64,
@@ -341,7 +343,7 @@ pub fn unconfined_drag(points: &[(f64, f64)]) -> Option<(f64, f64)> {
         return None;
     };
     let ratio = (c3 - c2) / (c2 - c1);
-    if !(ratio > 0.0) || !ratio.is_finite() {
+    if !ratio.is_finite() || ratio <= 0.0 {
         return None;
     }
     let shape = |p: f64| (x3.powf(p) - x2.powf(p)) / (x2.powf(p) - x1.powf(p));
@@ -367,11 +369,25 @@ pub const STREAM_VELOCITY: f64 = 0.08;
 /// The largest tau of [`fixed_sphere`]: the stream is slowed rather than tau raised past it.
 pub const STREAM_TAU: f64 = 1.0;
 
+/// A sphere held at rest in a stream: its Reynolds number, size, box and lattice.
+#[derive(Debug, Clone, Copy)]
+pub struct HeldSphere {
+    /// Re = u0 d / nu, with the nominal diameter.
+    pub reynolds: f64,
+    /// Nominal diameter, cells.
+    pub diameter: f64,
+    /// Box width (y and z) and length (x), cells.
+    pub width: usize,
+    pub length: usize,
+    /// The lattice's tau; None: the stream at [`STREAM_VELOCITY`] unless tau would pass
+    /// [`STREAM_TAU`].
+    pub tau: Option<f64>,
+    /// The radius the sphere is drawn larger by (cells; the radius correction, 0 without it).
+    pub drawn_larger: f64,
+}
+
 /// A sphere of `diameter` cells held at rest in a stream along x at Reynolds number `re` = u0 d
-/// / nu: velocity inlet at x = 0, pressure outlet at x = length, the four side faces moving with
-/// the stream (a far field that adds no shear), the sphere a third of the length downstream.
-/// Runs until the drag changes by less than 1e-4 relative over 100 steps (at least two passes of
-/// the stream through the box). Err: the run blew up or found no steady drag (what and when).
+/// / nu (see [`held_sphere`]), at the stream velocity's tau and drawn at its radius.
 pub fn fixed_sphere(
     gpu: &Arc<Gpu>,
     re: f64,
@@ -379,12 +395,22 @@ pub fn fixed_sphere(
     width: usize,
     length: usize,
 ) -> Result<SphereDrag, String> {
-    use super::imb::{ImbOptions, SolidParticle};
-    let nu_max = (STREAM_TAU - 0.5) / 3.0;
-    let u0 = STREAM_VELOCITY.min(re * nu_max / diameter);
-    let nu = u0 * diameter / re;
-    let tau = 3.0 * nu + 0.5;
-    let stream = [u0, 0.0, 0.0];
+    held_sphere(
+        gpu,
+        &HeldSphere {
+            reynolds: re,
+            diameter,
+            width,
+            length,
+            tau: None,
+            drawn_larger: 0.0,
+        },
+    )
+}
+
+/// A coupled TRT lattice of `size` cells with fluid moving at `stream` everywhere: velocity
+/// inlet at x = 0, pressure outlet at x = length, the four side faces moving with the stream.
+fn stream_box(gpu: &Arc<Gpu>, size: [usize; 3], tau: f64, stream: [f64; 3]) -> Lattice {
     let faces = [
         Face::VelocityInlet(stream),
         Face::PressureOutlet(1.0),
@@ -393,17 +419,40 @@ pub fn fixed_sphere(
         Face::MovingWall(stream),
         Face::MovingWall(stream),
     ];
-    let setup = Setup::new(
-        [length, width, width],
-        faces,
-        tau,
-        Operator::Trt { magic: 3.0 / 16.0 },
-    );
-    let mut lattice = coupled_lattice(gpu, &setup, ImbOptions::default());
+    let setup = Setup::new(size, faces, tau, Operator::Trt { magic: 3.0 / 16.0 });
+    let mut lattice = coupled_lattice(gpu, &setup, super::imb::ImbOptions::default());
     lattice.set_populations(&equilibrium_field(&setup, |_| (1.0, stream)));
+    lattice
+}
+
+/// The stream velocity and tau of a held sphere: at the given tau, or at [`STREAM_VELOCITY`]
+/// unless tau would pass [`STREAM_TAU`].
+fn stream_of(case: &HeldSphere) -> (f64, f64) {
+    let (re, d) = (case.reynolds, case.diameter);
+    match case.tau {
+        Some(tau) => (re * (tau - 0.5) / 3.0 / d, tau),
+        None => {
+            let nu_max = (STREAM_TAU - 0.5) / 3.0;
+            let u0 = STREAM_VELOCITY.min(re * nu_max / d);
+            (u0, 3.0 * u0 * d / re + 0.5)
+        }
+    }
+}
+
+/// A sphere held at rest in a stream along x: velocity inlet at x = 0, pressure outlet at x =
+/// length, the four side faces moving with the stream (a far field that adds no shear), the
+/// sphere a third of the length downstream; C_d with the nominal diameter. Runs until the drag
+/// changes by less than 1e-4 relative over 100 steps (at least two passes of the stream through
+/// the box). Err: the run blew up or found no steady drag (what and when).
+pub fn held_sphere(gpu: &Arc<Gpu>, case: &HeldSphere) -> Result<SphereDrag, String> {
+    use super::imb::SolidParticle;
+    let (u0, tau) = stream_of(case);
+    let (diameter, width, length) = (case.diameter, case.width, case.length);
+    let stream = [u0, 0.0, 0.0];
+    let mut lattice = stream_box(gpu, [length, width, width], tau, stream);
     let sphere = SolidParticle {
         position: [length as f64 / 3.0, width as f64 / 2.0, width as f64 / 2.0],
-        radius: diameter / 2.0,
+        radius: diameter / 2.0 + case.drawn_larger,
         ..Default::default()
     };
     let passes = (2.0 * length as f64 / u0) as u64;
@@ -426,14 +475,80 @@ pub fn fixed_sphere(
     }
     let area = std::f64::consts::PI * diameter * diameter / 4.0;
     Ok(SphereDrag {
-        reynolds: re,
+        reynolds: case.reynolds,
         diameter,
         width,
         length,
         u0,
         tau,
+        drawn_larger: case.drawn_larger,
         steps,
         cd: force / (0.5 * u0 * u0 * area),
+    })
+}
+
+/// Drag of a sphere towed at constant speed through fluid at rest ([`towed_sphere`]).
+#[derive(Debug, Clone, Copy)]
+pub struct TowedDrag {
+    /// The held sphere's case it is the moving counterpart of.
+    pub case: HeldSphere,
+    pub u0: f64,
+    pub tau: f64,
+    pub steps: u64,
+    /// C_d (nominal diameter) averaged over the sphere's travel from 10 to 12 and from 12 to 14
+    /// diameters past its start.
+    pub cd_early: f64,
+    pub cd: f64,
+}
+
+/// Diameters a towed sphere travels, and where its drag is averaged ([`towed_sphere`]).
+const TOW_TRAVEL: f64 = 14.0;
+const TOW_WINDOWS: [(f64, f64); 2] = [(10.0, 12.0), (12.0, 14.0)];
+
+/// The held sphere of `case` in the frame of the fluid far away: the sphere moves at -u0 along
+/// x through fluid at rest, between side walls at rest (the held box's walls moving with the
+/// stream), from 19 to 5 diameters from the x = 0 face (velocity 0) of a box 24 diameters long
+/// (pressure outlet at x = length). Started impulsively; C_d averaged over whole diameters of
+/// travel ([`TOW_WINDOWS`]). The same flow as the held sphere's, but with the sphere's cells
+/// covered and uncovered as it moves: the difference is the moving immersed boundary's.
+pub fn towed_sphere(gpu: &Arc<Gpu>, case: &HeldSphere) -> Result<TowedDrag, String> {
+    use super::imb::SolidParticle;
+    let (u0, tau) = stream_of(case);
+    let d = case.diameter;
+    let length = (24.0 * d).round() as usize;
+    let rest = [0.0; 3];
+    let mut lattice = stream_box(gpu, [length, case.width, case.width], tau, rest);
+    let centre = case.width as f64 / 2.0;
+    let start = 19.0 * d;
+    let steps = (TOW_TRAVEL * d / u0).ceil() as u64;
+    let mut sums = [(0.0, 0u64); 2];
+    for step in 0..steps {
+        let sphere = SolidParticle {
+            position: [start - u0 * step as f64, centre, centre],
+            radius: d / 2.0 + case.drawn_larger,
+            velocity: [-u0, 0.0, 0.0],
+            ..Default::default()
+        };
+        let force = lattice.step_coupled(&[sphere])?[0].force[0];
+        if !force.is_finite() {
+            return Err(format!("blew up by step {step} (tau {tau:.4}, u0 {u0})"));
+        }
+        let travel = u0 * step as f64 / d;
+        for (sum, &(from, to)) in sums.iter_mut().zip(&TOW_WINDOWS) {
+            if (from..to).contains(&travel) {
+                *sum = (sum.0 + force, sum.1 + 1);
+            }
+        }
+    }
+    let area = std::f64::consts::PI * d * d / 4.0;
+    let cd = |(sum, n): (f64, u64)| sum / n as f64 / (0.5 * u0 * u0 * area);
+    Ok(TowedDrag {
+        case: *case,
+        u0,
+        tau,
+        steps,
+        cd_early: cd(sums[0]),
+        cd: cd(sums[1]),
     })
 }
 
