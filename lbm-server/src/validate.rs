@@ -474,7 +474,7 @@ fn sphere_correction(gpu: &Arc<Gpu>) -> String {
     t + &correction_summary(&rows, experiment) + &towed_spheres(gpu, &rows)
 }
 
-/// The held spheres of the 6 x 6 box at 6 and 9 cells towed through fluid at rest instead
+/// The held spheres of the 6 x 6 box at 6, 9 and 12 cells towed through fluid at rest instead
 /// ([`validation::towed_sphere`]), against their held C_d.
 fn towed_spheres(gpu: &Arc<Gpu>, held: &[validation::SphereDrag]) -> String {
     let mut t = String::from(
@@ -486,7 +486,7 @@ fn towed_spheres(gpu: &Arc<Gpu>, held: &[validation::SphereDrag]) -> String {
          | d | tau | u0 | drawn larger by | steps | C_d over 10-12 d | C_d over 12-14 d | held | towed against held |\n\
          |---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
     );
-    for &(d, tau) in &E4_TAUS[..2] {
+    for &(d, tau) in &E4_TAUS {
         for corrected in [false, true] {
             let towed = correction_case(d, tau, (6.0, 10.0), corrected)
                 .and_then(|c| validation::towed_sphere(gpu, &c));
