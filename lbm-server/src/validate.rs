@@ -498,10 +498,7 @@ fn towed_spheres(gpu: &Arc<Gpu>, held: &[validation::SphereDrag]) -> String {
                 }
             };
             protocol::say!("lbm-server: sphere-correction: {towed:?}");
-            let held = drag_in_box(held, (6.0, 10.0), corrected)
-                .into_iter()
-                .find(|c| c.0 == d)
-                .map_or(f64::NAN, |c| c.1);
+            let held = held_drag(held, (6.0, 10.0), corrected, d).unwrap_or(f64::NAN);
             let _ = writeln!(
                 t,
                 "| {d} | {:.3} | {:.4} | {:.3} | {} | {:.3} | {:.3} | {held:.3} | {:+.1}% |",
@@ -556,6 +553,14 @@ fn drag_in_box(rows: &[validation::SphereDrag], (w, l): (f64, f64), corrected: b
         .collect()
 }
 
+/// C_d of the row at `d` cells in a box of (W, L) diameters, drawn larger or not.
+fn held_drag(rows: &[validation::SphereDrag], b: (f64, f64), corrected: bool, d: f64) -> Option<f64> {
+    drag_in_box(rows, b, corrected)
+        .into_iter()
+        .find(|c| c.0 == d)
+        .map(|c| c.1)
+}
+
 /// The limit N -> inf of a value that converges as 1 / N^2, from its two finest (N, value).
 fn second_order_limit(v: &[(f64, f64)]) -> Option<f64> {
     let [.., (n1, c1), (n2, c2)] = *v else {
@@ -606,17 +611,11 @@ fn correction_summary(rows: &[validation::SphereDrag], experiment: f64) -> Strin
 fn box_share(rows: &[validation::SphereDrag]) -> String {
     let mut t = String::new();
     for corrected in [false, true] {
-        let at = |b| {
-            drag_in_box(rows, b, corrected)
-                .first()
-                .filter(|c| c.0 == 6.0)
-                .map(|c| c.1)
-        };
-        let (Some(base), Some(wide), Some(long)) = (at((6.0, 10.0)), at((10.0, 10.0)), at((8.0, 15.0)))
-        else {
+        let at = |b| held_drag(rows, b, corrected, 6.0);
+        let boxes = [(6.0, 10.0), (8.0, 10.0), (10.0, 10.0), (8.0, 15.0)].map(at);
+        let [Some(base), Some(eight), Some(wide), Some(long)] = boxes else {
             continue;
         };
-        let eight = at((8.0, 10.0)).unwrap_or(f64::NAN);
         let _ = writeln!(
             t,
             "At 6 cells {}: W 6 -> 10 diameters {:+.1}% (8: {:+.1}%), L 10 -> 15 diameters at W 8 {:+.1}%.",
@@ -653,7 +652,8 @@ pub(crate) fn report_section(heading: &str) -> &'static str {
 #[cfg(test)]
 mod tests {
     use super::{
-        correction_boxes, replace_section, report_section, runs_over_tau, second_order_limit, E4_TAUS,
+        correction_boxes, correction_summary, replace_section, report_section, runs_over_tau,
+        second_order_limit, E4_TAUS,
     };
 
     /// The tau sections of validation/lbm/REPORT.md list their runs in the order of
@@ -697,6 +697,43 @@ mod tests {
             })
             .collect();
         assert_eq!(rows, cases);
+    }
+
+    /// The summary reads each box's row: C_d chosen so that every figure is known.
+    #[test]
+    fn the_correction_summary_reads_the_rows_of_each_box() {
+        let row =
+            |d: f64, (w, l): (f64, f64), drawn_larger: f64, cd: f64| crate::lbm::validation::SphereDrag {
+                reynolds: 32.2,
+                diameter: d,
+                width: (w * d) as usize,
+                length: (l * d) as usize,
+                u0: 0.06,
+                tau: 0.55,
+                drawn_larger,
+                steps: 100,
+                cd,
+            };
+        let mut rows = Vec::new();
+        for (drawn, scale) in [(0.0, 1.0), (0.1, 1.1)] {
+            rows.push(row(6.0, (6.0, 10.0), drawn, 2.0 * scale));
+            rows.push(row(6.0, (8.0, 10.0), drawn, 1.9 * scale));
+            rows.push(row(6.0, (10.0, 10.0), drawn, 1.8 * scale));
+            rows.push(row(6.0, (8.0, 15.0), drawn, 1.71 * scale));
+            rows.push(row(12.0, (6.0, 10.0), drawn, 2.3 * scale));
+        }
+        let summary = correction_summary(&rows, 2.0);
+        assert!(
+            summary.contains("at the radius 2.000 (6), 2.300 (12), spread 15.0%"),
+            "{summary}"
+        );
+        assert!(
+            summary.contains("corrected 2.200 (6), 2.530 (12), spread 16.5%"),
+            "{summary}"
+        );
+        assert!(summary.contains("two finest rows: 2.400 (-5.1% of"), "{summary}");
+        let boxes = "W 6 -> 10 diameters -10.0% (8: -5.0%), L 10 -> 15 diameters at W 8 -10.0%.";
+        assert_eq!(summary.matches(boxes).count(), 2, "{summary}");
     }
 
     #[test]

@@ -425,6 +425,11 @@ fn stream_box(gpu: &Arc<Gpu>, size: [usize; 3], tau: f64, stream: [f64; 3]) -> L
     lattice
 }
 
+/// C_d = F / (1/2 rho u0^2 pi d^2 / 4) of a sphere of `diameter` cells in a stream `u0` (rho 1).
+fn drag_coefficient(force: f64, u0: f64, diameter: f64) -> f64 {
+    force / (0.5 * u0 * u0 * std::f64::consts::PI * diameter * diameter / 4.0)
+}
+
 /// The stream velocity and tau of a held sphere: at the given tau, or at [`STREAM_VELOCITY`]
 /// unless tau would pass [`STREAM_TAU`].
 fn stream_of(case: &HeldSphere) -> (f64, f64) {
@@ -473,7 +478,6 @@ pub fn held_sphere(gpu: &Arc<Gpu>, case: &HeldSphere) -> Result<SphereDrag, Stri
             return Err(format!("no steady drag after {steps} steps: {force} vs {last}"));
         }
     }
-    let area = std::f64::consts::PI * diameter * diameter / 4.0;
     Ok(SphereDrag {
         reynolds: case.reynolds,
         diameter,
@@ -483,7 +487,7 @@ pub fn held_sphere(gpu: &Arc<Gpu>, case: &HeldSphere) -> Result<SphereDrag, Stri
         tau,
         drawn_larger: case.drawn_larger,
         steps,
-        cd: force / (0.5 * u0 * u0 * area),
+        cd: drag_coefficient(force, u0, diameter),
     })
 }
 
@@ -510,7 +514,8 @@ const TOW_WINDOWS: [(f64, f64); 2] = [(10.0, 12.0), (12.0, 14.0)];
 /// stream), from 19 to 5 diameters from the x = 0 face (velocity 0) of a box 24 diameters long
 /// (pressure outlet at x = length). Started impulsively; C_d averaged over whole diameters of
 /// travel ([`TOW_WINDOWS`]). The same flow as the held sphere's, but with the sphere's cells
-/// covered and uncovered as it moves: the difference is the moving immersed boundary's.
+/// covered and uncovered as it moves: the difference is the moving immersed boundary's. The
+/// case's length is not used (the tow sets it).
 pub fn towed_sphere(gpu: &Arc<Gpu>, case: &HeldSphere) -> Result<TowedDrag, String> {
     use super::imb::SolidParticle;
     let (u0, tau) = stream_of(case);
@@ -540,8 +545,7 @@ pub fn towed_sphere(gpu: &Arc<Gpu>, case: &HeldSphere) -> Result<TowedDrag, Stri
             }
         }
     }
-    let area = std::f64::consts::PI * d * d / 4.0;
-    let cd = |(sum, n): (f64, u64)| sum / n as f64 / (0.5 * u0 * u0 * area);
+    let cd = |(sum, n): (f64, u64)| drag_coefficient(sum / n as f64, u0, d);
     Ok(TowedDrag {
         case: *case,
         u0,
