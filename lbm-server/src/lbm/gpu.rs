@@ -296,11 +296,7 @@ impl Lattice {
             make_bind_group(
                 d,
                 &layout,
-                &params[parity],
-                &flags,
-                &mrt,
-                &fields,
-                &status,
+                [&params[parity], &flags, &mrt, &fields, &status],
                 &populations,
                 &coupling,
                 &cell_list,
@@ -381,11 +377,7 @@ impl Lattice {
         make_bind_group(
             &self.gpu.device,
             &self.layout,
-            params,
-            &self.flags,
-            &self.mrt,
-            &self.fields,
-            &self.status,
+            [params, &self.flags, &self.mrt, &self.fields, &self.status],
             &self.populations,
             self.imb.as_ref().expect("coupling buffers"),
             &self.cell_list,
@@ -599,25 +591,17 @@ pub fn fits_device(limits: &wgpu::Limits, n: [usize; 3]) -> Result<(), String> {
     ))
 }
 
+/// The lattice's bind group: `front` (params, flags, MRT matrices, fields, status) at bindings
+/// 0-4, then the populations, the coupling's buffers, the cell list and the loads.
 fn make_bind_group(
     d: &wgpu::Device,
     layout: &wgpu::BindGroupLayout,
-    params: &wgpu::Buffer,
-    flags: &wgpu::Buffer,
-    mrt: &wgpu::Buffer,
-    fields: &wgpu::Buffer,
-    status: &wgpu::Buffer,
+    front: [&wgpu::Buffer; 5],
     populations: &[wgpu::Buffer],
     coupling: &super::imb::Coupling,
     cell_list: &wgpu::Buffer,
 ) -> wgpu::BindGroup {
-    let mut entries = vec![
-        entry(0, params),
-        entry(1, flags),
-        entry(2, mrt),
-        entry(3, fields),
-        entry(4, status),
-    ];
+    let mut entries: Vec<_> = (0u32..).zip(front).map(|(i, b)| entry(i, b)).collect();
     entries.extend(
         populations
             .iter()

@@ -261,10 +261,28 @@ pub fn radius_deficit(
 fn array_drag(
     gpu: &Arc<Gpu>,
     n: usize,
+    radii: [f64; 2],
+    tau: f64,
+    operator: Operator,
+    options: super::imb::ImbOptions,
+) -> ArrayDrag {
+    moving_array_drag(gpu, n, radii, tau, operator, options, 0.0)
+}
+
+/// [`array_drag`] with the sphere moving at `velocity` (cells per step, along x) through the
+/// periodic lattice, its cells covered and uncovered as it goes; the same body force drives the
+/// fluid. Stokes flow depends only on the velocity relative to the sphere, so a boundary that
+/// acts the same moving and at rest gives the same K. The loads and the relative velocity are
+/// averaged over the last whole cells of travel (the drag of a moving sphere wavers with its
+/// place against the lattice).
+pub fn moving_array_drag(
+    gpu: &Arc<Gpu>,
+    n: usize,
     [drawn, radius]: [f64; 2],
     tau: f64,
     operator: Operator,
     options: super::imb::ImbOptions,
+    velocity: f64,
 ) -> ArrayDrag {
     use super::imb::SolidParticle;
     let mut setup = Setup::new([n, n, n], [Face::Periodic; 6], tau, operator);
@@ -272,24 +290,42 @@ fn array_drag(
     // A force small enough for Stokes flow (Re << 1).
     let f = 1e-6;
     setup.force = [f, 0.0, 0.0];
-    let sphere = SolidParticle {
-        position: [n as f64 / 2.0; 3],
+    let centre = n as f64 / 2.0;
+    let sphere_at = |step: u64| SolidParticle {
+        position: [
+            (centre + velocity * step as f64).rem_euclid(n as f64),
+            centre,
+            centre,
+        ],
         radius: drawn,
+        velocity: [velocity, 0.0, 0.0],
         ..Default::default()
     };
     let mut lattice = coupled_lattice(gpu, &setup, options);
     let steps = relaxation_steps(n as f64, nu, 12.0);
-    let mut exchange = 0.0;
-    for _ in 0..steps {
-        exchange = lattice.step_coupled(&[sphere]).expect("coupled step")[0].force[0];
+    // The last 4 cells of travel, the flux sampled 16 times over them (at rest: the last step).
+    let (window, samples) = if velocity == 0.0 {
+        (1, 1)
+    } else {
+        ((4.0 / velocity.abs()).round() as u64, 16)
+    };
+    let stride = (window / samples).max(1);
+    let (mut exchange, mut relative) = (0.0, 0.0);
+    for step in 0..steps {
+        let sphere = sphere_at(step);
+        let load = lattice.step_coupled(&[sphere]).expect("coupled step")[0].force[0];
+        let left = steps - step - 1;
+        if left < window {
+            exchange += load / window as f64;
+            if left.is_multiple_of(stride) && left / stride < samples {
+                let x_far = (sphere.position[0] + centre).floor() as usize % n;
+                relative += (face_flux(&lattice, n, x_far) - velocity) / samples as f64;
+            }
+        }
     }
-    let (fields, bad) = lattice.fields();
+    let (_, bad) = lattice.fields();
     assert!(bad.is_none(), "unhealthy: {bad:?}");
-    // The volumetric flux through the face x = 0 of the unit cell, which the sphere does not cut
-    // (the fluid inside an immersed boundary is not at rest, so a volume average would count it).
-    let face: Vec<f64> = (0..n * n).map(|k| fields[k * n][1] as f64).collect();
-    let u_mean = face.iter().sum::<f64>() / face.len() as f64;
-    let stokes = 6.0 * std::f64::consts::PI * nu * radius * u_mean;
+    let stokes = 6.0 * std::f64::consts::PI * nu * radius * relative;
     let sphere_volume = 4.0 / 3.0 * std::f64::consts::PI * radius.powi(3);
     ArrayDrag {
         radius,
@@ -297,6 +333,14 @@ fn array_drag(
         k_balance: f * (n * n * n) as f64 / stokes,
         steps,
     }
+}
+
+/// The mean velocity along x through the lattice plane x (the volumetric flux over its area);
+/// the sphere must not cut the plane (the fluid inside an immersed boundary moves with it, so a
+/// volume average would count it).
+fn face_flux(lattice: &Lattice, n: usize, x: usize) -> f64 {
+    let (fields, _) = lattice.fields();
+    (0..n * n).map(|k| fields[x + k * n][1] as f64).sum::<f64>() / (n * n) as f64
 }
 
 /// A lattice coupled to particles, with the default health limits.
@@ -384,6 +428,13 @@ pub struct HeldSphere {
     pub tau: Option<f64>,
     /// The radius the sphere is drawn larger by (cells; the radius correction, 0 without it).
     pub drawn_larger: f64,
+    /// The fluid's collision operator.
+    pub operator: Operator,
+    /// The coupling's options (the weighting B).
+    pub imb: super::imb::ImbOptions,
+    /// Cells the held sphere's centre is moved downstream from L/3 (its place against the
+    /// lattice; not used by the towed sphere, which passes every place).
+    pub shift: f64,
 }
 
 /// A sphere of `diameter` cells held at rest in a stream along x at Reynolds number `re` = u0 d
@@ -404,13 +455,23 @@ pub fn fixed_sphere(
             length,
             tau: None,
             drawn_larger: 0.0,
+            operator: Operator::Trt { magic: 3.0 / 16.0 },
+            imb: Default::default(),
+            shift: 0.0,
         },
     )
 }
 
 /// A coupled TRT lattice of `size` cells with fluid moving at `stream` everywhere: velocity
 /// inlet at x = 0, pressure outlet at x = length, the four side faces moving with the stream.
-fn stream_box(gpu: &Arc<Gpu>, size: [usize; 3], tau: f64, stream: [f64; 3]) -> Lattice {
+fn stream_box(
+    gpu: &Arc<Gpu>,
+    size: [usize; 3],
+    tau: f64,
+    operator: Operator,
+    imb: super::imb::ImbOptions,
+    stream: [f64; 3],
+) -> Lattice {
     let faces = [
         Face::VelocityInlet(stream),
         Face::PressureOutlet(1.0),
@@ -419,8 +480,8 @@ fn stream_box(gpu: &Arc<Gpu>, size: [usize; 3], tau: f64, stream: [f64; 3]) -> L
         Face::MovingWall(stream),
         Face::MovingWall(stream),
     ];
-    let setup = Setup::new(size, faces, tau, Operator::Trt { magic: 3.0 / 16.0 });
-    let mut lattice = coupled_lattice(gpu, &setup, super::imb::ImbOptions::default());
+    let setup = Setup::new(size, faces, tau, operator);
+    let mut lattice = coupled_lattice(gpu, &setup, imb);
     lattice.set_populations(&equilibrium_field(&setup, |_| (1.0, stream)));
     lattice
 }
@@ -454,9 +515,13 @@ pub fn held_sphere(gpu: &Arc<Gpu>, case: &HeldSphere) -> Result<SphereDrag, Stri
     let (u0, tau) = stream_of(case);
     let (diameter, width, length) = (case.diameter, case.width, case.length);
     let stream = [u0, 0.0, 0.0];
-    let mut lattice = stream_box(gpu, [length, width, width], tau, stream);
+    let mut lattice = stream_box(gpu, [length, width, width], tau, case.operator, case.imb, stream);
     let sphere = SolidParticle {
-        position: [length as f64 / 3.0, width as f64 / 2.0, width as f64 / 2.0],
+        position: [
+            length as f64 / 3.0 + case.shift,
+            width as f64 / 2.0,
+            width as f64 / 2.0,
+        ],
         radius: diameter / 2.0 + case.drawn_larger,
         ..Default::default()
     };
@@ -514,15 +579,23 @@ const TOW_WINDOWS: [(f64, f64); 2] = [(10.0, 12.0), (12.0, 14.0)];
 /// stream), from 19 to 5 diameters from the x = 0 face (velocity 0) of a box 24 diameters long
 /// (pressure outlet at x = length). Started impulsively; C_d averaged over whole diameters of
 /// travel ([`TOW_WINDOWS`]). The same flow as the held sphere's, but with the sphere's cells
-/// covered and uncovered as it moves: the difference is the moving immersed boundary's. The
-/// case's length is not used (the tow sets it).
+/// covered and uncovered as it moves and the flow unsteady on the lattice: the difference is
+/// what the immersed boundary does differently moving and at rest. The case's length is not
+/// used (the tow sets it).
 pub fn towed_sphere(gpu: &Arc<Gpu>, case: &HeldSphere) -> Result<TowedDrag, String> {
     use super::imb::SolidParticle;
     let (u0, tau) = stream_of(case);
     let d = case.diameter;
     let length = (24.0 * d).round() as usize;
     let rest = [0.0; 3];
-    let mut lattice = stream_box(gpu, [length, case.width, case.width], tau, rest);
+    let mut lattice = stream_box(
+        gpu,
+        [length, case.width, case.width],
+        tau,
+        case.operator,
+        case.imb,
+        rest,
+    );
     let centre = case.width as f64 / 2.0;
     let start = 19.0 * d;
     let steps = (TOW_TRAVEL * d / u0).ceil() as u64;
