@@ -68,6 +68,18 @@ const MISTAKES: &[(&str, &str, &str, &[&str])] = &[
         "timeout = 10\ncovered_cells = \"gpu\"",
         &["coupling.covered_cells = \"gpu\"", "\"fused\" or \"redo\""],
     ),
+    (
+        "calibrated radius correction with another TRT magic",
+        "velocity_scale = 0.01\n[output]\ninterval = 10\n[coupling]\ntimeout = 10",
+        "velocity_scale = 0.01\nmagic = 0.01\n[output]\ninterval = 10\n[coupling]\ntimeout = 10\nradius_correction = \"calibrated\"",
+        &["lattice.magic = 0.01", "magic 3/16"],
+    ),
+    (
+        "calibrated radius correction with other MRT rates",
+        "velocity_scale = 0.01\n[output]\ninterval = 10\n[coupling]\ntimeout = 10",
+        "velocity_scale = 0.01\noperator = \"mrt\"\nmrt = { e = 1.0, epsilon = 1.4, q = 1.2, pi = 1.4, m = 1.98 }\n[output]\ninterval = 10\n[coupling]\ntimeout = 10\nradius_correction = \"calibrated\"",
+        &["lattice.mrt = MrtRates { e: 1.0", "d'Humieres' rates"],
+    ),
 ];
 
 #[test]

@@ -126,28 +126,6 @@ fn radius_deficit_product(correction: &str, operator: &str, tau: f64) -> Result<
     }
 }
 
-/// The calibrated correction's table holds TRT at magic 3/16 and MRT at d'Humieres' rates (the
-/// runs of "hydrodynamic radius deficit against tau"): another magic parameter or other rates
-/// are refused, naming the field, since they move the deficit (the sphere held at Re 32 and 6 cells
-/// per diameter: C_d 2.017 at magic 3/16, 2.175 at 0.01; validation/lbm/REPORT.md, "the sphere at
-/// rest and moving").
-fn calibrated_lattice(correction: &str, units: &LatticeUnits) -> Result<(), String> {
-    if correction != "calibrated" {
-        return Ok(());
-    }
-    let field = match units.operator.as_str() {
-        "trt" if units.magic != 3.0 / 16.0 => format!("lattice.magic = {}", units.magic),
-        "mrt" if units.mrt != scene::lattice::MrtRates::default() => format!("lattice.mrt = {:?}", units.mrt),
-        _ => return Ok(()),
-    };
-    Err(format!(
-        "coupling.radius_correction = \"calibrated\" with {field}: the deficit was calibrated with \
-         TRT at magic 3/16 and MRT at d'Humieres' rates only, and these move it (a sphere held at Re \
-         32 and 6 cells per diameter has C_d 2.017 at magic 3/16 and 2.175 at 0.01); use the \
-         defaults or coupling.radius_correction = \"none\""
-    ))
-}
-
 /// How much larger (cells) a sphere of `radius` cells is drawn for the deficit product
 /// `product` (cells^2, [`radius_deficit_product`]); below [`MIN_DEFICIT_RADIUS`], where nothing
 /// was measured, the deficit of that radius.
@@ -256,6 +234,9 @@ impl FluidSide {
                 scene.name
             ));
         };
+        // The scene's coupling settings are checked before the device is opened.
+        let deficit_product =
+            radius_deficit_product(&scene.coupling.radius_correction, &units.operator, units.tau)?;
         let gpu = Arc::new(Gpu::new()?);
         let radii: Vec<f64> = scene.initial_particles().iter().map(|p| p.radius).collect();
         let options = ImbOptions {
@@ -265,9 +246,6 @@ impl FluidSide {
         };
         let lattice = Lattice::new(gpu, setup_of(&units), health_of(&units), Some(options))?;
         let lubrication = scene.coupling.lubrication.then(|| lubrication_of(scene, &units));
-        calibrated_lattice(&scene.coupling.radius_correction, &units)?;
-        let deficit_product =
-            radius_deficit_product(&scene.coupling.radius_correction, &units.operator, units.tau)?;
         let warning = if scene.coupling.radius_correction == "none" {
             tau_warning(&units.operator, units.tau)
         } else {
@@ -633,24 +611,6 @@ mod tests {
             None,
             "BGK's held and towed sphere agree"
         );
-    }
-
-    #[test]
-    fn the_calibrated_correction_is_refused_off_its_calibrated_operators() {
-        let e1 = TEN_CATE_E1;
-        assert_eq!(calibrated_lattice("calibrated", &units(e1)), Ok(()));
-        let magic = e1.replace("operator = \"trt\"", "operator = \"trt\"\nmagic = 0.01");
-        let err = calibrated_lattice("calibrated", &units(&magic)).expect_err("magic 0.01");
-        assert!(err.contains("lattice.magic = 0.01"), "{err}");
-        assert_eq!(calibrated_lattice("none", &units(&magic)), Ok(()));
-        let mrt = e1.replace(
-            "operator = \"trt\"",
-            "operator = \"mrt\"\nmrt = { e = 1.0, epsilon = 1.4, q = 1.2, pi = 1.4, m = 1.98 }",
-        );
-        let err = calibrated_lattice("calibrated", &units(&mrt)).expect_err("MRT e = 1");
-        assert!(err.contains("lattice.mrt = ") && err.contains("e: 1.0"), "{err}");
-        let mrt = e1.replace("operator = \"trt\"", "operator = \"mrt\"");
-        assert_eq!(calibrated_lattice("calibrated", &units(&mrt)), Ok(()));
     }
 
     #[test]

@@ -102,7 +102,7 @@ def report():
         case, n, tau, v_rc, e_rc = terminal(corrected)
         _, _, _, v, e = terminal(os.path.join(ten_cate.RUNS, name))
         with open(os.path.join(corrected, "log.txt")) as f:
-            drawn = re.search(r"drawn larger by ([0-9.]+) cells\^2", f.read())
+            drawn = re.search(r"drawn larger by (-?[0-9.]+) cells\^2", f.read())
         product = float(drawn.group(1)) if drawn else float("nan")
         r_cells = n / 2.0
         rows.append("| %s | %s | %g | %.3f | %.3f | %.4f | %+.1f | %.4f | %+.1f |" % (
