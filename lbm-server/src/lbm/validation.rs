@@ -273,8 +273,9 @@ fn array_drag(
 /// periodic lattice, its cells covered and uncovered as it goes; the same body force drives the
 /// fluid. Stokes flow depends only on the velocity relative to the sphere, so a boundary that
 /// acts the same moving and at rest gives the same K. The loads and the relative velocity are
-/// averaged over the last whole cells of travel (the drag of a moving sphere wavers with its
-/// place against the lattice).
+/// averaged over the last 4 cells of travel (the drag of a moving sphere wavers with its place
+/// against the lattice); the relative velocity is the flux through the plane farthest from the
+/// sphere less its velocity.
 pub fn moving_array_drag(
     gpu: &Arc<Gpu>,
     n: usize,
@@ -462,8 +463,9 @@ pub fn fixed_sphere(
     )
 }
 
-/// A coupled TRT lattice of `size` cells with fluid moving at `stream` everywhere: velocity
-/// inlet at x = 0, pressure outlet at x = length, the four side faces moving with the stream.
+/// A coupled lattice of `size` cells (this operator and coupling) with fluid moving at `stream`
+/// everywhere: velocity inlet at x = 0, pressure outlet at x = length, the four side faces
+/// moving with the stream.
 fn stream_box(
     gpu: &Arc<Gpu>,
     size: [usize; 3],
