@@ -565,22 +565,18 @@ const HELD_AND_TOWED: [HeldAndTowed; 15] = {
     ]
 };
 
-/// The operator of a [`HeldAndTowed`] or array row by its name ("TRT <magic>", "BGK", "MRT").
+/// The operator of a [`HeldAndTowed`] or array row by its name ("BGK", "MRT", "TRT <magic>"):
+/// `bench::parse_operator` with TRT's magic parameter from the name.
 fn operator_named(name: &str, tau: f64) -> Operator {
-    match name {
-        "BGK" => Operator::Bgk,
-        "MRT" => Operator::Mrt {
-            rates: Rates::dhumieres(1.0 / tau),
+    let (kind, magic) = name.split_once(' ').unwrap_or((name, "3/16"));
+    let operator = crate::bench::parse_operator(&kind.to_lowercase(), tau).expect("operator name");
+    match (operator, magic) {
+        (Operator::Trt { .. }, "3/16") | (Operator::Bgk | Operator::Mrt { .. }, _) => operator,
+        (Operator::Trt { .. }, "1/4") => Operator::Trt { magic: 0.25 },
+        (Operator::Trt { .. }, "1/12") => Operator::Trt { magic: 1.0 / 12.0 },
+        (Operator::Trt { .. }, other) => Operator::Trt {
+            magic: other.parse().expect("TRT magic"),
         },
-        trt => {
-            let magic = match trt.trim_start_matches("TRT ") {
-                "3/16" => 3.0 / 16.0,
-                "1/4" => 0.25,
-                "1/12" => 1.0 / 12.0,
-                other => other.parse().expect("TRT magic"),
-            };
-            Operator::Trt { magic }
-        }
     }
 }
 
