@@ -309,9 +309,11 @@ fn bounce(face: u32, c: vec3<f32>, w: f32, f_star: f32, m: Moments) -> f32 {
         return f_star - 6.0 * w * m.rho * dot(c, params.face_value[face].xyz);
     }
     if kind == PRESSURE {
+        // Equilibrium outflow: f_ibar = f_eq_ibar(rho_w, u), no non-equilibrium comes back in
+        // (anti-bounce-back sent it back, and near tau = 1/2 a wake's blew up there).
         let cu = dot(c, m.u);
         let rho_w = params.face_value[face].w;
-        return -f_star + 2.0 * w * (rho_w * (1.0 + 4.5 * cu * cu - 1.5 * dot(m.u, m.u)) - 1.0);
+        return w * ((rho_w - 1.0) + rho_w * (-3.0 * cu + 4.5 * cu * cu - 1.5 * dot(m.u, m.u)));
     }
     return f_star;
 }

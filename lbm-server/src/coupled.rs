@@ -9,7 +9,7 @@
 //! that the lattice does not carry either; the particles feel its share rho_f V a, added here too
 //! (without it a fixed bed's drag is short by that share: the Zick-Homsy check in docs/imb.md).
 
-use crate::fluid::{health_of, setup_of};
+use crate::fluid::{health_of, setup_of, stability_warning};
 use crate::lbm::gpu::{Gpu, Lattice};
 use crate::lbm::imb::{covered_fraction, CoveredCells, ImbOptions, Particles, SolidParticle};
 use crate::lubrication::Lubrication;
@@ -120,7 +120,7 @@ fn radius_deficit_product(correction: &str, operator: &str, tau: f64) -> Result<
         _ => Err(format!(
             "coupling.radius_correction = \"calibrated\": lattice tau = {tau:.3} is beyond the \
              calibrated taus of {operator} (up to {limit}; validation/lbm/REPORT.md, \"hydrodynamic \
-             radius deficit against tau\"): lower lattice.mach (or lattice.velocity_scale) or set \
+             radius deficit against tau\"): lower lattice.mach (or raise lattice.velocity_scale) or set \
              lattice.tau"
         )),
     }
@@ -169,7 +169,7 @@ fn tau_warning(operator: &str, tau: f64) -> Option<String> {
         "lattice tau = {tau:.3} ({operator}): the immersed boundary's drag falls as tau grows: a sphere \
          of 5 cells radius in the Zick-Homsy array measured {measured}, about half of it at 7.4 cells \
          (validation/lbm/REPORT.md, \"drag against tau\"); a settling sphere falls about that much too \
-         fast. Lower lattice.mach (or lattice.velocity_scale) or set lattice.tau: {operator} at tau \
+         fast. Lower lattice.mach (or raise lattice.velocity_scale) or set lattice.tau: {operator} at tau \
          {best_tau} measured {best:+.1}%; or coupling.radius_correction = \"calibrated\" (docs/imb.md)"
     ))
 }
@@ -251,7 +251,7 @@ impl FluidSide {
         } else {
             correction_warning(&units, 2.0 * radii.iter().fold(0.0, |a, &r| r.max(a)))
         };
-        if let Some(warning) = warning {
+        for warning in warning.into_iter().chain(stability_warning(&units, true)) {
             protocol::say!("lbm-server: warning: {warning}");
         }
         Ok(FluidSide {
@@ -611,6 +611,49 @@ mod tests {
             None,
             "BGK's held and towed sphere agree"
         );
+    }
+
+    #[test]
+    fn trt_warns_near_tau_one_half_where_it_blew_up() {
+        let at = |tau: f64, operator: &str, faces: &str| {
+            units(
+                &TEN_CATE_E1
+                    .replace("mach = 0.1", &format!("mach = 0.1\ntau = {tau}\n{faces}"))
+                    .replace("operator = \"trt\"", &format!("operator = \"{operator}\"")),
+            )
+        };
+        let inlet = "[lattice.faces]\nz_min = { type = \"velocity_inlet\", velocity = [0.0, 0.0, 0.01] }\n\
+                     z_max = { type = \"pressure_outlet\", pressure = 0.0 }";
+        let particles = stability_warning(&at(0.505, "trt", ""), true).expect("0.505 with particles");
+        assert!(
+            particles.contains("tau = 0.5050")
+                && particles.contains("= 38.0")
+                && particles.contains("periodic box"),
+            "{particles}"
+        );
+        assert_eq!(
+            stability_warning(&at(0.512, "trt", ""), true),
+            None,
+            "held at 0.5096"
+        );
+        assert_eq!(
+            stability_warning(&at(0.505, "trt", ""), false),
+            None,
+            "no particles, no inlet"
+        );
+        let with_inlet = stability_warning(&at(0.525, "trt", inlet), false).expect("0.525 with an inlet");
+        assert!(with_inlet.contains("velocity inlet"), "{with_inlet}");
+        assert_eq!(
+            stability_warning(&at(0.54, "trt", inlet), true),
+            None,
+            "held at 0.538"
+        );
+        assert_eq!(
+            stability_warning(&at(0.505, "mrt", inlet), true),
+            None,
+            "MRT held"
+        );
+        assert_eq!(stability_warning(&at(0.511, "bgk", inlet), true), None, "BGK");
     }
 
     #[test]

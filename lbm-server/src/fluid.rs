@@ -47,6 +47,41 @@ pub fn setup_of(units: &LatticeUnits) -> Setup {
     setup
 }
 
+/// Below these taus TRT blew up where BGK or MRT held (validation/lbm/REPORT.md, "Stability near
+/// tau = 1/2", a sphere of 8 cells held in a stream of 0.08): with a velocity inlet (at the
+/// inlet, from tau 0.5192; held at 0.538 in the sphere-drag section), and with particles (at the
+/// sphere in a periodic box, from tau 0.5048; held at 0.5096).
+const TRT_INLET_TAU: f64 = 0.53;
+const TRT_PARTICLES_TAU: f64 = 0.51;
+
+/// The warning for a TRT lattice at a tau where TRT was measured to blow up: with a velocity
+/// inlet below [`TRT_INLET_TAU`], with `particles` below [`TRT_PARTICLES_TAU`].
+pub fn stability_warning(units: &LatticeUnits, particles: bool) -> Option<String> {
+    let inlet = units
+        .faces
+        .iter()
+        .any(|f| matches!(f, LatticeFace::VelocityInlet(_)));
+    let measured = if inlet && units.tau < TRT_INLET_TAU {
+        "blew up at the velocity inlet from tau 0.5192 (magic 3/16 and 1/4; \
+         held at 0.538), where MRT held to tau 0.5024"
+    } else if particles && units.tau < TRT_PARTICLES_TAU {
+        "blew up at the sphere in a periodic box from tau 0.5048 (magic 3/16, 1/4 and 0.01; \
+         held at 0.5096), where BGK and MRT held to tau 0.5024"
+    } else {
+        return None;
+    };
+    (units.operator == "trt").then(|| {
+        format!(
+            "lattice tau = {:.4} with TRT: its antisymmetric modes relax with tau- = 1/2 + \
+             lattice.magic / (tau - 1/2) = {:.1}, hardly at all. A sphere of 8 cells held in a \
+             stream (validation/lbm/REPORT.md, \"Stability near tau = 1/2\") {measured}; \
+             consider lattice.operator = \"mrt\"",
+            units.tau,
+            0.5 + units.magic / (units.tau - 0.5)
+        )
+    })
+}
+
 /// Health limits: twice the operator's Mach limit, and a density deviation of 50%.
 pub fn health_of(units: &LatticeUnits) -> Health {
     Health {
@@ -110,6 +145,9 @@ pub fn run(scene: &Scene, scene_file: &str, steps: u64, out: &Path, interrupted:
         units.operator,
         gpu.adapter.name
     );
+    if let Some(warning) = stability_warning(units, false) {
+        protocol::say!("lbm-server: warning: {warning}");
+    }
     let mut lattice = match Lattice::new(gpu.clone(), setup_of(units), health_of(units), None) {
         Ok(l) => l,
         Err(e) => {

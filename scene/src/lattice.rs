@@ -245,14 +245,16 @@ impl LatticeUnits {
             "lattice (derived tau)"
         };
         if tau.is_nan() || tau - 0.5 < tau_margin(op) {
+            let remedy = if lattice.tau.is_some() {
+                "raise lattice.tau"
+            } else {
+                "refine dx or raise lattice.mach (tau - 1/2 grows as mach / dx)"
+            };
             return Err(fail(
                 file,
                 field,
                 format!("{tau:.5}"),
-                format!(
-                    "is below 0.5 + {} for {op}: unstable; refine dx, lower lattice.mach, or raise the viscosity",
-                    tau_margin(op)
-                ),
+                format!("is below 0.5 + {} for {op}: unstable; {remedy}", tau_margin(op)),
             ));
         }
         let mach = lattice.velocity_scale * dt / dx * 3f64.sqrt();

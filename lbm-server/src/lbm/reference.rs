@@ -54,11 +54,7 @@ pub fn bounce(face: Face, i: usize, f_star: f64, rho: f64, u: [f64; 3]) -> f64 {
     match face {
         Face::Wall | Face::Periodic => f_star,
         Face::MovingWall(uw) | Face::VelocityInlet(uw) => f_star - 6.0 * W[i] * rho * lattice::dot(i, uw),
-        Face::PressureOutlet(rho_w) => {
-            let cu = lattice::dot(i, u);
-            let uu = u[0] * u[0] + u[1] * u[1] + u[2] * u[2];
-            -f_star + 2.0 * W[i] * (rho_w * (1.0 + 4.5 * cu * cu - 1.5 * uu) - 1.0)
-        }
+        Face::PressureOutlet(rho_w) => lattice::equilibrium_shifted(opposite(i), rho_w, u),
     }
 }
 

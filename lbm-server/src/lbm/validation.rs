@@ -438,6 +438,19 @@ pub struct HeldSphere {
     pub shift: f64,
 }
 
+impl HeldSphere {
+    /// The held sphere: at rest, its centre a third of the length downstream (moved by `shift`)
+    /// on the box's axis, drawn larger by `drawn_larger`.
+    fn particle(&self) -> super::imb::SolidParticle {
+        let (w, l) = (self.width as f64, self.length as f64);
+        super::imb::SolidParticle {
+            position: [l / 3.0 + self.shift, w / 2.0, w / 2.0],
+            radius: self.diameter / 2.0 + self.drawn_larger,
+            ..Default::default()
+        }
+    }
+}
+
 /// A sphere of `diameter` cells held at rest in a stream along x at Reynolds number `re` = u0 d
 /// / nu (see [`held_sphere`]), at the stream velocity's tau and drawn at its radius.
 pub fn fixed_sphere(
@@ -513,20 +526,11 @@ fn stream_of(case: &HeldSphere) -> (f64, f64) {
 /// changes by less than 1e-4 relative over 100 steps (at least two passes of the stream through
 /// the box). Err: the run blew up or found no steady drag (what and when).
 pub fn held_sphere(gpu: &Arc<Gpu>, case: &HeldSphere) -> Result<SphereDrag, String> {
-    use super::imb::SolidParticle;
     let (u0, tau) = stream_of(case);
     let (diameter, width, length) = (case.diameter, case.width, case.length);
     let stream = [u0, 0.0, 0.0];
     let mut lattice = stream_box(gpu, [length, width, width], tau, case.operator, case.imb, stream);
-    let sphere = SolidParticle {
-        position: [
-            length as f64 / 3.0 + case.shift,
-            width as f64 / 2.0,
-            width as f64 / 2.0,
-        ],
-        radius: diameter / 2.0 + case.drawn_larger,
-        ..Default::default()
-    };
+    let sphere = case.particle();
     let passes = (2.0 * length as f64 / u0) as u64;
     let (mut steps, mut last, mut force) = (0u64, f64::INFINITY, 0.0);
     while steps < passes || (force - last).abs() > 1e-4 * force.abs() {
@@ -556,6 +560,93 @@ pub fn held_sphere(gpu: &Arc<Gpu>, case: &HeldSphere) -> Result<SphereDrag, Stri
         steps,
         cd: drag_coefficient(force, u0, diameter),
     })
+}
+
+/// How a held sphere's run near tau = 1/2 ended ([`sphere_stability`]).
+#[derive(Debug, Clone, Copy)]
+pub struct Stability {
+    pub tau: f64,
+    /// Steps run: the whole horizon, or up to the health check that failed.
+    pub steps: u64,
+    /// The first cell that failed the health check (|rho - 1| > 0.5, |u| > 0.4 or not finite),
+    /// if one did by `steps`.
+    pub unhealthy: Option<super::gpu::Unhealthy>,
+    /// C_d over the last pass of the stream through the box: mean, lowest, highest (the wake
+    /// may shed); None if it blew up.
+    pub cd: Option<[f64; 3]>,
+    /// The mean of u_x over the box at the last check, against u0 (the periodic box's stream
+    /// slows as the sphere takes its momentum).
+    pub stream: f64,
+}
+
+/// The faces around a held sphere ([`sphere_stability`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Faces {
+    /// [`held_sphere`]'s: velocity inlet, pressure outlet, side faces moving with the stream.
+    Open,
+    /// Periodic on all six faces: no boundary but the sphere; the stream, not driven, slows.
+    Periodic,
+}
+
+/// Steps between the health checks of [`sphere_stability`].
+pub const STABILITY_CHECK: u64 = 10;
+
+/// The held sphere of `case` ([`held_sphere`]'s stream, sphere and box, with these `faces`) run
+/// for `passes` passes of the stream through the box whether or not its drag settles (above Re ~
+/// 210 a sphere's wake is unsteady), with the lattice's health checked every
+/// [`STABILITY_CHECK`] steps: whether this operator at this tau holds the flow, where it first
+/// fails if not, and the drag over the last pass where it holds.
+pub fn sphere_stability(gpu: &Arc<Gpu>, case: &HeldSphere, faces: Faces, passes: f64) -> Stability {
+    let (u0, tau) = stream_of(case);
+    let (d, width, length) = (case.diameter, case.width, case.length);
+    let size = [length, width, width];
+    let stream = [u0, 0.0, 0.0];
+    let mut lattice = match faces {
+        Faces::Open => stream_box(gpu, size, tau, case.operator, case.imb, stream),
+        Faces::Periodic => {
+            let setup = Setup::new(size, [Face::Periodic; 6], tau, case.operator);
+            let mut lattice = coupled_lattice(gpu, &setup, case.imb);
+            lattice.set_populations(&equilibrium_field(&setup, |_| (1.0, stream)));
+            lattice
+        }
+    };
+    let sphere = case.particle();
+    let pass = (length as f64 / u0).ceil() as u64;
+    let horizon = ((passes * pass as f64) as u64).div_ceil(STABILITY_CHECK) * STABILITY_CHECK;
+    let last_pass = horizon.saturating_sub(pass);
+    let (mut sum, mut low, mut high, mut n) = (0.0, f64::INFINITY, f64::NEG_INFINITY, 0u64);
+    let (mut steps, mut stream) = (0, 1.0);
+    while steps < horizon {
+        for _ in 0..STABILITY_CHECK {
+            let force = lattice
+                .step_coupled(&[sphere])
+                .map_or(f64::NAN, |l| l[0].force[0]);
+            steps += 1;
+            if steps > last_pass {
+                let cd = drag_coefficient(force, u0, d);
+                (sum, low, high, n) = (sum + cd, low.min(cd), high.max(cd), n + 1);
+            }
+        }
+        let (fields, unhealthy) = lattice.fields();
+        if unhealthy.is_some() {
+            return Stability {
+                tau,
+                steps,
+                unhealthy,
+                cd: None,
+                stream,
+            };
+        }
+        stream = fields.iter().map(|c| c[1] as f64).sum::<f64>() / fields.len() as f64 / u0;
+    }
+    let cd = sum.is_finite().then_some([sum / n as f64, low, high]);
+    Stability {
+        tau,
+        steps,
+        unhealthy: None,
+        cd,
+        stream,
+    }
 }
 
 /// Drag of a sphere towed at constant speed through fluid at rest ([`towed_sphere`]).
