@@ -20,7 +20,8 @@ const MISTAKES: &[(&str, &str, &str, &[&str])] = &[
         "",
         &["time.dt = missing", "add a [lattice] section"],
     ),
-    ("relaxation time too low", "tau = 0.8", "tau = 0.5001", &["lattice.tau = 0.50010", "unstable"]),
+    ("relaxation time too low", "tau = 0.8", "tau = 0.5001", &["lattice.tau = 0.50010", "unstable", "raise lattice.tau"]),
+    ("negative ramp time", "tau = 0.8", "tau = 0.8\nramp_time = -0.1", &["lattice.ramp_time = -0.1 s", ">= 0"]),
     ("zero steps", "steps = 100", "steps = 0", &["time.steps = 0"]),
     ("negative viscosity", "dynamic_viscosity = 1.0", "dynamic_viscosity = -1.0", &["fluid.dynamic_viscosity = -1 Pa s"]),
     (

@@ -256,7 +256,15 @@ impl<'a> FluidRun<'a> {
                 .chain([steps])
                 .min()
                 .expect("steps");
-            lattice.step(next - now);
+            if (now as f64) < self.units.ramp_steps {
+                for step in now..next {
+                    lattice.set_face_scale(self.units.face_ramp(step));
+                    lattice.step(1);
+                }
+            } else {
+                lattice.set_face_scale(1.0);
+                lattice.step(next - now);
+            }
             let last = next == steps;
             let (fields, bad) = lattice.fields();
             if let Some(bad) = bad {

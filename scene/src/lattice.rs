@@ -40,6 +40,12 @@ pub struct Lattice {
     /// Steps between two health checks (non-finite values, density, speed).
     #[serde(default = "default_check_interval")]
     pub check_interval: u64,
+    /// Time [s] over which the velocity inlets and moving walls rise from rest to their velocity,
+    /// as (1 - cos(pi t / ramp_time)) / 2 (default 0: at full velocity from the first step). A
+    /// start at full speed sends a pressure wave of the inlet's speed through the liquid, which a
+    /// pressure outlet sends back; near tau = 1/2 it hardly decays (docs/lbm.md).
+    #[serde(default)]
+    pub ramp_time: f64,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
@@ -186,6 +192,8 @@ pub struct LatticeUnits {
     /// Solid cells, x fastest.
     pub solid: Vec<bool>,
     pub check_interval: u64,
+    /// Steps over which the face velocities rise from rest (`lattice.ramp_time` / dt).
+    pub ramp_steps: f64,
 }
 
 /// Smallest tau - 1/2 each operator accepts.
@@ -275,6 +283,14 @@ impl LatticeUnits {
             return Err(fail(file, "lattice.check_interval", 0, "must be at least 1 step"));
         }
         let force = lattice.body_acceleration.map(|a| a * dt * dt / dx);
+        if !(lattice.ramp_time.is_finite() && lattice.ramp_time >= 0.0) {
+            return Err(fail(
+                file,
+                "lattice.ramp_time",
+                format!("{} s", lattice.ramp_time),
+                "must be a finite number >= 0",
+            ));
+        }
         Ok(LatticeUnits {
             n,
             dx,
@@ -289,7 +305,19 @@ impl LatticeUnits {
             faces,
             solid,
             check_interval: lattice.check_interval,
+            ramp_steps: lattice.ramp_time / dt,
         })
+    }
+
+    /// The share of their velocity the velocity inlets and moving walls have in the step from
+    /// `step` to `step + 1`: (1 - cos(pi (step + 1) / ramp_steps)) / 2 until the ramp's end, then 1.
+    pub fn face_ramp(&self, step: u64) -> f64 {
+        let x = (step + 1) as f64 / self.ramp_steps;
+        if x >= 1.0 || x.is_nan() {
+            1.0
+        } else {
+            0.5 * (1.0 - (std::f64::consts::PI * x).cos())
+        }
     }
 
     /// Lattice velocity of an SI velocity.
@@ -457,4 +485,39 @@ fn solid_cells(
         }
     }
     Ok(solid)
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::Scene;
+
+    /// The face velocities rise as (1 - cos(pi t / T)) / 2 over lattice.ramp_time T, and are
+    /// whole from the first step without one.
+    #[test]
+    fn the_faces_rise_from_rest_over_the_ramp() {
+        let text =
+            crate::DEFAULT_SCENE.replace("check_interval = 100", "check_interval = 100\nramp_time = 1.0");
+        let units = Scene::parse(&text, "ramp.toml")
+            .expect("scene")
+            .lattice_units
+            .expect("lattice");
+        let steps = units.ramp_steps;
+        assert!((steps - 1.0 / units.dt).abs() < 1e-9, "{steps}");
+        assert!(
+            units.face_ramp(0) < 1e-4,
+            "the first step starts from rest: {}",
+            units.face_ramp(0)
+        );
+        let n = steps.floor() as u64;
+        let half = units.face_ramp(n / 2 - 1);
+        let expected = 0.5 * (1.0 - (std::f64::consts::PI * (n / 2) as f64 / steps).cos());
+        assert!((half - expected).abs() < 1e-12, "{half}");
+        assert_eq!(units.face_ramp(n), 1.0);
+        assert_eq!(units.face_ramp(10 * n), 1.0);
+        let plain = Scene::parse(crate::DEFAULT_SCENE, "d.toml")
+            .expect("scene")
+            .lattice_units
+            .expect("lattice");
+        assert_eq!(plain.face_ramp(0), 1.0, "no ramp: whole from the first step");
+    }
 }

@@ -150,6 +150,9 @@ pub struct Lattice {
     pub(super) imb: Option<super::imb::Coupling>,
     /// Completed steps; its parity selects the AA phase.
     pub time: u64,
+    /// The share of their velocity the velocity inlets and moving walls have now
+    /// ([`Lattice::set_face_scale`]).
+    face_scale: f64,
 }
 
 /// The first unhealthy cell found by a health check.
@@ -243,7 +246,7 @@ impl Lattice {
                 init(
                     "params",
                     bytemuck::bytes_of(&params(&setup, parity, health, &classes)),
-                    wgpu::BufferUsages::UNIFORM,
+                    wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
                 )
             })
             .collect();
@@ -322,6 +325,7 @@ impl Lattice {
             macroscopic,
             imb: Some(coupling),
             time: 0,
+            face_scale: 1.0,
         };
         // wgpu zero-initialises every buffer: the shifted populations start at rest (f = w, rho = 1)
         // without an upload (which took a 5 GB host array at 256 x 256 x 512).
@@ -398,6 +402,26 @@ impl Lattice {
     pub fn set_populations(&mut self, f: &[Cell]) {
         self.upload(f);
         self.time = 0;
+    }
+
+    /// Gives the velocity inlets and moving walls `scale` times the velocity of their face from
+    /// the next step on (a start from rest, `lattice.ramp_time`); the density of an outlet is
+    /// kept.
+    pub fn set_face_scale(&mut self, scale: f64) {
+        if scale == self.face_scale {
+            return;
+        }
+        self.face_scale = scale;
+        let values: [[f32; 4]; 6] = std::array::from_fn(|f| {
+            let ([x, y, z], rho) = self.setup.faces[f].values();
+            [x * scale, y * scale, z * scale, rho].map(|v| v as f32)
+        });
+        let offset = std::mem::offset_of!(Params, face_value) as u64;
+        for params in &self.params {
+            self.gpu
+                .queue
+                .write_buffer(params, offset, bytemuck::cast_slice(&values));
+        }
     }
 
     /// Advances `steps` steps (submitted in batches; returns once submitted, not completed).
