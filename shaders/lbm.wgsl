@@ -310,10 +310,14 @@ fn bounce(face: u32, c: vec3<f32>, w: f32, f_star: f32, m: Moments) -> f32 {
     }
     if kind == PRESSURE {
         // Equilibrium outflow: f_ibar = f_eq_ibar(rho_w, u), no non-equilibrium comes back in
-        // (anti-bounce-back sent it back, and near tau = 1/2 a wake's blew up there).
-        let cu = dot(c, m.u);
+        // (anti-bounce-back sent it back, and near tau = 1/2 a wake's blew up there); u is the
+        // cell's velocity less any part into the fluid (no backflow through the outlet).
+        var outward = vec3<f32>(0.0);
+        outward[face / 2u] = select(-1.0, 1.0, face % 2u == 1u);
+        let u = m.u - min(dot(m.u, outward), 0.0) * outward;
+        let cu = dot(c, u);
         let rho_w = params.face_value[face].w;
-        return w * ((rho_w - 1.0) + rho_w * (-3.0 * cu + 4.5 * cu * cu - 1.5 * dot(m.u, m.u)));
+        return w * ((rho_w - 1.0) + rho_w * (-3.0 * cu + 4.5 * cu * cu - 1.5 * dot(u, u)));
     }
     return f_star;
 }

@@ -19,7 +19,6 @@ import json
 import os
 import re
 import shutil
-import subprocess
 import sys
 
 HERE = os.path.dirname(os.path.abspath(__file__))
@@ -43,13 +42,7 @@ def run(name, timeout=None):
     src = os.path.join(ten_cate.RUNS, name)
     scene = open(os.path.join(src, "scene.toml")).read()
     out = os.path.join(OUT, name)
-    os.makedirs(out, exist_ok=True)
-    path = os.path.join(out, "scene.toml")
-    with open(path, "w") as f:
-        f.write(corrected_scene(scene, timeout))
-    work = os.path.join(out, "work")
-    with open(os.path.join(out, "log.txt"), "w") as log:
-        code = subprocess.call([ten_cate.BINARY, "run", path, "--out", work], stderr=log, stdout=log)
+    code, work = ten_cate.run_scene(out, corrected_scene(scene, timeout))
     if code != 0:
         raise SystemExit("%s: lbm-server exited %d (see %s/log.txt)" % (name, code, out))
     shutil.copy(os.path.join(work, "summary.json"), os.path.join(out, "summary.json"))

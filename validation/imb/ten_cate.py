@@ -185,6 +185,19 @@ def uptime():
         return "?"
 
 
+def run_scene(out, text):
+    """Writes the scene TEXT to OUT/scene.toml and runs it into OUT/work, its output in
+    OUT/log.txt; (exit code, OUT/work)."""
+    os.makedirs(out, exist_ok=True)
+    path = os.path.join(out, "scene.toml")
+    with open(path, "w") as f:
+        f.write(text)
+    work = os.path.join(out, "work")
+    with open(os.path.join(out, "log.txt"), "w") as log:
+        code = subprocess.call([BINARY, "run", path, "--out", work], stderr=log, stdout=log)
+    return code, work
+
+
 def run_one(case, n, force=False, mach=MACH, op=OPERATOR, width=None, height=None, sim_time=None, explicit=False):
     out = run_dir(case, n, mach, op, width, height, explicit)
     if os.path.exists(os.path.join(out, "summary.json")) and not force:

@@ -88,8 +88,13 @@ pub struct Setup {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Link {
     Cell(usize),
-    Boundary(Face),
+    /// The face crossed and its index (x_min, x_max, y_min, y_max, z_min, z_max), or a solid
+    /// cell ([`SOLID_FACE`]).
+    Boundary(Face, usize),
 }
+
+/// The face index of [`Link::Boundary`] into a solid cell.
+pub const SOLID_FACE: usize = 6;
 
 impl Setup {
     pub fn new(n: [usize; 3], faces: [Face; 6], tau: f64, operator: Operator) -> Self {
@@ -131,24 +136,25 @@ impl Setup {
     pub fn link(&self, cell: usize, c: [i32; 3]) -> Link {
         let x = self.coords(cell);
         let mut y = [0usize; 3];
-        let mut crossed: Option<Face> = None;
+        let mut crossed: Option<(Face, usize)> = None;
         for a in 0..3 {
             let v = x[a] as i64 + c[a] as i64;
             let n = self.n[a] as i64;
             if v < 0 || v >= n {
-                let face = self.faces[2 * a + usize::from(v >= n)];
-                if face != Face::Periodic && crossed.is_none_or(|f| face.code() > f.code()) {
-                    crossed = Some(face);
+                let index = 2 * a + usize::from(v >= n);
+                let face = self.faces[index];
+                if face != Face::Periodic && crossed.is_none_or(|(f, _)| face.code() > f.code()) {
+                    crossed = Some((face, index));
                 }
             }
             y[a] = v.rem_euclid(n) as usize;
         }
-        if let Some(face) = crossed {
-            return Link::Boundary(face);
+        if let Some((face, index)) = crossed {
+            return Link::Boundary(face, index);
         }
         let t = self.index(y);
         if self.solid[t] {
-            Link::Boundary(Face::Wall)
+            Link::Boundary(Face::Wall, SOLID_FACE)
         } else {
             Link::Cell(t)
         }

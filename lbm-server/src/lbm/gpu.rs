@@ -534,7 +534,7 @@ impl Lattice {
                     // when that link leaves the fluid.
                     match self.setup.link(k, C[opposite(i)]) {
                         Link::Cell(s) => columns[opposite(i)][s] as f64,
-                        Link::Boundary(_) => columns[i][k] as f64,
+                        Link::Boundary(..) => columns[i][k] as f64,
                     }
                 })
             })
@@ -668,7 +668,7 @@ pub fn cell_flags(setup: &Setup) -> Vec<u32> {
                 return SOLID_FLAG;
             }
             let links: u32 = (0..19)
-                .filter(|&i| matches!(setup.link(k, C[i]), Link::Boundary(_)))
+                .filter(|&i| matches!(setup.link(k, C[i]), Link::Boundary(..)))
                 .map(|i| 1u32 << i)
                 .sum();
             let x = setup.coords(k);

@@ -42,20 +42,35 @@ pub fn step_with_particles(
         for i in 0..19 {
             match setup.link(cell, C[i]) {
                 Link::Cell(t) => next[t][i] = post[i],
-                Link::Boundary(face) => next[cell][opposite(i)] = bounce(face, i, post[i], rho, u),
+                Link::Boundary(face, index) => {
+                    next[cell][opposite(i)] = bounce(face, index, i, post[i], rho, u)
+                }
             }
         }
     }
     (next, loads)
 }
 
-/// The population f_ibar that comes back to a cell whose post-collision f*_i left through `face`.
-pub fn bounce(face: Face, i: usize, f_star: f64, rho: f64, u: [f64; 3]) -> f64 {
+/// The population f_ibar that comes back to a cell whose post-collision f*_i left through `face`
+/// (face `index`: x_min, x_max, ... z_max).
+pub fn bounce(face: Face, index: usize, i: usize, f_star: f64, rho: f64, u: [f64; 3]) -> f64 {
     match face {
         Face::Wall | Face::Periodic => f_star,
         Face::MovingWall(uw) | Face::VelocityInlet(uw) => f_star - 6.0 * W[i] * rho * lattice::dot(i, uw),
-        Face::PressureOutlet(rho_w) => lattice::equilibrium_shifted(opposite(i), rho_w, u),
+        Face::PressureOutlet(rho_w) => lattice::equilibrium_shifted(opposite(i), rho_w, outflow(index, u)),
     }
+}
+
+/// The velocity of a pressure outlet's equilibrium: the cell's, less any part into the fluid
+/// through face `index` (no backflow).
+pub fn outflow(index: usize, u: [f64; 3]) -> [f64; 3] {
+    let axis = index / 2;
+    let outward = if index % 2 == 1 { 1.0 } else { -1.0 };
+    let mut out = u;
+    if u[axis] * outward < 0.0 {
+        out[axis] = 0.0;
+    }
+    out
 }
 
 /// Density and velocity (with the half-force correction of Guo forcing).

@@ -1,0 +1,260 @@
+#!/usr/bin/env python3
+"""The fluidized bed of validation/scenes/fluidized-bed.toml at Re 200 and 400 with each operator.
+
+The seed paper's bed (BGK, 10 cells per diameter) ran at Re 200 and diverged at Re 400. For each
+case this script writes the scene with its operator and inflow (Re = U d / nu) into
+validation/imb/runs_bed/<operator>_Re<re>/, runs `lbm-server run` there (or records why the scene
+was refused), keeps summary.json, the log and the grains' mean height per output row, and writes
+validation/imb/FLUIDIZED_BED.md: whether each case ran to its end, and where it did, the expanded
+bed's voidage against Richardson & Zaki (1954).
+
+    python3 validation/imb/fluidized_bed.py                  # every case (about an hour on lavapipe)
+    python3 validation/imb/fluidized_bed.py mrt_Re400        # one case
+    python3 validation/imb/fluidized_bed.py --report         # only the report, from runs_bed/
+
+LBM_SERVER names another lbm-server (as for ten_cate.py).
+"""
+
+import argparse
+import csv
+import json
+import math
+import os
+import re
+import shutil
+import sys
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, HERE)
+import ten_cate  # noqa: E402  (lbm-server, LBM_SERVER and how a scene is run)
+
+ROOT = os.path.dirname(os.path.dirname(HERE))
+SCENE = os.path.join(ROOT, "validation", "scenes", "fluidized-bed.toml")
+OUT = os.path.join(HERE, "runs_bed")
+REPORT = os.path.join(HERE, "FLUIDIZED_BED.md")
+
+# The scene's physics (validation/scenes/fluidized-bed.toml).
+RHO_F, MU, RHO_P, D, G = 1000.0, 1.48e-3, 2650.0, 0.003, 9.81
+NU = MU / RHO_F
+WIDTH_X, WIDTH_Y = 0.030, 0.012
+FLOOR = 0.0075  # the distributor plane, m
+TOP = 0.0645  # the top plane, m
+MACH, DX = 0.1, 0.0005
+SIM_TIME = 0.75  # s of each run
+AVERAGE_FROM = 0.5  # s: the voidage is averaged over the rows from here on
+# The fastest liquid expected, over the superficial velocity: the liquid between the grains.
+SPEED_OVER_U = 0.3 / 0.1973
+
+CASES = [("mrt", 400), ("mrt", 200), ("trt", 400), ("trt", 200), ("bgk", 400), ("bgk", 200)]
+
+
+def name(operator, re_):
+    return "%s_Re%d" % (operator, re_)
+
+
+def inflow(re_):
+    """Superficial velocity U [m/s] of particle Reynolds number re_ = U d / nu."""
+    return re_ * NU / D
+
+
+def scene_text(operator, re_):
+    """The scene with this operator, this inflow, a velocity scale in proportion and the steps of
+    SIM_TIME."""
+    u = inflow(re_)
+    scale = SPEED_OVER_U * u
+    dt = MACH / math.sqrt(3.0) * DX / scale
+    text = open(SCENE).read()
+    subs = [
+        (r'^operator = .*$', 'operator = "%s"' % operator),
+        (r"^velocity_scale = .*$", "velocity_scale = %.4f                # m/s: %.2f U" % (scale, SPEED_OVER_U)),
+        (r"^steps = .*$", "steps = %d                         # coupled steps (%.2f s)" % (round(SIM_TIME / dt), SIM_TIME)),
+        (r"^z_min = .*$", 'z_min = { type = "velocity_inlet", velocity = [0.0, 0.0, %.4f] } # m/s: Re %d' % (u, re_)),
+    ]
+    for pattern, new in subs:
+        text, n = re.subn(pattern, new, text, count=1, flags=re.M)
+        if n != 1:
+            raise SystemExit("%s: no line matches %r" % (SCENE, pattern))
+    return text
+
+
+def settling_reynolds():
+    """Re_t of one grain settling alone (Schiller-Naumann drag), by bisection."""
+    ar = G * D**3 * (RHO_P / RHO_F - 1.0) / NU**2
+    lo, hi = 1e-3, 1e5
+    for _ in range(200):
+        mid = math.sqrt(lo * hi)
+        cd = 24.0 / mid * (1.0 + 0.15 * mid**0.687)
+        if 0.75 * cd * mid * mid > ar:
+            hi = mid
+        else:
+            lo = mid
+    return ar, mid
+
+
+def richardson_zaki(re_):
+    """(n, voidage unbounded, voidage with the wall term) of Richardson & Zaki (1954) at Re:
+    U / u_i = eps^n with n = (4.7 + 0.41 Re_t^0.75) / (1 + 0.175 Re_t^0.75) (Rowe 1987) and
+    log10 u_i = log10 u_t - d / D, D the narrow width of the slab."""
+    _, re_t = settling_reynolds()
+    n = (4.7 + 0.41 * re_t**0.75) / (1.0 + 0.175 * re_t**0.75)
+    ratio = re_ / re_t
+    walled = ratio / 10.0 ** (-D / WIDTH_Y)
+    return n, ratio ** (1.0 / n), (walled ** (1.0 / n) if walled < 1.0 else float("nan"))
+
+
+# The band of the bed whose grains give its local voidage: centres 1 to 3 diameters above the
+# distributor (above the layer the distributor orders, below the bed's top).
+BAND = (1.0 * D, 3.0 * D)
+
+
+def heights(path):
+    """(time, mean height of the grains' centres above the distributor, grains, grains whose
+    centre lies in BAND, grains within a diameter of the top plane) per output row."""
+    rows = {}
+    with open(path) as f:
+        for r in csv.DictReader(f):
+            t = float(r["time"])
+            z = float(r["z"])
+            s = rows.setdefault(t, [0.0, 0, 0, 0])
+            s[0] += z - FLOOR
+            s[1] += 1
+            s[2] += BAND[0] <= z - FLOOR < BAND[1]
+            s[3] += z > TOP - D
+    return sorted((t, s / n, n, b, top) for t, (s, n, b, top) in rows.items())
+
+
+def band_voidage(count):
+    """Voidage of BAND from the grains whose centres lie in it."""
+    return 1.0 - count * math.pi / 6.0 * D**3 / (WIDTH_X * WIDTH_Y * (BAND[1] - BAND[0]))
+
+
+def voidage(mean_height, count):
+    """Voidage of a uniform bed of `count` grains whose centres average `mean_height` above the
+    distributor: the bed is twice that high."""
+    solids = count * math.pi / 6.0 * D**3
+    return 1.0 - solids / (WIDTH_X * WIDTH_Y * 2.0 * mean_height)
+
+
+def run(operator, re_):
+    out = os.path.join(OUT, name(operator, re_))
+    code, work = ten_cate.run_scene(out, scene_text(operator, re_))
+    with open(os.path.join(out, "exit_code"), "w") as f:
+        f.write("%d\n" % code)
+    if os.path.exists(os.path.join(work, "summary.json")):
+        shutil.copy(os.path.join(work, "summary.json"), os.path.join(out, "summary.json"))
+    if os.path.exists(os.path.join(work, "particles.csv")):
+        with open(os.path.join(out, "heights.csv"), "w") as f:
+            f.write("time,mean_height,grains,in_band,at_top\n")
+            for t, h, n, b, top in heights(os.path.join(work, "particles.csv")):
+                f.write("%.6g,%.6g,%d,%d,%d\n" % (t, h, n, b, top))
+    shutil.rmtree(work, ignore_errors=True)
+
+
+def outcome(folder):
+    """(ran to the end, what stopped it or None, steps completed, wall time, MLUPS)."""
+    log = open(os.path.join(folder, "log.txt")).read()
+    code = int(open(os.path.join(folder, "exit_code")).read())
+    summary_path = os.path.join(folder, "summary.json")
+    summary = json.load(open(summary_path)) if os.path.exists(summary_path) else {}
+    if code == 0:
+        return True, None, summary.get("steps_completed"), summary.get("wall_time_s"), summary.get("fluid_mlups")
+    errors = [l for l in log.splitlines() if "error" in l]
+    reason = errors[-1] if errors else "exit code %d" % code
+    reason = re.sub(r"^lbm-server: (error: )?", "", reason)
+    reason = re.sub(r"^\S+scene\.toml: (.*?): unstable.*$", r"refused: \1", reason)
+    reason = re.sub(r"(left the domain at step \d+): position.*$", r"\1 (the fluid blew up around it)", reason)
+    reason = re.sub(r"(the fluid became unstable by step \d+: cell \d+ at \([^)]*\)).*$", r"\1", reason)
+    return False, reason, summary.get("steps_completed"), summary.get("wall_time_s"), summary.get("fluid_mlups")
+
+
+def report():
+    ar, re_t = settling_reynolds()
+    lines = [
+        "# A fluidized bed at Re 200 and 400 by operator (the seed paper's section 5)",
+        "",
+        "Written by `python3 validation/imb/fluidized_bed.py` (lavapipe, this repository's 2-core CPU",
+        "machine, shared with other runs: read wall time and MLUPS as +-50%). The scene: validation/scenes/fluidized-bed.toml, 216 sand grains (d = 3 mm, density",
+        "ratio 2.65) in water-like liquid (nu = %.3g m^2/s), a slab 10 x 4 x 24 diameters, 6 cells per" % NU,
+        "diameter (60 x 24 x 144 cells), uniform inflow through the floor at U = Re nu / d, a pressure",
+        "outlet at the top (the equilibrium outflow, docs/lbm.md), DEM planes 2.5 diameters from both.",
+        "Each case runs %.2f s; lattice.velocity_scale is %.2f U (the liquid between the grains), Mach" % (SIM_TIME, SPEED_OVER_U),
+        "0.1, so tau = 0.5017 at Re 400 and 0.5034 at Re 200. The seed's bed (BGK, 10 cells per diameter)",
+        "ran at Re 200 and diverged at Re 400.",
+        "",
+        "Voidage: the grains' centres average h above the distributor, a uniform bed is 2h high, voidage",
+        "= 1 - N V_p / (A 2h), averaged over the rows from %.2f s on (mean and range); \"1-3 d\": the" % AVERAGE_FROM,
+        "grains whose centres lie 1 to 3 diameters above the distributor, over that band's volume. Reference:",
+        "Richardson & Zaki (1954), U / u_i = eps^n, with the grain's settling velocity from",
+        "Schiller-Naumann (Archimedes number %.3g: Re_t = %.0f, u_t = %.3f m/s) and n from Rowe" % (ar, re_t, re_t * NU / D),
+        "(1987); \"walled\" divides u_t by 10^(d/D) with D the slab's 4 diameters (Richardson & Zaki's",
+        "wall term, made for tubes: for a slab it is an estimate). \"Grains at the top\": centres within a",
+        "diameter of the top plane in the last row kept (a bed lifted against it is no longer fluidized).",
+        "",
+        "| case | Re | U [m/s] | outcome | steps | wall time [s] | MLUPS | grains at the top, last row | voidage (range) | voidage 1-3 d (range) | Richardson-Zaki | walled | error |",
+        "|---|---:|---:|---|---:|---:|---:|---|---|---|---:|---:|---:|",
+    ]
+    for operator, re_ in CASES:
+        folder = os.path.join(OUT, name(operator, re_))
+        if not os.path.exists(os.path.join(folder, "exit_code")):
+            continue
+        done, reason, steps, wall, mlups = outcome(folder)
+        n, eps_rz, eps_walled = richardson_zaki(re_)
+        measured = band = error = top = ""
+        hpath = os.path.join(folder, "heights.csv")
+        if os.path.exists(hpath):
+            with open(hpath) as f:
+                last = list(csv.DictReader(f))[-1]
+            top = "%s of %s (%.2f s)" % (last["at_top"], last["grains"], float(last["time"]))
+        if done and os.path.exists(hpath):
+            with open(hpath) as f:
+                rows = [r for r in csv.DictReader(f) if float(r["time"]) >= AVERAGE_FROM]
+            late = [voidage(float(r["mean_height"]), int(r["grains"])) for r in rows]
+            if late:
+                mean = sum(late) / len(late)
+                measured = "%.3f (%.3f-%.3f)" % (mean, min(late), max(late))
+                error = "%+.1f%%" % (100.0 * (mean / eps_rz - 1.0))
+                local = [band_voidage(int(r["in_band"])) for r in rows]
+                band = "%.3f (%.3f-%.3f)" % (sum(local) / len(local), min(local), max(local))
+        text = "ran %.2f s" % SIM_TIME if done else reason.replace("|", "/")
+        lines.append(
+            "| %s | %d | %.4f | %s | %s | %s | %s | %s | %s | %s | %.3f | %.3f | %s |"
+            % (
+                operator.upper(),
+                re_,
+                inflow(re_),
+                text,
+                steps if steps is not None else "",
+                "%.0f" % wall if wall else "",
+                "%.2f" % mlups if mlups else "",
+                top,
+                measured,
+                band,
+                eps_rz,
+                eps_walled,
+                error,
+            )
+        )
+    lines.append("")
+    lines.append("Error: the measured voidage against Richardson-Zaki without the wall term. What these runs")
+    lines.append("found (the ramp, the outflow without backflow, the bed lifted at Re 400): docs/imb.md,")
+    lines.append("\"Stability near tau = 1/2\".")
+    with open(REPORT, "w") as f:
+        f.write("\n".join(lines) + "\n")
+    print("\n".join(lines))
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("cases", nargs="*", help="cases to run (e.g. mrt_Re400); default: all")
+    parser.add_argument("--report", action="store_true", help="only write the report from runs_bed/")
+    args = parser.parse_args()
+    if not args.report:
+        wanted = args.cases or [name(o, r) for o, r in CASES]
+        for operator, re_ in CASES:
+            if name(operator, re_) in wanted:
+                run(operator, re_)
+    report()
+
+
+if __name__ == "__main__":
+    main()
