@@ -36,7 +36,7 @@ REPORT = os.path.join(HERE, "FLUIDIZED_BED.md")
 # The scene's physics (validation/scenes/fluidized-bed.toml).
 RHO_F, MU, RHO_P, D, G = 1000.0, 1.48e-3, 2650.0, 0.003, 9.81
 NU = MU / RHO_F
-WIDTH_X, WIDTH_Y = 0.030, 0.012
+WIDTH_X = 0.030  # m; the slab's depth is DEPTH diameters (4 in the scene)
 FLOOR = 0.0075  # the distributor plane, m
 TOP = 0.0645  # the top plane, m
 MACH, DX = 0.1, 0.0005
@@ -45,11 +45,26 @@ AVERAGE_FROM = 0.5  # s: the voidage is averaged over the rows from here on
 # The fastest liquid expected, over the superficial velocity: the liquid between the grains.
 SPEED_OVER_U = 0.3 / 0.1973
 
-CASES = [("mrt", 400), ("mrt", 200), ("trt", 400), ("trt", 200), ("bgk", 400), ("bgk", 200)]
+# (operator, Re, slab depth in diameters): the scene's slab, and Re 200 in one twice as deep (the
+# grains in 7 rows across instead of 3) to see what the walls do.
+CASES = [
+    ("mrt", 400, 4),
+    ("mrt", 200, 4),
+    ("trt", 400, 4),
+    ("trt", 200, 4),
+    ("bgk", 400, 4),
+    ("bgk", 200, 4),
+    ("mrt", 200, 8),
+]
+ROWS_ACROSS = {4: 3, 8: 7}
 
 
-def name(operator, re_):
-    return "%s_Re%d" % (operator, re_)
+def name(operator, re_, depth):
+    return "%s_Re%d" % (operator, re_) + ("" if depth == 4 else "_D%d" % depth)
+
+
+def width_y(depth):
+    return depth * D
 
 
 def inflow(re_):
@@ -57,7 +72,7 @@ def inflow(re_):
     return re_ * NU / D
 
 
-def scene_text(operator, re_):
+def scene_text(operator, re_, depth):
     """The scene with this operator, this inflow, a velocity scale in proportion and the steps of
     SIM_TIME."""
     u = inflow(re_)
@@ -69,6 +84,9 @@ def scene_text(operator, re_):
         (r"^velocity_scale = .*$", "velocity_scale = %.4f                # m/s: %.2f U" % (scale, SPEED_OVER_U)),
         (r"^steps = .*$", "steps = %d                         # coupled steps (%.2f s)" % (round(SIM_TIME / dt), SIM_TIME)),
         (r"^z_min = .*$", 'z_min = { type = "velocity_inlet", velocity = [0.0, 0.0, %.4f] } # m/s: Re %d' % (u, re_)),
+        (r"^max = \[0\.030, 0\.012, ", "max = [0.030, %g, " % width_y(depth)),
+        (r"^point = \[0\.0, 0\.012, 0\.0\]", "point = [0.0, %g, 0.0]" % width_y(depth)),
+        (r"^count = \[9, 3, 8\]", "count = [9, %d, 8]" % ROWS_ACROSS[depth]),
     ]
     for pattern, new in subs:
         text, n = re.subn(pattern, new, text, count=1, flags=re.M)
@@ -91,14 +109,14 @@ def settling_reynolds():
     return ar, mid
 
 
-def richardson_zaki(re_):
+def richardson_zaki(re_, depth):
     """(n, voidage unbounded, voidage with the wall term) of Richardson & Zaki (1954) at Re:
     U / u_i = eps^n with n = (4.7 + 0.41 Re_t^0.75) / (1 + 0.175 Re_t^0.75) (Rowe 1987) and
     log10 u_i = log10 u_t - d / D, D the narrow width of the slab."""
     _, re_t = settling_reynolds()
     n = (4.7 + 0.41 * re_t**0.75) / (1.0 + 0.175 * re_t**0.75)
     ratio = re_ / re_t
-    walled = ratio / 10.0 ** (-D / WIDTH_Y)
+    walled = ratio / 10.0 ** (-D / width_y(depth))
     return n, ratio ** (1.0 / n), (walled ** (1.0 / n) if walled < 1.0 else float("nan"))
 
 
@@ -123,21 +141,21 @@ def heights(path):
     return sorted((t, s / n, n, b, top) for t, (s, n, b, top) in rows.items())
 
 
-def band_voidage(count):
+def band_voidage(count, depth):
     """Voidage of BAND from the grains whose centres lie in it."""
-    return 1.0 - count * math.pi / 6.0 * D**3 / (WIDTH_X * WIDTH_Y * (BAND[1] - BAND[0]))
+    return 1.0 - count * math.pi / 6.0 * D**3 / (WIDTH_X * width_y(depth) * (BAND[1] - BAND[0]))
 
 
-def voidage(mean_height, count):
+def voidage(mean_height, count, depth):
     """Voidage of a uniform bed of `count` grains whose centres average `mean_height` above the
     distributor: the bed is twice that high."""
     solids = count * math.pi / 6.0 * D**3
-    return 1.0 - solids / (WIDTH_X * WIDTH_Y * 2.0 * mean_height)
+    return 1.0 - solids / (WIDTH_X * width_y(depth) * 2.0 * mean_height)
 
 
-def run(operator, re_):
-    out = os.path.join(OUT, name(operator, re_))
-    code, work = ten_cate.run_scene(out, scene_text(operator, re_))
+def run(operator, re_, depth):
+    out = os.path.join(OUT, name(operator, re_, depth))
+    code, work = ten_cate.run_scene(out, scene_text(operator, re_, depth))
     with open(os.path.join(out, "exit_code"), "w") as f:
         f.write("%d\n" % code)
     if os.path.exists(os.path.join(work, "summary.json")):
@@ -173,9 +191,11 @@ def report():
         "# A fluidized bed at Re 200 and 400 by operator (the seed paper's section 5)",
         "",
         "Written by `python3 validation/imb/fluidized_bed.py` (lavapipe, this repository's 2-core CPU",
-        "machine, shared with other runs: read wall time and MLUPS as +-50%). The scene: validation/scenes/fluidized-bed.toml, 216 sand grains (d = 3 mm, density",
-        "ratio 2.65) in water-like liquid (nu = %.3g m^2/s), a slab 10 x 4 x 24 diameters, 6 cells per" % NU,
-        "diameter (60 x 24 x 144 cells), uniform inflow through the floor at U = Re nu / d, a pressure",
+        "machine, shared with other runs: read wall time and MLUPS as +-50%). The scene:",
+        "validation/scenes/fluidized-bed.toml, 216 sand grains (d = 3 mm, density ratio 2.65) in",
+        "water-like liquid (nu = %.3g m^2/s), a slab 10 x 4 x 24 diameters (60 x 24 x 144 cells; one case" % NU,
+        "8 diameters deep with 504 grains, 7 rows across), 6 cells per diameter, uniform inflow through",
+        "the floor at U = Re nu / d, a pressure",
         "outlet at the top (the equilibrium outflow, docs/lbm.md), DEM planes 2.5 diameters from both.",
         "Each case runs %.2f s; lattice.velocity_scale is %.2f U (the liquid between the grains), Mach" % (SIM_TIME, SPEED_OVER_U),
         "0.1, so tau = 0.5017 at Re 400 and 0.5034 at Re 200. The seed's bed (BGK, 10 cells per diameter)",
@@ -190,15 +210,15 @@ def report():
         "wall term, made for tubes: for a slab it is an estimate). \"Grains at the top\": centres within a",
         "diameter of the top plane in the last row kept (a bed lifted against it is no longer fluidized).",
         "",
-        "| case | Re | U [m/s] | outcome | steps | wall time [s] | MLUPS | grains at the top, last row | voidage (range) | voidage 1-3 d (range) | Richardson-Zaki | walled | error |",
-        "|---|---:|---:|---|---:|---:|---:|---|---|---|---:|---:|---:|",
+        "| case | Re | slab depth [d] | U [m/s] | outcome | steps | wall time [s] | MLUPS | grains at the top, last row | voidage (range) | voidage 1-3 d (range) | Richardson-Zaki | walled | error |",
+        "|---|---:|---:|---:|---|---:|---:|---:|---|---|---|---:|---:|---:|",
     ]
-    for operator, re_ in CASES:
-        folder = os.path.join(OUT, name(operator, re_))
+    for operator, re_, depth in CASES:
+        folder = os.path.join(OUT, name(operator, re_, depth))
         if not os.path.exists(os.path.join(folder, "exit_code")):
             continue
         done, reason, steps, wall, mlups = outcome(folder)
-        n, eps_rz, eps_walled = richardson_zaki(re_)
+        n, eps_rz, eps_walled = richardson_zaki(re_, depth)
         measured = band = error = top = ""
         hpath = os.path.join(folder, "heights.csv")
         if os.path.exists(hpath):
@@ -208,19 +228,20 @@ def report():
         if done and os.path.exists(hpath):
             with open(hpath) as f:
                 rows = [r for r in csv.DictReader(f) if float(r["time"]) >= AVERAGE_FROM]
-            late = [voidage(float(r["mean_height"]), int(r["grains"])) for r in rows]
+            late = [voidage(float(r["mean_height"]), int(r["grains"]), depth) for r in rows]
             if late:
                 mean = sum(late) / len(late)
                 measured = "%.3f (%.3f-%.3f)" % (mean, min(late), max(late))
                 error = "%+.1f%%" % (100.0 * (mean / eps_rz - 1.0))
-                local = [band_voidage(int(r["in_band"])) for r in rows]
+                local = [band_voidage(int(r["in_band"]), depth) for r in rows]
                 band = "%.3f (%.3f-%.3f)" % (sum(local) / len(local), min(local), max(local))
         text = "ran %.2f s" % SIM_TIME if done else reason.replace("|", "/")
         lines.append(
-            "| %s | %d | %.4f | %s | %s | %s | %s | %s | %s | %s | %.3f | %.3f | %s |"
+            "| %s | %d | %d | %.4f | %s | %s | %s | %s | %s | %s | %s | %.3f | %.3f | %s |"
             % (
                 operator.upper(),
                 re_,
+                depth,
                 inflow(re_),
                 text,
                 steps if steps is not None else "",
@@ -249,10 +270,10 @@ def main():
     parser.add_argument("--report", action="store_true", help="only write the report from runs_bed/")
     args = parser.parse_args()
     if not args.report:
-        wanted = args.cases or [name(o, r) for o, r in CASES]
-        for operator, re_ in CASES:
-            if name(operator, re_) in wanted:
-                run(operator, re_)
+        wanted = args.cases or [name(*c) for c in CASES]
+        for case in CASES:
+            if name(*case) in wanted:
+                run(*case)
     report()
 
 
