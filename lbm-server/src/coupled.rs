@@ -338,8 +338,6 @@ impl FluidSide {
         let pressure_acceleration: [f64; 3] =
             std::array::from_fn(|a| self.units.force[a] * dx / (dt * dt) - self.gravity[a]);
         let fluid_density = self.fluid_density;
-        let ramp = self.units.face_ramp(self.lattice.time);
-        self.lattice.set_face_scale(ramp);
         self.lattice.step_coupled_with(&lattice_states, out, |j, l| {
             let s = &states[j];
             let volume = 4.0 / 3.0 * std::f64::consts::PI * s.radius.powi(3);

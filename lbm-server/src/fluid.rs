@@ -1,7 +1,7 @@
 //! A fluid-only scene (a `[lattice]` and no particles): the GPU lattice alone, with health checks,
 //! VTK snapshots, probe lines and a summary.
 
-use crate::lbm::geometry::{Face, Operator, Setup};
+use crate::lbm::geometry::{tau_minus, Face, Operator, Setup};
 use crate::lbm::gpu::{Gpu, Health, Lattice, Unhealthy};
 use crate::lbm::mrt::Rates;
 use crate::output::Progress;
@@ -44,6 +44,7 @@ pub fn setup_of(units: &LatticeUnits) -> Setup {
     let mut setup = Setup::new(units.n, units.faces.map(|f| face(&f)), units.tau, operator);
     setup.solid = units.solid.clone();
     setup.force = units.force;
+    setup.ramp_steps = units.ramp_steps;
     setup
 }
 
@@ -57,6 +58,9 @@ const TRT_PARTICLES_TAU: f64 = 0.51;
 /// The warning for a TRT lattice at a tau where TRT was measured to blow up: with a velocity
 /// inlet below [`TRT_INLET_TAU`], with `particles` below [`TRT_PARTICLES_TAU`].
 pub fn stability_warning(units: &LatticeUnits, particles: bool) -> Option<String> {
+    if units.operator != "trt" {
+        return None;
+    }
     let inlet = units
         .faces
         .iter()
@@ -70,16 +74,14 @@ pub fn stability_warning(units: &LatticeUnits, particles: bool) -> Option<String
     } else {
         return None;
     };
-    (units.operator == "trt").then(|| {
-        format!(
-            "lattice tau = {:.4} with TRT: its antisymmetric modes relax with tau- = 1/2 + \
-             lattice.magic / (tau - 1/2) = {:.1}, hardly at all. A sphere of 8 cells held in a \
-             stream (validation/lbm/REPORT.md, \"Stability near tau = 1/2\") {measured}; \
-             consider lattice.operator = \"mrt\"",
-            units.tau,
-            0.5 + units.magic / (units.tau - 0.5)
-        )
-    })
+    Some(format!(
+        "lattice tau = {:.4} with TRT: its antisymmetric modes relax with tau- = 1/2 + \
+         lattice.magic / (tau - 1/2) = {:.1}, hardly at all. A sphere of 8 cells held in a \
+         stream (validation/lbm/REPORT.md, \"Stability near tau = 1/2\") {measured}; \
+         consider lattice.operator = \"mrt\"",
+        units.tau,
+        tau_minus(units.magic, units.tau)
+    ))
 }
 
 /// Health limits: twice the operator's Mach limit, and a density deviation of 50%.
@@ -256,15 +258,7 @@ impl<'a> FluidRun<'a> {
                 .chain([steps])
                 .min()
                 .expect("steps");
-            if (now as f64) < self.units.ramp_steps {
-                for step in now..next {
-                    lattice.set_face_scale(self.units.face_ramp(step));
-                    lattice.step(1);
-                }
-            } else {
-                lattice.set_face_scale(1.0);
-                lattice.step(next - now);
-            }
+            lattice.step(next - now);
             let last = next == steps;
             let (fields, bad) = lattice.fields();
             if let Some(bad) = bad {

@@ -309,17 +309,6 @@ impl LatticeUnits {
         })
     }
 
-    /// The share of their velocity the velocity inlets and moving walls have in the step from
-    /// `step` to `step + 1`: (1 - cos(pi (step + 1) / ramp_steps)) / 2 until the ramp's end, then 1.
-    pub fn face_ramp(&self, step: u64) -> f64 {
-        let x = (step + 1) as f64 / self.ramp_steps;
-        if x >= 1.0 || x.is_nan() {
-            1.0
-        } else {
-            0.5 * (1.0 - (std::f64::consts::PI * x).cos())
-        }
-    }
-
     /// Lattice velocity of an SI velocity.
     pub fn velocity(&self, u: [f64; 3]) -> [f64; 3] {
         u.map(|v| v * self.dt / self.dx)
@@ -491,33 +480,25 @@ fn solid_cells(
 mod tests {
     use crate::Scene;
 
-    /// The face velocities rise as (1 - cos(pi t / T)) / 2 over lattice.ramp_time T, and are
-    /// whole from the first step without one.
+    /// lattice.ramp_time becomes the steps of the ramp (`Setup::face_ramp` in lbm-server draws
+    /// it); without it, none.
     #[test]
-    fn the_faces_rise_from_rest_over_the_ramp() {
+    fn the_ramp_time_becomes_steps() {
         let text =
             crate::DEFAULT_SCENE.replace("check_interval = 100", "check_interval = 100\nramp_time = 1.0");
         let units = Scene::parse(&text, "ramp.toml")
             .expect("scene")
             .lattice_units
             .expect("lattice");
-        let steps = units.ramp_steps;
-        assert!((steps - 1.0 / units.dt).abs() < 1e-9, "{steps}");
         assert!(
-            units.face_ramp(0) < 1e-4,
-            "the first step starts from rest: {}",
-            units.face_ramp(0)
+            (units.ramp_steps - 1.0 / units.dt).abs() < 1e-9,
+            "{}",
+            units.ramp_steps
         );
-        let n = steps.floor() as u64;
-        let half = units.face_ramp(n / 2 - 1);
-        let expected = 0.5 * (1.0 - (std::f64::consts::PI * (n / 2) as f64 / steps).cos());
-        assert!((half - expected).abs() < 1e-12, "{half}");
-        assert_eq!(units.face_ramp(n), 1.0);
-        assert_eq!(units.face_ramp(10 * n), 1.0);
         let plain = Scene::parse(crate::DEFAULT_SCENE, "d.toml")
             .expect("scene")
             .lattice_units
             .expect("lattice");
-        assert_eq!(plain.face_ramp(0), 1.0, "no ramp: whole from the first step");
+        assert_eq!(plain.ramp_steps, 0.0, "no ramp");
     }
 }

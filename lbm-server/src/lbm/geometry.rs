@@ -82,6 +82,15 @@ pub struct Setup {
     pub operator: Operator,
     /// Body force density (lattice units), Guo forcing.
     pub force: [f64; 3],
+    /// Steps over which the velocity inlets and moving walls rise from rest
+    /// (`lattice.ramp_time` / dt; 0: at full velocity from the first step).
+    pub ramp_steps: f64,
+}
+
+/// TRT's antisymmetric relaxation time tau- = 1/2 + Lambda / (tau - 1/2) of magic parameter
+/// Lambda at shear relaxation time tau.
+pub fn tau_minus(magic: f64, tau: f64) -> f64 {
+    0.5 + magic / (tau - 0.5)
 }
 
 /// What lies along a link from a fluid cell.
@@ -105,6 +114,18 @@ impl Setup {
             tau,
             operator,
             force: [0.0; 3],
+            ramp_steps: 0.0,
+        }
+    }
+
+    /// The share of their velocity the velocity inlets and moving walls have in the step from
+    /// `step` to `step + 1`: (1 - cos(pi (step + 1) / ramp_steps)) / 2 until the ramp's end, then 1.
+    pub fn face_ramp(&self, step: u64) -> f64 {
+        let x = (step + 1) as f64 / self.ramp_steps;
+        if x >= 1.0 || x.is_nan() {
+            1.0
+        } else {
+            0.5 * (1.0 - (std::f64::consts::PI * x).cos())
         }
     }
 
@@ -163,7 +184,7 @@ impl Setup {
     /// Omega of the antisymmetric (odd) moments for TRT.
     pub fn omega_minus(&self) -> f64 {
         match self.operator {
-            Operator::Trt { magic } => 1.0 / (magic / (self.tau - 0.5) + 0.5),
+            Operator::Trt { magic } => 1.0 / tau_minus(magic, self.tau),
             _ => 1.0 / self.tau,
         }
     }

@@ -405,17 +405,13 @@ impl Lattice {
     }
 
     /// Gives the velocity inlets and moving walls `scale` times the velocity of their face from
-    /// the next step on (a start from rest, `lattice.ramp_time`); the density of an outlet is
-    /// kept.
+    /// the next step on (the setup's ramp calls it; the density of an outlet is kept).
     pub fn set_face_scale(&mut self, scale: f64) {
         if scale == self.face_scale {
             return;
         }
         self.face_scale = scale;
-        let values: [[f32; 4]; 6] = std::array::from_fn(|f| {
-            let ([x, y, z], rho) = self.setup.faces[f].values();
-            [x * scale, y * scale, z * scale, rho].map(|v| v as f32)
-        });
+        let values = face_values(&self.setup.faces, scale);
         let offset = std::mem::offset_of!(Params, face_value) as u64;
         for params in &self.params {
             self.gpu
@@ -424,8 +420,26 @@ impl Lattice {
         }
     }
 
+    /// During the setup's ramp, gives the faces their share of velocity for the next step
+    /// ([`Setup::face_ramp`]); true while the ramp lasts.
+    pub(super) fn ramp_faces(&mut self) -> bool {
+        let ramping = (self.time as f64) < self.setup.ramp_steps;
+        if ramping {
+            self.set_face_scale(self.setup.face_ramp(self.time));
+        }
+        ramping
+    }
+
     /// Advances `steps` steps (submitted in batches; returns once submitted, not completed).
+    /// During the setup's ramp each step is submitted alone, after its face velocities.
     pub fn step(&mut self, steps: u64) {
+        let mut steps = steps;
+        while steps > 0 && self.ramp_faces() {
+            let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
+            self.encode_step(&mut encoder);
+            self.gpu.queue.submit([encoder.finish()]);
+            steps -= 1;
+        }
         let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
         for done in 0..steps {
             self.encode_step(&mut encoder);
@@ -781,12 +795,16 @@ impl CellList {
     }
 }
 
+/// Each face's velocity times `scale` (a start from rest) and density, for `Params::face_value`.
+fn face_values(faces: &[Face; 6], scale: f64) -> [[f32; 4]; 6] {
+    faces.map(|f| {
+        let ([x, y, z], rho) = f.values();
+        [x * scale, y * scale, z * scale, rho].map(|v| v as f32)
+    })
+}
+
 fn params(setup: &Setup, parity: usize, health: Health, classes: &CellList) -> Params {
     let face = |f: usize| setup.faces[f].code();
-    let values = |f: &Face| {
-        let (u, rho) = f.values();
-        [u[0] as f32, u[1] as f32, u[2] as f32, rho as f32]
-    };
     Params {
         n: [
             setup.n[0] as u32,
@@ -803,7 +821,7 @@ fn params(setup: &Setup, parity: usize, health: Health, classes: &CellList) -> P
             health.max_density_deviation as f32,
         ],
         force: vec4(setup.force, 0.0),
-        face_value: std::array::from_fn(|f| values(&setup.faces[f])),
+        face_value: face_values(&setup.faces, 1.0),
         ranges: [
             classes.sizes[0],
             classes.sizes[1],

@@ -430,6 +430,7 @@ impl Lattice {
         read: &mut dyn FnMut(&[GpuLoad]) -> Result<(), String>,
     ) -> Result<(), String> {
         let n = particles.count();
+        self.ramp_faces();
         let pairs = self.stage_particles(particles)?;
         let coupling = self.imb.as_ref().expect("coupling");
         let passes = coupling

@@ -2,6 +2,7 @@
 //! sphere's wake as tau nears 1/2 (the seed paper's fluidized bed diverged at Re 400 with BGK).
 
 use super::operator_named;
+use crate::lbm::geometry::{tau_minus, Operator};
 use crate::lbm::gpu::Gpu;
 use crate::lbm::validation::{self, schiller_naumann, Faces, HeldSphere, Stability};
 use std::fmt::Write as _;
@@ -38,9 +39,9 @@ fn case(reynolds: f64, operator: &str) -> HeldSphere {
 }
 
 /// TRT's antisymmetric relaxation time tau- = 1/2 + Lambda / (tau - 1/2), or "".
-fn tau_minus(operator: &str, tau: f64) -> String {
+fn tau_minus_column(operator: &str, tau: f64) -> String {
     match operator_named(operator, tau) {
-        crate::lbm::geometry::Operator::Trt { magic } => format!("{:.2}", 0.5 + magic / (tau - 0.5)),
+        Operator::Trt { magic } => format!("{:.2}", tau_minus(magic, tau)),
         _ => String::new(),
     }
 }
@@ -117,7 +118,7 @@ pub(super) fn section(gpu: &Arc<Gpu>) -> String {
                     t,
                     "| {name} | {operator} | {re} | {:.4} | {} | {} | {} | {:.3} | {drag} | {:.3} |",
                     s.tau,
-                    tau_minus(operator, s.tau),
+                    tau_minus_column(operator, s.tau),
                     s.steps,
                     outcome(&s, faces),
                     s.stream,
