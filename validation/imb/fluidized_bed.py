@@ -96,17 +96,10 @@ def scene_text(operator, re_, depth):
 
 
 def settling_reynolds():
-    """Re_t of one grain settling alone (Schiller-Naumann drag), by bisection."""
+    """(Archimedes number, Re_t of one grain settling alone by Schiller-Naumann's drag)."""
     ar = G * D**3 * (RHO_P / RHO_F - 1.0) / NU**2
-    lo, hi = 1e-3, 1e5
-    for _ in range(200):
-        mid = math.sqrt(lo * hi)
-        cd = 24.0 / mid * (1.0 + 0.15 * mid**0.687)
-        if 0.75 * cd * mid * mid > ar:
-            hi = mid
-        else:
-            lo = mid
-    return ar, mid
+    u_t = ten_cate.terminal_velocity(RHO_F, MU, RHO_P, D, "sn", 0.1)
+    return ar, u_t * D / NU
 
 
 def richardson_zaki(re_, depth):

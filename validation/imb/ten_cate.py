@@ -526,9 +526,14 @@ def drag_law_velocity(case, law):
     Weber (1978), Cd = 24/Re (1 + 0.1315 Re^(0.82 - 0.05 log10 Re)) for Re <= 20, 24/Re (1 + 0.1935 Re^0.6305)
     for 20 < Re <= 260; "abraham" Abraham (1970), Cd = 24/9.06^2 (1 + 9.06/sqrt(Re))^2."""
     c = CASES[case]
-    u = c["u_inf"]
+    return terminal_velocity(c["rho_f"], c["mu"], RHO_P, D, law, c["u_inf"])
+
+
+def terminal_velocity(rho_f, mu, rho_p, d, law, u):
+    """Terminal velocity of a sphere of diameter d and density rho_p in a fluid (rho_f, mu) by the
+    drag law `law` of drag_law_velocity, iterated from the guess u."""
     for _ in range(200):
-        re_ = c["rho_f"] * u * D / c["mu"]
+        re_ = rho_f * u * d / mu
         if law == "sn":
             cd = 24.0 / re_ * (1.0 + 0.15 * re_ ** 0.687)
         elif law == "abraham":
@@ -537,7 +542,7 @@ def drag_law_velocity(case, law):
             cd = 24.0 / re_ * (1.0 + 0.1315 * re_ ** (0.82 - 0.05 * math.log10(re_)))
         else:
             cd = 24.0 / re_ * (1.0 + 0.1935 * re_ ** 0.6305)
-        u = math.sqrt(4.0 / 3.0 * (RHO_P / c["rho_f"] - 1.0) * 9.81 * D / cd)
+        u = math.sqrt(4.0 / 3.0 * (rho_p / rho_f - 1.0) * 9.81 * d / cd)
     return u
 
 
