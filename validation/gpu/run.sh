@@ -11,7 +11,8 @@
 # particles, a dense bed), default/ (the default scene), suspension/ and suspension_substeps/ (32^3
 # beads settling, the whole program, free flight on and off: summary.json), dem_bench_{suspension,bed}.txt
 # (the DEM side alone on this machine's cores, 32^3 beads dilute and in a bed), tencate/<run>/ (import with
-# python3 validation/imb/ten_cate.py import DIR). The steps run in order of priority; a step that
+# python3 validation/imb/ten_cate.py import DIR), bed/<run>/ (the fluidized bed at 10 and 15 cells per
+# diameter: python3 validation/imb/fluidized_bed.py import DIR). The steps run in order of priority; a step that
 # would start with less time left than it needs is skipped and named in batch.log.
 set -u
 cd "$(dirname "$0")/../.."
@@ -25,19 +26,21 @@ log() { echo "[$(elapsed) s] $*" | tee -a "$OUT/batch.log"; }
 
 # step NAME NEED LIMIT COMMAND...: COMMAND (stdout and stderr to $OUT/NAME.txt) when at least NEED
 # seconds are left, stopped by SIGINT (a clean stop: lbm-server writes its outputs) after LIMIT
-# seconds or when the budget runs out.
+# seconds or when the budget runs out. Returns COMMAND's exit status, 125 when skipped.
 step() {
     local name=$1 need=$2 limit=$3
     shift 3
     if [ "$(left)" -lt "$need" ]; then
         log "skipped $name: $(left) s left, needs $need"
-        return
+        return 125
     fi
     [ "$limit" -gt $(($(left) - 5)) ] && limit=$(($(left) - 5))
     log "start $name (limit $limit s): $*"
     mkdir -p "$(dirname "$OUT/$name")"
     timeout -s INT -k 10 "$limit" "$@" > "$OUT/$name.txt" 2>&1
-    log "end $name: exit $?"
+    local code=$?
+    log "end $name: exit $code"
+    return $code
 }
 
 if ls .gl/*.deb >/dev/null 2>&1; then
@@ -86,10 +89,15 @@ done
 # fluid's step above, what a whole coupled step costs between these two extremes.
 step dem_bench_suspension 20 60 $bin/dem-client bench .gpu/suspension.toml --steps 40 --free-flight both
 step dem_bench_bed 20 90 $bin/dem-client bench .gpu/bed.toml --steps 4 --free-flight both
-# Ten Cate, in the order of .gpu/plan.txt.
+# Ten Cate and the fluidized bed (bed_*), in the order of .gpu/plan.txt.
 while read -r name _; do
     [ -f ".gpu/scenes/$name/scene.toml" ] || continue
-    step "tencate/$name/log" 20 300 $bin/lbm-server run ".gpu/scenes/$name/scene.toml" --out "$OUT/tencate/$name"
-    rm -rf "$OUT/tencate/$name/fields"
+    kind=tencate
+    case $name in bed_*) kind=bed ;; esac
+    dir="$OUT/$kind/$name"
+    step "$kind/$name/log" 20 300 $bin/lbm-server run ".gpu/scenes/$name/scene.toml" --out "$dir"
+    code=$?
+    [ "$code" -ne 125 ] && echo "$code" > "$dir/exit_code" && cp ".gpu/scenes/$name/scene.toml" "$dir/"
+    rm -rf "$dir/fields"
 done < .gpu/plan.txt
 log "done"

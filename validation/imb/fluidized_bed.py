@@ -11,6 +11,8 @@ bed's voidage against Richardson & Zaki (1954).
     python3 validation/imb/fluidized_bed.py                  # every case (about an hour on lavapipe)
     python3 validation/imb/fluidized_bed.py mrt_Re400        # one case
     python3 validation/imb/fluidized_bed.py --report         # only the report, from runs_bed/
+    python3 validation/imb/fluidized_bed.py scenes DIR       # write the GPU cases' scenes (validation/gpu/)
+    python3 validation/imb/fluidized_bed.py import DIR       # take a GPU batch's runs into runs_bed/
 
 LBM_SERVER names another lbm-server (as for ten_cate.py).
 """
@@ -39,28 +41,41 @@ NU = MU / RHO_F
 WIDTH_X = 0.030  # m; the slab's depth is DEPTH diameters (4 in the scene)
 FLOOR = 0.0075  # the distributor plane, m
 TOP = 0.0645  # the top plane, m
-MACH, DX = 0.1, 0.0005
+MACH = 0.1
+CELLS = 6  # cells per diameter of the scene (dx 0.5 mm)
 SIM_TIME = 0.75  # s of each run
 AVERAGE_FROM = 0.5  # s: the voidage is averaged over the rows from here on
 # The fastest liquid expected, over the superficial velocity: the liquid between the grains.
 SPEED_OVER_U = 0.3 / 0.1973
 
-# (operator, Re, slab depth in diameters): the scene's slab, and Re 200 in one twice as deep (the
-# grains in 7 rows across instead of 3) to see what the walls do.
+# (operator, Re, slab depth in diameters, cells per diameter): the scene's slab, and Re 200 in one
+# twice as deep (the grains in 7 rows across instead of 3) to see what the walls do.
 CASES = [
-    ("mrt", 400, 4),
-    ("mrt", 200, 4),
-    ("trt", 400, 4),
-    ("trt", 200, 4),
-    ("bgk", 400, 4),
-    ("bgk", 200, 4),
-    ("mrt", 200, 8),
+    ("mrt", 400, 4, CELLS),
+    ("mrt", 200, 4, CELLS),
+    ("trt", 400, 4, CELLS),
+    ("trt", 200, 4, CELLS),
+    ("bgk", 400, 4, CELLS),
+    ("bgk", 200, 4, CELLS),
+    ("mrt", 200, 8, CELLS),
+]
+# Finer grids, for a GPU (validation/gpu/run.sh; too slow for lavapipe): whether the bed's excess
+# expansion at 6 cells is the grid's (the held sphere's drag at 8 cells is 15-25% above Schiller-
+# Naumann at Re 100-400 in validation/lbm/REPORT.md, "Stability near tau = 1/2"). In the order
+# the batch runs them: the seed's 10 cells at Re 200 and 400, the deep slab, then 15 cells.
+GPU_CASES = [
+    ("mrt", 200, 4, 10),
+    ("mrt", 400, 4, 10),
+    ("mrt", 200, 8, 10),
+    ("trt", 200, 4, 10),
+    ("mrt", 200, 4, 15),
+    ("mrt", 400, 4, 15),
 ]
 ROWS_ACROSS = {4: 3, 8: 7}
 
 
-def name(operator, re_, depth):
-    return "%s_Re%d" % (operator, re_) + ("" if depth == 4 else "_D%d" % depth)
+def name(operator, re_, depth, cells=CELLS):
+    return "%s_Re%d" % (operator, re_) + ("" if depth == 4 else "_D%d" % depth) + ("" if cells == CELLS else "_N%d" % cells)
 
 
 def width_y(depth):
@@ -72,16 +87,18 @@ def inflow(re_):
     return re_ * NU / D
 
 
-def scene_text(operator, re_, depth):
-    """The scene with this operator, this inflow, a velocity scale in proportion and the steps of
-    SIM_TIME."""
+def scene_text(operator, re_, depth, cells=CELLS):
+    """The scene with this operator, this inflow, a velocity scale in proportion, this grid and the
+    steps of SIM_TIME."""
     u = inflow(re_)
     scale = SPEED_OVER_U * u
-    dt = MACH / math.sqrt(3.0) * DX / scale
+    dx = D / cells
+    dt = MACH / math.sqrt(3.0) * dx / scale
     text = open(SCENE).read()
     subs = [
         (r'^operator = .*$', 'operator = "%s"' % operator),
         (r"^velocity_scale = .*$", "velocity_scale = %.4f                # m/s: %.2f U" % (scale, SPEED_OVER_U)),
+        (r"^dx = .*$", "dx = %.6g                       # m: %d cells per grain diameter" % (dx, cells)),
         (r"^steps = .*$", "steps = %d                         # coupled steps (%.2f s)" % (round(SIM_TIME / dt), SIM_TIME)),
         (r"^z_min = .*$", 'z_min = { type = "velocity_inlet", velocity = [0.0, 0.0, %.4f] } # m/s: Re %d' % (u, re_)),
         (r"^max = \[0\.030, 0\.012, ", "max = [0.030, %g, " % width_y(depth)),
@@ -93,6 +110,13 @@ def scene_text(operator, re_, depth):
         if n != 1:
             raise SystemExit("%s: no line matches %r" % (SCENE, pattern))
     return text
+
+
+def lattice_tau(re_, cells):
+    """tau of the scene at Re with this many cells per diameter (as lbm-server derives it)."""
+    dx = D / cells
+    dt = MACH / math.sqrt(3.0) * dx / (SPEED_OVER_U * inflow(re_))
+    return 0.5 + 3.0 * NU * dt / dx**2
 
 
 def settling_reynolds():
@@ -146,9 +170,9 @@ def voidage(mean_height, count, depth):
     return 1.0 - solids / (WIDTH_X * width_y(depth) * 2.0 * mean_height)
 
 
-def run(operator, re_, depth):
-    out = os.path.join(OUT, name(operator, re_, depth))
-    code, work = ten_cate.run_scene(out, scene_text(operator, re_, depth))
+def keep(out, work, code):
+    """What runs_bed/ keeps of a run whose outputs are in WORK: its exit code, summary.json and the
+    grains' mean height per row (heights.csv)."""
     with open(os.path.join(out, "exit_code"), "w") as f:
         f.write("%d\n" % code)
     if os.path.exists(os.path.join(work, "summary.json")):
@@ -158,7 +182,58 @@ def run(operator, re_, depth):
             f.write("time,mean_height,grains,in_band,at_top\n")
             for t, h, n, b, top in heights(os.path.join(work, "particles.csv")):
                 f.write("%.6g,%.6g,%d,%d,%d\n" % (t, h, n, b, top))
+
+
+def run(operator, re_, depth, cells=CELLS):
+    out = os.path.join(OUT, name(operator, re_, depth, cells))
+    code, work = ten_cate.run_scene(out, scene_text(operator, re_, depth, cells))
+    keep(out, work, code)
     shutil.rmtree(work, ignore_errors=True)
+
+
+def write_scenes(folder):
+    """The GPU cases' scenes, FOLDER/bed_<name>/scene.toml, and one line each on stdout (name,
+    cells, steps, cell-steps) for validation/gpu/prepare.sh's plan."""
+    for case in GPU_CASES:
+        operator, re_, depth, cells = case
+        text = scene_text(*case)
+        path = os.path.join(folder, "bed_" + name(*case))
+        os.makedirs(path, exist_ok=True)
+        with open(os.path.join(path, "scene.toml"), "w") as f:
+            f.write(text)
+        grid = [round(x / (D / cells)) for x in (WIDTH_X, width_y(depth), 0.072)]
+        steps = scene_steps(path)
+        print("bed_%s %dx%dx%d steps %d cell-steps %.3g" % (name(*case), *grid, steps, grid[0] * grid[1] * grid[2] * steps))
+
+
+def import_runs(folder):
+    """FOLDER/bed_<name>/ of a GPU batch (scene.toml, log.txt, exit_code, summary.json,
+    particles.csv) into runs_bed/<name>/ as `run` leaves its runs."""
+    for entry in sorted(os.listdir(folder)):
+        src = os.path.join(folder, entry)
+        if not entry.startswith("bed_") or not os.path.exists(os.path.join(src, "exit_code")):
+            print("%s: no exit_code (not run), not imported" % entry)
+            continue
+        out = os.path.join(OUT, entry[len("bed_"):])
+        os.makedirs(out, exist_ok=True)
+        for f in ("scene.toml", "log.txt"):
+            shutil.copy(os.path.join(src, f), os.path.join(out, f))
+        keep(out, src, int(open(os.path.join(src, "exit_code")).read()))
+        print("%s: imported into %s" % (entry, out))
+
+
+# lbm-server's exit status when stopped by SIGINT (validation/gpu/run.sh's time limit): outputs written.
+EXIT_INTERRUPTED = 130
+
+
+def scene_steps(folder):
+    """The steps of SIM_TIME the case's scene asks for."""
+    return int(re.search(r"^steps = (\d+)", open(os.path.join(folder, "scene.toml")).read(), re.M).group(1))
+
+
+def simulated(folder, steps):
+    """Seconds simulated in `steps` steps of the case's run."""
+    return steps * json.load(open(os.path.join(folder, "summary.json")))["lattice"]["dt_s"]
 
 
 def outcome(folder):
@@ -167,8 +242,12 @@ def outcome(folder):
     code = int(open(os.path.join(folder, "exit_code")).read())
     summary_path = os.path.join(folder, "summary.json")
     summary = json.load(open(summary_path)) if os.path.exists(summary_path) else {}
-    if code == 0:
-        return True, None, summary.get("steps_completed"), summary.get("wall_time_s"), summary.get("fluid_mlups")
+    steps = summary.get("steps_completed")
+    if code == 0 and steps == summary.get("steps_requested") and scene_steps(folder) == steps:
+        return True, None, steps, summary.get("wall_time_s"), summary.get("fluid_mlups")
+    if code in (0, EXIT_INTERRUPTED) and steps is not None:
+        reason = "stopped after %d of %d steps (%.2f s)" % (steps, scene_steps(folder), simulated(folder, steps))
+        return False, reason, steps, summary.get("wall_time_s"), summary.get("fluid_mlups")
     errors = [l for l in log.splitlines() if "error" in l]
     reason = errors[-1] if errors else "exit code %d" % code
     reason = re.sub(r"^lbm-server: (error: )?", "", reason)
@@ -176,6 +255,15 @@ def outcome(folder):
     reason = re.sub(r"(left the domain at step \d+): position.*$", r"\1 (the fluid blew up around it)", reason)
     reason = re.sub(r"(the fluid became unstable by step \d+: cell \d+ at \([^)]*\)).*$", r"\1", reason)
     return False, reason, summary.get("steps_completed"), summary.get("wall_time_s"), summary.get("fluid_mlups")
+
+
+def device(folder):
+    """The Vulkan adapter the run's log names (its line "lbm-server: scene ... on <adapter> (...)")."""
+    log = open(os.path.join(folder, "log.txt")).read()
+    m = re.search(r"^lbm-server: scene .*? on (.+?)(?: \(|,|$)", log, re.M)
+    if not m:
+        return ""
+    return "lavapipe CPU" if m.group(1).startswith("llvmpipe") else m.group(1).strip()
 
 
 def report():
@@ -187,11 +275,12 @@ def report():
         "machine, shared with other runs: read wall time and MLUPS as +-50%). The scene:",
         "validation/scenes/fluidized-bed.toml, 216 sand grains (d = 3 mm, density ratio 2.65) in",
         "water-like liquid (nu = %.3g m^2/s), a slab 10 x 4 x 24 diameters (60 x 24 x 144 cells; one case" % NU,
-        "8 diameters deep with 504 grains, 7 rows across), 6 cells per diameter, uniform inflow through",
-        "the floor at U = Re nu / d, a pressure",
+        "8 diameters deep with 504 grains, 7 rows across), 6 cells per diameter (10 and 15 on a GPU:",
+        "the device column), uniform inflow through the floor at U = Re nu / d, a pressure",
         "outlet at the top (the equilibrium outflow, docs/lbm.md), DEM planes 2.5 diameters from both.",
         "Each case runs %.2f s; lattice.velocity_scale is %.2f U (the liquid between the grains), Mach" % (SIM_TIME, SPEED_OVER_U),
-        "0.1, so tau = 0.5017 at Re 400 and 0.5034 at Re 200. The seed's bed (BGK, 10 cells per diameter)",
+        "0.1, so tau = 0.5017 at Re 400 and 0.5034 at Re 200 (tau - 1/2 grows as the cells per diameter).",
+        "The seed's bed (BGK, 10 cells per diameter)",
         "ran at Re 200 and diverged at Re 400.",
         "",
         "Voidage: the grains' centres average h above the distributor, a uniform bed is 2h high, voidage",
@@ -203,11 +292,11 @@ def report():
         "wall term, made for tubes: for a slab it is an estimate). \"Grains at the top\": centres within a",
         "diameter of the top plane in the last row kept (a bed lifted against it is no longer fluidized).",
         "",
-        "| case | Re | slab depth [d] | U [m/s] | outcome | steps | wall time [s] | MLUPS | grains at the top, last row | voidage (range) | voidage 1-3 d (range) | Richardson-Zaki | walled | error |",
-        "|---|---:|---:|---:|---|---:|---:|---:|---|---|---|---:|---:|---:|",
+        "| case | Re | slab depth [d] | cells per d | tau | U [m/s] | outcome | steps | wall time [s] | MLUPS | device | grains at the top, last row | voidage (range) | voidage 1-3 d (range) | Richardson-Zaki | walled | error |",
+        "|---|---:|---:|---:|---:|---:|---|---:|---:|---:|---|---|---|---|---:|---:|---:|",
     ]
-    for operator, re_, depth in CASES:
-        folder = os.path.join(OUT, name(operator, re_, depth))
+    for operator, re_, depth, cells in CASES + GPU_CASES:
+        folder = os.path.join(OUT, name(operator, re_, depth, cells))
         if not os.path.exists(os.path.join(folder, "exit_code")):
             continue
         done, reason, steps, wall, mlups = outcome(folder)
@@ -228,18 +317,21 @@ def report():
                 error = "%+.1f%%" % (100.0 * (mean / eps_rz - 1.0))
                 local = [band_voidage(int(r["in_band"]), depth) for r in rows]
                 band = "%.3f (%.3f-%.3f)" % (sum(local) / len(local), min(local), max(local))
-        text = "ran %.2f s" % SIM_TIME if done else reason.replace("|", "/")
+        text = "ran %.2f s" % simulated(folder, steps) if done else reason.replace("|", "/")
         lines.append(
-            "| %s | %d | %d | %.4f | %s | %s | %s | %s | %s | %s | %s | %.3f | %.3f | %s |"
+            "| %s | %d | %d | %d | %.4f | %.4f | %s | %s | %s | %s | %s | %s | %s | %s | %.3f | %.3f | %s |"
             % (
                 operator.upper(),
                 re_,
                 depth,
+                cells,
+                lattice_tau(re_, cells),
                 inflow(re_),
                 text,
                 steps if steps is not None else "",
                 "%.0f" % wall if wall else "",
                 "%.2f" % mlups if mlups else "",
+                device(folder),
                 top,
                 measured,
                 band,
@@ -258,13 +350,22 @@ def report():
 
 
 def main():
+    if sys.argv[1:2] in (["scenes"], ["import"]):
+        if len(sys.argv) != 3:
+            raise SystemExit("usage: fluidized_bed.py %s DIR" % sys.argv[1])
+        if sys.argv[1] == "scenes":
+            write_scenes(sys.argv[2])
+            return
+        import_runs(sys.argv[2])
+        report()
+        return
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("cases", nargs="*", help="cases to run (e.g. mrt_Re400); default: all")
     parser.add_argument("--report", action="store_true", help="only write the report from runs_bed/")
     args = parser.parse_args()
     if not args.report:
         wanted = args.cases or [name(*c) for c in CASES]
-        for case in CASES:
+        for case in CASES + GPU_CASES:
             if name(*case) in wanted:
                 run(*case)
     report()
