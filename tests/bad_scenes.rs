@@ -76,6 +76,12 @@ const MISTAKES: &[(&str, &str, &str, &[&str])] = &[
         &["lattice.magic = 0.01", "magic 3/16"],
     ),
     (
+        "calibrated radius correction with a bounded TRT tau-",
+        "velocity_scale = 0.01\n[output]\ninterval = 10\n[coupling]\ntimeout = 10",
+        "velocity_scale = 0.01\nmax_tau_minus = 1.0\n[output]\ninterval = 10\n[coupling]\ntimeout = 10\nradius_correction = \"calibrated\"",
+        &["lattice.max_tau_minus = 1", "magic 3/16"],
+    ),
+    (
         "calibrated radius correction with other MRT rates",
         "velocity_scale = 0.01\n[output]\ninterval = 10\n[coupling]\ntimeout = 10",
         "velocity_scale = 0.01\noperator = \"mrt\"\nmrt = { e = 1.0, epsilon = 1.4, q = 1.2, pi = 1.4, m = 1.98 }\n[output]\ninterval = 10\n[coupling]\ntimeout = 10\nradius_correction = \"calibrated\"",

@@ -57,17 +57,21 @@ fn poiseuille_in_si_units_matches_the_analytic_profile() {
         serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
     assert_eq!(summary["steps_completed"], 3000);
     assert_eq!(summary["lattice"]["tau"], 0.8);
+    assert_eq!(summary["lattice"]["magic"], 0.1875, "TRT's magic as used");
+    let tau_minus = summary["lattice"]["tau_minus"].as_f64().expect("TRT's tau-");
+    assert!((tau_minus - (0.5 + 0.1875 / 0.3)).abs() < 1e-12, "{tau_minus}");
+    assert_eq!(summary["lattice"]["ramp_time_s"], 0.0);
 }
 
 #[test]
 fn tau_below_the_limit_is_refused() {
     let text = POISEUILLE
         .replace("operator = \"trt\"", "operator = \"bgk\"")
-        .replace("tau = 0.8", "tau = 0.505");
+        .replace("tau = 0.8", "tau = 0.5004");
     let (code, err, out) = run("lowtau", &text);
     assert_eq!(code, Some(2), "{err}");
     assert!(
-        err.contains("lattice.tau = 0.50500: is below 0.5 + 0.01 for bgk"),
+        err.contains("lattice.tau = 0.50040: is below 0.5 + 0.0005: unstable; raise lattice.tau"),
         "{err}"
     );
     assert!(!out.exists());

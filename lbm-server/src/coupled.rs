@@ -614,7 +614,7 @@ mod tests {
     }
 
     #[test]
-    fn trt_warns_near_tau_one_half_where_it_blew_up() {
+    fn a_lattice_warns_near_tau_one_half_where_its_operator_blew_up() {
         let at = |tau: f64, operator: &str, faces: &str| {
             units(
                 &TEN_CATE_E1
@@ -654,6 +654,35 @@ mod tests {
             "MRT held"
         );
         assert_eq!(stability_warning(&at(0.511, "bgk", inlet), true), None, "BGK");
+        let bgk = stability_warning(&at(0.505, "bgk", inlet), false).expect("BGK at 0.505");
+        assert!(
+            bgk.contains("with BGK") && bgk.contains("where it blew up at 0.5024"),
+            "{bgk}"
+        );
+        assert_eq!(
+            stability_warning(&at(0.505, "bgk", ""), false),
+            None,
+            "BGK, no particles, no inlet"
+        );
+        let bounded = |tau: f64, faces: &str| {
+            let mut u = at(tau, "trt", faces);
+            u.magic = scene::lattice::bounded_magic(u.magic, tau, 1.0);
+            u
+        };
+        let trt = stability_warning(&bounded(0.505, ""), true).expect("bounded TRT at 0.505");
+        assert!(
+            trt.contains("TRT with tau- = 1.00") && trt.contains("tau- <= 1 held to tau 0.5048"),
+            "{trt}"
+        );
+        assert_eq!(
+            stability_warning(&bounded(0.52, inlet), true),
+            None,
+            "bounded TRT above 0.51: the inlet held"
+        );
+        assert!(
+            particles.contains("lattice.max_tau_minus = 1"),
+            "the unbounded TRT warning names the bound: {particles}"
+        );
     }
 
     #[test]

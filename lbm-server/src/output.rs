@@ -127,10 +127,19 @@ pub struct LatticeSummary {
     pub tau: f64,
     pub mach: f64,
     pub operator: String,
+    /// TRT's magic parameter as used (`lattice.magic`, lowered by `lattice.max_tau_minus`) and
+    /// the antisymmetric relaxation time it gives.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub magic: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub tau_minus: Option<f64>,
+    /// `lattice.ramp_time`: the inlets and moving walls rise from rest over it.
+    pub ramp_time_s: f64,
 }
 
 impl LatticeSummary {
     pub fn of(u: &scene::lattice::LatticeUnits) -> Self {
+        let trt = u.operator == "trt";
         Self {
             cells: u.n,
             dx_m: u.dx,
@@ -138,6 +147,9 @@ impl LatticeSummary {
             tau: u.tau,
             mach: u.mach,
             operator: u.operator.clone(),
+            magic: trt.then_some(u.magic),
+            tau_minus: trt.then(|| crate::lbm::geometry::tau_minus(u.magic, u.tau)),
+            ramp_time_s: u.ramp_steps * u.dt,
         }
     }
 }

@@ -577,6 +577,18 @@ fn operator_named(name: &str, tau: f64) -> Operator {
         (Operator::Trt { .. }, "3/16") | (Operator::Bgk | Operator::Mrt { .. }, _) => operator,
         (Operator::Trt { .. }, "1/4") => Operator::Trt { magic: 0.25 },
         (Operator::Trt { .. }, "1/12") => Operator::Trt { magic: 1.0 / 12.0 },
+        (Operator::Trt { .. }, bounded) if bounded.contains(" (tau- <= ") => {
+            let (magic, max) = bounded
+                .trim_end_matches(')')
+                .split_once(" (tau- <= ")
+                .expect("checked");
+            let Operator::Trt { magic } = operator_named(&format!("TRT {magic}"), tau) else {
+                unreachable!("a TRT name")
+            };
+            Operator::Trt {
+                magic: scene::lattice::bounded_magic(magic, tau, max.parse().expect("TRT tau- bound")),
+            }
+        }
         (Operator::Trt { .. }, other) => Operator::Trt {
             magic: other.parse().expect("TRT magic"),
         },

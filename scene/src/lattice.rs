@@ -25,6 +25,11 @@ pub struct Lattice {
     /// TRT magic parameter Lambda (default 3/16).
     #[serde(default = "default_magic")]
     pub magic: f64,
+    /// TRT: the largest antisymmetric relaxation time tau- (none by default). A fixed magic makes
+    /// tau- = 1/2 + magic / (tau - 1/2) grow without bound as tau nears 1/2, where TRT blew up
+    /// (validation/lbm/REPORT.md, "Stability near tau = 1/2"); with this set the magic becomes
+    /// min(magic, (tau - 1/2)(max_tau_minus - 1/2)). 1 held where BGK held.
+    pub max_tau_minus: Option<f64>,
     /// MRT relaxation rates of the non-hydrodynamic moments (d'Humieres 2002 defaults).
     #[serde(default)]
     pub mrt: MrtRates,
@@ -184,6 +189,7 @@ pub struct LatticeUnits {
     /// Mach number of the velocity scale: u_lattice / c_s.
     pub mach: f64,
     pub operator: String,
+    /// TRT's magic parameter as used: `lattice.magic`, lowered by `lattice.max_tau_minus`.
     pub magic: f64,
     pub mrt: MrtRates,
     /// Body force density in lattice units.
@@ -196,14 +202,10 @@ pub struct LatticeUnits {
     pub ramp_steps: f64,
 }
 
-/// Smallest tau - 1/2 each operator accepts.
-pub fn tau_margin(operator: &str) -> f64 {
-    if operator == "bgk" {
-        0.01
-    } else {
-        0.0005
-    }
-}
+/// Smallest tau - 1/2 accepted, for every operator. BGK was refused below 0.51 until BGK held a
+/// sphere's wake to tau 0.5024 (validation/lbm/REPORT.md, "Stability near tau = 1/2"); near
+/// there lbm-server warns with what was measured.
+pub const TAU_MARGIN: f64 = 0.0005;
 
 /// Largest Mach number each operator accepts.
 pub fn mach_limit(operator: &str) -> f64 {
@@ -221,6 +223,39 @@ fn fail(file: &str, field: &str, value: impl ToString, problem: impl Into<String
         value: value.to_string(),
         problem: problem.into(),
     }
+}
+
+/// TRT's magic parameter at `tau`: `lattice.magic`, or less where `lattice.max_tau_minus` bounds
+/// tau- = 1/2 + magic / (tau - 1/2).
+fn trt_magic(lattice: &Lattice, tau: f64, file: &str) -> Result<f64, SceneError> {
+    positive(file, "lattice.magic", lattice.magic, "")?;
+    let Some(max) = lattice.max_tau_minus else {
+        return Ok(lattice.magic);
+    };
+    if lattice.operator != "trt" {
+        let op = &lattice.operator;
+        return Err(fail(
+            file,
+            "lattice.max_tau_minus",
+            max,
+            format!("applies to TRT only, not {op:?}"),
+        ));
+    }
+    if !(max.is_finite() && max > 0.5) {
+        return Err(fail(
+            file,
+            "lattice.max_tau_minus",
+            max,
+            "must be a finite number above 1/2",
+        ));
+    }
+    Ok(bounded_magic(lattice.magic, tau, max))
+}
+
+/// The TRT magic parameter at `tau` that keeps tau- = 1/2 + magic / (tau - 1/2) at most
+/// `max_tau_minus`: min(magic, (tau - 1/2)(max_tau_minus - 1/2)).
+pub fn bounded_magic(magic: f64, tau: f64, max_tau_minus: f64) -> f64 {
+    magic.min((tau - 0.5) * (max_tau_minus - 0.5))
 }
 
 impl LatticeUnits {
@@ -252,7 +287,7 @@ impl LatticeUnits {
         } else {
             "lattice (derived tau)"
         };
-        if tau.is_nan() || tau - 0.5 < tau_margin(op) {
+        if tau.is_nan() || tau - 0.5 < TAU_MARGIN {
             let remedy = if lattice.tau.is_some() {
                 "raise lattice.tau"
             } else {
@@ -262,7 +297,7 @@ impl LatticeUnits {
                 file,
                 field,
                 format!("{tau:.5}"),
-                format!("is below 0.5 + {} for {op}: unstable; {remedy}", tau_margin(op)),
+                format!("is below 0.5 + {TAU_MARGIN}: unstable; {remedy}"),
             ));
         }
         let mach = lattice.velocity_scale * dt / dx * 3f64.sqrt();
@@ -299,7 +334,7 @@ impl LatticeUnits {
             nu: (tau - 0.5) / 3.0,
             mach,
             operator: op.to_string(),
-            magic: lattice.magic,
+            magic: trt_magic(lattice, tau, file)?,
             mrt: lattice.mrt,
             force,
             faces,
@@ -500,5 +535,53 @@ mod tests {
             .lattice_units
             .expect("lattice");
         assert_eq!(plain.ramp_steps, 0.0, "no ramp");
+    }
+
+    fn with_lattice(lines: &str) -> Result<super::LatticeUnits, crate::SceneError> {
+        let text =
+            crate::DEFAULT_SCENE.replace("check_interval = 100", &format!("check_interval = 100\n{lines}"));
+        Scene::parse(&text, "tau_minus.toml").map(|s| s.lattice_units.expect("lattice"))
+    }
+
+    /// lattice.max_tau_minus lowers TRT's magic where tau- = 1/2 + magic / (tau - 1/2) would
+    /// exceed it, and leaves it where it would not.
+    #[test]
+    fn max_tau_minus_bounds_trt_tau_minus() {
+        let near = with_lattice("tau = 0.505\nmax_tau_minus = 1.0").expect("scene");
+        assert!((near.magic - 0.0025).abs() < 1e-12, "{}", near.magic);
+        assert!(
+            (0.5 + near.magic / (near.tau - 0.5) - 1.0).abs() < 1e-9,
+            "tau- = 1"
+        );
+        let far = with_lattice("tau = 1.0\nmax_tau_minus = 1.0").expect("scene");
+        assert_eq!(far.magic, 3.0 / 16.0, "tau- 0.875 is below the bound");
+        let plain = with_lattice("tau = 0.505").expect("scene");
+        assert_eq!(plain.magic, 3.0 / 16.0, "no bound: the magic as given");
+    }
+
+    /// A bound of 1/2 or less, one on another operator and a magic that is not positive are
+    /// refused, naming the field and the value.
+    #[test]
+    fn a_bad_max_tau_minus_or_magic_is_refused() {
+        let message = |lines: &str| with_lattice(lines).expect_err(lines).to_string();
+        let half = message("max_tau_minus = 0.5");
+        assert!(
+            half.contains("lattice.max_tau_minus = 0.5") && half.contains("above 1/2"),
+            "{half}"
+        );
+        assert!(with_lattice("max_tau_minus = 1.0").is_ok(), "TRT accepts it");
+        let text = crate::DEFAULT_SCENE
+            .replace("operator = \"trt\"", "operator = \"mrt\"")
+            .replace(
+                "check_interval = 100",
+                "check_interval = 100\nmax_tau_minus = 1.0",
+            );
+        let mrt = Scene::parse(&text, "mrt.toml").expect_err("MRT").to_string();
+        assert!(
+            mrt.contains("lattice.max_tau_minus = 1") && mrt.contains("TRT only"),
+            "{mrt}"
+        );
+        let magic = message("magic = -0.1");
+        assert!(magic.contains("lattice.magic = -0.1"), "{magic}");
     }
 }

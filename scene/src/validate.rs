@@ -230,6 +230,9 @@ impl Scene {
         if lattice.operator == "trt" && lattice.magic != 3.0 / 16.0 {
             return Err(c.fail("lattice.magic", lattice.magic, why));
         }
+        if let Some(max) = lattice.max_tau_minus {
+            return Err(c.fail("lattice.max_tau_minus", max, why));
+        }
         if lattice.operator == "mrt" && lattice.mrt != crate::lattice::MrtRates::default() {
             return Err(c.fail("lattice.mrt", format!("{:?}", lattice.mrt), why));
         }

@@ -9,7 +9,14 @@ use std::fmt::Write as _;
 use std::sync::Arc;
 
 /// The operators compared, by the names of [`operator_named`].
-pub(super) const OPERATORS: [&str; 5] = ["BGK", "TRT 3/16", "TRT 1/4", "TRT 0.01", "MRT"];
+pub(super) const OPERATORS: [&str; 6] = [
+    "BGK",
+    "TRT 3/16",
+    "TRT 1/4",
+    "TRT 0.01",
+    "TRT 3/16 (tau- <= 1)",
+    "MRT",
+];
 /// The Reynolds numbers (u0 d / nu) of the held sphere.
 pub(super) const REYNOLDS: [f64; 4] = [100.0, 200.0, 400.0, 800.0];
 /// Sphere diameter, box width and length (cells): the sphere-drag section's box at Re 50.
@@ -96,7 +103,8 @@ pub(super) fn section(gpu: &Arc<Gpu>) -> String {
          shedding wake swings it) against Schiller & Naumann, valid to Re 800, for reading only: the \
          periodic box is a row of spheres and the open box confines (about +4-6% at this width, \
          sphere-drag section). MRT: d'Humieres' rates for the non-hydrodynamic moments. TRT: tau- = 1/2 + \
-         Lambda / (tau - 1/2). The pressure outlet is the equilibrium outflow (docs/lbm.md); with the \
+         Lambda / (tau - 1/2); \"(tau- <= 1)\": Lambda lowered to (tau - 1/2) / 2 where that would \
+         exceed 1 (`lattice.max_tau_minus = 1`, here at every Re). The pressure outlet is the equilibrium outflow (docs/lbm.md); with the \
          anti-bounce-back outlet it replaced (2026-12-03, these runs with the code before) BGK blew up at \
          the outlet from Re 100 (by step 1780), MRT from Re 400 (step 2980; Re 200 held) and TRT 0.01 \
          at Re 200, one cell from the outlet.\n\n\
