@@ -10,6 +10,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 use std::sync::Arc;
 
+mod bed_drag;
 mod stability;
 
 #[derive(clap::Args)]
@@ -18,7 +19,7 @@ pub struct ValidateArgs {
     #[arg(long, default_value = "validation/lbm")]
     out: PathBuf,
     /// Run only these sections (channel, wall, taylor-green, mass, array-drag, drag-tau,
-    /// radius-deficit, sphere-drag, sphere-correction, moving-boundary, stability, momentum), print
+    /// radius-deficit, sphere-drag, sphere-correction, moving-boundary, stability, bed-drag, momentum), print
     /// them and replace them in an existing REPORT.md (the other sections are kept as they are).
     #[arg(long, value_delimiter = ',')]
     only: Vec<String>,
@@ -26,7 +27,7 @@ pub struct ValidateArgs {
 
 type Section = fn(&Arc<Gpu>) -> String;
 
-const SECTIONS: [(&str, Section); 12] = [
+const SECTIONS: [(&str, Section); 13] = [
     ("channel", channel_convergence),
     ("wall", wall_location),
     ("taylor-green", taylor_green),
@@ -38,6 +39,7 @@ const SECTIONS: [(&str, Section); 12] = [
     ("sphere-correction", sphere_correction),
     ("moving-boundary", moving_boundary),
     ("stability", stability::section),
+    ("bed-drag", bed_drag::section),
     ("momentum", momentum),
 ];
 

@@ -810,3 +810,97 @@ mod tests {
         assert_eq!(unconfined_drag(&zigzag), None);
     }
 }
+
+/// A simple cubic array held against a weight per sphere ([`array_at_weight`]).
+#[derive(Debug, Clone, Copy)]
+pub struct WeightedArray {
+    /// The periodic box's side n and the sphere's diameter d (cells).
+    pub cells: usize,
+    pub diameter: f64,
+    pub tau: f64,
+    pub steps: u64,
+    /// Particle Reynolds number U d / nu of the superficial velocity U (the flux through the
+    /// plane farthest from the sphere): mean, lowest and highest over the last
+    /// [`WEIGHT_SAMPLES`] checks.
+    pub reynolds: [f64; 3],
+    /// The first cell that failed the health check, if one did.
+    pub unhealthy: Option<super::gpu::Unhealthy>,
+}
+
+/// Checks of the flux (one per [`WEIGHT_CHECK`] steps) that [`array_at_weight`] averages over and
+/// that must agree to 1e-3 for it to stop.
+pub const WEIGHT_SAMPLES: usize = 20;
+pub const WEIGHT_CHECK: u64 = 100;
+
+/// A sphere fixed at the centre of a periodic n^3 box (a simple cubic array of this solid
+/// fraction: d = n (6 phi / pi)^(1/3)), the fluid driven by a mean pressure gradient f whose
+/// force on each unit cell, f n^3, is `weight` rho nu^2: the force a grain's weight puts on the
+/// liquid in a fluidized bed, weight = (rho_p / rho_f - 1) g V / nu^2 = Ar pi / 6. At rho = 1
+/// and viscosity nu the superficial velocity settles where the array's drag carries that
+/// weight; the run starts from the fluid at `u_start` everywhere and stops when the last
+/// [`WEIGHT_SAMPLES`] fluxes agree to 1e-3 (a steady flow), after `max_steps`, or at a failed
+/// health check.
+pub fn array_at_weight(
+    gpu: &Arc<Gpu>,
+    n: usize,
+    solid_fraction: f64,
+    [nu, weight]: [f64; 2],
+    operator: Operator,
+    u_start: f64,
+    max_steps: u64,
+) -> WeightedArray {
+    let tau = 0.5 + 3.0 * nu;
+    let mut setup = Setup::new([n, n, n], [Face::Periodic; 6], tau, operator);
+    setup.force = [weight * nu * nu / (n * n * n) as f64, 0.0, 0.0];
+    let diameter = n as f64 * (6.0 * solid_fraction / std::f64::consts::PI).cbrt();
+    let mut lattice = coupled_lattice(gpu, &setup, Default::default());
+    lattice.set_populations(&equilibrium_field(&setup, |_| (1.0, [u_start, 0.0, 0.0])));
+    let centre = n as f64 / 2.0;
+    let sphere = super::imb::SolidParticle {
+        position: [centre; 3],
+        radius: diameter / 2.0,
+        ..Default::default()
+    };
+    // The plane x = 0 lies half a box from the sphere's centre: it never cuts the sphere.
+    let flux =
+        |fields: &[[f32; 4]]| (0..n * n).map(|k| fields[k * n][1] as f64).sum::<f64>() / (n * n) as f64;
+    let mut history: Vec<f64> = Vec::new();
+    let mut steps = 0;
+    let mut unhealthy = None;
+    while steps < max_steps {
+        for _ in 0..WEIGHT_CHECK {
+            lattice.step_coupled(&[sphere]).expect("coupled step");
+        }
+        steps += WEIGHT_CHECK;
+        let (fields, bad) = lattice.fields();
+        if bad.is_some() {
+            unhealthy = bad;
+            break;
+        }
+        history.push(flux(&fields) * diameter / nu);
+        let last = &history[history.len().saturating_sub(WEIGHT_SAMPLES)..];
+        let (low, high) = last
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &r| {
+                (l.min(r), h.max(r))
+            });
+        if last.len() == WEIGHT_SAMPLES && high - low < 1e-3 * high.abs() {
+            break;
+        }
+    }
+    let last = &history[history.len().saturating_sub(WEIGHT_SAMPLES)..];
+    let mean = last.iter().sum::<f64>() / last.len().max(1) as f64;
+    let (low, high) = last
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &r| {
+            (l.min(r), h.max(r))
+        });
+    WeightedArray {
+        cells: n,
+        diameter,
+        tau,
+        steps,
+        reynolds: [mean, low, high],
+        unhealthy,
+    }
+}
