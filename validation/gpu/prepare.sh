@@ -44,12 +44,12 @@ fi
 # One line per scene, in the order run.sh runs them (its priority): name, cells, tau, steps.
 scenes() { python3 validation/imb/ten_cate.py scenes .gpu/scenes "$@" >> .gpu/plan.txt; }
 # The fluidized bed at 10 and 15 cells per diameter (validation/imb/fluidized_bed.py GPU_CASES).
-beds() { python3 validation/imb/fluidized_bed.py scenes .gpu/scenes >> .gpu/plan.txt; }
+beds() { python3 validation/imb/fluidized_bed.py scenes .gpu/scenes > .gpu/beds.txt; }
 if $small; then
     echo small > .gpu/mode
     scenes 3 --cases E3 E4 --sim-time 0.3
     # One bed, 20 steps (a check that its outputs come back and import).
-    python3 validation/imb/fluidized_bed.py scenes .gpu/scenes > .gpu/beds.txt
+    beds
     head -n 1 .gpu/beds.txt >> .gpu/plan.txt
     for d in .gpu/scenes/bed_*; do
         grep -q "^$(basename "$d") " .gpu/plan.txt || rm -rf "$d"
@@ -66,6 +66,7 @@ else
     scenes 16 --cases E2 --mach 0.075 --width 210 --height 240
     scenes 16 --cases E3 E4 --width 210 --height 240
     beds
+    cat .gpu/beds.txt >> .gpu/plan.txt
     # 24 cells per diameter: 200 x 200 x 240 mm, 320 x 320 x 384 cells.
     scenes 24 --cases E1 --mach 0.025 --width 200 --height 240
     scenes 24 --cases E2 --mach 0.05 --width 200 --height 240

@@ -794,23 +794,6 @@ pub fn momentum_exchange(gpu: &Arc<Gpu>, n: usize, steps: u64) -> Momentum {
     }
 }
 
-#[cfg(test)]
-mod tests {
-    use super::unconfined_drag;
-
-    #[test]
-    fn the_unconfined_drag_is_recovered_from_three_confined_boxes() {
-        let drag = |x: f64| 2.0 + 3.0 * x.powf(2.5);
-        let points: Vec<(f64, f64)> = [0.25, 1.0 / 6.0, 0.125, 0.1].map(|x| (x, drag(x))).to_vec();
-        let (c_inf, p) = unconfined_drag(&points).expect("a fit");
-        assert!((c_inf - 2.0).abs() < 1e-9, "{c_inf}");
-        assert!((p - 2.5).abs() < 1e-6, "{p}");
-        assert_eq!(unconfined_drag(&points[..2]), None);
-        let zigzag = [(0.1, 2.0), (0.125, 2.5), (0.25, 2.2)];
-        assert_eq!(unconfined_drag(&zigzag), None);
-    }
-}
-
 /// A simple cubic array held against a weight per sphere ([`array_at_weight`]).
 #[derive(Debug, Clone, Copy)]
 pub struct WeightedArray {
@@ -879,22 +862,14 @@ pub fn array_at_weight(
         }
         history.push(flux(&fields) * diameter / nu);
         let last = &history[history.len().saturating_sub(WEIGHT_SAMPLES)..];
-        let (low, high) = last
-            .iter()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &r| {
-                (l.min(r), h.max(r))
-            });
+        let (low, high) = range(last);
         if last.len() == WEIGHT_SAMPLES && high - low < 1e-3 * high.abs() {
             break;
         }
     }
     let last = &history[history.len().saturating_sub(WEIGHT_SAMPLES)..];
     let mean = last.iter().sum::<f64>() / last.len().max(1) as f64;
-    let (low, high) = last
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &r| {
-            (l.min(r), h.max(r))
-        });
+    let (low, high) = range(last);
     WeightedArray {
         cells: n,
         diameter,
@@ -902,5 +877,31 @@ pub fn array_at_weight(
         steps,
         reynolds: [mean, low, high],
         unhealthy,
+    }
+}
+
+/// The lowest and highest of `values`.
+fn range(values: &[f64]) -> (f64, f64) {
+    values
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &v| {
+            (l.min(v), h.max(v))
+        })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::unconfined_drag;
+
+    #[test]
+    fn the_unconfined_drag_is_recovered_from_three_confined_boxes() {
+        let drag = |x: f64| 2.0 + 3.0 * x.powf(2.5);
+        let points: Vec<(f64, f64)> = [0.25, 1.0 / 6.0, 0.125, 0.1].map(|x| (x, drag(x))).to_vec();
+        let (c_inf, p) = unconfined_drag(&points).expect("a fit");
+        assert!((c_inf - 2.0).abs() < 1e-9, "{c_inf}");
+        assert!((p - 2.5).abs() < 1e-6, "{p}");
+        assert_eq!(unconfined_drag(&points[..2]), None);
+        let zigzag = [(0.1, 2.0), (0.125, 2.5), (0.25, 2.2)];
+        assert_eq!(unconfined_drag(&zigzag), None);
     }
 }
