@@ -320,7 +320,7 @@ pub fn moving_array_drag(
             exchange += load / window as f64;
             if left.is_multiple_of(stride) && left / stride < samples {
                 let x_far = (sphere.position[0] + centre).floor() as usize % n;
-                relative += (face_flux(&lattice, n, x_far) - velocity) / samples as f64;
+                relative += (plane_flux(&lattice.fields().0, n, x_far) - velocity) / samples as f64;
             }
         }
     }
@@ -336,11 +336,10 @@ pub fn moving_array_drag(
     }
 }
 
-/// The mean velocity along x through the lattice plane x (the volumetric flux over its area);
-/// the sphere must not cut the plane (the fluid inside an immersed boundary moves with it, so a
-/// volume average would count it).
-fn face_flux(lattice: &Lattice, n: usize, x: usize) -> f64 {
-    let (fields, _) = lattice.fields();
+/// The mean velocity along x through the plane x of an n^3 lattice's `fields` (the volumetric
+/// flux over its area); the sphere must not cut the plane (the fluid inside an immersed boundary
+/// moves with it, so a volume average would count it).
+fn plane_flux(fields: &[[f32; 4]], n: usize, x: usize) -> f64 {
     (0..n * n).map(|k| fields[x + k * n][1] as f64).sum::<f64>() / (n * n) as f64
 }
 
@@ -844,9 +843,6 @@ pub fn array_at_weight(
         radius: diameter / 2.0,
         ..Default::default()
     };
-    // The plane x = 0 lies half a box from the sphere's centre: it never cuts the sphere.
-    let flux =
-        |fields: &[[f32; 4]]| (0..n * n).map(|k| fields[k * n][1] as f64).sum::<f64>() / (n * n) as f64;
     let mut history: Vec<f64> = Vec::new();
     let mut steps = 0;
     let mut unhealthy = None;
@@ -860,7 +856,8 @@ pub fn array_at_weight(
             unhealthy = bad;
             break;
         }
-        history.push(flux(&fields) * diameter / nu);
+        // The plane x = 0 lies half a box from the sphere's centre: it never cuts the sphere.
+        history.push(plane_flux(&fields, n, 0) * diameter / nu);
         let last = &history[history.len().saturating_sub(WEIGHT_SAMPLES)..];
         let (low, high) = range(last);
         if last.len() == WEIGHT_SAMPLES && high - low < 1e-3 * high.abs() {
