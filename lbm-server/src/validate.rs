@@ -19,7 +19,8 @@ pub struct ValidateArgs {
     #[arg(long, default_value = "validation/lbm")]
     out: PathBuf,
     /// Run only these sections (channel, wall, taylor-green, mass, array-drag, drag-tau,
-    /// radius-deficit, sphere-drag, sphere-correction, moving-boundary, stability, bed-drag, momentum), print
+    /// radius-deficit, sphere-drag, sphere-correction, moving-boundary, stability, bed-drag,
+    /// random-drag, momentum; random-drag-fine, a GPU's grids, only when named), print
     /// them and replace them in an existing REPORT.md (the other sections are kept as they are).
     #[arg(long, value_delimiter = ',')]
     only: Vec<String>,
@@ -27,7 +28,7 @@ pub struct ValidateArgs {
 
 type Section = fn(&Arc<Gpu>) -> String;
 
-const SECTIONS: [(&str, Section); 13] = [
+const SECTIONS: [(&str, Section); 15] = [
     ("channel", channel_convergence),
     ("wall", wall_location),
     ("taylor-green", taylor_green),
@@ -40,8 +41,13 @@ const SECTIONS: [(&str, Section); 13] = [
     ("moving-boundary", moving_boundary),
     ("stability", stability::section),
     ("bed-drag", bed_drag::section),
+    ("random-drag", bed_drag::random_section),
+    ("random-drag-fine", bed_drag::random_fine_section),
     ("momentum", momentum),
 ];
+
+/// Sections run only when named with --only: grids for a GPU (hours on lavapipe).
+const GPU_ONLY: [&str; 1] = ["random-drag-fine"];
 
 const TRT: Operator = Operator::Trt { magic: 3.0 / 16.0 };
 
@@ -81,7 +87,8 @@ pub fn main(args: ValidateArgs) -> ExitCode {
         }
     }
     for (name, section) in SECTIONS {
-        if args.only.is_empty() || args.only.iter().any(|o| o == name) {
+        let chosen = args.only.iter().any(|o| o == name);
+        if chosen || (args.only.is_empty() && !GPU_ONLY.contains(&name)) {
             let text = section(&gpu);
             print!("{text}");
             report = replace_section(&report, &text);

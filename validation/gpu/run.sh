@@ -12,7 +12,9 @@
 # beads settling, the whole program, free flight on and off: summary.json), dem_bench_{suspension,bed}.txt
 # (the DEM side alone on this machine's cores, 32^3 beads dilute and in a bed), tencate/<run>/ (import with
 # python3 validation/imb/ten_cate.py import DIR), bed/<run>/ (the fluidized bed at 10 and 15 cells per
-# diameter: python3 validation/imb/fluidized_bed.py import DIR). The steps run in order of priority; a step that
+# diameter, and held still at 12 and 18: python3 validation/imb/fluidized_bed.py import DIR),
+# validate/REPORT.md (random arrays at 18 and 24 cells per diameter: its section goes into
+# validation/lbm/REPORT.md). The steps run in order of priority; a step that
 # would start with less time left than it needs is skipped and named in batch.log.
 set -u
 cd "$(dirname "$0")/../.."
@@ -89,6 +91,9 @@ done
 # fluid's step above, what a whole coupled step costs between these two extremes.
 step dem_bench_suspension 20 60 $bin/dem-client bench .gpu/suspension.toml --steps 40 --free-flight both
 step dem_bench_bed 20 90 $bin/dem-client bench .gpu/bed.toml --steps 4 --free-flight both
+# Random arrays at the fluidized bed's voidage at 18 and 24 cells per diameter (lavapipe: 6-12):
+# whether their drag at the bed's Re converges to Tenneti et al.'s (validation/lbm/REPORT.md).
+[ "$mode" = small ] || step validate/log 60 150 $bin/lbm-server validate --out "$OUT/validate" --only random-drag-fine
 # Ten Cate and the fluidized bed (bed_*), in the order of .gpu/plan.txt.
 while read -r name _; do
     [ -f ".gpu/scenes/$name/scene.toml" ] || continue

@@ -337,8 +337,8 @@ pub fn moving_array_drag(
 }
 
 /// The mean velocity along x through the plane x of an n^3 lattice's `fields` (the volumetric
-/// flux over its area); the sphere must not cut the plane (the fluid inside an immersed boundary
-/// moves with it, so a volume average would count it).
+/// flux over its area); a moving sphere must not cut the plane (the fluid inside an immersed
+/// boundary moves with it, so the plane would count it).
 fn plane_flux(fields: &[[f32; 4]], n: usize, x: usize) -> f64 {
     (0..n * n).map(|k| fields[x + k * n][1] as f64).sum::<f64>() / (n * n) as f64
 }
@@ -793,17 +793,70 @@ pub fn momentum_exchange(gpu: &Arc<Gpu>, n: usize, steps: u64) -> Momentum {
     }
 }
 
-/// A simple cubic array held against a weight per sphere ([`array_at_weight`]).
+/// An array of spheres held in a periodic n^3 box ([`array_at_weight`]).
+#[derive(Debug, Clone)]
+pub struct Array {
+    pub cells: usize,
+    pub diameter: f64,
+    pub centres: Vec<[f64; 3]>,
+    /// The x planes whose mean velocity is the superficial velocity: one that no sphere cuts, or
+    /// all of them (the mean over the box; the fluid inside a held sphere is at rest).
+    pub planes: Vec<usize>,
+}
+
+impl Array {
+    /// One sphere at the centre of the box: a simple cubic array of solid fraction phi,
+    /// d = n (6 phi / pi)^(1/3). The plane x = 0 lies half a box from the centre: no sphere cuts it.
+    pub fn simple_cubic(n: usize, phi: f64) -> Self {
+        Self {
+            cells: n,
+            diameter: n as f64 * (6.0 * phi / std::f64::consts::PI).cbrt(),
+            centres: vec![[n as f64 / 2.0; 3]],
+            planes: vec![0],
+        }
+    }
+
+    /// `count` spheres of solid fraction phi placed at random, none overlapping another across
+    /// the periodic box (random sequential addition from `seed`): a random array as Tenneti et
+    /// al. (2011) simulated theirs. Panics if a sphere finds no place in 100,000 tries.
+    pub fn random(n: usize, count: usize, phi: f64, seed: u64) -> Self {
+        let side = n as f64;
+        let diameter = side * (6.0 * phi / (std::f64::consts::PI * count as f64)).cbrt();
+        let mut random = super::random::Random::new(seed);
+        let mut centres: Vec<[f64; 3]> = Vec::with_capacity(count);
+        let apart = |a: &[f64; 3], b: &[f64; 3]| {
+            let gap = |i: usize| {
+                let d = (a[i] - b[i]).abs();
+                d.min(side - d)
+            };
+            (gap(0).powi(2) + gap(1).powi(2) + gap(2).powi(2)).sqrt() >= diameter
+        };
+        for k in 0..count {
+            let place = (0..100_000)
+                .map(|_| std::array::from_fn(|_| side * 0.5 * (random.next() + 1.0)))
+                .find(|c| centres.iter().all(|o| apart(c, o)))
+                .unwrap_or_else(|| panic!("sphere {k} of {count} finds no place at solid fraction {phi}"));
+            centres.push(place);
+        }
+        Self {
+            cells: n,
+            diameter,
+            centres,
+            planes: (0..n).collect(),
+        }
+    }
+}
+
+/// An array held against a weight per sphere ([`array_at_weight`]).
 #[derive(Debug, Clone, Copy)]
 pub struct WeightedArray {
-    /// The periodic box's side n and the sphere's diameter d (cells).
+    /// The periodic box's side n and the spheres' diameter d (cells).
     pub cells: usize,
     pub diameter: f64,
     pub tau: f64,
     pub steps: u64,
-    /// Particle Reynolds number U d / nu of the superficial velocity U (the flux through the
-    /// plane farthest from the sphere): mean, lowest and highest over the last
-    /// [`WEIGHT_SAMPLES`] checks.
+    /// Particle Reynolds number U d / nu of the superficial velocity U (the mean velocity over the
+    /// array's planes): mean, lowest and highest over the last [`WEIGHT_SAMPLES`] checks.
     pub reynolds: [f64; 3],
     /// The first cell that failed the health check, if one did.
     pub unhealthy: Option<super::gpu::Unhealthy>,
@@ -814,41 +867,46 @@ pub struct WeightedArray {
 pub const WEIGHT_SAMPLES: usize = 20;
 pub const WEIGHT_CHECK: u64 = 100;
 
-/// A sphere fixed at the centre of a periodic n^3 box (a simple cubic array of this solid
-/// fraction: d = n (6 phi / pi)^(1/3)), the fluid driven by a mean pressure gradient f whose
-/// force on each unit cell, f n^3, is `weight` rho nu^2: the force a grain's weight puts on the
-/// liquid in a fluidized bed, weight = (rho_p / rho_f - 1) g V / nu^2 = Ar pi / 6. At rho = 1
-/// and viscosity nu the superficial velocity settles where the array's drag carries that
-/// weight; the run starts from the fluid at `u_start` everywhere and stops when the last
-/// [`WEIGHT_SAMPLES`] fluxes agree to 1e-3 (a steady flow), after `max_steps`, or at a failed
-/// health check.
+/// The spheres of `array` held in their periodic box, the fluid driven by a mean pressure
+/// gradient f whose force on the box, f n^3, is `weight` rho nu^2 per sphere: the force a grain's
+/// weight puts on the liquid in a fluidized bed, weight = (rho_p / rho_f - 1) g V / nu^2 = Ar pi
+/// / 6. At rho = 1 and viscosity nu the superficial velocity settles where the array's drag
+/// carries that weight; the run starts from the fluid at `u_start` everywhere and stops when
+/// the last [`WEIGHT_SAMPLES`] fluxes agree to 1e-3 (a steady flow), after `max_steps`, or at a
+/// failed health check.
 pub fn array_at_weight(
     gpu: &Arc<Gpu>,
-    n: usize,
-    solid_fraction: f64,
+    array: &Array,
     [nu, weight]: [f64; 2],
     operator: Operator,
     u_start: f64,
     max_steps: u64,
 ) -> WeightedArray {
+    let n = array.cells;
     let tau = 0.5 + 3.0 * nu;
     let mut setup = Setup::new([n, n, n], [Face::Periodic; 6], tau, operator);
-    setup.force = [weight * nu * nu / (n * n * n) as f64, 0.0, 0.0];
-    let diameter = n as f64 * (6.0 * solid_fraction / std::f64::consts::PI).cbrt();
+    setup.force = [
+        weight * nu * nu * array.centres.len() as f64 / (n * n * n) as f64,
+        0.0,
+        0.0,
+    ];
     let mut lattice = coupled_lattice(gpu, &setup, Default::default());
     lattice.set_populations(&equilibrium_field(&setup, |_| (1.0, [u_start, 0.0, 0.0])));
-    let centre = n as f64 / 2.0;
-    let sphere = super::imb::SolidParticle {
-        position: [centre; 3],
-        radius: diameter / 2.0,
-        ..Default::default()
-    };
+    let spheres: Vec<super::imb::SolidParticle> = array
+        .centres
+        .iter()
+        .map(|&position| super::imb::SolidParticle {
+            position,
+            radius: array.diameter / 2.0,
+            ..Default::default()
+        })
+        .collect();
     let mut history: Vec<f64> = Vec::new();
     let mut steps = 0;
     let mut unhealthy = None;
     while steps < max_steps {
         for _ in 0..WEIGHT_CHECK {
-            lattice.step_coupled(&[sphere]).expect("coupled step");
+            lattice.step_coupled(&spheres).expect("coupled step");
         }
         steps += WEIGHT_CHECK;
         let (fields, bad) = lattice.fields();
@@ -856,8 +914,12 @@ pub fn array_at_weight(
             unhealthy = bad;
             break;
         }
-        // The plane x = 0 lies half a box from the sphere's centre: it never cuts the sphere.
-        history.push(plane_flux(&fields, n, 0) * diameter / nu);
+        let flux = array
+            .planes
+            .iter()
+            .map(|&x| plane_flux(&fields, n, x))
+            .sum::<f64>();
+        history.push(flux / array.planes.len() as f64 * array.diameter / nu);
         let last = &history[history.len().saturating_sub(WEIGHT_SAMPLES)..];
         let (low, high) = range(last);
         if last.len() == WEIGHT_SAMPLES && high - low < 1e-3 * high.abs() {
@@ -869,7 +931,7 @@ pub fn array_at_weight(
     let (low, high) = range(last);
     WeightedArray {
         cells: n,
-        diameter,
+        diameter: array.diameter,
         tau,
         steps,
         reynolds: [mean, low, high],
@@ -900,5 +962,32 @@ mod tests {
         assert_eq!(unconfined_drag(&points[..2]), None);
         let zigzag = [(0.1, 2.0), (0.125, 2.5), (0.25, 2.2)];
         assert_eq!(unconfined_drag(&zigzag), None);
+    }
+
+    /// A random array: its spheres at the solid fraction asked for, none overlapping another across
+    /// the periodic box, the same placement from the same seed and another from another.
+    #[test]
+    fn a_random_array_places_its_spheres_apart_at_the_solid_fraction() {
+        let (n, count, phi) = (25, 32, 0.24);
+        let array = super::Array::random(n, count, phi, 1);
+        assert_eq!(array.centres.len(), count);
+        let volume = count as f64 * std::f64::consts::PI / 6.0 * array.diameter.powi(3);
+        assert!((volume / (n * n * n) as f64 - phi).abs() < 1e-12);
+        let side = n as f64;
+        for (i, a) in array.centres.iter().enumerate() {
+            assert!(a.iter().all(|&x| (0.0..side).contains(&x)), "{a:?}");
+            for b in &array.centres[i + 1..] {
+                let d2: f64 = (0..3)
+                    .map(|k| {
+                        let d = (a[k] - b[k]).abs();
+                        d.min(side - d).powi(2)
+                    })
+                    .sum();
+                assert!(d2.sqrt() >= array.diameter, "{a:?} {b:?}");
+            }
+        }
+        assert_eq!(super::Array::random(n, count, phi, 1).centres, array.centres);
+        assert_ne!(super::Array::random(n, count, phi, 2).centres, array.centres);
+        assert_eq!(array.planes.len(), n);
     }
 }

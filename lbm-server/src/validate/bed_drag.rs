@@ -1,9 +1,11 @@
 //! `lbm-server validate --only bed-drag`: whether the immersed boundary's drag in a bed at the
 //! fluidized bed's Reynolds numbers converges with the grid, and how far 6 cells per diameter
-//! (validation/scenes/fluidized-bed.toml, which expands 30% more than Richardson & Zaki) is off.
+//! (validation/scenes/fluidized-bed.toml, which expands 30% more than Richardson & Zaki) is off;
+//! `--only random-drag` (and `random-drag-fine`, a GPU's grids): the same with the spheres at
+//! random, against Tenneti et al.'s random arrays.
 
 use crate::lbm::gpu::Gpu;
-use crate::lbm::validation::{self, schiller_naumann, WeightedArray};
+use crate::lbm::validation::{self, schiller_naumann, Array, WeightedArray};
 use std::f64::consts::PI;
 use std::fmt::Write as _;
 use std::sync::Arc;
@@ -32,16 +34,39 @@ const MAX_STEPS: u64 = 60_000;
 /// Reynolds number U d / nu at which one grain settles alone (Schiller & Naumann's drag):
 /// C_d Re^2 = 4 Ar / 3.
 fn settling_reynolds(ar: f64) -> f64 {
+    reynolds_where(|re| schiller_naumann(re) * re * re, 4.0 * ar / 3.0)
+}
+
+/// The Reynolds number in [1e-3, 1e5] at which `rising(Re)`, growing with Re, reaches `target`.
+fn reynolds_where(rising: impl Fn(f64) -> f64, target: f64) -> f64 {
     let (mut low, mut high) = (1e-3f64, 1e5f64);
     for _ in 0..200 {
         let mid = (low * high).sqrt();
-        if schiller_naumann(mid) * mid * mid < 4.0 * ar / 3.0 {
+        if rising(mid) < target {
             low = mid;
         } else {
             high = mid;
         }
     }
     low
+}
+
+/// Tenneti, Garg & Subramaniam (2011), particle-resolved simulations of fixed random arrays
+/// (solid fraction 0.1-0.5, Re 0.01-300): the mean fluid force on a sphere, the mean pressure
+/// gradient's share included, over 3 pi mu d U, at solid fraction phi and Re = U d / nu of the
+/// superficial velocity U.
+fn tenneti(phi: f64, re: f64) -> f64 {
+    let eps = 1.0 - phi;
+    let isolated = (1.0 + 0.15 * re.powf(0.687)) / eps.powi(3);
+    let packing = 5.81 * phi / eps.powi(3) + 0.48 * phi.cbrt() / eps.powi(4);
+    let inertia = phi.powi(3) * re * (0.95 + 0.61 * phi.powi(3) / eps.powi(2));
+    isolated + packing + inertia
+}
+
+/// Re at which a random array of solid fraction phi carries a grain of Archimedes number ar
+/// (Tenneti et al.'s force 3 pi Re F = Ar pi / 6 in units of rho nu^2).
+fn tenneti_reynolds(ar: f64, phi: f64) -> f64 {
+    reynolds_where(|re| tenneti_force(phi, re), ar * PI / 6.0)
 }
 
 /// Richardson & Zaki's (1954) superficial Reynolds number of a bed at voidage eps: Re_t eps^n,
@@ -55,11 +80,17 @@ fn richardson_zaki(ar: f64, voidage: f64) -> f64 {
 /// One row: the array of this solid fraction at about this diameter.
 fn run(gpu: &Arc<Gpu>, phi: f64, diameter: f64, expected: f64) -> WeightedArray {
     let n = ((diameter / (6.0 * phi / PI).cbrt()).round() as usize).max(MIN_BOX);
-    let d = n as f64 * (6.0 * phi / PI).cbrt();
-    let nu = VELOCITY * d / expected;
+    let array = Array::simple_cubic(n, phi);
+    at_weight(gpu, &array, expected, MAX_STEPS)
+}
+
+/// `array` carrying the bed's grain weight, nu set so that U nears [`VELOCITY`] at Re `expected`,
+/// for at most `max_steps`.
+fn at_weight(gpu: &Arc<Gpu>, array: &Array, expected: f64, max_steps: u64) -> WeightedArray {
+    let nu = VELOCITY * array.diameter / expected;
     let weight = archimedes() * PI / 6.0;
     let mrt = super::operator_named("MRT", 0.5 + 3.0 * nu);
-    validation::array_at_weight(gpu, n, phi, [nu, weight], mrt, VELOCITY, MAX_STEPS)
+    validation::array_at_weight(gpu, array, [nu, weight], mrt, VELOCITY, max_steps)
 }
 
 pub(super) fn section(gpu: &Arc<Gpu>) -> String {
@@ -126,10 +157,150 @@ pub(super) fn section(gpu: &Arc<Gpu>) -> String {
     t
 }
 
+/// Spheres per random array, the arrays (seeds of their placement) and the diameters aimed at
+/// (cells): the box side is the nearest whole number that gives the bed's solid fraction.
+pub(super) const RANDOM_COUNT: usize = 32;
+pub(super) const RANDOM_SEEDS: [u64; 2] = [1, 2];
+pub(super) const RANDOM_DIAMETERS: [f64; 3] = [6.0, 9.0, 12.0];
+/// The same on finer grids, for a GPU (`--only random-drag-fine`, validation/gpu/run.sh).
+const FINE_DIAMETERS: [f64; 2] = [18.0, 24.0];
+/// Steps a random array's run may take at most: its flow does not settle to 1e-3 (the wakes of 32
+/// spheres), and the superficial velocity answers the force within about U n^3 / (f n^3) = 430
+/// steps at 6 cells, 860 at 12 (growing as d).
+const RANDOM_MAX_STEPS: u64 = 15_000;
+
+/// The random arrays in Stokes flow, first: tau (where the boundary's radius deficit is under 0.03
+/// cells, the "drag against tau" section), the superficial Reynolds number aimed at, steps at most.
+const STOKES_TAU: f64 = 0.7;
+const STOKES_RE: f64 = 0.5;
+const STOKES_MAX_STEPS: u64 = 40_000;
+
+/// Tenneti et al.'s total force on a sphere at Re, in units of rho nu^2.
+fn tenneti_force(phi: f64, re: f64) -> f64 {
+    3.0 * PI * re * tenneti(phi, re)
+}
+
+/// `lbm-server validate --only random-drag`: the bed's grains at its voidage placed at random
+/// instead of on a cubic lattice, against Tenneti et al.'s random arrays, in Stokes flow and
+/// carrying the bed's weight.
+pub(super) fn random_section(gpu: &Arc<Gpu>) -> String {
+    random_arrays(gpu, "by resolution", &RANDOM_DIAMETERS)
+}
+
+/// `--only random-drag-fine`: the same at 18 and 24 cells per diameter (a GPU's).
+pub(super) fn random_fine_section(gpu: &Arc<Gpu>) -> String {
+    random_arrays(gpu, "finer grids", &FINE_DIAMETERS)
+}
+
+/// The random arrays' section at these diameters (cells), its heading ending in `grids`.
+fn random_arrays(gpu: &Arc<Gpu>, grids: &str, diameters: &[f64]) -> String {
+    let ar = archimedes();
+    let phi = SOLID_FRACTIONS[0];
+    let bed = tenneti_reynolds(ar, phi);
+    let mut t = format!(
+        "\n## Immersed moving boundary: a random array at the fluidized bed's voidage, {grids}\n\n\
+         The simple cubic array of the section above carries the bed's weight at Re 476-491, where the \
+         fluidized bed (validation/imb/FLUIDIZED_BED.md) stands at the same voidage at Re 200; but \
+         spheres in line shelter each other in their wakes. Here {RANDOM_COUNT} spheres at the same \
+         solid fraction {phi} lie at random in a periodic box (random sequential addition, none \
+         overlapping; two placements), held, the fluid driven by a mean pressure gradient as above \
+         (MRT, Noble-Torczynski weighting, 2 particles per cell as in the bed), and the superficial \
+         Reynolds number Re = U d / nu at which the spheres carry the force is measured at each \
+         resolution (U: the mean velocity over the box; the liquid inside a held sphere is at rest). \
+         Reference: Tenneti, Garg & Subramaniam (2011), particle-resolved simulations of fixed random \
+         arrays (solid fraction 0.1-0.5, Re up to 300): force per sphere 3 pi mu d U F with F = \
+         F_isol / eps^3 + F_phi + F_phi,Re (the mean pressure gradient's share included); \"Tenneti \
+         Re\": where that force is the one applied. Two flows: Stokes flow (tau {STOKES_TAU}, the force \
+         Tenneti's at Re {STOKES_RE}; what the arrangement and the boundary give without inertia) and \
+         the bed's weight (a grain's buoyant weight per sphere, Ar = {ar:.3e}; nu set so that U nears \
+         {VELOCITY} as in the bed, so tau nears 1/2; Tenneti's random array carries it at Re \
+         {bed:.0}, Richardson & Zaki's fluidized bed at Re {:.0}). A run stops when {} checks {} steps \
+         apart agree to 1e-3 (steady), else after {STOKES_MAX_STEPS} (Stokes) or {RANDOM_MAX_STEPS} \
+         steps (mean and range of the last checks). A higher Re than Tenneti's: less drag.\n\n\
+         | flow | placement | box n | d (cells) | tau | steps | outcome | Re mean | Re range | Tenneti Re | error | grid error of Re vs finest |\n\
+         |---|---:|---:|---:|---:|---:|---|---:|---:|---:|---:|---:|\n",
+        richardson_zaki(ar, 1.0 - phi),
+        validation::WEIGHT_SAMPLES,
+        validation::WEIGHT_CHECK,
+    );
+    let scale = (RANDOM_COUNT as f64 * PI / (6.0 * phi)).cbrt();
+    let arrays = |seed: u64| -> Vec<Array> {
+        diameters
+            .iter()
+            .map(|&d| Array::random((d * scale).round() as usize, RANDOM_COUNT, phi, seed))
+            .collect()
+    };
+    let stokes = |array: &Array| {
+        let nu = (STOKES_TAU - 0.5) / 3.0;
+        let u = STOKES_RE * nu / array.diameter;
+        let mrt = super::operator_named("MRT", STOKES_TAU);
+        let force = tenneti_force(phi, STOKES_RE);
+        validation::array_at_weight(gpu, array, [nu, force], mrt, u, STOKES_MAX_STEPS)
+    };
+    let weight = |array: &Array| at_weight(gpu, array, bed, RANDOM_MAX_STEPS);
+    type Flow<'a> = (&'a str, &'a dyn Fn(&Array) -> WeightedArray, f64, u64);
+    let flows: [Flow; 2] = [
+        ("Stokes", &stokes, STOKES_RE, STOKES_MAX_STEPS),
+        ("the bed's weight", &weight, bed, RANDOM_MAX_STEPS),
+    ];
+    for (flow, run, reference, max_steps) in flows {
+        for seed in RANDOM_SEEDS {
+            let runs: Vec<WeightedArray> = arrays(seed)
+                .iter()
+                .map(|array| {
+                    let r = run(array);
+                    protocol::say!("lbm-server: random-drag: {flow}, seed {seed} {r:?}");
+                    r
+                })
+                .collect();
+            random_rows(&mut t, [flow, &seed.to_string()], &runs, reference, max_steps);
+        }
+    }
+    t
+}
+
+/// The rows of one placement's runs by resolution, labelled [flow, placement].
+fn random_rows(
+    t: &mut String,
+    [flow, seed]: [&str; 2],
+    runs: &[WeightedArray],
+    reference: f64,
+    max_steps: u64,
+) {
+    let finest = runs.last().map_or(f64::NAN, |r| r.reynolds[0]);
+    for r in runs {
+        let [mean, low, high] = r.reynolds;
+        let numbers = match &r.unhealthy {
+            Some(bad) => format!(
+                "blew up at ({}, {}, {}) | | | {reference:.3} | |",
+                bad.coords[0], bad.coords[1], bad.coords[2]
+            ),
+            None => format!(
+                "{} | {mean:.3} | {low:.3}-{high:.3} | {reference:.3} | {:+.1}% | {:+.1}%",
+                if r.steps < max_steps {
+                    "steady"
+                } else {
+                    "not steady"
+                },
+                100.0 * (mean / reference - 1.0),
+                100.0 * (mean / finest - 1.0)
+            ),
+        };
+        let _ = writeln!(
+            t,
+            "| {flow} | {seed} | {} | {:.2} | {:.4} | {} | {numbers} |",
+            r.cells, r.diameter, r.tau, r.steps
+        );
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::super::report_section;
-    use super::{archimedes, richardson_zaki, settling_reynolds, DIAMETERS, SOLID_FRACTIONS};
+    use super::{
+        archimedes, richardson_zaki, settling_reynolds, tenneti, tenneti_reynolds, DIAMETERS,
+        RANDOM_DIAMETERS, RANDOM_SEEDS, SOLID_FRACTIONS,
+    };
 
     /// The report's section holds one row per solid fraction and diameter, in that order.
     #[test]
@@ -157,5 +328,34 @@ mod tests {
         assert!((re_t - 738.0).abs() < 1.0, "{re_t}");
         assert!((richardson_zaki(ar, 0.585) - 200.0).abs() < 1.0);
         assert!((richardson_zaki(ar, 0.777) - 400.0).abs() < 2.0);
+    }
+
+    /// The random-drag section holds one row per flow, placement and diameter, in that order.
+    #[test]
+    fn the_random_drag_section_holds_the_runs() {
+        let section = report_section("## Immersed moving boundary: a random array");
+        let rows: Vec<String> = section
+            .lines()
+            .filter(|l| l.starts_with("| Stokes") || l.starts_with("| the bed"))
+            .map(|l| l.split(" | ").take(2).collect::<Vec<_>>().join(" | "))
+            .collect();
+        let runs: Vec<String> = ["| Stokes", "| the bed's weight"]
+            .iter()
+            .flat_map(|flow| RANDOM_SEEDS.iter().map(move |seed| format!("{flow} | {seed}")))
+            .flat_map(|row| RANDOM_DIAMETERS.iter().map(move |_| row.clone()))
+            .collect();
+        assert_eq!(rows, runs);
+    }
+
+    /// Tenneti et al.'s law: one sphere alone is Schiller-Naumann's, and the bed's grain is
+    /// carried at Re 361 at voidage 0.76, within 5% of Richardson & Zaki's fluidized bed there
+    /// (Re 379): two independent references agree where the random array is compared with them.
+    #[test]
+    fn tennetis_law_agrees_with_richardson_and_zaki() {
+        let (phi, eps) = (0.24f64, 0.76f64);
+        assert!((tenneti(0.0, 100.0) - (1.0 + 0.15 * 100f64.powf(0.687))).abs() < 1e-12);
+        let re = tenneti_reynolds(archimedes(), phi);
+        assert!((re - 361.1).abs() < 0.1, "{re}");
+        assert!((re / richardson_zaki(archimedes(), eps) - 1.0).abs() < 0.05);
     }
 }
