@@ -933,6 +933,17 @@ pub(crate) fn report_section(heading: &str) -> &'static str {
         .unwrap_or_else(|| panic!("the report has no section {heading:?}"))
 }
 
+/// The first `columns` cells ("| a | b") of the rows of the report's section `heading` whose
+/// first cell starts with one of `starts`: the runs a section test holds against its constants.
+#[cfg(test)]
+pub(crate) fn report_rows(heading: &str, starts: &[&str], columns: usize) -> Vec<String> {
+    report_section(heading)
+        .lines()
+        .filter(|l| starts.iter().any(|s| l.starts_with(&format!("| {s}"))))
+        .map(|l| l.split(" | ").take(columns).collect::<Vec<_>>().join(" | "))
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::{

@@ -160,10 +160,12 @@ BAND = (1.0 * D, 3.0 * D)
 
 
 def heights(path):
-    """(time, mean height of the grains' centres above the distributor, grains, grains whose
+    """([(time, mean height of the grains' centres above the distributor, grains, grains whose
     centre lies in BAND, grains within a diameter of the top plane, the liquid's vertical force on
-    all grains [N], buoyancy included) per output row."""
+    all grains [N], buoyancy included) per output row], [x, y, z] of each grain in the last row),
+    in one pass over particles.csv."""
     rows = {}
+    last = (None, [])
     with open(path) as f:
         for r in csv.DictReader(f):
             t = float(r["time"])
@@ -174,16 +176,10 @@ def heights(path):
             s[2] += BAND[0] <= z - FLOOR < BAND[1]
             s[3] += z > TOP - D
             s[4] += float(r["fz"])
-    return sorted((t, s / n, n, b, top, fz) for t, (s, n, b, top, fz) in rows.items())
-
-
-def last_row(path):
-    """[x, y, z] of each grain in the last output row of particles.csv."""
-    rows = {}
-    with open(path) as f:
-        for r in csv.DictReader(f):
-            rows.setdefault(float(r["time"]), []).append([float(r[k]) for k in ("x", "y", "z")])
-    return rows[max(rows)]
+            if t != last[0]:
+                last = (t, [])
+            last[1].append([float(r["x"]), float(r["y"]), z])
+    return sorted((t, s / n, n, b, top, fz) for t, (s, n, b, top, fz) in rows.items()), last[1]
 
 
 def band_voidage(count, depth):
@@ -208,13 +204,14 @@ def keep(out, work, code):
         shutil.copy(os.path.join(work, "summary.json"), os.path.join(out, "summary.json"))
     particles = os.path.join(work, "particles.csv")
     if os.path.exists(particles):
+        rows, last = heights(particles)
         with open(os.path.join(out, "heights.csv"), "w") as f:
             f.write("time,mean_height,grains,in_band,at_top,fluid_fz\n")
-            for t, h, n, b, top, fz in heights(particles):
+            for t, h, n, b, top, fz in rows:
                 f.write("%.6g,%.6g,%d,%d,%d,%.6g\n" % (t, h, n, b, top, fz))
         with open(os.path.join(out, "grains.csv"), "w") as f:
             f.write("x,y,z\n")
-            for p in last_row(particles):
+            for p in last:
                 f.write("%.8g,%.8g,%.8g\n" % tuple(p))
 
 
@@ -310,7 +307,7 @@ def tenneti(phi, re_):
 def held_rows():
     """The held bed's report lines."""
     operator, re_, depth, _ = HELD_FROM
-    ar, _ = settling_reynolds()
+    ar, re_t = settling_reynolds()
     buoyant = (RHO_P - RHO_F) * math.pi / 6.0 * D**3 * G
     lines = [
         "",
@@ -339,7 +336,7 @@ def held_rows():
         eps = voidage(sum(p[2] - FLOOR for p in start) / len(start), len(start), depth)
         expected = 3.0 * math.pi * re_ * tenneti(1.0 - eps, re_) / (ar * math.pi / 6.0)
         n_rz, _, _ = richardson_zaki(re_, depth)
-        re_rz = settling_reynolds()[1] * eps**n_rz
+        re_rz = re_t * eps**n_rz
         force = error = moved = ""
         hpath = os.path.join(folder, "heights.csv")
         if done and os.path.exists(hpath):
@@ -377,19 +374,25 @@ def run(operator, re_, depth, cells=CELLS):
     shutil.rmtree(work, ignore_errors=True)
 
 
+def plan_line(path, depth, cells):
+    """The plan's line of the GPU scene in PATH: its name, cells, steps and cell-steps."""
+    grid = [round(x / (D / cells)) for x in (WIDTH_X, width_y(depth), 0.072)]
+    steps = scene_steps(path)
+    cell_steps = grid[0] * grid[1] * grid[2] * steps
+    return "%s %dx%dx%d steps %d cell-steps %.3g" % (os.path.basename(path), *grid, steps, cell_steps)
+
+
 def write_scenes(folder):
     """The GPU cases' scenes, FOLDER/bed_<name>/scene.toml, and one line each on stdout (name,
     cells, steps, cell-steps) for validation/gpu/prepare.sh's plan."""
     for case in GPU_CASES:
-        operator, re_, depth, cells = case
+        _, _, depth, cells = case
         text = scene_text(*case)
         path = os.path.join(folder, "bed_" + name(*case))
         os.makedirs(path, exist_ok=True)
         with open(os.path.join(path, "scene.toml"), "w") as f:
             f.write(text)
-        grid = [round(x / (D / cells)) for x in (WIDTH_X, width_y(depth), 0.072)]
-        steps = scene_steps(path)
-        print("bed_%s %dx%dx%d steps %d cell-steps %.3g" % (name(*case), *grid, steps, grid[0] * grid[1] * grid[2] * steps))
+        print(plan_line(path, depth, cells))
 
 
 def write_held_scenes(folder):
@@ -400,9 +403,7 @@ def write_held_scenes(folder):
         os.makedirs(path, exist_ok=True)
         with open(os.path.join(path, "scene.toml"), "w") as f:
             f.write(held_scene_text(cells))
-        grid = [round(x / (D / cells)) for x in (WIDTH_X, width_y(depth), 0.072)]
-        steps = scene_steps(path)
-        print("bed_%s %dx%dx%d steps %d cell-steps %.3g" % (held_name(cells), *grid, steps, grid[0] * grid[1] * grid[2] * steps))
+        print(plan_line(path, depth, cells))
 
 
 def import_runs(folder):

@@ -63,6 +63,11 @@ fn tenneti(phi: f64, re: f64) -> f64 {
     isolated + packing + inertia
 }
 
+/// Tenneti et al.'s total force on a sphere at Re, in units of rho nu^2.
+fn tenneti_force(phi: f64, re: f64) -> f64 {
+    3.0 * PI * re * tenneti(phi, re)
+}
+
 /// Re at which a random array of solid fraction phi carries a grain of Archimedes number ar
 /// (Tenneti et al.'s force 3 pi Re F = Ar pi / 6 in units of rho nu^2).
 fn tenneti_reynolds(ar: f64, phi: f64) -> f64 {
@@ -130,14 +135,7 @@ pub(super) fn section(gpu: &Arc<Gpu>) -> String {
         let finest = runs.last().map_or(f64::NAN, |r| r.reynolds[0]);
         for r in &runs {
             let [mean, low, high] = r.reynolds;
-            let outcome = match (&r.unhealthy, r.steps < MAX_STEPS) {
-                (Some(bad), _) => format!(
-                    "blew up at ({}, {}, {})",
-                    bad.coords[0], bad.coords[1], bad.coords[2]
-                ),
-                (None, true) => "steady".into(),
-                (None, false) => "not steady".into(),
-            };
+            let outcome = outcome(r, MAX_STEPS);
             let numbers = if r.unhealthy.is_some() {
                 " | | | ".to_string()
             } else {
@@ -174,11 +172,6 @@ const RANDOM_MAX_STEPS: u64 = 15_000;
 const STOKES_TAU: f64 = 0.7;
 const STOKES_RE: f64 = 0.5;
 const STOKES_MAX_STEPS: u64 = 40_000;
-
-/// Tenneti et al.'s total force on a sphere at Re, in units of rho nu^2.
-fn tenneti_force(phi: f64, re: f64) -> f64 {
-    3.0 * PI * re * tenneti(phi, re)
-}
 
 /// `lbm-server validate --only random-drag`: the bed's grains at its voidage placed at random
 /// instead of on a cubic lattice, against Tenneti et al.'s random arrays, in Stokes flow and
@@ -259,6 +252,18 @@ fn random_arrays(gpu: &Arc<Gpu>, grids: &str, diameters: &[f64]) -> String {
     t
 }
 
+/// How an array's run ended: blew up (where), steady, or stopped at `max_steps` unsteady.
+fn outcome(r: &WeightedArray, max_steps: u64) -> String {
+    match &r.unhealthy {
+        Some(bad) => format!(
+            "blew up at ({}, {}, {})",
+            bad.coords[0], bad.coords[1], bad.coords[2]
+        ),
+        None if r.steps < max_steps => "steady".into(),
+        None => "not steady".into(),
+    }
+}
+
 /// The rows of one placement's runs by resolution, labelled [flow, placement].
 fn random_rows(
     t: &mut String,
@@ -270,33 +275,30 @@ fn random_rows(
     let finest = runs.last().map_or(f64::NAN, |r| r.reynolds[0]);
     for r in runs {
         let [mean, low, high] = r.reynolds;
-        let numbers = match &r.unhealthy {
-            Some(bad) => format!(
-                "blew up at ({}, {}, {}) | | | {reference:.3} | |",
-                bad.coords[0], bad.coords[1], bad.coords[2]
-            ),
-            None => format!(
-                "{} | {mean:.3} | {low:.3}-{high:.3} | {reference:.3} | {:+.1}% | {:+.1}%",
-                if r.steps < max_steps {
-                    "steady"
-                } else {
-                    "not steady"
-                },
+        let numbers = if r.unhealthy.is_some() {
+            format!("| | {reference:.3} | |")
+        } else {
+            format!(
+                "{mean:.3} | {low:.3}-{high:.3} | {reference:.3} | {:+.1}% | {:+.1}%",
                 100.0 * (mean / reference - 1.0),
                 100.0 * (mean / finest - 1.0)
-            ),
+            )
         };
         let _ = writeln!(
             t,
-            "| {flow} | {seed} | {} | {:.2} | {:.4} | {} | {numbers} |",
-            r.cells, r.diameter, r.tau, r.steps
+            "| {flow} | {seed} | {} | {:.2} | {:.4} | {} | {} | {numbers} |",
+            r.cells,
+            r.diameter,
+            r.tau,
+            r.steps,
+            outcome(r, max_steps)
         );
     }
 }
 
 #[cfg(test)]
 mod tests {
-    use super::super::report_section;
+    use super::super::report_rows;
     use super::{
         archimedes, richardson_zaki, settling_reynolds, tenneti, tenneti_reynolds, DIAMETERS,
         RANDOM_DIAMETERS, RANDOM_SEEDS, SOLID_FRACTIONS,
@@ -305,12 +307,7 @@ mod tests {
     /// The report's section holds one row per solid fraction and diameter, in that order.
     #[test]
     fn the_bed_drag_section_holds_the_runs() {
-        let section = report_section("## Immersed moving boundary: drag in a bed");
-        let rows: Vec<&str> = section
-            .lines()
-            .filter(|l| l.starts_with("| 0."))
-            .map(|l| l.split(" | ").next().unwrap_or(""))
-            .collect();
+        let rows = report_rows("## Immersed moving boundary: drag in a bed", &["0."], 1);
         let runs: Vec<String> = SOLID_FRACTIONS
             .iter()
             .flat_map(|phi| DIAMETERS.iter().map(move |_| format!("| {phi}")))
@@ -333,12 +330,11 @@ mod tests {
     /// The random-drag section holds one row per flow, placement and diameter, in that order.
     #[test]
     fn the_random_drag_section_holds_the_runs() {
-        let section = report_section("## Immersed moving boundary: a random array");
-        let rows: Vec<String> = section
-            .lines()
-            .filter(|l| l.starts_with("| Stokes") || l.starts_with("| the bed"))
-            .map(|l| l.split(" | ").take(2).collect::<Vec<_>>().join(" | "))
-            .collect();
+        let rows = report_rows(
+            "## Immersed moving boundary: a random array",
+            &["Stokes", "the bed"],
+            2,
+        );
         let runs: Vec<String> = ["| Stokes", "| the bed's weight"]
             .iter()
             .flat_map(|flow| RANDOM_SEEDS.iter().map(move |seed| format!("{flow} | {seed}")))

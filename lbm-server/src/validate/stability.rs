@@ -175,19 +175,14 @@ pub(super) fn summary(runs: &[(&str, &str, f64, bool)]) -> String {
 
 #[cfg(test)]
 mod tests {
-    use super::super::report_section;
+    use super::super::report_rows;
     use super::{summary, FACES, OPERATORS, REYNOLDS};
 
     /// The rows of the report's stability section are the runs of `section`: each set of faces,
     /// each operator, each Reynolds number, in that order.
     #[test]
     fn the_stability_section_holds_the_runs() {
-        let section = report_section("## Stability near tau = 1/2");
-        let rows: Vec<String> = section
-            .lines()
-            .filter(|l| l.starts_with("| periodic") || l.starts_with("| inlet-outlet"))
-            .map(|l| l.split(" | ").take(3).collect::<Vec<_>>().join(" | "))
-            .collect();
+        let rows = report_rows("## Stability near tau = 1/2", &["periodic", "inlet-outlet"], 3);
         let runs: Vec<String> = FACES
             .iter()
             .flat_map(|(_, faces)| {
