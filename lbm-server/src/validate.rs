@@ -12,6 +12,7 @@ use std::sync::Arc;
 
 mod bed_drag;
 mod stability;
+mod wake_drag;
 
 #[derive(clap::Args)]
 pub struct ValidateArgs {
@@ -19,8 +20,8 @@ pub struct ValidateArgs {
     #[arg(long, default_value = "validation/lbm")]
     out: PathBuf,
     /// Run only these sections (channel, wall, taylor-green, mass, array-drag, drag-tau,
-    /// radius-deficit, sphere-drag, sphere-correction, moving-boundary, stability, bed-drag,
-    /// random-drag, momentum; random-drag-fine, a GPU's grids, only when named), print
+    /// radius-deficit, sphere-drag, sphere-correction, moving-boundary, stability, wake-drag, bed-drag,
+    /// random-drag, momentum; wake-drag-fine and random-drag-fine, a GPU's grids, only when named), print
     /// them and replace them in an existing REPORT.md (the other sections are kept as they are).
     #[arg(long, value_delimiter = ',')]
     only: Vec<String>,
@@ -28,7 +29,7 @@ pub struct ValidateArgs {
 
 type Section = fn(&Arc<Gpu>) -> String;
 
-const SECTIONS: [(&str, Section); 15] = [
+const SECTIONS: [(&str, Section); 17] = [
     ("channel", channel_convergence),
     ("wall", wall_location),
     ("taylor-green", taylor_green),
@@ -40,6 +41,8 @@ const SECTIONS: [(&str, Section); 15] = [
     ("sphere-correction", sphere_correction),
     ("moving-boundary", moving_boundary),
     ("stability", stability::section),
+    ("wake-drag", wake_drag::section),
+    ("wake-drag-fine", wake_drag::fine_section),
     ("bed-drag", bed_drag::section),
     ("random-drag", bed_drag::random_section),
     ("random-drag-fine", bed_drag::random_fine_section),
@@ -47,7 +50,7 @@ const SECTIONS: [(&str, Section); 15] = [
 ];
 
 /// Sections run only when named with --only: grids for a GPU (hours on lavapipe).
-const GPU_ONLY: [&str; 1] = ["random-drag-fine"];
+const GPU_ONLY: [&str; 2] = ["wake-drag-fine", "random-drag-fine"];
 
 const TRT: Operator = Operator::Trt { magic: 3.0 / 16.0 };
 

@@ -13,8 +13,8 @@
 # (the DEM side alone on this machine's cores, 32^3 beads dilute and in a bed), tencate/<run>/ (import with
 # python3 validation/imb/ten_cate.py import DIR), bed/<run>/ (the fluidized bed at 10 and 15 cells per
 # diameter, and held still at 12 and 18: python3 validation/imb/fluidized_bed.py import DIR),
-# validate/REPORT.md (random arrays at 18 and 24 cells per diameter: its section goes into
-# validation/lbm/REPORT.md). The steps run in order of priority; a step that
+# validate/REPORT.md (random arrays at 18 and 24 cells per diameter) and validate_wake/REPORT.md (a held
+# sphere at Re 200 and 300 at 24 and 32): their sections go into validation/lbm/REPORT.md. The steps run in order of priority; a step that
 # would start with less time left than it needs is skipped and named in batch.log.
 set -u
 cd "$(dirname "$0")/../.."
@@ -105,4 +105,7 @@ while read -r name _; do
     [ "$code" -ne 125 ] && echo "$code" > "$dir/exit_code" && cp ".gpu/scenes/$name/scene.toml" "$dir/"
     rm -rf "$dir/fields"
 done < .gpu/plan.txt
+# A sphere held in a stream at Re 200 and 300 at 24 and 32 cells per diameter (lavapipe: 6-16):
+# whether its drag keeps falling as 1 / d towards Schiller-Naumann (validation/lbm/REPORT.md).
+[ "$mode" = small ] || step validate_wake/log 60 150 $bin/lbm-server validate --out "$OUT/validate_wake" --only wake-drag-fine
 log "done"

@@ -880,7 +880,7 @@ mod coupling_validation {
             imb: Default::default(),
             shift: 0.0,
         };
-        let s = sphere_stability(&gpu(), &case, Faces::Open, 3.0);
+        let s = sphere_stability(&gpu(), &case, Faces::Open, 3.0, STABILITY_CHECK);
         assert!(s.unhealthy.is_none(), "{s:?}");
         assert_eq!(s.steps, 1500);
     }

@@ -587,15 +587,21 @@ pub enum Faces {
     Periodic,
 }
 
-/// Steps between the health checks of [`sphere_stability`].
+/// Steps between the health checks of [`sphere_stability`] (each reads every cell back).
 pub const STABILITY_CHECK: u64 = 10;
 
 /// The held sphere of `case` ([`held_sphere`]'s stream, sphere and box, with these `faces`) run
 /// for `passes` passes of the stream through the box whether or not its drag settles (above Re ~
-/// 210 a sphere's wake is unsteady), with the lattice's health checked every
-/// [`STABILITY_CHECK`] steps: whether this operator at this tau holds the flow, where it first
-/// fails if not, and the drag over the last pass where it holds.
-pub fn sphere_stability(gpu: &Arc<Gpu>, case: &HeldSphere, faces: Faces, passes: f64) -> Stability {
+/// 210 a sphere's wake is unsteady), with the lattice's health checked every `check` steps
+/// ([`STABILITY_CHECK`] where that is the question): whether this operator at this tau holds the
+/// flow, where it first fails if not, and the drag over the last pass where it holds.
+pub fn sphere_stability(
+    gpu: &Arc<Gpu>,
+    case: &HeldSphere,
+    faces: Faces,
+    passes: f64,
+    check: u64,
+) -> Stability {
     let (u0, tau) = stream_of(case);
     let (d, width, length) = (case.diameter, case.width, case.length);
     let size = [length, width, width];
@@ -611,12 +617,12 @@ pub fn sphere_stability(gpu: &Arc<Gpu>, case: &HeldSphere, faces: Faces, passes:
     };
     let sphere = case.particle();
     let pass = (length as f64 / u0).ceil() as u64;
-    let horizon = ((passes * pass as f64) as u64).div_ceil(STABILITY_CHECK) * STABILITY_CHECK;
+    let horizon = ((passes * pass as f64) as u64).div_ceil(check) * check;
     let last_pass = horizon.saturating_sub(pass);
     let (mut sum, mut low, mut high, mut n) = (0.0, f64::INFINITY, f64::NEG_INFINITY, 0u64);
     let (mut steps, mut stream) = (0, 1.0);
     while steps < horizon {
-        for _ in 0..STABILITY_CHECK {
+        for _ in 0..check {
             let force = lattice
                 .step_coupled(&[sphere])
                 .map_or(f64::NAN, |l| l[0].force[0]);

@@ -117,7 +117,13 @@ pub(super) fn section(gpu: &Arc<Gpu>) -> String {
     for (faces, name) in FACES {
         for operator in OPERATORS {
             for re in REYNOLDS {
-                let s = validation::sphere_stability(gpu, &case(re, operator), faces, PASSES);
+                let s = validation::sphere_stability(
+                    gpu,
+                    &case(re, operator),
+                    faces,
+                    PASSES,
+                    validation::STABILITY_CHECK,
+                );
                 protocol::say!("lbm-server: stability: {name} {operator} Re {re}: {s:?}");
                 let drag = s.cd.map_or(" | ".into(), |[mean, low, high]| {
                     format!("{mean:.3} | {low:.3}-{high:.3}")
