@@ -20,9 +20,10 @@ pub struct ValidateArgs {
     #[arg(long, default_value = "validation/lbm")]
     out: PathBuf,
     /// Run only these sections (channel, wall, taylor-green, mass, array-drag, drag-tau,
-    /// radius-deficit, sphere-drag, sphere-correction, moving-boundary, stability, wake-drag, bed-drag,
-    /// random-drag, momentum; wake-drag-fine and random-drag-fine, a GPU's grids, only when named), print
-    /// them and replace them in an existing REPORT.md (the other sections are kept as they are).
+    /// radius-deficit, sphere-drag, sphere-correction, moving-boundary, stability, wake-drag,
+    /// bed-drag, random-drag, momentum; wake-drag-fine and random-drag-fine, a GPU's grids, only
+    /// when named), print them and replace them in an existing REPORT.md (the other sections are
+    /// kept as they are).
     #[arg(long, value_delimiter = ',')]
     only: Vec<String>,
 }

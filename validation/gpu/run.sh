@@ -14,8 +14,9 @@
 # python3 validation/imb/ten_cate.py import DIR), bed/<run>/ (the fluidized bed at 10 and 15 cells per
 # diameter, and held still at 12 and 18: python3 validation/imb/fluidized_bed.py import DIR),
 # validate/REPORT.md (random arrays at 18 and 24 cells per diameter) and validate_wake/REPORT.md (a held
-# sphere at Re 200 and 300 at 24 and 32): their sections go into validation/lbm/REPORT.md. The steps run in order of priority; a step that
-# would start with less time left than it needs is skipped and named in batch.log.
+# sphere at Re 200 and 300 at 24 and 32): their sections go into validation/lbm/REPORT.md. The steps
+# run in order of priority; a step that would start with less time left than it needs is skipped and
+# named in batch.log.
 set -u
 cd "$(dirname "$0")/../.."
 budget=${1:-540}
