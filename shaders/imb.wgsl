@@ -291,7 +291,7 @@ fn stream_collide_covered(
         f{i}[u32(i32(k) + offset(vec3<i32>({i.cx}, {i.cy}, {i.cz})))] = post[{i}];
         //#end
     } else {
-        write_populations(k, flags[k], post, m);
+        write_populations(k, coords(k), flags[k], post, m);
     }
 }
 

@@ -173,9 +173,9 @@ fn link_face(p: vec3<i32>, c: vec3<i32>) -> u32 {
     return select(face, SOLID_LINK, face == 0xffu);
 }
 
-// The cell along c from cell k, for a link that stays in the fluid.
-fn next_cell(k: u32, c: vec3<i32>, flag: u32) -> u32 {
-    if (flag & WRAPS) != 0u { return neighbour(coords(k), c); }
+// The cell along c from cell k (at p), for a link that stays in the fluid.
+fn next_cell(k: u32, p: vec3<i32>, c: vec3<i32>, flag: u32) -> u32 {
+    if (flag & WRAPS) != 0u { return neighbour(p, c); }
     return u32(i32(k) + offset(c));
 }
 
@@ -190,8 +190,9 @@ fn cell_index(wg: vec3<u32>, nwg: vec3<u32>, local: u32) -> u32 {
     return (wg.y * nwg.x + wg.x) * 64u + local;
 }
 
-// Pre-collision populations of cell k at the current time, whatever the step parity.
-fn read_populations(k: u32, flag: u32) -> array<f32, 19> {
+// Pre-collision populations of cell k (at p: its coordinates, found once per cell, since they
+// take three integer divisions) at the current time, whatever the step parity.
+fn read_populations(k: u32, p: vec3<i32>, flag: u32) -> array<f32, 19> {
     var f: array<f32, 19>;
     if params.n.w == 0u {
         //#for i
@@ -202,7 +203,7 @@ fn read_populations(k: u32, flag: u32) -> array<f32, 19> {
         if leaves(flag, {i.o}u) {
             f[{i}] = f{i}[k];
         } else {
-            f[{i}] = f{i.o}[next_cell(k, -vec3<i32>({i.cx}, {i.cy}, {i.cz}), flag)];
+            f[{i}] = f{i.o}[next_cell(k, p, -vec3<i32>({i.cx}, {i.cy}, {i.cz}), flag)];
         }
         //#end
     }
@@ -338,21 +339,22 @@ fn stream_collide(
     if j >= params.ranges.z { return; }
     let k = cell_list[params.ranges.x + params.ranges.y + j];
     let flag = flags[k];
-    let f = read_populations(k, flag);
+    let p = coords(k);
+    let f = read_populations(k, p, flag);
     let m = moments(f);
-    write_populations(k, flag, solid_term(k, f, m, collide(f, m)), m);
+    write_populations(k, p, flag, solid_term(k, f, m, collide(f, m)), m);
 }
 
-// Stores the post-collision populations of cell k where the next step reads them, either parity,
-// with the boundaries of links that leave the fluid.
-fn write_populations(k: u32, flag: u32, post: array<f32, 19>, m: Moments) {
+// Stores the post-collision populations of cell k (at p) where the next step reads them, either
+// parity, with the boundaries of links that leave the fluid.
+fn write_populations(k: u32, p: vec3<i32>, flag: u32, post: array<f32, 19>, m: Moments) {
     let odd = params.n.w == 1u;
     //#for i
     if leaves(flag, {i}u) {
-        let face = link_face(coords(k), vec3<i32>({i.cx}, {i.cy}, {i.cz}));
+        let face = link_face(p, vec3<i32>({i.cx}, {i.cy}, {i.cz}));
         f{i.o}[k] = bounce(face, vec3<f32>({i.cx}.0, {i.cy}.0, {i.cz}.0), {i.w}, post[{i}], m);
     } else if odd {
-        f{i}[next_cell(k, vec3<i32>({i.cx}, {i.cy}, {i.cz}), flag)] = post[{i}];
+        f{i}[next_cell(k, p, vec3<i32>({i.cx}, {i.cy}, {i.cz}), flag)] = post[{i}];
     } else {
         f{i.o}[k] = post[{i}];
     }
@@ -533,7 +535,7 @@ fn macroscopic(
         fields[k] = vec4<f32>(1.0, 0.0, 0.0, 0.0);
         return;
     }
-    let m = moments(read_populations(k, flag));
+    let m = moments(read_populations(k, coords(k), flag));
     fields[k] = vec4<f32>(m.rho, m.u);
     let speed = length(m.u);
     // NaN fails every comparison: written so that NaN and infinity count as unhealthy.

@@ -35,6 +35,14 @@ pub struct BenchArgs {
     /// on a CPU driver), fused, redo, or both (each particle count both ways).
     #[arg(long, default_value = "auto")]
     covered_cells: String,
+    /// The grid's faces: periodic (every cell an interior or wrapping one) or walls (a closed box,
+    /// as a settling sphere's or a bed's: the cells beside the walls take the general kernel).
+    #[arg(long, default_value = "periodic")]
+    faces: String,
+    /// Also time the LBM-only step with every cell on its own, without the four-cell quads (a
+    /// thread per cell, as the naive kernel: what the quads gain or cost on this device).
+    #[arg(long)]
+    per_cell: bool,
     /// Timed rounds, ours and the naive kernel alternating (best round reported).
     #[arg(long, default_value_t = 3)]
     rounds: u32,
@@ -96,11 +104,12 @@ fn run(args: &BenchArgs) -> Result<(), String> {
         other => return Err(format!("--kernel = {other:?}: expected both, ours or naive")),
     };
     let rounds = args.rounds.max(1);
+    let faces = parse_faces(&args.faces)?;
     let gpu = Arc::new(Gpu::new()?);
     let bandwidth = copy_bandwidth(&gpu);
-    let setup = Setup::new(n, [Face::Periodic; 6], tau, operator);
+    let setup = Setup::new(n, faces, tau, operator);
     let cells = setup.cells() as f64;
-    let mut lattice = Lattice::new(gpu.clone(), setup, Health::default(), None)?;
+    let mut lattice = Lattice::new(gpu.clone(), setup.clone(), Health::default(), None)?;
     let naive = if time_naive { Naive::new(&gpu, n) } else { None };
     // Warm-up, then rounds alternating ours and the naive kernel, so that both see the same load.
     lattice.step(20);
@@ -131,8 +140,8 @@ fn run(args: &BenchArgs) -> Result<(), String> {
         gpu.adapter.name, gpu.adapter.device_type, gpu.adapter.backend
     );
     println!(
-        "grid:           {}x{}x{} ({} cells), operator {}",
-        n[0], n[1], n[2], cells, args.operator
+        "grid:           {}x{}x{} ({} cells), operator {}, faces {}",
+        n[0], n[1], n[2], cells, args.operator, args.faces
     );
     println!("steps:          {} per round, {rounds} rounds", args.steps);
     let mlups = best(&ours);
@@ -148,14 +157,30 @@ fn run(args: &BenchArgs) -> Result<(), String> {
             100.0 * mlups / roofline
         );
     }
+    if time_ours && args.per_cell {
+        let mut per_cell = Lattice::per_cell(gpu.clone(), setup.clone(), Health::default())?;
+        per_cell.step(20);
+        gpu.wait();
+        let rounds: Vec<f64> = (0..rounds)
+            .map(|_| {
+                let start = Instant::now();
+                per_cell.step(args.steps);
+                gpu.wait();
+                cells * args.steps as f64 / start.elapsed().as_secs_f64() / 1e6
+            })
+            .collect();
+        println!(
+            "per cell:       {:.1} MLUPS (best round; rounds: {}; our kernels without the four-cell quads)",
+            best(&rounds),
+            list(&rounds)
+        );
+    }
     if !args.particles.is_empty() {
         let modes = covered_cell_modes(&args.covered_cells)?;
         coupled_sweep(
             &gpu,
             lattice,
-            n,
-            tau,
-            operator,
+            Setup::new(n, faces, tau, operator),
             args.steps,
             &args.particles,
             mlups,
@@ -168,7 +193,7 @@ fn run(args: &BenchArgs) -> Result<(), String> {
             Some(_) => {
                 let naive = best(&theirs);
                 println!(
-                    "naive kernel:   {naive:.1} MLUPS (best round; rounds: {}; two lattices, pull, BGK, same grid, same run)",
+                    "naive kernel:   {naive:.1} MLUPS (best round; rounds: {}; two lattices, pull, BGK, periodic, same grid, same run)",
                     list(&theirs)
                 );
                 if time_ours {
@@ -186,7 +211,9 @@ fn run(args: &BenchArgs) -> Result<(), String> {
     Ok(())
 }
 
-/// Bytes per second of a large buffer-to-buffer copy (read + write counted), best of 5.
+/// Bytes per second of a large buffer-to-buffer copy (read + write counted), best of 5: copies
+/// repeated within one submission until it lasts 20 ms or more, so that the submission's round
+/// trip (about a millisecond: as long as one copy of 256 MiB on a GPU of 4 TB/s) is a small part.
 pub fn copy_bandwidth(gpu: &Gpu) -> f64 {
     let bytes = (gpu.limits.max_buffer_size / 4).min(256 << 20);
     let make = |usage| {
@@ -199,19 +226,23 @@ pub fn copy_bandwidth(gpu: &Gpu) -> f64 {
     };
     let src = make(wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST);
     let dst = make(wgpu::BufferUsages::COPY_DST);
-    let copy = || {
+    let copies = |repeats: u32| {
+        let start = Instant::now();
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
-        encoder.copy_buffer_to_buffer(&src, 0, &dst, 0, bytes);
+        for _ in 0..repeats {
+            encoder.copy_buffer_to_buffer(&src, 0, &dst, 0, bytes);
+        }
         gpu.queue.submit([encoder.finish()]);
         gpu.wait();
+        start.elapsed().as_secs_f64()
     };
-    copy();
+    copies(1);
+    let mut repeats = 1;
+    while copies(repeats) < 0.02 && repeats < 1 << 12 {
+        repeats *= 2;
+    }
     (0..5)
-        .map(|_| {
-            let start = Instant::now();
-            copy();
-            2.0 * bytes as f64 / start.elapsed().as_secs_f64()
-        })
+        .map(|_| 2.0 * bytes as f64 * repeats as f64 / copies(repeats))
         .fold(0.0, f64::max)
 }
 
@@ -345,6 +376,15 @@ fn covered_cell_modes(name: &str) -> Result<Vec<CoveredCells>, String> {
         .ok_or_else(|| format!("--covered-cells {name}: expected auto, fused, redo or both"))
 }
 
+/// "periodic" or "walls": every face periodic, or every face a wall at rest.
+fn parse_faces(name: &str) -> Result<[Face; 6], String> {
+    match name {
+        "periodic" => Ok([Face::Periodic; 6]),
+        "walls" => Ok([Face::Wall; 6]),
+        other => Err(format!("--faces {other}: expected periodic or walls")),
+    }
+}
+
 /// Coupled MLUPS for each particle count (and way of treating the covered cells), against the
 /// LBM-only figure of the same run; first the LBM-only `lattice` of that figure stepped as the
 /// lockstep steps (then freed).
@@ -352,15 +392,14 @@ fn covered_cell_modes(name: &str) -> Result<Vec<CoveredCells>, String> {
 fn coupled_sweep(
     gpu: &Arc<Gpu>,
     mut lattice: Lattice,
-    n: [usize; 3],
-    tau: f64,
-    operator: Operator,
+    setup: Setup,
     steps: u64,
     counts: &[usize],
     lbm_only: f64,
     passes: bool,
     modes: &[CoveredCells],
 ) -> Result<(), String> {
+    let n = setup.n;
     let mut breakdown = Vec::new();
     let mut host = Vec::new();
     println!("coupled (spheres of 4 cells diameter, immersed moving boundary, one readback per step):");
@@ -379,8 +418,7 @@ fn coupled_sweep(
             covered_cells: CoveredCells::Fused,
             ..Default::default()
         };
-        let setup = Setup::new(n, [Face::Periodic; 6], tau, operator);
-        let mut lattice = Lattice::new(gpu.clone(), setup, Health::default(), Some(options))?;
+        let mut lattice = Lattice::new(gpu.clone(), setup.clone(), Health::default(), Some(options))?;
         let mlups = lockstep_mlups(gpu, &mut lattice, steps);
         println!(
             "| 0 (fused fluid kernels, no particle: one submit and wait per step) | fused | {mlups:.1} | {:.0}% |",
@@ -402,12 +440,11 @@ fn coupled_sweep(
         }
         let particles = sphere_lattice(side, spacing);
         for &mode in modes {
-            let setup = Setup::new(n, [Face::Periodic; 6], tau, operator);
             let options = ImbOptions {
                 covered_cells: mode,
                 ..Default::default()
             };
-            let mut lattice = Lattice::new(gpu.clone(), setup, Health::default(), Some(options))?;
+            let mut lattice = Lattice::new(gpu.clone(), setup.clone(), Health::default(), Some(options))?;
             let name = if lattice.covered_cells_fused() {
                 "fused"
             } else {

@@ -371,7 +371,7 @@ impl FluidSide {
 
     /// The health check of the lattice, and a warning when cells had more particles than slots.
     fn check(&self) -> Result<(), String> {
-        let (_, bad) = self.lattice.fields();
+        let bad = self.lattice.health();
         if let Some(bad) = bad {
             let what = bad.describe(&health_of(&self.units));
             return Err(format!(

@@ -75,7 +75,27 @@ else
     scenes 24 --cases E1 --mach 0.025 --width 200 --height 240
     scenes 24 --cases E2 --mach 0.05 --width 200 --height 240
     scenes 24 --cases E3 E4 --width 200 --height 240
+    # Runs already imported are left out: a Ten Cate run that completed (validation/imb/runs/NAME),
+    # a bed that ran, to its end or to its blow-up (validation/imb/runs_bed/NAME without bed_).
+    imported() {
+        case $1 in
+            bed_*) [ -f "validation/imb/runs_bed/${1#bed_}/log.txt" ] ;;
+            *) grep -qs '"exit_code": 0' "validation/imb/runs/$1/summary.json" ;;
+        esac
+    }
+    while read -r name rest; do
+        if imported "$name"; then
+            echo "already imported, left out: $name"
+            rm -rf ".gpu/scenes/$name"
+        else
+            echo "$name $rest"
+        fi
+    done < .gpu/plan.txt > .gpu/plan.new
+    grep -v '^already imported' .gpu/plan.new > .gpu/plan.txt
+    grep '^already imported' .gpu/plan.new || true
+    rm .gpu/plan.new
 fi
 cat .gpu/plan.txt
 du -sh .gl .gpu
-echo "now: run with carry [\".gl\", \".gpu\"] and the command 'bash validation/gpu/run.sh 540'"
+echo "now: run with carry [\".gl\", \".gpu\"] and the command 'bash validation/gpu/run.sh 540' (timeout_s 600),"
+echo "then: bash validation/gpu/import.sh FILES_AT"

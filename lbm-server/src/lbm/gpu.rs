@@ -71,6 +71,11 @@ impl Gpu {
 
     /// Copies a GPU buffer back to the host.
     pub fn read_buffer(&self, buffer: &wgpu::Buffer, bytes: u64) -> Vec<u8> {
+        self.read_range(buffer, 0, bytes)
+    }
+
+    /// `bytes` of `buffer` from `offset` (both multiples of 4).
+    pub fn read_range(&self, buffer: &wgpu::Buffer, offset: u64, bytes: u64) -> Vec<u8> {
         let staging = self.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("readback"),
             size: bytes,
@@ -78,7 +83,7 @@ impl Gpu {
             mapped_at_creation: false,
         });
         let mut encoder = self.device.create_command_encoder(&Default::default());
-        encoder.copy_buffer_to_buffer(buffer, 0, &staging, 0, bytes);
+        encoder.copy_buffer_to_buffer(buffer, offset, &staging, 0, bytes);
         self.queue.submit([encoder.finish()]);
         let slice = staging.slice(..);
         slice.map_async(wgpu::MapMode::Read, |_| {});
@@ -195,6 +200,22 @@ impl Lattice {
         health: Health,
         imb: Option<super::imb::ImbOptions>,
     ) -> Result<Lattice, String> {
+        Self::build(gpu, setup, health, imb, true)
+    }
+
+    /// A lattice without coupling whose fluid kernels take every cell on its own, without the
+    /// four-cell quads (`lbm-server bench --per-cell`: what the quads gain on this device).
+    pub fn per_cell(gpu: std::sync::Arc<Gpu>, setup: Setup, health: Health) -> Result<Lattice, String> {
+        Self::build(gpu, setup, health, None, false)
+    }
+
+    fn build(
+        gpu: std::sync::Arc<Gpu>,
+        setup: Setup,
+        health: Health,
+        imb: Option<super::imb::ImbOptions>,
+        quads: bool,
+    ) -> Result<Lattice, String> {
         fits_device(&gpu.limits, setup.n)?;
         let cells = setup.cells();
         let bytes = (cells * 4) as u64;
@@ -231,7 +252,7 @@ impl Lattice {
         // The solid term in the fluid kernels (imb.rs, `CoveredCells`): those kernels then update
         // every cell one at a time, without the four-cell quads.
         let fused = imb.is_some_and(|o| o.covered_cells.fused_on(gpu.adapter.device_type));
-        let classes = CellList::new(&setup, !fused);
+        let classes = CellList::new(&setup, quads && !fused);
         let cell_list = init(
             "cell list",
             bytemuck::cast_slice(if classes.list.is_empty() {
@@ -508,6 +529,29 @@ impl Lattice {
         self.time += 1;
     }
 
+    /// The first unhealthy cell if any, as `fields` finds it, with only that cell read back (a
+    /// run's health check: on a GPU the whole field is 16 bytes per cell over the bus).
+    pub fn health(&self) -> Option<Unhealthy> {
+        let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
+        self.dispatch(&mut encoder, &self.macroscopic, self.time % 2);
+        self.gpu.queue.submit([encoder.finish()]);
+        let status: Vec<u32> = bytemuck::cast_slice(&self.gpu.read_buffer(&self.status, 16)).to_vec();
+        (status[0] != u32::MAX).then(|| {
+            let cell = status[0] as usize;
+            let bytes = self.gpu.read_range(&self.fields, cell as u64 * 16, 16);
+            self.unhealthy(cell, bytemuck::cast_slice::<u8, [f32; 4]>(&bytes)[0])
+        })
+    }
+
+    fn unhealthy(&self, cell: usize, v: [f32; 4]) -> Unhealthy {
+        Unhealthy {
+            cell,
+            coords: self.setup.coords(cell),
+            rho: v[0],
+            u: [v[1], v[2], v[3]],
+        }
+    }
+
     /// Density and velocity of every cell, and the first unhealthy cell if any.
     pub fn fields(&self) -> (Vec<[f32; 4]>, Option<Unhealthy>) {
         let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
@@ -520,13 +564,7 @@ impl Lattice {
         let status: Vec<u32> = bytemuck::cast_slice(&self.gpu.read_buffer(&self.status, 16)).to_vec();
         let bad = (status[0] != u32::MAX).then(|| {
             let cell = status[0] as usize;
-            let v = fields[cell];
-            Unhealthy {
-                cell,
-                coords: self.setup.coords(cell),
-                rho: v[0],
-                u: [v[1], v[2], v[3]],
-            }
+            self.unhealthy(cell, fields[cell])
         });
         (fields, bad)
     }

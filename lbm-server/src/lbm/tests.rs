@@ -246,6 +246,30 @@ fn a_ramped_inlet_sends_a_weaker_pressure_wave_than_a_sudden_one() {
     assert!(ramped < 0.3 * sudden, "ramped {ramped}, sudden {sudden}");
 }
 
+/// The run's health check reads back one cell, not the field: it finds the cell the full
+/// readback finds (the lowest index among the unhealthy ones), with its density and velocity,
+/// and nothing in a healthy lattice.
+#[test]
+fn the_health_check_finds_the_cell_the_full_readback_finds() {
+    let setup = Setup::new([8, 6, 5], [Face::Wall; 6], 0.7, Operator::Bgk);
+    let mut f = random_populations(&setup, 11);
+    let mut lattice = Lattice::new(gpu(), setup.clone(), Health::default(), None).unwrap();
+    lattice.set_populations(&f);
+    assert!(lattice.health().is_none());
+    assert!(lattice.fields().1.is_none());
+    // Two cells too fast (|u| 0.5 > 0.4); the lower index is the one reported.
+    for k in [141, 77] {
+        f[k] = std::array::from_fn(|i| super::lattice::equilibrium_shifted(i, 1.02, [0.3, -0.4, 0.0]));
+    }
+    lattice.set_populations(&f);
+    let (fields, full) = lattice.fields();
+    let (one, full) = (lattice.health().expect("unhealthy"), full.expect("unhealthy"));
+    assert_eq!((one.cell, one.coords), (77, setup.coords(77)));
+    assert_eq!((full.cell, full.coords), (one.cell, one.coords));
+    assert_eq!([one.rho, one.u[0], one.u[1], one.u[2]], fields[77]);
+    assert!((one.u[1] + 0.4).abs() < 1e-5, "{one:?}");
+}
+
 mod validation_cases {
     use super::super::validation::*;
     use super::*;

@@ -1,0 +1,31 @@
+#!/usr/bin/env bash
+# Takes a GPU batch back (validation/gpu/run.sh on the device machine): unpacks FILES_AT/gpu.tgz.*
+# into out/gpu_import/gpu/, imports its Ten Cate runs into validation/imb/runs/ and its beds into
+# validation/imb/runs_bed/ (the reports rebuilt), and lists what goes by hand into BENCHMARKS.md
+# (bench_*.txt, coupled_*.txt, suspension*/summary.json, dem_bench_*.txt) and into
+# validation/lbm/REPORT.md (the "finer grids" sections of validate/ and validate_wake/REPORT.md).
+#
+#     bash validation/gpu/import.sh FILES_AT     # the folder the device tool put the files in
+set -euo pipefail
+cd "$(dirname "$0")/../.."
+src=${1:?usage: bash validation/gpu/import.sh FILES_AT}
+ls "$src"/gpu.tgz.* >/dev/null 2>&1 || { echo "no gpu.tgz.* in $src" >&2; exit 1; }
+dest=out/gpu_import
+rm -rf "$dest"
+mkdir -p "$dest"
+cat "$src"/gpu.tgz.* | tar xzf - -C "$dest"
+g=$dest/gpu
+echo "== batch.log"
+cat "$g/batch.log"
+if [ -d "$g/tencate" ]; then
+    echo "== Ten Cate"
+    python3 validation/imb/ten_cate.py import "$g/tencate"
+fi
+if [ -d "$g/bed" ]; then
+    echo "== fluidized bed"
+    python3 validation/imb/fluidized_bed.py import "$g/bed" > /dev/null
+    ls validation/imb/runs_bed
+fi
+echo "== by hand: BENCHMARKS.md and validation/lbm/REPORT.md from"
+find "$g" -maxdepth 2 \( -name 'bench_*.txt' -o -name 'coupled_*.txt' -o -name 'dem_bench_*.txt' \
+    -o -name summary.json -o -name REPORT.md \) | sort
