@@ -22,6 +22,8 @@ override SLOTS: u32 = 2u;
 override FUSED: bool = false;
 // Solid weighting: false = Noble & Torczynski B(eps, tau), true = the seed's B = eps.
 override SEED_WEIGHTING: bool = false;
+// Solid collision: false = Noble & Torczynski's, true = superposition (`immersed_boundary`).
+override SUPERPOSITION: bool = false;
 
 struct Particle {
     // centre in lattice units (cell i spans [i, i + 1]) and radius
@@ -317,7 +319,9 @@ fn solid_term(k: u32, f: array<f32, 19>, m: Moments, post: array<f32, 19>) -> ar
 
 // The collision of a cell covered by particles: the fluid part of `post` (the operator's
 // relaxation and source) is weighted by 1 - sum B, and each particle adds B_s Omega_s with
-// Omega_i = f_ibar - f_i + f_eq_i(rho, u_s) - f_eq_ibar(rho, u) (seed eq. 7-8).
+// Omega_i = f_ibar - f_i + f_eq_i(rho, u_s) - f_eq_ibar(rho, u) (seed eq. 7-8), or with
+// SUPERPOSITION Omega_i = f_eq_i(rho, u_s) - f_eq_i(rho, u) + post_i - S_i - f_i (S: the body
+// force's part of post, `forcing`).
 fn immersed_boundary(k: u32, f: array<f32, 19>, m: Moments, post: array<f32, 19>) -> array<f32, 19> {
     let count = min(atomicLoad(&covered[k]), SLOTS);
     if count == 0u { return post; }
@@ -352,11 +356,23 @@ fn immersed_boundary(k: u32, f: array<f32, 19>, m: Moments, post: array<f32, 19>
     //#for i
     out[{i}] = f[{i}] - (1.0 - b_total) * (f[{i}] - post[{i}]);
     //#end
+    // Superposition: what the solid term keeps of the fluid's own collision, post - S - f.
+    var own: array<f32, 19>;
+    if SUPERPOSITION {
+        var source: array<f32, 19>;
+        if FORCE {
+            source = forcing(m);
+        }
+        //#for i
+        own[{i}] = post[{i}] - source[{i}] - f[{i}];
+        //#end
+    }
     for (var s = 0u; s < count; s++) {
         let p = particles[ids[s]];
         let solid = p.vel.xyz + cross(p.omega.xyz, x[s] - p.pos_r.xyz);
         // f_eq_i(rho, u_s) - f_eq_ibar(rho, u) = w_i rho (3 c.sum + 4.5 (c.sum)(c.diff) - 1.5 sum.diff)
-        // with sum = u_s + u, diff = u_s - u.
+        // with sum = u_s + u, diff = u_s - u; f_eq_i(rho, u_s) - f_eq_i(rho, u) the same with
+        // 3 c.diff in place of 3 c.sum.
         let sum = solid + m.u;
         let diff = solid - m.u;
         let scalar = -1.5 * dot(sum, diff);
@@ -365,8 +381,13 @@ fn immersed_boundary(k: u32, f: array<f32, 19>, m: Moments, post: array<f32, 19>
         {
             let c = vec3<f32>({i.cx}.0, {i.cy}.0, {i.cz}.0);
             let cs = dot(c, sum);
-            let equilibria = {i.w} * m.rho * (3.0 * cs + 4.5 * cs * dot(c, diff) + scalar);
-            let omega = b[s] * (f[{i.o}] - f[{i}] + equilibria);
+            let cd = dot(c, diff);
+            var omega: f32;
+            if SUPERPOSITION {
+                omega = b[s] * ({i.w} * m.rho * (3.0 * cd + 4.5 * cs * cd + scalar) + own[{i}]);
+            } else {
+                omega = b[s] * (f[{i.o}] - f[{i}] + {i.w} * m.rho * (3.0 * cs + 4.5 * cs * cd + scalar));
+            }
             out[{i}] += omega;
             momentum += omega * c;
         }

@@ -272,23 +272,36 @@ fn collide(f: array<f32, 19>, m: Moments) -> array<f32, 19> {
         //#end
     }
     if FORCE {
-        var src: array<f32, 19>;
+        let source = forcing(m);
         //#for i
-        src[{i}] = guo_source(vec3<f32>({i.cx}.0, {i.cy}.0, {i.cz}.0), {i.w}, m);
+        out[{i}] += source[{i}];
         //#end
-        if OPERATOR == 0u {
-            //#for i
-            out[{i}] += (1.0 - 0.5 * wp) * src[{i}];
-            //#end
-        } else if OPERATOR == 1u {
-            //#for i
-            out[{i}] += 0.5 * ((1.0 - 0.5 * wp) * (src[{i}] + src[{i.o}]) + (1.0 - 0.5 * wm) * (src[{i}] - src[{i.o}]));
-            //#end
-        } else {
-            //#for i
-            out[{i}] += mrt_row(19u + {i}u, src);
-            //#end
-        }
+    }
+    return out;
+}
+
+// The body force's part of the collision: Guo's source through the operator's relaxation
+// factors (what `collide` adds when FORCE).
+fn forcing(m: Moments) -> array<f32, 19> {
+    var src: array<f32, 19>;
+    //#for i
+    src[{i}] = guo_source(vec3<f32>({i.cx}.0, {i.cy}.0, {i.cz}.0), {i.w}, m);
+    //#end
+    let wp = params.relax.x;
+    let wm = params.relax.y;
+    var out: array<f32, 19>;
+    if OPERATOR == 0u {
+        //#for i
+        out[{i}] = (1.0 - 0.5 * wp) * src[{i}];
+        //#end
+    } else if OPERATOR == 1u {
+        //#for i
+        out[{i}] = 0.5 * ((1.0 - 0.5 * wp) * (src[{i}] + src[{i.o}]) + (1.0 - 0.5 * wm) * (src[{i}] - src[{i.o}]));
+        //#end
+    } else {
+        //#for i
+        out[{i}] = mrt_row(19u + {i}u, src);
+        //#end
     }
     return out;
 }

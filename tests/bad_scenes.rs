@@ -70,6 +70,18 @@ const MISTAKES: &[(&str, &str, &str, &[&str])] = &[
         &["coupling.covered_cells = \"gpu\"", "\"fused\" or \"redo\""],
     ),
     (
+        "unknown solid collision",
+        "timeout = 10",
+        "timeout = 10\nsolid_collision = \"bounce-back\"",
+        &["coupling.solid_collision = \"bounce-back\"", "\"noble-torczynski\" or \"superposition\""],
+    ),
+    (
+        "calibrated radius correction with the superposition term",
+        "velocity_scale = 0.01\n[output]\ninterval = 10\n[coupling]\ntimeout = 10",
+        "velocity_scale = 0.01\n[output]\ninterval = 10\n[coupling]\ntimeout = 10\nsolid_collision = \"superposition\"\nradius_correction = \"calibrated\"",
+        &["coupling.radius_correction = \"calibrated\"", "solid_collision = \"noble-torczynski\""],
+    ),
+    (
         "calibrated radius correction with another TRT magic",
         "velocity_scale = 0.01\n[output]\ninterval = 10\n[coupling]\ntimeout = 10",
         "velocity_scale = 0.01\nmagic = 0.01\n[output]\ninterval = 10\n[coupling]\ntimeout = 10\nradius_correction = \"calibrated\"",

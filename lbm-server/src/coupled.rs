@@ -11,7 +11,7 @@
 
 use crate::fluid::{health_of, setup_of, stability_warning};
 use crate::lbm::gpu::{Gpu, Lattice};
-use crate::lbm::imb::{covered_fraction, CoveredCells, ImbOptions, Particles, SolidParticle};
+use crate::lbm::imb::{covered_fraction, CoveredCells, ImbOptions, Particles, SolidCollision, SolidParticle};
 use crate::lubrication::Lubrication;
 use protocol::{ParticleReply, ParticleState, Physics};
 use scene::lattice::{LatticeFace, LatticeUnits};
@@ -242,6 +242,12 @@ impl FluidSide {
         let options = ImbOptions {
             slots: scene.coupling.slots,
             seed_weighting: scene.coupling.weighting == "seed",
+            solid_collision: SolidCollision::from_name(&scene.coupling.solid_collision).ok_or_else(|| {
+                format!(
+                    "coupling.solid_collision = {:?}: expected \"noble-torczynski\" or \"superposition\"",
+                    scene.coupling.solid_collision
+                )
+            })?,
             covered_cells: covered_cells(scene, &units, &radii, gpu.adapter.device_type)?,
         };
         let lattice = Lattice::new(gpu, setup_of(&units), health_of(&units), Some(options))?;

@@ -132,6 +132,11 @@ pub struct Coupling {
     /// With a `[lattice]`: solid weighting B, "noble-torczynski" (B(eps, tau)) or "seed" (B = eps).
     #[serde(default = "default_weighting")]
     pub weighting: String,
+    /// With a `[lattice]`: the solid collision term, "noble-torczynski" (default: the seed's eq. 8,
+    /// the non-equilibrium part bounced back) or "superposition" (the fluid's own collision with
+    /// its equilibrium moved to the solid's velocity; docs/imb.md, "The solid collision").
+    #[serde(default = "default_solid_collision")]
+    pub solid_collision: String,
     /// With a `[lattice]`: lubrication correction for sphere-sphere and sphere-wall gaps below one
     /// cell (default on): integrated in the DEM's sub-steps by a DEM that declares LUBRICATION
     /// (dem-client does), else the fluid's held correction.
@@ -190,6 +195,10 @@ fn default_weighting() -> String {
     "noble-torczynski".into()
 }
 
+fn default_solid_collision() -> String {
+    "noble-torczynski".into()
+}
+
 impl Default for Coupling {
     fn default() -> Self {
         Self {
@@ -197,6 +206,7 @@ impl Default for Coupling {
             capacity: None,
             slots: default_slots(),
             weighting: default_weighting(),
+            solid_collision: default_solid_collision(),
             lubrication: default_lubrication(),
             substep_drag: default_substep_drag(),
             free_flight: default_free_flight(),

@@ -185,6 +185,11 @@ impl Scene {
             &["noble-torczynski", "seed"],
         )?;
         c.one_of(
+            "coupling.solid_collision",
+            &self.coupling.solid_collision,
+            &["noble-torczynski", "superposition"],
+        )?;
+        c.one_of(
             "coupling.radius_correction",
             &self.coupling.radius_correction,
             &["none", "calibrated"],
@@ -194,6 +199,15 @@ impl Scene {
                 "coupling.radius_correction",
                 "\"calibrated\"",
                 "is measured with coupling.weighting = \"noble-torczynski\", not \"seed\"",
+            ));
+        }
+        if self.coupling.radius_correction == "calibrated"
+            && self.coupling.solid_collision != "noble-torczynski"
+        {
+            return Err(c.fail(
+                "coupling.radius_correction",
+                "\"calibrated\"",
+                "is measured with coupling.solid_collision = \"noble-torczynski\", not \"superposition\"",
             ));
         }
         self.validate_calibrated_lattice(c)?;

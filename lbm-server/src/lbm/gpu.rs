@@ -291,6 +291,12 @@ impl Lattice {
                 "SEED_WEIGHTING",
                 f64::from(u8::from(imb.is_some_and(|o| o.seed_weighting))),
             ),
+            (
+                "SUPERPOSITION",
+                f64::from(u8::from(imb.is_some_and(|o| {
+                    o.solid_collision == super::imb::SolidCollision::Superposition
+                }))),
+            ),
             ("FUSED", f64::from(u8::from(fused))),
         ];
         let pipeline_kind = |entry: &str, kind: u32| {

@@ -11,6 +11,8 @@ pub struct ImbOptions {
     pub slots: u32,
     /// B = eps (the seed's choice) instead of Noble & Torczynski's B(eps, tau).
     pub seed_weighting: bool,
+    /// The solid collision term Omega.
+    pub solid_collision: SolidCollision,
     /// Where the covered cells get their solid term.
     pub covered_cells: CoveredCells,
 }
@@ -20,7 +22,34 @@ impl Default for ImbOptions {
         Self {
             slots: 2,
             seed_weighting: false,
+            solid_collision: SolidCollision::NobleTorczynski,
             covered_cells: CoveredCells::Auto,
+        }
+    }
+}
+
+/// The solid collision term Omega_i that a covered cell adds, weighted by B, to its fluid part
+/// f_i - (1 - B) (f_i - post_i) (docs/imb.md, "The solid collision").
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum SolidCollision {
+    /// Noble & Torczynski (1998), the seed's eq. 8: the non-equilibrium part bounced back,
+    /// Omega_i = f_ibar - f_i + f_eq_i(rho, u_s) - f_eq_ibar(rho, u).
+    #[default]
+    NobleTorczynski,
+    /// Superposition (Holdych 2003): the fluid's own collision without its body-force source,
+    /// with the equilibrium moved to the solid's velocity, Omega_i = f_eq_i(rho, u_s) -
+    /// f_eq_i(rho, u) + post_i - S_i - f_i; the covered cell becomes post_i - B S_i + B
+    /// (f_eq_i(rho, u_s) - f_eq_i(rho, u)).
+    Superposition,
+}
+
+impl SolidCollision {
+    /// The scene's `coupling.solid_collision` ("noble-torczynski", "superposition").
+    pub fn from_name(name: &str) -> Option<SolidCollision> {
+        match name {
+            "noble-torczynski" => Some(SolidCollision::NobleTorczynski),
+            "superposition" => Some(SolidCollision::Superposition),
+            _ => None,
         }
     }
 }

@@ -2,7 +2,7 @@
 //! used by the tests to check every GPU kernel.
 
 use super::geometry::{Cell, Face, Link, Operator, Setup};
-use super::imb::{box_edge, into_lattice, ImbOptions, Load, SolidParticle};
+use super::imb::{box_edge, into_lattice, ImbOptions, Load, SolidCollision, SolidParticle};
 use super::lattice::{self, opposite, C, W};
 use super::mrt;
 
@@ -87,31 +87,50 @@ pub fn moments(f: &Cell, force: [f64; 3]) -> (f64, [f64; 3]) {
 pub fn collide(setup: &Setup, f: &Cell) -> (Cell, f64, [f64; 3]) {
     let (rho, u) = moments(f, setup.force);
     let neq: Cell = std::array::from_fn(|i| f[i] - lattice::equilibrium_shifted(i, rho, u));
-    let s: Cell = std::array::from_fn(|i| lattice::guo_source(i, u, setup.force));
-    let out = match setup.operator {
+    let source = forcing(setup, u);
+    let relaxed: Cell = match setup.operator {
         Operator::Bgk => {
             let w = 1.0 / setup.tau;
-            std::array::from_fn(|i| f[i] - w * neq[i] + (1.0 - w / 2.0) * s[i])
+            std::array::from_fn(|i| f[i] - w * neq[i])
         }
         Operator::Trt { .. } => {
             let (wp, wm) = (1.0 / setup.tau, setup.omega_minus());
             std::array::from_fn(|i| {
                 let o = opposite(i);
                 let (np, nm) = ((neq[i] + neq[o]) / 2.0, (neq[i] - neq[o]) / 2.0);
-                let (sp, sm) = ((s[i] + s[o]) / 2.0, (s[i] - s[o]) / 2.0);
-                f[i] - wp * np - wm * nm + (1.0 - wp / 2.0) * sp + (1.0 - wm / 2.0) * sm
+                f[i] - wp * np - wm * nm
             })
         }
         Operator::Mrt { rates } => {
-            let (a, b) = mrt::collision_matrices(&rates);
-            std::array::from_fn(|i| {
-                let relax: f64 = (0..19).map(|j| a[i][j] * neq[j]).sum();
-                let source: f64 = (0..19).map(|j| b[i][j] * s[j]).sum();
-                f[i] - relax + source
-            })
+            let (a, _) = mrt::collision_matrices(&rates);
+            std::array::from_fn(|i| f[i] - (0..19).map(|j| a[i][j] * neq[j]).sum::<f64>())
         }
     };
-    (out, rho, u)
+    (std::array::from_fn(|i| relaxed[i] + source[i]), rho, u)
+}
+
+/// The body force's part of the collision at velocity u: Guo's source through the operator's
+/// relaxation factors (lbm.wgsl `forcing`).
+pub fn forcing(setup: &Setup, u: [f64; 3]) -> Cell {
+    let s: Cell = std::array::from_fn(|i| lattice::guo_source(i, u, setup.force));
+    match setup.operator {
+        Operator::Bgk => {
+            let w = 1.0 / setup.tau;
+            s.map(|s| (1.0 - w / 2.0) * s)
+        }
+        Operator::Trt { .. } => {
+            let (wp, wm) = (1.0 / setup.tau, setup.omega_minus());
+            std::array::from_fn(|i| {
+                let o = opposite(i);
+                let (sp, sm) = ((s[i] + s[o]) / 2.0, (s[i] - s[o]) / 2.0);
+                (1.0 - wp / 2.0) * sp + (1.0 - wm / 2.0) * sm
+            })
+        }
+        Operator::Mrt { rates } => {
+            let (_, b) = mrt::collision_matrices(&rates);
+            std::array::from_fn(|i| (0..19).map(|j| b[i][j] * s[j]).sum())
+        }
+    }
 }
 
 /// Fraction of the cell centred at `x` inside the sphere, as imb.wgsl: the fraction of a unit cell
@@ -193,6 +212,7 @@ fn solid_collision(
     let b: Vec<f64> = covers.iter().map(|c| weight(c.1 * scale)).collect();
     let b_total: f64 = b.iter().sum();
     let mut out: Cell = std::array::from_fn(|i| f[i] - (1.0 - b_total) * (f[i] - post[i]));
+    let source = forcing(setup, u);
     for (&(j, _, x), b) in covers.iter().zip(&b) {
         let p = &particles[j];
         let arm: [f64; 3] = std::array::from_fn(|a| x[a] - p.position[a]);
@@ -206,9 +226,18 @@ fn solid_collision(
         let mut momentum = [0.0; 3];
         for i in 0..19 {
             let o = opposite(i);
-            let omega = b
-                * (f[o] - f[i] + lattice::equilibrium_shifted(i, rho, us)
-                    - lattice::equilibrium_shifted(o, rho, u));
+            let omega = b * match options.solid_collision {
+                SolidCollision::NobleTorczynski => {
+                    f[o] - f[i] + lattice::equilibrium_shifted(i, rho, us)
+                        - lattice::equilibrium_shifted(o, rho, u)
+                }
+                SolidCollision::Superposition => {
+                    lattice::equilibrium_shifted(i, rho, us) - lattice::equilibrium_shifted(i, rho, u)
+                        + post[i]
+                        - source[i]
+                        - f[i]
+                }
+            };
             out[i] += omega;
             for a in 0..3 {
                 momentum[a] += omega * C[i][a] as f64;

@@ -5,7 +5,7 @@
 
 use super::operator_named;
 use crate::lbm::gpu::Gpu;
-use crate::lbm::imb::ImbOptions;
+use crate::lbm::imb::{ImbOptions, SolidCollision};
 use crate::lbm::validation::{self, schiller_naumann, Faces, HeldSphere};
 use std::fmt::Write as _;
 use std::sync::Arc;
@@ -29,6 +29,8 @@ pub(super) struct Wake {
     pub u0: f64,
     pub operator: &'static str,
     pub seed: bool,
+    /// The superposition solid term instead of Noble-Torczynski's (`SolidCollision`).
+    pub superposition: bool,
 }
 
 const fn mrt(re: f64, d: f64) -> Wake {
@@ -38,6 +40,15 @@ const fn mrt(re: f64, d: f64) -> Wake {
         u0: validation::STREAM_VELOCITY,
         operator: "MRT",
         seed: false,
+        superposition: false,
+    }
+}
+
+/// `mrt` with the superposition solid term.
+const fn superposed(re: f64, d: f64) -> Wake {
+    Wake {
+        superposition: true,
+        ..mrt(re, d)
     }
 }
 
@@ -77,6 +88,22 @@ pub(super) const WAKES: [Wake; 13] = [
 /// `--only wake-drag-fine`: the MRT series on a GPU's grids.
 const FINE: [Wake; 3] = [mrt(200.0, 24.0), mrt(300.0, 24.0), mrt(200.0, 32.0)];
 
+/// `--only wake-drag-superposition`: the MRT series with the superposition solid term.
+pub(super) const SUPERPOSED: [Wake; 5] = [
+    superposed(200.0, 6.0),
+    superposed(200.0, 8.0),
+    superposed(300.0, 6.0),
+    superposed(300.0, 8.0),
+    superposed(200.0, 12.0),
+];
+
+/// What the superposition section says before its table.
+const SUPERPOSED_NOTE: &str =
+    "Every row here with the superposition solid term (`coupling.solid_collision = \
+    \"superposition\"`, docs/imb.md \"The solid collision\"): the covered cell keeps the fluid's own \
+    collision, its equilibrium moved to the solid's velocity, where Noble & Torczynski's term (the rows \
+    above, and the default) bounces its non-equilibrium part back. Weighting B(eps, tau) as above.\n\n";
+
 impl Wake {
     fn tau(&self) -> f64 {
         0.5 + 3.0 * self.u0 * self.d / self.re
@@ -94,6 +121,11 @@ impl Wake {
             operator: operator_named(self.operator, tau),
             imb: ImbOptions {
                 seed_weighting: self.seed,
+                solid_collision: if self.superposition {
+                    SolidCollision::Superposition
+                } else {
+                    SolidCollision::NobleTorczynski
+                },
                 ..Default::default()
             },
             shift: 0.0,
@@ -116,18 +148,29 @@ impl Wake {
 }
 
 pub(super) fn section(gpu: &Arc<Gpu>) -> String {
-    wakes(gpu, "", &WAKES, CHECK)
+    wakes(gpu, "", "", &WAKES, CHECK)
 }
 
 pub(super) fn fine_section(gpu: &Arc<Gpu>) -> String {
-    wakes(gpu, ", finer grids", &FINE, FINE_CHECK)
+    wakes(gpu, ", finer grids", "", &FINE, FINE_CHECK)
 }
 
-/// The held spheres' section for these runs, its heading ending in `grids`.
-fn wakes(gpu: &Arc<Gpu>, grids: &str, runs: &[Wake], check: u64) -> String {
+pub(super) fn superposition_section(gpu: &Arc<Gpu>) -> String {
+    wakes(
+        gpu,
+        ", the superposition term",
+        SUPERPOSED_NOTE,
+        &SUPERPOSED,
+        CHECK,
+    )
+}
+
+/// The held spheres' section for these runs, its heading ending in `grids`, `note` before the
+/// description.
+fn wakes(gpu: &Arc<Gpu>, grids: &str, note: &str, runs: &[Wake], check: u64) -> String {
     let mut t = format!(
         "\n## Immersed moving boundary: a held sphere at the fluidized bed's Reynolds numbers{grids}\n\n\
-         The random arrays at the fluidized bed's voidage (section \"a random array at the fluidized \
+         {note}The random arrays at the fluidized bed's voidage (section \"a random array at the fluidized \
          bed's voidage\") drag 1.6-1.8 times Tenneti et al.'s at Re 250-360 and hardly less from 6 to 12 \
          cells per diameter. Here one sphere held in a stream at Re 200 (a steady wake) and 300 (a \
          shedding one), in the sphere-drag section's open box (velocity inlet, pressure outlet, side \
@@ -215,7 +258,7 @@ pub(super) fn convergence(series: &[(f64, f64, f64)]) -> String {
 #[cfg(test)]
 mod tests {
     use super::super::{report_rows, report_section};
-    use super::{convergence, WAKES};
+    use super::{convergence, Wake, SUPERPOSED, WAKES};
 
     /// Each Reynolds number's series, whatever the order of its rows, is read from its coarsest
     /// grid to its finest.
@@ -249,8 +292,21 @@ mod tests {
     /// series' as `convergence` writes them from those rows.
     #[test]
     fn the_wake_drag_section_holds_the_runs() {
-        let rows = report_rows(HEADING, &["200 ", "300 "], 13);
-        let runs: Vec<String> = WAKES
+        section_holds(HEADING, &WAKES);
+    }
+
+    #[test]
+    fn the_superposition_section_holds_its_runs() {
+        section_holds(
+            "## Immersed moving boundary: a held sphere at the fluidized bed's Reynolds numbers, \
+             the superposition term\n",
+            &SUPERPOSED,
+        );
+    }
+
+    fn section_holds(heading: &str, wakes: &[Wake]) {
+        let rows = report_rows(heading, &["200 ", "300 "], 13);
+        let runs: Vec<String> = wakes
             .iter()
             .map(|w| {
                 format!(
@@ -269,7 +325,7 @@ mod tests {
             .map(|r| r.split(" | ").take(6).collect::<Vec<_>>().join(" | "))
             .collect();
         assert_eq!(heads, runs);
-        let series: Vec<(f64, f64, f64)> = WAKES
+        let series: Vec<(f64, f64, f64)> = wakes
             .iter()
             .zip(&rows)
             .filter(|(w, _)| w.is_series())
@@ -285,7 +341,7 @@ mod tests {
                 )
             })
             .collect();
-        let section = report_section(HEADING);
+        let section = report_section(heading);
         let lines = convergence(&series);
         assert!(section.contains(&lines), "{lines}");
     }
