@@ -157,6 +157,12 @@ fn run(args: &BenchArgs) -> Result<(), String> {
             100.0 * mlups / roofline
         );
     }
+    if time_ours {
+        let [full, one] = health_check_times(&gpu, &lattice);
+        println!(
+            "health check:   {full:.1} ms reading every cell back, {one:.2} ms reading the status and one cell (best of 3; a run checks every lattice.check_interval steps)"
+        );
+    }
     if time_ours && args.per_cell {
         let mut per_cell = Lattice::per_cell(gpu.clone(), setup.clone(), Health::default())?;
         per_cell.step(20);
@@ -374,6 +380,29 @@ fn covered_cell_modes(name: &str) -> Result<Vec<CoveredCells>, String> {
     CoveredCells::from_name(name)
         .map(|mode| vec![mode])
         .ok_or_else(|| format!("--covered-cells {name}: expected auto, fused, redo or both"))
+}
+
+/// Milliseconds (best of 3) of the health check as runs made it until 2026-12-04, the whole field
+/// read back (`Lattice::fields`), and as they make it now (`Lattice::health`).
+fn health_check_times(gpu: &Gpu, lattice: &Lattice) -> [f64; 2] {
+    let best = |check: &dyn Fn()| {
+        (0..3)
+            .map(|_| {
+                gpu.wait();
+                let start = Instant::now();
+                check();
+                start.elapsed().as_secs_f64() * 1e3
+            })
+            .fold(f64::INFINITY, f64::min)
+    };
+    [
+        best(&|| {
+            let _ = lattice.fields();
+        }),
+        best(&|| {
+            let _ = lattice.health();
+        }),
+    ]
 }
 
 /// "periodic" or "walls": every face periodic, or every face a wall at rest.
