@@ -229,7 +229,8 @@ struct FluidRun<'a> {
     grid: Grid,
     series: Series,
     lines: Vec<std::io::BufWriter<std::fs::File>>,
-    last_good: Option<(u64, Vec<[f32; 4]>)>,
+    /// The step of the last check that passed (its fields kept on the device).
+    last_good: Option<u64>,
 }
 
 impl<'a> FluidRun<'a> {
@@ -275,17 +276,25 @@ impl<'a> FluidRun<'a> {
                 .expect("steps");
             lattice.step(next - now);
             let last = next == steps;
-            let (fields, bad) = lattice.fields();
-            if let Some(bad) = bad {
-                return Err(self.blow_up(next, check, bad));
+            let (lines, snapshot) = (due(next, lines_every) || last, due(next, fields_every) || last);
+            // The whole field crosses the bus only when something is written from it; a check
+            // alone reads the status and, if it fails, one cell.
+            if lines || snapshot {
+                let (fields, bad) = lattice.fields();
+                if let Some(bad) = bad {
+                    return Err(self.blow_up(lattice, next, check, bad));
+                }
+                if lines {
+                    self.write_lines(next, &fields)?;
+                }
+                if snapshot {
+                    self.write_snapshot(next, &fields)?;
+                }
+            } else if let Some(bad) = lattice.health() {
+                return Err(self.blow_up(lattice, next, check, bad));
             }
-            if due(next, lines_every) || last {
-                self.write_lines(next, &fields)?;
-            }
-            if due(next, fields_every) || last {
-                self.write_snapshot(next, &fields)?;
-            }
-            self.last_good = Some((next, fields));
+            lattice.keep_fields();
+            self.last_good = Some(next);
             progress.update(next);
             if interrupted.load(Ordering::SeqCst) {
                 self.flush()?;
@@ -355,13 +364,13 @@ impl<'a> FluidRun<'a> {
     }
 
     /// Describes an unhealthy cell and writes the last good snapshot.
-    fn blow_up(&mut self, step: u64, check: u64, bad: Unhealthy) -> Stop {
+    fn blow_up(&mut self, lattice: &Lattice, step: u64, check: u64, bad: Unhealthy) -> Stop {
         let mut msg = format!(
             "the fluid became unstable between steps {} and {step}: {}",
             step.saturating_sub(check),
             bad.describe(&health_of(self.units))
         );
-        if let Some((good, fields)) = self.last_good.take() {
+        if let Some((good, fields)) = self.last_good.take().zip(lattice.kept_fields()) {
             let (density, velocity) = self.si_fields(&fields);
             let path = self.out.join("last_good.vti");
             match write_vti(&path, &self.grid, &density, &velocity) {

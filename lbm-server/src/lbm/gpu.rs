@@ -158,6 +158,8 @@ pub struct Lattice {
     /// The share of their velocity the velocity inlets and moving walls have now
     /// ([`Lattice::set_face_scale`]).
     face_scale: f64,
+    /// The fields of the last check that passed, kept on the device ([`Lattice::keep_fields`]).
+    kept: Option<wgpu::Buffer>,
 }
 
 /// The first unhealthy cell found by a health check.
@@ -353,6 +355,7 @@ impl Lattice {
             imb: Some(coupling),
             time: 0,
             face_scale: 1.0,
+            kept: None,
         };
         // wgpu zero-initialises every buffer: the shifted populations start at rest (f = w, rho = 1)
         // without an upload (which took a 5 GB host array at 256 x 256 x 512).
@@ -556,6 +559,25 @@ impl Lattice {
             rho: v[0],
             u: [v[1], v[2], v[3]],
         }
+    }
+
+    /// Keeps the fields of the last `health` or `fields` on the device (a copy there, not over the
+    /// bus): what a run writes as its last good snapshot when a later check fails.
+    pub fn keep_fields(&mut self) {
+        let bytes = (self.setup.cells() * 16) as u64;
+        let kept = self
+            .kept
+            .get_or_insert_with(|| storage_buffer(&self.gpu.device, "kept fields", bytes));
+        let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
+        encoder.copy_buffer_to_buffer(&self.fields, 0, kept, 0, bytes);
+        self.gpu.queue.submit([encoder.finish()]);
+    }
+
+    /// The fields [`Lattice::keep_fields`] kept, if it was called.
+    pub fn kept_fields(&self) -> Option<Vec<[f32; 4]>> {
+        let kept = self.kept.as_ref()?;
+        let bytes = self.gpu.read_buffer(kept, (self.setup.cells() * 16) as u64);
+        Some(bytemuck::cast_slice(&bytes).to_vec())
     }
 
     /// Density and velocity of every cell, and the first unhealthy cell if any.

@@ -246,6 +246,31 @@ fn a_ramped_inlet_sends_a_weaker_pressure_wave_than_a_sudden_one() {
     assert!(ramped < 0.3 * sudden, "ramped {ramped}, sudden {sudden}");
 }
 
+/// The fields kept on the device at a check that passed come back as they were then, after the
+/// lattice has changed and failed a check (a run's last good snapshot).
+#[test]
+fn kept_fields_are_those_of_the_last_good_check() {
+    let setup = Setup::new(
+        [8, 6, 5],
+        [Face::Periodic; 6],
+        0.7,
+        Operator::Trt { magic: 3.0 / 16.0 },
+    );
+    let mut f = random_populations(&setup, 12);
+    let mut lattice = Lattice::new(gpu(), setup.clone(), Health::default(), None).unwrap();
+    assert!(lattice.kept_fields().is_none());
+    lattice.set_populations(&f);
+    lattice.step(3);
+    let (good, bad) = lattice.fields();
+    assert!(bad.is_none());
+    assert!(lattice.health().is_none());
+    lattice.keep_fields();
+    f[100] = std::array::from_fn(|i| super::lattice::equilibrium_shifted(i, 1.0, [0.6, 0.0, 0.0]));
+    lattice.set_populations(&f);
+    assert!(lattice.health().is_some());
+    assert_eq!(lattice.kept_fields().expect("kept"), good);
+}
+
 /// The run's health check reads back one cell, not the field: it finds the cell the full
 /// readback finds (the lowest index among the unhealthy ones), with its density and velocity,
 /// and nothing in a healthy lattice.
