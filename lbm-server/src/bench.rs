@@ -186,7 +186,7 @@ fn run(args: &BenchArgs) -> Result<(), String> {
         coupled_sweep(
             &gpu,
             lattice,
-            Setup::new(n, faces, tau, operator),
+            setup.clone(),
             args.steps,
             &args.particles,
             mlups,

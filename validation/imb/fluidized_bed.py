@@ -89,9 +89,8 @@ ROWS_ACROSS = {4: 3, 8: 7}
 MAX_TAU_MINUS = 1.0
 
 
-# "mrts": MRT with the superposition solid term (coupling.solid_collision; docs/imb.md, "The
+# "mrts": MRT with the superposition solid term (ten_cate.SUPERPOSITION; docs/imb.md, "The
 # solid collision"), which drags a lone sphere at Re 200-300 less than Noble & Torczynski's.
-SUPERPOSITION = '\n[coupling]\nsolid_collision = "superposition"\n'
 
 
 def label(operator):
@@ -137,7 +136,7 @@ def scene_text(operator, re_, depth, cells=CELLS):
         text, n = re.subn(pattern, new, text, count=1, flags=re.M)
         if n != 1:
             raise SystemExit("%s: no line matches %r" % (SCENE, pattern))
-    return text + (SUPERPOSITION if operator == "mrts" else "")
+    return text + (ten_cate.SUPERPOSITION if operator == "mrts" else "")
 
 
 def time_step(re_, cells):

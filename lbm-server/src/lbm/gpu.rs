@@ -541,15 +541,20 @@ impl Lattice {
     /// The first unhealthy cell if any, as `fields` finds it, with only that cell read back (a
     /// run's health check: on a GPU the whole field is 16 bytes per cell over the bus).
     pub fn health(&self) -> Option<Unhealthy> {
+        self.first_unhealthy().map(|cell| {
+            let bytes = self.gpu.read_range(&self.fields, cell as u64 * 16, 16);
+            self.unhealthy(cell, bytemuck::cast_slice::<u8, [f32; 4]>(&bytes)[0])
+        })
+    }
+
+    /// Computes the fields (density, velocity) on the device and returns the lowest index of an
+    /// unhealthy cell, reading back only the status.
+    fn first_unhealthy(&self) -> Option<usize> {
         let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
         self.dispatch(&mut encoder, &self.macroscopic, self.time % 2);
         self.gpu.queue.submit([encoder.finish()]);
         let status: Vec<u32> = bytemuck::cast_slice(&self.gpu.read_buffer(&self.status, 16)).to_vec();
-        (status[0] != u32::MAX).then(|| {
-            let cell = status[0] as usize;
-            let bytes = self.gpu.read_range(&self.fields, cell as u64 * 16, 16);
-            self.unhealthy(cell, bytemuck::cast_slice::<u8, [f32; 4]>(&bytes)[0])
-        })
+        (status[0] != u32::MAX).then_some(status[0] as usize)
     }
 
     fn unhealthy(&self, cell: usize, v: [f32; 4]) -> Unhealthy {
@@ -582,18 +587,12 @@ impl Lattice {
 
     /// Density and velocity of every cell, and the first unhealthy cell if any.
     pub fn fields(&self) -> (Vec<[f32; 4]>, Option<Unhealthy>) {
-        let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
-        self.dispatch(&mut encoder, &self.macroscopic, self.time % 2);
-        self.gpu.queue.submit([encoder.finish()]);
+        let bad = self.first_unhealthy();
         let bytes = self
             .gpu
             .read_buffer(&self.fields, (self.setup.cells() * 16) as u64);
         let fields: Vec<[f32; 4]> = bytemuck::cast_slice(&bytes).to_vec();
-        let status: Vec<u32> = bytemuck::cast_slice(&self.gpu.read_buffer(&self.status, 16)).to_vec();
-        let bad = (status[0] != u32::MAX).then(|| {
-            let cell = status[0] as usize;
-            self.unhealthy(cell, fields[cell])
-        });
+        let bad = bad.map(|cell| self.unhealthy(cell, fields[cell]));
         (fields, bad)
     }
 
