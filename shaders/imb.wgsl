@@ -10,11 +10,12 @@
 // same result):
 // - FUSED: `cover` sets the cell's bit in a cover mask, and the fluid kernels, which test the bit
 //   of every cell, apply the solid term where it is set (`solid_term`);
-// - otherwise (the redo): `cover` lists the covered cells, `save` keeps their pre-collision
-//   populations, the fluid kernels update every cell as without particles, and
-//   `stream_collide_covered` redoes each covered cell from its saved populations with the solid
-//   term (the AA pattern: a cell reads and writes the same 19 slots, which no other cell touches
-//   in that step, so the second write simply replaces the first).
+// - otherwise (the redo): `cover` lists the covered cells, `collide_covered` gives each its
+//   collision with the solid term from its pre-collision populations and keeps the result, the
+//   loads are reduced and go back to the host, and meanwhile the fluid kernels update every cell as
+//   without particles and `store_covered` writes the kept populations over the covered cells'
+//   (the AA pattern: a cell reads and writes the same 19 slots, which no other cell touches in
+//   that step, so the second write simply replaces the first).
 
 // Particles a cell can hold (1-4).
 override SLOTS: u32 = 2u;
@@ -36,7 +37,7 @@ struct Particle {
     edge: u32,
 }
 
-// A covered cell and its pre-collision populations (`save`).
+// A covered cell and the populations it sends out this step (`collide_covered`).
 struct Saved {
     cell: u32,
     f: array<f32, 19>,
@@ -201,7 +202,7 @@ fn cover(
     }
 }
 
-// The covered cells' workgroups for the indirect dispatches of `save` and `stream_collide_covered`:
+// The covered cells' workgroups for the indirect dispatches of `collide_covered` and `store_covered`:
 // status[5..8] (x, y, z; 2D beyond 65535 workgroups) for the front of the list, status[9..12] for
 // the back. One invocation; covered cells beyond the capacity are counted in status[2] (the run
 // stops: their solid term would be missing).
@@ -235,9 +236,13 @@ fn saved_entry(j: u32) -> u32 {
     return select(NO_CELL, capacity - 1u - j, j < back);
 }
 
-// Before the fluid step: the pre-collision populations of each covered cell.
+// Before the fluid step: each covered cell's collision with the solid term, from its
+// pre-collision populations where the fluid kernels will read them; what it sends along each link
+// (bounced back where the link leaves the fluid) is kept in `saved` until `store_covered` writes
+// it over the fluid kernels' result. The loads need nothing else: they go back to the host while
+// the fluid kernels run.
 @compute @workgroup_size(64)
-fn save(
+fn collide_covered(
     @builtin(workgroup_id) wg: vec3<u32>,
     @builtin(num_workgroups) nwg: vec3<u32>,
     @builtin(local_invocation_index) local: u32,
@@ -246,31 +251,50 @@ fn save(
     if e == NO_CELL { return; }
     let k = saved[e].cell;
     let p = coords(k);
+    var f: array<f32, 19>;
     // Without branches (llvmpipe would run both sides): in the odd step of a cell with a link that
     // leaves the fluid, both candidate slots are read and the right one kept.
     if KIND == 0u || KIND == 2u {
         //#for i
-        saved[e].f[{i}] = f{i}[k];
+        f[{i}] = f{i}[k];
         //#end
     } else if KIND == 1u {
         //#for i
-        saved[e].f[{i}] = f{i.o}[u32(i32(k) - offset(vec3<i32>({i.cx}, {i.cy}, {i.cz})))];
+        f[{i}] = f{i.o}[u32(i32(k) - offset(vec3<i32>({i.cx}, {i.cy}, {i.cz})))];
         //#end
     } else {
         let flag = flags[k];
         //#for i
         {
             let c = vec3<i32>({i.cx}, {i.cy}, {i.cz});
-            saved[e].f[{i}] = select(f{i.o}[wrapped(p - c)], f{i}[k], leaves(flag, {i.o}u));
+            f[{i}] = select(f{i.o}[wrapped(p - c)], f{i}[k], leaves(flag, {i.o}u));
+        }
+        //#end
+    }
+    let m = moments(f);
+    let post = immersed_boundary(k, f, m, collide(f, m));
+    if KIND < 2u {
+        //#for i
+        saved[e].f[{i}] = post[{i}];
+        //#end
+    } else {
+        let flag = flags[k];
+        //#for i
+        if leaves(flag, {i}u) {
+            let face = link_face(p, vec3<i32>({i.cx}, {i.cy}, {i.cz}));
+            saved[e].f[{i}] = bounce(face, vec3<f32>({i.cx}.0, {i.cy}.0, {i.cz}.0), {i.w}, post[{i}], m);
+        } else {
+            saved[e].f[{i}] = post[{i}];
         }
         //#end
     }
 }
 
-// After the fluid step, which updated the covered cells without the solid term: each covered cell
-// is redone from its saved populations, with the solid term, over the fluid kernels' result.
+// After the fluid step, which updated the covered cells without the solid term: each covered cell's
+// populations from `collide_covered` go where the next step reads them, over the fluid kernels'
+// (the AA pattern: the same slots, which no other cell touches in this step).
 @compute @workgroup_size(64)
-fn stream_collide_covered(
+fn store_covered(
     @builtin(workgroup_id) wg: vec3<u32>,
     @builtin(num_workgroups) nwg: vec3<u32>,
     @builtin(local_invocation_index) local: u32,
@@ -278,22 +302,24 @@ fn stream_collide_covered(
     let e = saved_entry(cell_index(wg, nwg, local));
     if e == NO_CELL { return; }
     let k = saved[e].cell;
-    var f: array<f32, 19>;
-    //#for i
-    f[{i}] = saved[e].f[{i}];
-    //#end
-    let m = moments(f);
-    let post = immersed_boundary(k, f, m, collide(f, m));
-    if KIND == 0u {
+    if KIND == 0u || KIND == 2u {
         //#for i
-        f{i.o}[k] = post[{i}];
+        f{i.o}[k] = saved[e].f[{i}];
         //#end
     } else if KIND == 1u {
         //#for i
-        f{i}[u32(i32(k) + offset(vec3<i32>({i.cx}, {i.cy}, {i.cz})))] = post[{i}];
+        f{i}[u32(i32(k) + offset(vec3<i32>({i.cx}, {i.cy}, {i.cz})))] = saved[e].f[{i}];
         //#end
     } else {
-        write_populations(k, coords(k), flags[k], post, m);
+        let flag = flags[k];
+        let p = coords(k);
+        //#for i
+        if leaves(flag, {i}u) {
+            f{i.o}[k] = saved[e].f[{i}];
+        } else {
+            f{i}[next_cell(k, p, vec3<i32>({i.cx}, {i.cy}, {i.cz}), flag)] = saved[e].f[{i}];
+        }
+        //#end
     }
 }
 

@@ -340,8 +340,8 @@ fn bounce(face: u32, c: vec3<f32>, w: f32, f_star: f32, m: Moments) -> f32 {
 // parity. llvmpipe (lavapipe) executes both sides of every branch: the fluid cells, far more, go
 // through the branch-free `stream_collide_fluid` instead. With particles, either these kernels
 // give the covered cells their solid term (FUSED, `solid_term` in imb.wgsl: one bit tested per
-// cell), or they update every cell without it and `stream_collide_covered` (imb.wgsl) then redoes
-// the covered cells from their saved populations.
+// cell), or they update every cell without it and `store_covered` (imb.wgsl) then writes the
+// covered cells' own collision, made before them by `collide_covered`, over theirs.
 @compute @workgroup_size(64)
 fn stream_collide(
     @builtin(workgroup_id) wg: vec3<u32>,

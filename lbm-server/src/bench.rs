@@ -31,10 +31,15 @@ pub struct BenchArgs {
     /// waited for: the round trip is in every pass), mean over the timed steps.
     #[arg(long)]
     passes: bool,
-    /// With --particles: where the covered cells get their solid term: auto (fused on a GPU, redo
-    /// on a CPU driver), fused, redo, or both (each particle count both ways).
+    /// With --particles: where the covered cells get their solid term: auto (redo: the bench's
+    /// spheres are sparse), fused, redo, or both (each particle count both ways).
     #[arg(long, default_value = "auto")]
     covered_cells: String,
+    /// With --particles: the host waits this long (ms) after each coupled step's loads are back,
+    /// as for a DEM process's step, before the next step (0: not at all). With the covered cells
+    /// redone the fluid kernels run meanwhile; the LBM-only lockstep row waits as long.
+    #[arg(long, default_value_t = 0.0)]
+    dem_ms: f64,
     /// The grid's faces: periodic (every cell an interior or wrapping one) or walls (a closed box,
     /// as a settling sphere's or a bed's: the cells beside the walls take the general kernel).
     #[arg(long, default_value = "periodic")]
@@ -192,6 +197,7 @@ fn run(args: &BenchArgs) -> Result<(), String> {
             mlups,
             args.passes,
             &modes,
+            args.dem_ms,
         )?;
     }
     if time_naive {
@@ -427,28 +433,36 @@ fn coupled_sweep(
     lbm_only: f64,
     passes: bool,
     modes: &[CoveredCells],
+    dem_ms: f64,
 ) -> Result<(), String> {
+    if !(dem_ms.is_finite() && dem_ms >= 0.0) {
+        return Err(format!("--dem-ms = {dem_ms}: expected 0 or more milliseconds"));
+    }
+    let dem = std::time::Duration::from_secs_f64(dem_ms / 1e3);
     let n = setup.n;
     let mut breakdown = Vec::new();
     let mut host = Vec::new();
     println!("coupled (spheres of 4 cells diameter, immersed moving boundary, one readback per step):");
+    if dem_ms > 0.0 {
+        println!("(the host waits {dem_ms} ms per step after the loads, a stand-in for the DEM's step)");
+    }
     println!("| particles | covered cells | MLUPS | ratio to LBM-only ({lbm_only:.1} MLUPS) |");
     println!("|---:|---|---:|---:|");
     // The lockstep's own cost: LBM-only steps, each submitted and waited for as a coupled step is.
-    let mlups = lockstep_mlups(gpu, &mut lattice, steps);
+    let mlups = lockstep_mlups(gpu, &mut lattice, steps, dem);
     println!(
         "| 0 (no coupling: one submit and wait per step) | - | {mlups:.1} | {:.0}% |",
         100.0 * mlups / lbm_only
     );
     drop(lattice);
     // The fused fluid kernels' own cost (no quads, one mask bit tested per cell), no particle.
-    if modes.iter().any(|m| m.fused_on(gpu.adapter.device_type)) {
+    if modes.iter().any(|m| m.fused()) {
         let options = ImbOptions {
             covered_cells: CoveredCells::Fused,
             ..Default::default()
         };
         let mut lattice = Lattice::new(gpu.clone(), setup.clone(), Health::default(), Some(options))?;
-        let mlups = lockstep_mlups(gpu, &mut lattice, steps);
+        let mlups = lockstep_mlups(gpu, &mut lattice, steps, dem);
         println!(
             "| 0 (fused fluid kernels, no particle: one submit and wait per step) | fused | {mlups:.1} | {:.0}% |",
             100.0 * mlups / lbm_only
@@ -485,7 +499,10 @@ fn coupled_sweep(
             let start = Instant::now();
             for _ in 0..steps {
                 lattice.step_coupled(&particles)?;
+                std::thread::sleep(dem);
             }
+            // The last step's fluid kernels may still run (with the redo they do not hold the loads).
+            gpu.wait();
             let mlups = (n[0] * n[1] * n[2]) as f64 * steps as f64 / start.elapsed().as_secs_f64() / 1e6;
             println!(
                 "| {count} | {name} | {mlups:.1} | {:.0}% |",
@@ -519,13 +536,14 @@ fn print_host_passes(host: &[(usize, [f64; 2])]) {
     }
 }
 
-/// MLUPS of `steps` fluid steps, each submitted and waited for on its own.
-fn lockstep_mlups(gpu: &Gpu, lattice: &mut Lattice, steps: u64) -> f64 {
+/// MLUPS of `steps` fluid steps, each submitted and waited for on its own, then `dem` idle.
+fn lockstep_mlups(gpu: &Gpu, lattice: &mut Lattice, steps: u64, dem: std::time::Duration) -> f64 {
     gpu.wait();
     let start = Instant::now();
     for _ in 0..steps {
         lattice.step(1);
         gpu.wait();
+        std::thread::sleep(dem);
     }
     lattice.setup.cells() as f64 * steps as f64 / start.elapsed().as_secs_f64() / 1e6
 }

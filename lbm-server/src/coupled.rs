@@ -206,14 +206,9 @@ fn correction_warning(units: &LatticeUnits, diameter: f64) -> Option<String> {
     })
 }
 
-/// The scene's `coupling.covered_cells`, "auto" made definite for this device and the scene's
-/// initial particles (their covered fraction of the lattice; `radii` in m).
-fn covered_cells(
-    scene: &Scene,
-    units: &LatticeUnits,
-    radii: &[f64],
-    device: wgpu::DeviceType,
-) -> Result<CoveredCells, String> {
+/// The scene's `coupling.covered_cells`, "auto" made definite for the scene's initial particles
+/// (their covered fraction of the lattice; `radii` in m).
+fn covered_cells(scene: &Scene, units: &LatticeUnits, radii: &[f64]) -> Result<CoveredCells, String> {
     let mode = CoveredCells::from_name(&scene.coupling.covered_cells).ok_or_else(|| {
         format!(
             "coupling.covered_cells = {:?}: expected \"auto\", \"fused\" or \"redo\"",
@@ -222,7 +217,7 @@ fn covered_cells(
     })?;
     let radii = radii.iter().map(|r| r / units.dx);
     let cells = units.n.iter().product();
-    Ok(mode.for_scene(device, covered_fraction(radii, cells)))
+    Ok(mode.for_scene(covered_fraction(radii, cells)))
 }
 
 impl FluidSide {
@@ -248,7 +243,7 @@ impl FluidSide {
                     scene.coupling.solid_collision
                 )
             })?,
-            covered_cells: covered_cells(scene, &units, &radii, gpu.adapter.device_type)?,
+            covered_cells: covered_cells(scene, &units, &radii)?,
         };
         let lattice = Lattice::new(gpu, setup_of(&units), health_of(&units), Some(options))?;
         let lubrication = scene.coupling.lubrication.then(|| lubrication_of(scene, &units));

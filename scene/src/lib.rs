@@ -154,9 +154,10 @@ pub struct Coupling {
     #[serde(default = "default_free_flight")]
     pub free_flight: bool,
     /// With a `[lattice]`: where the covered cells get their solid term (docs/imb.md, "Speed"):
-    /// "fused" in the fluid kernels (each cell tests one bit; suits a GPU, and dense beds),
-    /// "redo" saved and redone after them (the fluid kernels stay branch-free; suits a CPU driver
-    /// with sparse particles), "auto" (default): fused on a GPU, redo on a CPU driver.
+    /// "fused" in the fluid kernels (each cell tests one bit; suits dense beds), "redo" collided
+    /// before them and stored over their result (the fluid kernels stay branch-free and run while
+    /// the DEM takes its step; suits sparse particles), "auto" (default): redo unless the initial
+    /// particles cover 20% of the cells or more.
     #[serde(default = "default_covered_cells")]
     pub covered_cells: String,
     /// With a `[lattice]`: "none" (default) draws each sphere on the lattice at its radius;

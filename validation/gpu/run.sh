@@ -14,7 +14,8 @@
 # grid at 16 cells, 224 x 224 x 256, closed and periodic, one sphere, both ways of treating the
 # covered cells, each pass timed: what a closed box costs), coupled_trt.txt (256 x 256 x 512, 1 to
 # 32^3 particles, ratio to LBM-only, time per pass, the covered cells fused and redone),
-# coupled_dense.txt (64^3 particles, a dense bed), default/ (the default scene), suspension/ and
+# coupled_dense.txt (64^3 particles, a dense bed), coupled_dem.txt (1 and 32^3 particles, the
+# host idle 1.1 ms a step as for a DEM), default/ (the default scene), suspension/ and
 # suspension_substeps/ (32^3 beads settling, the whole program, free flight on and off:
 # summary.json), dem_bench_{suspension,bed}.txt (the DEM side alone on this machine's cores, 32^3
 # beads dilute and in a bed), tencate/<run>/ and bed/<run>/ (the scenes of .gpu/plan.txt: Ten Cate
@@ -80,9 +81,9 @@ mode=$(cat .gpu/mode 2>/dev/null || echo full)
 } > "$OUT/system.txt" 2>&1
 
 if [ "$mode" = small ]; then
-    cube=32x32x32 tencate=32x32x32 coupled=32x32x64 counts=1,8,64 dense=512 steps=30
+    cube=32x32x32 tencate=32x32x32 coupled=32x32x64 counts=1,8,64 dense=512 dense_dem=64 steps=30
 else
-    cube=256x256x256 tencate=224x224x256 coupled=256x256x512 counts=1,8,64,512,4096,32768 dense=262144 steps=300
+    cube=256x256x256 tencate=224x224x256 coupled=256x256x512 counts=1,8,64,512,4096,32768 dense=262144 dense_dem=32768 steps=300
 fi
 # LBM-only against the copy bandwidth and the naive kernel (issue 3's target: 85% of the copy
 # bandwidth); TRT also per cell (2026-12-04 on an H200: ours 0.79x the naive kernel).
@@ -104,6 +105,11 @@ step coupled_trt 90 150 $bin/lbm-server bench --grid $coupled --operator trt --p
 # A dense bed: 64^3 spheres of 4 cells 4 x 4 x 8 cells apart, half the cells covered, both ways.
 step coupled_dense 40 60 $bin/lbm-server bench --grid $coupled --operator trt --particles $dense \
     --steps $((steps / 15)) --rounds 1 --kernel ours --covered-cells both
+# The coupled step with the host idle 1.1 ms after each step's loads, as for the DEM's step of 32^3
+# beads flown on this machine's cores (2026-12-04): the redo's fluid kernels run meanwhile, the
+# fused ones cannot (the lockstep row waits as long after each fluid step).
+step coupled_dem 40 60 $bin/lbm-server bench --grid $coupled --operator trt --particles 1,$dense_dem \
+    --steps $((steps / 3)) --rounds 1 --kernel ours --covered-cells both --dem-ms 1.1
 # The default scene, the whole coupled program (DEM process and lockstep included).
 step default/log 30 60 $bin/lbm-server run .gpu/default.toml --out "$OUT/default"
 rm -rf "$OUT/default/fields"

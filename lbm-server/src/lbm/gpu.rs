@@ -35,7 +35,12 @@ impl Gpu {
     /// Picks the first adapter of the backends allowed by WGPU_BACKEND (default: all).
     pub fn new() -> Result<Gpu, String> {
         // WGPU_BACKEND (vulkan, metal, dx12, gl) and friends are honoured.
-        let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+        let mut descriptor = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
+        // wgpu checks each indirect dispatch's workgroup counts with a dispatch of its own and two
+        // barriers, four times per coupled step with the redo; `covered_groups` (imb.wgsl) writes
+        // them within the limits itself. WGPU_VALIDATION_INDIRECT_CALL=1 turns the check back on.
+        descriptor.flags = (descriptor.flags - wgpu::InstanceFlags::VALIDATION_INDIRECT_CALL).with_env();
+        let instance = wgpu::Instance::new(descriptor);
         let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
             power_preference: wgpu::PowerPreference::HighPerformance,
             ..Default::default()
@@ -67,6 +72,14 @@ impl Gpu {
     /// Waits until the queue is idle.
     pub fn wait(&self) {
         let _ = self.device.poll(wgpu::PollType::wait_indefinitely());
+    }
+
+    /// Waits for one submission (and those before it) only: later ones may still run.
+    pub fn wait_for(&self, submission: wgpu::SubmissionIndex) {
+        let _ = self.device.poll(wgpu::PollType::Wait {
+            submission_index: Some(submission),
+            timeout: None,
+        });
     }
 
     /// Copies a GPU buffer back to the host.
@@ -253,7 +266,7 @@ impl Lattice {
         );
         // The solid term in the fluid kernels (imb.rs, `CoveredCells`): those kernels then update
         // every cell one at a time, without the four-cell quads.
-        let fused = imb.is_some_and(|o| o.covered_cells.fused_on(gpu.adapter.device_type));
+        let fused = imb.is_some_and(|o| o.covered_cells.fused());
         let classes = CellList::new(&setup, quads && !fused);
         let cell_list = init(
             "cell list",

@@ -58,7 +58,7 @@ impl SolidCollision {
 /// populations and loads (tested bit for bit); they differ in cost.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum CoveredCells {
-    /// Fused on a GPU, redo on a CPU driver.
+    /// Redo for sparse particles, fused from [`FUSED_FROM`] of the cells covered, on every device.
     #[default]
     Auto,
     /// In the fluid kernels: every cell tests one bit of a cover mask, and a covered cell takes
@@ -66,8 +66,9 @@ pub enum CoveredCells {
     /// branch in the fluid kernels, which a GPU pays per warp that holds a covered cell and a CPU
     /// driver such as lavapipe (which runs both sides of a branch) for every cell.
     Fused,
-    /// Saved before the fluid kernels and redone after them with the solid term: the fluid
-    /// kernels stay branch-free, each covered cell's populations move three times.
+    /// Collided with the solid term before the fluid kernels (the loads then go back to the host
+    /// while they run) and stored over their result: the fluid kernels stay branch-free, each
+    /// covered cell's populations move three times.
     Redo,
 }
 
@@ -82,33 +83,32 @@ impl CoveredCells {
         }
     }
 
-    /// Whether the solid term goes in the fluid kernels on this kind of device (`Auto` taken as
-    /// sparse particles; see [`CoveredCells::for_scene`]).
-    pub fn fused_on(self, device: wgpu::DeviceType) -> bool {
-        match self {
-            CoveredCells::Auto => device != wgpu::DeviceType::Cpu,
-            CoveredCells::Fused => true,
-            CoveredCells::Redo => false,
-        }
+    /// Whether the solid term goes in the fluid kernels (`Auto` taken as sparse particles; see
+    /// [`CoveredCells::for_scene`]).
+    pub fn fused(self) -> bool {
+        self == CoveredCells::Fused
     }
 
-    /// `Auto` made definite for particles that cover `covered_fraction` of the cells: fused on a
-    /// GPU; on a CPU driver redo for sparse particles and fused from [`FUSED_ON_CPU_FROM`] on.
-    pub fn for_scene(self, device: wgpu::DeviceType, covered_fraction: f64) -> CoveredCells {
-        let dense = covered_fraction >= FUSED_ON_CPU_FROM;
+    /// `Auto` made definite for particles that cover `covered_fraction` of the cells: redo for
+    /// sparse particles, fused from [`FUSED_FROM`] on.
+    pub fn for_scene(self, covered_fraction: f64) -> CoveredCells {
         match self {
-            CoveredCells::Auto if self.fused_on(device) || dense => CoveredCells::Fused,
+            CoveredCells::Auto if covered_fraction >= FUSED_FROM => CoveredCells::Fused,
             CoveredCells::Auto => CoveredCells::Redo,
             mode => mode,
         }
     }
 }
 
-/// The covered fraction of the cells from which a CPU driver runs the coupled step faster with the
-/// solid term fused: lavapipe, 64 x 64 x 128, TRT, spheres of 4 cells (BENCHMARKS.md): the redo
-/// runs at 94 / 64 / 44 / 30 / 26% of LBM-only at 1 / 512 / 1728 / 2744 / 4096 spheres (0.01 /
-/// 6 / 21 / 33 / 49% of the cells covered by [`covered_fraction`]), fused at 57 / 53 / 43 / 39 / 37%.
-pub const FUSED_ON_CPU_FROM: f64 = 0.2;
+/// The covered fraction of the cells from which the coupled step runs faster with the solid term
+/// fused (BENCHMARKS.md). Lavapipe, 64 x 64 x 128, TRT, spheres of 4 cells: the redo runs at 94 /
+/// 64 / 44 / 30 / 26% of LBM-only at 1 / 512 / 1728 / 2744 / 4096 spheres (0.01 / 6 / 21 / 33 /
+/// 49% of the cells covered by [`covered_fraction`]), fused at 57 / 53 / 43 / 39 / 37%. NVIDIA
+/// H200, 256 x 256 x 512: the redo faster from 1 to 4096 spheres (up to 0.7% covered; 71-57%
+/// against 62-54%), fused faster with half the cells covered (44% against 18%), before the redo
+/// let the fluid kernels run during the host's part of the step; the crossover between is not
+/// measured there.
+pub const FUSED_FROM: f64 = 0.2;
 
 /// The fraction of the cells that spheres of these radii (cells) cover: those whose centre lies
 /// within r + 1/2 - 1/(12 r) of a sphere's centre (where the solid fraction is above 0), counted
@@ -232,13 +232,13 @@ struct Passes {
     redo: Option<Redo>,
 }
 
-/// The passes of [`CoveredCells::Redo`]: `covered_groups`, then `save` and
-/// `stream_collide_covered` for each KIND (bit 0 the parity, bit 1 the covered cells with a link
-/// that leaves the fluid).
+/// The passes of [`CoveredCells::Redo`]: `covered_groups`, then `collide_covered` (before the
+/// fluid kernels) and `store_covered` (after them) for each KIND (bit 0 the parity, bit 1 the
+/// covered cells with a link that leaves the fluid).
 struct Redo {
     groups: wgpu::ComputePipeline,
-    save: [wgpu::ComputePipeline; 4],
-    covered: [wgpu::ComputePipeline; 4],
+    collide: [wgpu::ComputePipeline; 4],
+    store: [wgpu::ComputePipeline; 4],
 }
 
 /// Buffers and pipelines of the coupling (tiny placeholders when the scene has no particles).
@@ -302,14 +302,14 @@ impl Coupling {
         }
     }
 
-    /// Adds the cover and reduce pipelines when the coupling is on, and with the redo the save and
-    /// covered-cell pipelines.
+    /// Adds the cover and reduce pipelines when the coupling is on, and with the redo the
+    /// covered cells' collide and store pipelines.
     pub fn with_pipelines(mut self, on: bool, make: &dyn Fn(&str, u32) -> wgpu::ComputePipeline) -> Coupling {
         if on {
             let redo = (!self.fused).then(|| Redo {
                 groups: make("covered_groups", 0),
-                save: [0, 1, 2, 3].map(|kind| make("save", kind)),
-                covered: [0, 1, 2, 3].map(|kind| make("stream_collide_covered", kind)),
+                collide: [0, 1, 2, 3].map(|kind| make("collide_covered", kind)),
+                store: [0, 1, 2, 3].map(|kind| make("store_covered", kind)),
             });
             self.pipelines = Some(Passes {
                 cover: make("cover", 0),
@@ -329,7 +329,7 @@ impl Coupling {
         let mut all = vec![&p.cover, &p.reduce, &p.sum_loads];
         if let Some(r) = &p.redo {
             all.push(&r.groups);
-            all.extend(r.save.iter().chain(&r.covered));
+            all.extend(r.collide.iter().chain(&r.store));
         }
         all
     }
@@ -476,8 +476,8 @@ impl Lattice {
             let kind = |list: usize| (self.time % 2) as usize + 2 * list;
             (
                 r.groups.clone(),
-                [0, 1].map(|list| r.save[kind(list)].clone()),
-                [0, 1].map(|list| r.covered[kind(list)].clone()),
+                [0, 1].map(|list| r.collide[kind(list)].clone()),
+                [0, 1].map(|list| r.store[kind(list)].clone()),
             )
         });
         let parity = self.time % 2;
@@ -495,29 +495,23 @@ impl Lattice {
         encoder.clear_buffer(&self.status, 16, Some(32));
         self.dispatch_groups(&mut encoder, &cover, parity, n);
         encoder = split("cover", encoder);
-        match redo {
+        match &redo {
             // The fluid kernels give the covered cells their solid term (shaders/lbm.wgsl).
             None => {
                 self.encode_step(&mut encoder);
                 encoder = split("fluid", encoder);
             }
-            // The fluid kernels update every cell without the solid term; the covered cells are
-            // then redone from their saved populations (shaders/imb.wgsl).
-            Some((groups, save, covered)) => {
-                self.dispatch_groups(&mut encoder, &groups, parity, 1);
+            // The covered cells collide with the solid term first, from their pre-collision
+            // populations, and keep the result (shaders/imb.wgsl).
+            Some((groups, collide, _)) => {
+                self.dispatch_groups(&mut encoder, groups, parity, 1);
                 let indirect = &self.imb.as_ref().expect("coupling").indirect;
                 encoder.copy_buffer_to_buffer(&self.status, 20, indirect, 0, 28);
                 encoder = split("covered_groups", encoder);
-                for (offset, pipeline) in [0, 16].into_iter().zip(&save) {
+                for (offset, pipeline) in [0, 16].into_iter().zip(collide) {
                     self.dispatch_indirect(&mut encoder, pipeline, parity, offset);
                 }
-                encoder = split("save", encoder);
-                self.encode_step(&mut encoder);
-                encoder = split("fluid", encoder);
-                for (offset, pipeline) in [0, 16].into_iter().zip(&covered) {
-                    self.dispatch_indirect(&mut encoder, pipeline, parity, offset);
-                }
-                encoder = split("stream_collide_covered", encoder);
+                encoder = split("collide_covered", encoder);
             }
         }
         self.dispatch_groups(&mut encoder, &reduce, parity, (n * REDUCE_SLICES).div_ceil(64));
@@ -528,13 +522,27 @@ impl Lattice {
         if bytes > 0 {
             encoder.copy_buffer_to_buffer(&coupling.loads, 0, &coupling.readback, 0, bytes);
         }
-        gpu.queue.submit([encoder.finish()]);
+        let with_loads = gpu.queue.submit([encoder.finish()]);
+        // With the redo the fluid kernels, which update every cell as without particles, and the
+        // covered cells' stores over their result go in a submission of their own: it runs while
+        // the host reads the loads back and the DEM takes its step (docs/imb.md, "The redo").
+        if let Some((_, _, store)) = redo {
+            let mut encoder = gpu.device.create_command_encoder(&Default::default());
+            self.encode_step(&mut encoder);
+            encoder = split("fluid", encoder);
+            for (offset, pipeline) in [0, 16].into_iter().zip(&store) {
+                self.dispatch_indirect(&mut encoder, pipeline, parity, offset);
+            }
+            encoder = split("store_covered", encoder);
+            gpu.queue.submit([encoder.finish()]);
+        }
         if bytes == 0 {
             return read(&[]);
         }
+        let coupling = self.imb.as_ref().expect("coupling");
         let slice = coupling.readback.slice(..bytes);
         slice.map_async(wgpu::MapMode::Read, |_| {});
-        gpu.wait();
+        gpu.wait_for(with_loads);
         let read_out = {
             let data = slice
                 .get_mapped_range()
@@ -921,13 +929,13 @@ mod tests {
     }
 
     #[test]
-    fn auto_fuses_on_a_gpu_and_for_dense_beds_on_a_cpu() {
-        use wgpu::DeviceType::{Cpu, DiscreteGpu};
+    fn auto_fuses_only_for_dense_beds() {
         let auto = CoveredCells::Auto;
-        assert_eq!(auto.for_scene(DiscreteGpu, 0.0), CoveredCells::Fused);
-        assert_eq!(auto.for_scene(Cpu, 0.05), CoveredCells::Redo);
-        assert_eq!(auto.for_scene(Cpu, 0.3), CoveredCells::Fused);
-        assert_eq!(CoveredCells::Redo.for_scene(DiscreteGpu, 0.9), CoveredCells::Redo);
-        assert_eq!(CoveredCells::Fused.for_scene(Cpu, 0.0), CoveredCells::Fused);
+        assert_eq!(auto.for_scene(0.0), CoveredCells::Redo);
+        assert_eq!(auto.for_scene(0.05), CoveredCells::Redo);
+        assert_eq!(auto.for_scene(0.3), CoveredCells::Fused);
+        assert!(!auto.fused());
+        assert_eq!(CoveredCells::Redo.for_scene(0.9), CoveredCells::Redo);
+        assert_eq!(CoveredCells::Fused.for_scene(0.0), CoveredCells::Fused);
     }
 }
