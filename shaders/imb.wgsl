@@ -37,11 +37,6 @@ struct Particle {
     edge: u32,
 }
 
-// A covered cell and the populations it sends out this step (`collide_covered`).
-struct Saved {
-    cell: u32,
-    f: array<f32, 19>,
-}
 
 @group(0) @binding(24) var<storage, read_write> particles: array<Particle>;
 // Hydrodynamic force and torque about the centre of each particle (lattice units), six numbers
@@ -64,8 +59,11 @@ struct Saved {
 // The covered cells of this step, each once, in the order `cover` found them, over the `fields`
 // buffer (binding 3), which only `macroscopic` uses and which it rewrites: from the front those
 // none of whose links leaves the fluid or wraps (status[4] of them: their neighbours are at fixed
-// index offsets), from the back the others (status[8]).
-@group(0) @binding(3) var<storage, read_write> saved: array<Saved>;
+// index offsets), from the back the others (status[8]). Entry e of a list of capacity C
+// (imb_info.w) is the cell, saved[e], and the 19 populations it sends out this step
+// (`collide_covered`), saved[C (i + 1) + e] for direction i: structure of arrays, so that
+// neighbouring invocations touch neighbouring words.
+@group(0) @binding(3) var<storage, read_write> saved: array<u32>;
 
 const NO_CELL: u32 = 0xffffffffu;
 
@@ -185,10 +183,10 @@ fn cover(
                         atomicOr(&covered[mask_word(k)], mask_bit(k));
                     } else if (flags[k] & (0x7ffffu | WRAPS)) == 0u {
                         let e = atomicAdd(&status[4], 1u);
-                        if e < imb_info.w { saved[e].cell = k; }
+                        if e < imb_info.w { saved[e] = k; }
                     } else {
                         let e = atomicAdd(&status[8], 1u);
-                        if e < imb_info.w { saved[imb_info.w - 1u - e].cell = k; }
+                        if e < imb_info.w { saved[imb_info.w - 1u - e] = k; }
                     }
                 }
                 if slot >= SLOTS {
@@ -236,6 +234,11 @@ fn saved_entry(j: u32) -> u32 {
     return select(NO_CELL, capacity - 1u - j, j < back);
 }
 
+// Where entry e of the list keeps the population it sends along direction i.
+fn population(e: u32, i: u32) -> u32 {
+    return imb_info.w * (i + 1u) + e;
+}
+
 // Before the fluid step: each covered cell's collision with the solid term, from its
 // pre-collision populations where the fluid kernels will read them; what it sends along each link
 // (bounced back where the link leaves the fluid) is kept in `saved` until `store_covered` writes
@@ -249,7 +252,7 @@ fn collide_covered(
 ) {
     let e = saved_entry(cell_index(wg, nwg, local));
     if e == NO_CELL { return; }
-    let k = saved[e].cell;
+    let k = saved[e];
     let p = coords(k);
     var f: array<f32, 19>;
     // Without branches (llvmpipe would run both sides): in the odd step of a cell with a link that
@@ -275,16 +278,16 @@ fn collide_covered(
     let post = immersed_boundary(k, f, m, collide(f, m));
     if KIND < 2u {
         //#for i
-        saved[e].f[{i}] = post[{i}];
+        saved[population(e, {i}u)] = bitcast<u32>(post[{i}]);
         //#end
     } else {
         let flag = flags[k];
         //#for i
         if leaves(flag, {i}u) {
             let face = link_face(p, vec3<i32>({i.cx}, {i.cy}, {i.cz}));
-            saved[e].f[{i}] = bounce(face, vec3<f32>({i.cx}.0, {i.cy}.0, {i.cz}.0), {i.w}, post[{i}], m);
+            saved[population(e, {i}u)] = bitcast<u32>(bounce(face, vec3<f32>({i.cx}.0, {i.cy}.0, {i.cz}.0), {i.w}, post[{i}], m));
         } else {
-            saved[e].f[{i}] = post[{i}];
+            saved[population(e, {i}u)] = bitcast<u32>(post[{i}]);
         }
         //#end
     }
@@ -301,23 +304,23 @@ fn store_covered(
 ) {
     let e = saved_entry(cell_index(wg, nwg, local));
     if e == NO_CELL { return; }
-    let k = saved[e].cell;
+    let k = saved[e];
     if KIND == 0u || KIND == 2u {
         //#for i
-        f{i.o}[k] = saved[e].f[{i}];
+        f{i.o}[k] = bitcast<f32>(saved[population(e, {i}u)]);
         //#end
     } else if KIND == 1u {
         //#for i
-        f{i}[u32(i32(k) + offset(vec3<i32>({i.cx}, {i.cy}, {i.cz})))] = saved[e].f[{i}];
+        f{i}[u32(i32(k) + offset(vec3<i32>({i.cx}, {i.cy}, {i.cz})))] = bitcast<f32>(saved[population(e, {i}u)]);
         //#end
     } else {
         let flag = flags[k];
         let p = coords(k);
         //#for i
         if leaves(flag, {i}u) {
-            f{i.o}[k] = saved[e].f[{i}];
+            f{i.o}[k] = bitcast<f32>(saved[population(e, {i}u)]);
         } else {
-            f{i}[next_cell(k, p, vec3<i32>({i.cx}, {i.cy}, {i.cz}), flag)] = saved[e].f[{i}];
+            f{i}[next_cell(k, p, vec3<i32>({i.cx}, {i.cy}, {i.cz}), flag)] = bitcast<f32>(saved[population(e, {i}u)]);
         }
         //#end
     }

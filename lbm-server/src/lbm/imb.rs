@@ -195,7 +195,7 @@ const REDUCE_SLICES: u32 = 8;
 const LOADS_BUFFER_BYTES: u64 = LOAD_BYTES * (1 + REDUCE_SLICES as u64);
 /// The shader's pair: one vec4 per cell of a particle's bounding box.
 const PAIR_BYTES: u64 = 16;
-/// The shader's `Saved`: a covered cell and its 19 populations (over the `fields` buffer).
+/// An entry of the shader's `saved`: a covered cell and its 19 populations (over the `fields` buffer).
 const SAVED_BYTES: u64 = 80;
 
 /// Most particles a coupled step takes: imb.wgsl's `slot_key` holds 24-bit particle indices.
