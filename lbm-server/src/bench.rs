@@ -28,7 +28,8 @@ pub struct BenchArgs {
     #[arg(long, value_delimiter = ',')]
     particles: Vec<usize>,
     /// With --particles: also time each pass of the coupled step on its own (each submitted and
-    /// waited for: the round trip is in every pass), mean over the timed steps.
+    /// waited for: the round trip is in every pass), mean over the timed steps; and, where the
+    /// device has timestamps, each pass by the device's clock in steps not split.
     #[arg(long)]
     passes: bool,
     /// With --particles: where the covered cells get their solid term: auto (redo: the bench's
@@ -441,6 +442,7 @@ fn coupled_sweep(
     let dem = std::time::Duration::from_secs_f64(dem_ms / 1e3);
     let n = setup.n;
     let mut breakdown = Vec::new();
+    let mut clocked = Vec::new();
     let mut host = Vec::new();
     println!("coupled (spheres of 4 cells diameter, immersed moving boundary, one readback per step):");
     if dem_ms > 0.0 {
@@ -510,6 +512,14 @@ fn coupled_sweep(
             );
             if passes {
                 breakdown.push((count, name, time_passes(&mut lattice, &particles, steps)?));
+                if let Some(clock) = lattice.pass_clock() {
+                    let mut sums: PassTimes<1> = Vec::new();
+                    for _ in 0..steps {
+                        let times = lattice.step_coupled_clocked(&particles, &clock)?;
+                        add_mean(&mut sums, times.iter().map(|(name, t)| (*name, [*t])), steps);
+                    }
+                    clocked.push((count, name, sums));
+                }
                 if host.last().is_none_or(|(c, _)| *c != count) {
                     host.push((count, lattice.host_pass_times(&particles, 21)?));
                 }
@@ -517,7 +527,10 @@ fn coupled_sweep(
         }
     }
     if passes {
-        print_passes(&breakdown);
+        let split = "each pass submitted and waited for on its own";
+        print_passes(&breakdown, ["wall", "CPU (all threads)"], split);
+        let unsplit = "the device's timestamps between the passes of steps not split, as a run makes them";
+        print_passes(&clocked, ["device clock"], unsplit);
         print_host_passes(&host);
     }
     Ok(())
@@ -571,19 +584,29 @@ fn time_passes(
     steps: u64,
 ) -> Result<Vec<(&'static str, [f64; 2])>, String> {
     let clock = || [start_of_run().elapsed().as_secs_f64(), process_cpu_seconds()];
-    let mut sums: Vec<(&'static str, [f64; 2])> = Vec::new();
+    let mut sums: PassTimes<2> = Vec::new();
     for _ in 0..steps {
         let times = lattice.step_coupled_timed(particles, &clock)?;
-        if sums.is_empty() {
-            sums = times.iter().map(|(name, _)| (*name, [0.0; 2])).collect();
-        }
-        for (sum, (_, t)) in sums.iter_mut().zip(&times) {
-            for (total, t) in sum.1.iter_mut().zip(t) {
-                *total += t * 1e3 / steps as f64;
-            }
-        }
+        let ms = times.iter().map(|(name, t)| (*name, t.map(|t| t * 1e3)));
+        add_mean(&mut sums, ms, steps);
     }
     Ok(sums)
+}
+
+/// Adds one step's times of each pass (ms) over `steps` to `sums` (the passes in the same order).
+fn add_mean<const N: usize>(
+    sums: &mut PassTimes<N>,
+    times: impl Iterator<Item = (&'static str, [f64; N])>,
+    steps: u64,
+) {
+    for (k, (name, t)) in times.enumerate() {
+        if k == sums.len() {
+            sums.push((name, [0.0; N]));
+        }
+        for (total, t) in sums[k].1.iter_mut().zip(t) {
+            *total += t / steps as f64;
+        }
+    }
 }
 
 fn start_of_run() -> Instant {
@@ -606,31 +629,34 @@ fn process_cpu_seconds() -> f64 {
     }
 }
 
-/// Milliseconds (wall, CPU) of each pass of a coupled step, in the order of the step.
-type PassTimes = Vec<(&'static str, [f64; 2])>;
+/// Milliseconds by N clocks of each pass of a coupled step, in the order of the step.
+type PassTimes<const N: usize> = Vec<(&'static str, [f64; N])>;
 
 /// The time of each pass per particle count: one table per way of treating the covered cells
-/// (their passes differ) and clock.
-fn print_passes(breakdown: &[(usize, &str, PassTimes)]) {
+/// (their passes differ) and clock; `how` the passes were timed.
+fn print_passes<const N: usize>(breakdown: &[(usize, &str, PassTimes<N>)], clocks: [&str; N], how: &str) {
     for mode in ["redo", "fused"] {
-        let rows: Vec<(usize, &PassTimes)> = breakdown
+        let rows: Vec<(usize, &PassTimes<N>)> = breakdown
             .iter()
             .filter(|(_, m, _)| *m == mode)
             .map(|(count, _, times)| (*count, times))
             .collect();
-        print_pass_table(mode, &rows);
+        print_pass_table(mode, &rows, clocks, how);
     }
 }
 
-fn print_pass_table(mode: &str, breakdown: &[(usize, &PassTimes)]) {
+fn print_pass_table<const N: usize>(
+    mode: &str,
+    breakdown: &[(usize, &PassTimes<N>)],
+    clocks: [&str; N],
+    how: &str,
+) {
     let Some((_, first)) = breakdown.first() else {
         return;
     };
     let names: Vec<&str> = first.iter().map(|(name, _)| *name).collect();
-    for (k, what) in ["wall", "CPU (all threads)"].iter().enumerate() {
-        println!(
-            "coupled step by pass, covered cells {mode}, {what} ms per step (mean; each pass submitted and waited for on its own):"
-        );
+    for (k, what) in clocks.iter().enumerate() {
+        println!("coupled step by pass, covered cells {mode}, {what} ms per step (mean; {how}):");
         println!(
             "| particles | {} | total | total without fluid |",
             names.join(" | ")

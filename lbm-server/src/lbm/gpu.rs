@@ -55,9 +55,13 @@ impl Gpu {
                 limits.max_storage_buffers_per_shader_stage
             ));
         }
+        // Timestamps between passes where the device has them (`bench --passes`: each pass's time
+        // by the device's clock).
+        let stamps = wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS;
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("lbm"),
             required_limits: limits.clone(),
+            required_features: adapter.features() & stamps,
             ..Default::default()
         }))
         .map_err(|e| format!("cannot open the GPU device: {e}"))?;

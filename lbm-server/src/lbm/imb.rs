@@ -221,8 +221,18 @@ pub fn box_edge(radius: f64) -> u32 {
 }
 
 /// Receives the encoder after each pass of a coupled step (named) and returns the one to go on
-/// with: the identity, or a submit and wait for timing each pass.
+/// with: the identity, a submit and wait for timing each pass, or a timestamp.
 type Split<'a> = &'a mut dyn FnMut(&'static str, wgpu::CommandEncoder) -> wgpu::CommandEncoder;
+
+/// The device's timestamps between the passes of a coupled step ([`Lattice::pass_clock`]).
+pub struct PassClock {
+    set: wgpu::QuerySet,
+    resolved: wgpu::Buffer,
+    readback: wgpu::Buffer,
+}
+
+/// Timestamps a coupled step can write (it writes at most 8).
+const PASS_STAMPS: u32 = 16;
 
 /// The coupling's kernels: `cover` and `reduce`, and with the redo the passes around the fluid step.
 struct Passes {
@@ -418,6 +428,80 @@ impl Lattice {
         })?;
         times.push(("readback", elapsed(&mut mark)));
         Ok(times)
+    }
+
+    /// Timestamps for [`Lattice::step_coupled_clocked`], where the device writes them inside
+    /// command encoders (None elsewhere).
+    pub fn pass_clock(&self) -> Option<PassClock> {
+        let need = wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS;
+        if !self.gpu.device.features().contains(need) {
+            return None;
+        }
+        let d = &self.gpu.device;
+        let bytes = PASS_STAMPS as u64 * 8;
+        let buffer = |label, usage| {
+            d.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: bytes,
+                usage,
+                mapped_at_creation: false,
+            })
+        };
+        Some(PassClock {
+            set: d.create_query_set(&wgpu::QuerySetDescriptor {
+                label: Some("pass clock"),
+                ty: wgpu::QueryType::Timestamp,
+                count: PASS_STAMPS,
+            }),
+            resolved: buffer(
+                "pass clock",
+                wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+            ),
+            readback: buffer(
+                "pass clock readback",
+                wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            ),
+        })
+    }
+
+    /// A coupled step as a run makes it (not split into submissions), with a timestamp after
+    /// each pass: the milliseconds of each pass by the device's clock, in the order of the step
+    /// (the host's "upload" only marks the start; with the redo "fluid" includes the loads' copy).
+    pub fn step_coupled_clocked(
+        &mut self,
+        particles: &[SolidParticle],
+        clock: &PassClock,
+    ) -> Result<Vec<(&'static str, f64)>, String> {
+        let mut names = Vec::new();
+        let mut stamp = |name: &'static str, mut encoder: wgpu::CommandEncoder| {
+            encoder.write_timestamp(&clock.set, names.len() as u32);
+            names.push(name);
+            encoder
+        };
+        let mut loads = Vec::new();
+        self.coupled_step(particles, &mut stamp, &mut |l| {
+            convert_loads(l, &mut loads, &|_, l| l)
+        })?;
+        let count = names.len() as u32;
+        let gpu = self.gpu.clone();
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        encoder.resolve_query_set(&clock.set, 0..count, &clock.resolved, 0);
+        encoder.copy_buffer_to_buffer(&clock.resolved, 0, &clock.readback, 0, count as u64 * 8);
+        gpu.queue.submit([encoder.finish()]);
+        let slice = clock.readback.slice(..count as u64 * 8);
+        slice.map_async(wgpu::MapMode::Read, |_| {});
+        gpu.wait();
+        let ticks: Vec<u64> = {
+            let data = slice
+                .get_mapped_range()
+                .map_err(|e| format!("pass clock: {e:?}"))?;
+            bytemuck::cast_slice(&data).to_vec()
+        };
+        clock.readback.unmap();
+        let ms_per_tick = gpu.queue.get_timestamp_period() as f64 * 1e-6;
+        Ok((1..names.len())
+            .map(|k| (names[k], ticks[k].wrapping_sub(ticks[k - 1]) as f64 * ms_per_tick))
+            .collect())
     }
 
     /// The host's own passes of a coupled step over `particles`, timed without the device:
