@@ -25,6 +25,11 @@ override FUSED: bool = false;
 override SEED_WEIGHTING: bool = false;
 // Solid collision: false = Noble & Torczynski's, true = superposition (`immersed_boundary`).
 override SUPERPOSITION: bool = false;
+// The redo's list of covered cells (`saved`) as structure of arrays (true, on a GPU: the cells, then
+// each population in a run of its own, so that neighbouring invocations touch neighbouring words)
+// or one 20-word record per cell (false, on a CPU driver, where each invocation's loads go one by
+// one and a record's words are best together).
+override BY_POPULATION: bool = true;
 
 struct Particle {
     // centre in lattice units (cell i spans [i, i + 1]) and radius
@@ -59,10 +64,8 @@ struct Particle {
 // The covered cells of this step, each once, in the order `cover` found them, over the `fields`
 // buffer (binding 3), which only `macroscopic` uses and which it rewrites: from the front those
 // none of whose links leaves the fluid or wraps (status[4] of them: their neighbours are at fixed
-// index offsets), from the back the others (status[8]). Entry e of a list of capacity C
-// (imb_info.w) is the cell, saved[e], and the 19 populations it sends out this step
-// (`collide_covered`), saved[C (i + 1) + e] for direction i: structure of arrays, so that
-// neighbouring invocations touch neighbouring words.
+// index offsets), from the back the others (status[8]). Entry e holds the cell and the 19
+// populations it sends out this step (`collide_covered`), laid out by BY_POPULATION.
 @group(0) @binding(3) var<storage, read_write> saved: array<u32>;
 
 const NO_CELL: u32 = 0xffffffffu;
@@ -167,36 +170,60 @@ fn cover(
     let p = particles[j];
     let m = p.edge;
     let origin = box_origin(p);
-    for (var t = local; t < m * m * m; t += 64u) {
-        let q = box_cell(origin, m, t);
-        var covers = 0.0;
-        let k = lattice_cell(q);
-        if k != NO_CELL {
-            let eps = solid_fraction(vec3<f32>(q) + 0.5, p.pos_r.xyz, p.pos_r.w);
-            if eps > 0.0 && (flags[k] & SOLID) == 0u {
-                let slot = atomicAdd(&covered[k], 1u);
-                if slot == 0u {
-                    // First to cover the cell: it sets the cell's bit of the cover mask (FUSED),
-                    // or joins the list of covered cells (a cell that would not fit is counted by
-                    // `covered_groups`).
-                    if FUSED {
-                        atomicOr(&covered[mask_word(k)], mask_bit(k));
-                    } else if (flags[k] & (0x7ffffu | WRAPS)) == 0u {
-                        let e = atomicAdd(&status[4], 1u);
-                        if e < imb_info.w { saved[e] = k; }
-                    } else {
-                        let e = atomicAdd(&status[8], 1u);
-                        if e < imb_info.w { saved[imb_info.w - 1u - e] = k; }
+    let cells = m * m * m;
+    // Every invocation of the workgroup takes the same turns (`list_entry` may gather a subgroup).
+    for (var start = 0u; start < cells; start += 64u) {
+        let t = start + local;
+        var k = NO_CELL;
+        // The list the cell joins (the redo): FRONT, BACK or NO_LIST.
+        var list = NO_LIST;
+        if t < cells {
+            let q = box_cell(origin, m, t);
+            var covers = 0.0;
+            k = lattice_cell(q);
+            if k != NO_CELL {
+                let eps = solid_fraction(vec3<f32>(q) + 0.5, p.pos_r.xyz, p.pos_r.w);
+                if eps > 0.0 && (flags[k] & SOLID) == 0u {
+                    let slot = atomicAdd(&covered[k], 1u);
+                    if slot == 0u {
+                        // First to cover the cell: it sets the cell's bit of the cover mask
+                        // (FUSED), or the cell joins a list of covered cells.
+                        if FUSED {
+                            atomicOr(&covered[mask_word(k)], mask_bit(k));
+                        } else {
+                            list = select(BACK, FRONT, (flags[k] & (0x7ffffu | WRAPS)) == 0u);
+                        }
                     }
+                    if slot >= SLOTS {
+                        atomicAdd(&status[1], 1u);
+                    }
+                    hold_slot(k, slot_key(eps, j));
+                    covers = 1.0;
                 }
-                if slot >= SLOTS {
-                    atomicAdd(&status[1], 1u);
-                }
-                hold_slot(k, slot_key(eps, j));
-                covers = 1.0;
             }
+            pairs[p.first + t] = vec4<f32>(0.0, 0.0, 0.0, covers);
         }
-        pairs[p.first + t] = vec4<f32>(0.0, 0.0, 0.0, covers);
+        if !FUSED {
+            join_list(k, list);
+        }
+    }
+}
+
+const FRONT: u32 = 0u;
+const BACK: u32 = 1u;
+const NO_LIST: u32 = 2u;
+
+// Cell k joins the front of the covered cells' list (status[4] of them) or its back (status[8]); a
+// cell that would not fit is counted by `covered_groups`. Called by every invocation of `cover`
+// at each turn, `list` NO_LIST for those whose cell joins none (`list_entry` may gather a subgroup).
+fn join_list(k: u32, list: u32) {
+    let front = list_entry(list == FRONT, 4u);
+    let back = list_entry(list == BACK, 8u);
+    if list == FRONT && front < imb_info.w {
+        saved[list_cell(front)] = k;
+    }
+    if list == BACK && back < imb_info.w {
+        saved[list_cell(imb_info.w - 1u - back)] = k;
     }
 }
 
@@ -234,9 +261,14 @@ fn saved_entry(j: u32) -> u32 {
     return select(NO_CELL, capacity - 1u - j, j < back);
 }
 
-// Where entry e of the list keeps the population it sends along direction i.
+// Where entry e of the list (of capacity imb_info.w) keeps its cell, and the population it sends
+// along direction i.
+fn list_cell(e: u32) -> u32 {
+    return select(20u * e, e, BY_POPULATION);
+}
+
 fn population(e: u32, i: u32) -> u32 {
-    return imb_info.w * (i + 1u) + e;
+    return select(20u * e + 1u + i, imb_info.w * (i + 1u) + e, BY_POPULATION);
 }
 
 // Before the fluid step: each covered cell's collision with the solid term, from its
@@ -252,7 +284,7 @@ fn collide_covered(
 ) {
     let e = saved_entry(cell_index(wg, nwg, local));
     if e == NO_CELL { return; }
-    let k = saved[e];
+    let k = saved[list_cell(e)];
     let p = coords(k);
     var f: array<f32, 19>;
     // Without branches (llvmpipe would run both sides): in the odd step of a cell with a link that
@@ -304,7 +336,7 @@ fn store_covered(
 ) {
     let e = saved_entry(cell_index(wg, nwg, local));
     if e == NO_CELL { return; }
-    let k = saved[e];
+    let k = saved[list_cell(e)];
     if KIND == 0u || KIND == 2u {
         //#for i
         f{i.o}[k] = bitcast<f32>(saved[population(e, {i}u)]);

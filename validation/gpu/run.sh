@@ -14,6 +14,7 @@
 # grid at 16 cells, 224 x 224 x 256, closed and periodic, one sphere, both ways of treating the
 # covered cells, each pass timed: what a closed box costs), coupled_trt.txt (256 x 256 x 512, 1 to
 # 32^3 particles, ratio to LBM-only, time per pass, the covered cells fused and redone),
+# coupled_atomic_list.txt (32^3, the list joined with one atomic per cell, not per subgroup),
 # coupled_dense.txt (64^3 particles, a dense bed), coupled_dem.txt (1 and 32^3 particles, the
 # host idle 1.1 ms a step as for a DEM), default/ (the default scene), suspension/ and
 # suspension_substeps/ (32^3 beads settling, the whole program, free flight on and off:
@@ -102,6 +103,10 @@ done
 # Coupled, the seed's Fig. 5 sweep (issue 5's target: 90% of LBM-only at 32^3 particles).
 step coupled_trt 90 150 $bin/lbm-server bench --grid $coupled --operator trt --particles $counts \
     --steps $((steps / 3)) --rounds 1 --kernel ours --passes --covered-cells both
+# The same at 32^3 with one atomic per covered cell on the list's counter instead of one per
+# subgroup (the default on a GPU since 2026-12-04): what the subgroups gain, by pass.
+LBM_NO_SUBGROUPS=1 step coupled_atomic_list 30 60 $bin/lbm-server bench --grid $coupled --operator trt \
+    --particles ${counts##*,} --steps $((steps / 3)) --rounds 1 --kernel ours --passes --covered-cells redo
 # A dense bed: 64^3 spheres of 4 cells 4 x 4 x 8 cells apart, half the cells covered, both ways.
 step coupled_dense 40 60 $bin/lbm-server bench --grid $coupled --operator trt --particles $dense \
     --steps $((steps / 15)) --rounds 1 --kernel ours --covered-cells both

@@ -8,6 +8,9 @@ use wgpu::util::DeviceExt;
 /// The kernels' source, kept in their own files: the lattice and the immersed moving boundary.
 pub const SHADER: &str = include_str!("../../../shaders/lbm.wgsl");
 pub const IMB_SHADER: &str = include_str!("../../../shaders/imb.wgsl");
+/// The redo's list of covered cells with one atomic per subgroup, and with one per cell.
+const LIST_SUBGROUP: &str = include_str!("../../../shaders/list_subgroup.wgsl");
+const LIST_ATOMIC: &str = include_str!("../../../shaders/list_atomic.wgsl");
 
 /// Invocations per workgroup (must match `@workgroup_size` in the shader).
 const WORKGROUP: u32 = 64;
@@ -29,6 +32,23 @@ pub struct Gpu {
     pub queue: wgpu::Queue,
     pub adapter: wgpu::AdapterInfo,
     pub limits: wgpu::Limits,
+    /// How the redo's list of covered cells is kept (imb.wgsl): on a GPU by population and joined
+    /// with subgroup operations, on a CPU driver (where both cost) cell by cell with one atomic
+    /// per cell.
+    pub list: ListLayout,
+}
+
+/// The redo's list of covered cells ([`Gpu::list`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ListLayout {
+    /// Cells join the list with one atomic per subgroup (list_subgroup.wgsl), not one per cell
+    /// (list_atomic.wgsl): where the device has subgroups, is not a CPU, and LBM_NO_SUBGROUPS is
+    /// not set.
+    pub subgroups: bool,
+    /// The records as structure of arrays, each population in a run of its own (a GPU warp's
+    /// accesses to one population in 4 sectors instead of 32), not one record per cell: on all but
+    /// CPU drivers.
+    pub by_population: bool,
 }
 
 impl Gpu {
@@ -58,10 +78,18 @@ impl Gpu {
         // Timestamps between passes where the device has them (`bench --passes`: each pass's time
         // by the device's clock).
         let stamps = wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS;
+        let wanted = stamps | wgpu::Features::SUBGROUP;
+        let on_gpu = adapter.get_info().device_type != wgpu::DeviceType::Cpu;
+        let list = ListLayout {
+            subgroups: on_gpu
+                && adapter.features().contains(wgpu::Features::SUBGROUP)
+                && std::env::var_os("LBM_NO_SUBGROUPS").is_none(),
+            by_population: on_gpu,
+        };
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("lbm"),
             required_limits: limits.clone(),
-            required_features: adapter.features() & stamps,
+            required_features: adapter.features() & wanted,
             ..Default::default()
         }))
         .map_err(|e| format!("cannot open the GPU device: {e}"))?;
@@ -70,12 +98,27 @@ impl Gpu {
             queue,
             adapter: adapter.get_info(),
             limits,
+            list,
         })
     }
 
     /// Waits until the queue is idle.
     pub fn wait(&self) {
         let _ = self.device.poll(wgpu::PollType::wait_indefinitely());
+    }
+
+    /// The same device with another layout of the covered cells' list (tests: every layout on
+    /// one device; subgroups only where it has them).
+    #[cfg(test)]
+    pub fn with_list(&self, list: ListLayout) -> Gpu {
+        assert!(!list.subgroups || self.device.features().contains(wgpu::Features::SUBGROUP));
+        Gpu {
+            device: self.device.clone(),
+            queue: self.queue.clone(),
+            adapter: self.adapter.clone(),
+            limits: self.limits.clone(),
+            list,
+        }
     }
 
     /// Waits for one submission (and those before it) only: later ones may still run.
@@ -291,7 +334,11 @@ impl Lattice {
             })
             .collect();
         let coupling = super::imb::Coupling::new(d, imb, cells, fused);
-        let source = format!("{SHADER}\n{IMB_SHADER}");
+        let source = if gpu.list.subgroups {
+            format!("{SHADER}\n{IMB_SHADER}\n{LIST_SUBGROUP}")
+        } else {
+            format!("{SHADER}\n{IMB_SHADER}\n{LIST_ATOMIC}")
+        };
         let module = d.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("lbm.wgsl + imb.wgsl"),
             source: wgpu::ShaderSource::Wgsl(super::unroll::unroll(&source).into()),
@@ -317,6 +364,7 @@ impl Lattice {
                 }))),
             ),
             ("FUSED", f64::from(u8::from(fused))),
+            ("BY_POPULATION", f64::from(u8::from(gpu.list.by_population))),
         ];
         let pipeline_kind = |entry: &str, kind: u32| {
             let mut constants = constants.to_vec();

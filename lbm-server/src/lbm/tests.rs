@@ -1,7 +1,7 @@
 //! Every GPU kernel against the f64 reference step, on random populations.
 
 use super::geometry::{Cell, Face, Operator, Setup};
-use super::gpu::{fits_device, Gpu, Health, Lattice};
+use super::gpu::{fits_device, Gpu, Health, Lattice, ListLayout};
 use super::mrt::Rates;
 use super::random::{random_populations, Random};
 use super::reference;
@@ -454,7 +454,7 @@ mod immersed_boundary {
                 covered_cells,
                 ..options
             };
-            check_steps_in(setup.clone(), options, seed, shifts, &particles_at)
+            check_steps_in(gpu(), setup.clone(), options, seed, shifts, &particles_at)
         });
         let [(redo, redo_f, redo_dropped), (fused, fused_f, fused_dropped)] = runs;
         assert_eq!(redo, fused, "loads: redo and fused differ");
@@ -468,6 +468,7 @@ mod immersed_boundary {
 
     /// `check_steps` with one way of treating the covered cells; also the final populations.
     fn check_steps_in(
+        gpu: Arc<Gpu>,
         setup: Setup,
         options: ImbOptions,
         seed: u64,
@@ -475,7 +476,7 @@ mod immersed_boundary {
         particles_at: &impl Fn(f64) -> Vec<SolidParticle>,
     ) -> (Vec<Vec<Load>>, Vec<Cell>, u32) {
         let f0 = random_populations(&setup, seed);
-        let mut lattice = Lattice::new(gpu(), setup.clone(), Health::default(), Some(options)).unwrap();
+        let mut lattice = Lattice::new(gpu, setup.clone(), Health::default(), Some(options)).unwrap();
         assert_eq!(
             lattice.covered_cells_fused(),
             options.covered_cells == CoveredCells::Fused
@@ -870,6 +871,40 @@ mod immersed_boundary {
         let (loads, dropped) = check_steps(setup, ImbOptions::default(), 22, &[0.0, 0.3], many_particles);
         assert_eq!(loads[0].len(), 2 * CHUNK + 321);
         assert!(dropped > 0, "crowded cells drop covers");
+    }
+
+    /// The redo's list of covered cells in each layout: joined with one atomic per subgroup (a
+    /// GPU's) or one per cell (a CPU driver's), kept by population (a GPU's) or cell by cell (a CPU
+    /// driver's): each against the reference, and the same populations and loads bit for bit (the
+    /// cells' order in the list differs).
+    #[test]
+    fn the_covered_cells_list_gives_the_same_run_in_every_layout() {
+        let setup = Setup::new(
+            [40, 36, 32],
+            [Face::Periodic; 6],
+            0.7,
+            Operator::Trt { magic: 3.0 / 16.0 },
+        );
+        let options = ImbOptions {
+            covered_cells: CoveredCells::Redo,
+            ..ImbOptions::default()
+        };
+        let device = gpu();
+        let subgroups = device.device.features().contains(wgpu::Features::SUBGROUP);
+        assert!(subgroups, "this device has subgroups: every layout is compared");
+        let layouts = [(false, false), (true, false), (false, true), (true, true)];
+        let runs = layouts.map(|(subgroups, by_population)| {
+            let gpu = Arc::new(device.with_list(ListLayout {
+                subgroups,
+                by_population,
+            }));
+            check_steps_in(gpu, setup.clone(), options, 23, &[0.0, 0.3], &many_particles)
+        });
+        for (layout, run) in layouts.iter().zip(&runs).skip(1) {
+            assert_eq!(run.0, runs[0].0, "{layout:?}: loads differ");
+            assert!(run.1 == runs[0].1, "{layout:?}: populations differ");
+            assert_eq!(run.2, runs[0].2, "{layout:?}: dropped covers differ");
+        }
     }
 
     #[test]
