@@ -847,6 +847,16 @@ mod immersed_boundary {
     /// own records and pair ranges, and converting its own loads), of different radii (box edges
     /// 2 to 5), crowded and across the periodic faces: the f64 reference's loads and populations,
     /// fused and redone.
+    /// The periodic TRT lattice of `many_particles`.
+    fn many_particles_setup() -> Setup {
+        Setup::new(
+            [40, 36, 32],
+            [Face::Periodic; 6],
+            0.7,
+            Operator::Trt { magic: 3.0 / 16.0 },
+        )
+    }
+
     fn many_particles(shift: f64) -> Vec<SolidParticle> {
         let mut r = Random::new(21);
         let n = [40.0, 36.0, 32.0];
@@ -862,12 +872,7 @@ mod immersed_boundary {
 
     #[test]
     fn particles_in_parallel_chunks_match_the_reference() {
-        let setup = Setup::new(
-            [40, 36, 32],
-            [Face::Periodic; 6],
-            0.7,
-            Operator::Trt { magic: 3.0 / 16.0 },
-        );
+        let setup = many_particles_setup();
         let (loads, dropped) = check_steps(setup, ImbOptions::default(), 22, &[0.0, 0.3], many_particles);
         assert_eq!(loads[0].len(), 2 * CHUNK + 321);
         assert!(dropped > 0, "crowded cells drop covers");
@@ -879,12 +884,7 @@ mod immersed_boundary {
     /// cells' order in the list differs).
     #[test]
     fn the_covered_cells_list_gives_the_same_run_in_every_layout() {
-        let setup = Setup::new(
-            [40, 36, 32],
-            [Face::Periodic; 6],
-            0.7,
-            Operator::Trt { magic: 3.0 / 16.0 },
-        );
+        let setup = many_particles_setup();
         let options = ImbOptions {
             covered_cells: CoveredCells::Redo,
             ..ImbOptions::default()
