@@ -19,8 +19,11 @@
 
 // Particles a cell can hold (1-4).
 override SLOTS: u32 = 2u;
-// The solid term in the fluid kernels (true) or redone after them (false).
+// The solid term in the fluid kernels (true) or in `collide_covered` before them (false).
 override FUSED: bool = false;
+// With FUSED false: `collide_covered` stores the covered cells in place and the fluid kernels skip
+// them (true), or it keeps them for `store_covered` after the fluid kernels (false: the redo).
+override SKIP: bool = false;
 // Solid weighting: false = Noble & Torczynski B(eps, tau), true = the seed's B = eps.
 override SEED_WEIGHTING: bool = false;
 // Solid collision: false = Noble & Torczynski's, true = superposition (`immersed_boundary`).
@@ -219,11 +222,14 @@ const NO_LIST: u32 = 2u;
 fn join_list(k: u32, list: u32) {
     let front = list_entry(list == FRONT, 4u);
     let back = list_entry(list == BACK, 8u);
-    if list == FRONT && front < imb_info.w {
-        saved[list_cell(front)] = k;
-    }
-    if list == BACK && back < imb_info.w {
-        saved[list_cell(imb_info.w - 1u - back)] = k;
+    let e = select(imb_info.w - 1u - back, front, list == FRONT);
+    if list != NO_LIST && select(back, front, list == FRONT) < imb_info.w {
+        saved[list_cell(e)] = k;
+        // SKIP: the fluid kernels leave the listed cells alone (a cell beyond the list's room is
+        // updated without its solid term, as with the redo, and the run stops).
+        if SKIP {
+            atomicOr(&covered[mask_word(k)], mask_bit(k));
+        }
     }
 }
 
@@ -247,6 +253,18 @@ fn covered_groups() {
         atomicStore(&status[6u + 4u * list], select(1u, (groups + x - 1u) / x, x > 0u));
         atomicStore(&status[7u + 4u * list], 1u);
     }
+}
+
+// An invocation of a kernel over the list of covered cells.
+struct Invocation {
+    @builtin(workgroup_id) wg: vec3<u32>,
+    @builtin(num_workgroups) nwg: vec3<u32>,
+    @builtin(local_invocation_index) local: u32,
+}
+
+// The entry of `saved` of an invocation over the list, or NO_CELL past the end of its list.
+fn listed(at: Invocation) -> u32 {
+    return saved_entry(cell_index(at.wg, at.nwg, at.local));
 }
 
 // The entry of `saved` of invocation j, or NO_CELL past the end of its list. KIND: bit 0 the
@@ -277,12 +295,8 @@ fn population(e: u32, i: u32) -> u32 {
 // it over the fluid kernels' result. The loads need nothing else: they go back to the host while
 // the fluid kernels run.
 @compute @workgroup_size(64)
-fn collide_covered(
-    @builtin(workgroup_id) wg: vec3<u32>,
-    @builtin(num_workgroups) nwg: vec3<u32>,
-    @builtin(local_invocation_index) local: u32,
-) {
-    let e = saved_entry(cell_index(wg, nwg, local));
+fn collide_covered(at: Invocation) {
+    let e = listed(at);
     if e == NO_CELL { return; }
     let k = saved[list_cell(e)];
     let p = coords(k);
@@ -308,18 +322,63 @@ fn collide_covered(
     }
     let m = moments(f);
     let post = immersed_boundary(k, f, m, collide(f, m));
-    if KIND < 2u {
-        //#for i
-        saved[population(e, {i}u)] = bitcast<u32>(post[{i}]);
-        //#end
-    } else {
+    var out = post;
+    if KIND >= 2u {
         let flag = flags[k];
         //#for i
         if leaves(flag, {i}u) {
             let face = link_face(p, vec3<i32>({i.cx}, {i.cy}, {i.cz}));
-            saved[population(e, {i}u)] = bitcast<u32>(bounce(face, vec3<f32>({i.cx}.0, {i.cy}.0, {i.cz}.0), {i.w}, post[{i}], m));
+            out[{i}] = bounce(face, vec3<f32>({i.cx}.0, {i.cy}.0, {i.cz}.0), {i.w}, post[{i}], m);
+        }
+        //#end
+    }
+    if SKIP {
+        store_populations(k, out);
+    } else {
+        //#for i
+        saved[population(e, {i}u)] = bitcast<u32>(out[{i}]);
+        //#end
+    }
+}
+
+// SKIP, after the fluid step: the listed cells' bits of the cover mask back to zero.
+@compute @workgroup_size(64)
+fn uncover_listed(at: Invocation) {
+    let e = listed(at);
+    if e == NO_CELL { return; }
+    let k = saved[list_cell(e)];
+    atomicAnd(&covered[mask_word(k)], ~mask_bit(k));
+}
+
+// In the fluid kernels (lbm.wgsl): whether cell k is left alone, `collide_covered` having updated
+// it already (SKIP, its bit of the cover mask set). One mask word serves 32 consecutive cells.
+fn skipped(k: u32) -> bool {
+    if SKIP {
+        return (atomicLoad(&covered[mask_word(k)]) & mask_bit(k)) != 0u;
+    }
+    return false;
+}
+
+// What covered cell k sends along each link (`out`, bounced back where the link leaves the
+// fluid), stored where the next step reads it: KIND bit 0 the parity, bit 1 the list's back (the
+// cells with a link that leaves the fluid or wraps).
+fn store_populations(k: u32, out: array<f32, 19>) {
+    if KIND == 0u || KIND == 2u {
+        //#for i
+        f{i.o}[k] = out[{i}];
+        //#end
+    } else if KIND == 1u {
+        //#for i
+        f{i}[u32(i32(k) + offset(vec3<i32>({i.cx}, {i.cy}, {i.cz})))] = out[{i}];
+        //#end
+    } else {
+        let flag = flags[k];
+        let p = coords(k);
+        //#for i
+        if leaves(flag, {i}u) {
+            f{i.o}[k] = out[{i}];
         } else {
-            saved[population(e, {i}u)] = bitcast<u32>(post[{i}]);
+            f{i}[next_cell(k, p, vec3<i32>({i.cx}, {i.cy}, {i.cz}), flag)] = out[{i}];
         }
         //#end
     }
@@ -329,33 +388,15 @@ fn collide_covered(
 // populations from `collide_covered` go where the next step reads them, over the fluid kernels'
 // (the AA pattern: the same slots, which no other cell touches in this step).
 @compute @workgroup_size(64)
-fn store_covered(
-    @builtin(workgroup_id) wg: vec3<u32>,
-    @builtin(num_workgroups) nwg: vec3<u32>,
-    @builtin(local_invocation_index) local: u32,
-) {
-    let e = saved_entry(cell_index(wg, nwg, local));
+fn store_covered(at: Invocation) {
+    let e = listed(at);
     if e == NO_CELL { return; }
     let k = saved[list_cell(e)];
-    if KIND == 0u || KIND == 2u {
-        //#for i
-        f{i.o}[k] = bitcast<f32>(saved[population(e, {i}u)]);
-        //#end
-    } else if KIND == 1u {
-        //#for i
-        f{i}[u32(i32(k) + offset(vec3<i32>({i.cx}, {i.cy}, {i.cz})))] = bitcast<f32>(saved[population(e, {i}u)]);
-        //#end
-    } else {
-        let flag = flags[k];
-        let p = coords(k);
-        //#for i
-        if leaves(flag, {i}u) {
-            f{i.o}[k] = bitcast<f32>(saved[population(e, {i}u)]);
-        } else {
-            f{i}[next_cell(k, p, vec3<i32>({i.cx}, {i.cy}, {i.cz}), flag)] = bitcast<f32>(saved[population(e, {i}u)]);
-        }
-        //#end
-    }
+    var out: array<f32, 19>;
+    //#for i
+    out[{i}] = bitcast<f32>(saved[population(e, {i}u)]);
+    //#end
+    store_populations(k, out);
 }
 
 // The word of the cover mask that holds cell k's bit, and the bit.

@@ -341,7 +341,8 @@ fn bounce(face: u32, c: vec3<f32>, w: f32, f_star: f32, m: Moments) -> f32 {
 // through the branch-free `stream_collide_fluid` instead. With particles, either these kernels
 // give the covered cells their solid term (FUSED, `solid_term` in imb.wgsl: one bit tested per
 // cell), or they update every cell without it and `store_covered` (imb.wgsl) then writes the
-// covered cells' own collision, made before them by `collide_covered`, over theirs.
+// covered cells' own collision, made before them by `collide_covered`, over theirs, or (SKIP) they
+// leave alone the covered cells, which `collide_covered` updated in place before them.
 @compute @workgroup_size(64)
 fn stream_collide(
     @builtin(workgroup_id) wg: vec3<u32>,
@@ -351,6 +352,7 @@ fn stream_collide(
     let j = cell_index(wg, nwg, local);
     if j >= params.ranges.z { return; }
     let k = cell_list[params.ranges.x + params.ranges.y + j];
+    if skipped(k) { return; }
     let flag = flags[k];
     let p = coords(k);
     let f = read_populations(k, p, flag);
@@ -395,6 +397,7 @@ fn stream_collide_fluid(
     }
     if j >= count { return; }
     let k = cell_list[start + j];
+    if skipped(k) { return; }
     let p = coords(k);
     var f: array<f32, 19>;
     if KIND == 0u {

@@ -67,7 +67,7 @@ const MISTAKES: &[(&str, &str, &str, &[&str])] = &[
         "unknown covered-cell mode",
         "timeout = 10",
         "timeout = 10\ncovered_cells = \"gpu\"",
-        &["coupling.covered_cells = \"gpu\"", "\"fused\" or \"redo\""],
+        &["coupling.covered_cells = \"gpu\"", "\"redo\" or \"skip\""],
     ),
     (
         "unknown solid collision",

@@ -409,7 +409,8 @@ fn assert_time_split(s: &serde_json::Value, err: &str, steps: u64) {
 /// three runs gave three different files), and the run warns about the dropped covers at its last
 /// step, 40, which is no multiple of `lattice.check_interval` (such a tail went unchecked). A third
 /// run with the solid term in the fluid kernels (`coupling.covered_cells = "fused"`; "auto" redoes
-/// the covered cells on lavapipe) writes the same file too.
+/// the covered cells of sparse particles) and a fourth with the covered cells skipped by the fluid
+/// kernels ("skip") write the same file too.
 #[test]
 fn crowded_cells_give_the_same_run_every_time() {
     let beads: String = [3.7, 7.9, 12.1, 16.3, 20.5]
@@ -428,9 +429,13 @@ fn crowded_cells_give_the_same_run_every_time() {
          mach = 0.1\n[output]\ninterval = 1\n[coupling]\nslots = 1\n[particles]\ndensity = 2500.0\n{beads}"
     );
     let fused = scene.replace("slots = 1\n", "slots = 1\ncovered_cells = \"fused\"\n");
+    let skip = scene.replace("slots = 1\n", "slots = 1\ncovered_cells = \"skip\"\n");
     let files: Vec<String> = [("crowd_a", &scene, "redone"), ("crowd_b", &scene, "redone")]
         .into_iter()
-        .chain([("crowd_fused", &fused, "solid term in the fluid kernels")])
+        .chain([
+            ("crowd_fused", &fused, "solid term in the fluid kernels"),
+            ("crowd_skip", &skip, "skipped by the fluid kernels"),
+        ])
         .map(|(tag, scene, mode)| {
             let (code, err, out) = run(tag, scene);
             assert_eq!(code, Some(0), "{err}");
@@ -447,6 +452,10 @@ fn crowded_cells_give_the_same_run_every_time() {
     assert!(
         files[0] == files[2],
         "fused and redone covered cells give different particles.csv"
+    );
+    assert!(
+        files[0] == files[3],
+        "skipped and redone covered cells give different particles.csv"
     );
 }
 

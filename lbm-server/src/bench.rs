@@ -33,7 +33,7 @@ pub struct BenchArgs {
     #[arg(long)]
     passes: bool,
     /// With --particles: where the covered cells get their solid term: auto (redo: the bench's
-    /// spheres are sparse), fused, redo, or both (each particle count both ways).
+    /// spheres are sparse), fused, redo, skip, both (redo and fused) or all three.
     #[arg(long, default_value = "auto")]
     covered_cells: String,
     /// With --particles: the host waits this long (ms) after each coupled step's loads are back,
@@ -381,12 +381,14 @@ impl Naive {
 
 /// The ways of treating the covered cells that `--covered-cells` names.
 fn covered_cell_modes(name: &str) -> Result<Vec<CoveredCells>, String> {
-    if name == "both" {
-        return Ok(vec![CoveredCells::Redo, CoveredCells::Fused]);
+    match name {
+        "both" => return Ok(vec![CoveredCells::Redo, CoveredCells::Fused]),
+        "all" => return Ok(vec![CoveredCells::Redo, CoveredCells::Fused, CoveredCells::Skip]),
+        _ => {}
     }
     CoveredCells::from_name(name)
         .map(|mode| vec![mode])
-        .ok_or_else(|| format!("--covered-cells {name}: expected auto, fused, redo or both"))
+        .ok_or_else(|| format!("--covered-cells {name}: expected auto, fused, redo, skip, both or all"))
 }
 
 /// Milliseconds (best of 3) of the health check as runs made it until 2026-12-04, the whole field
@@ -457,16 +459,19 @@ fn coupled_sweep(
         100.0 * mlups / lbm_only
     );
     drop(lattice);
-    // The fused fluid kernels' own cost (no quads, one mask bit tested per cell), no particle.
-    if modes.iter().any(|m| m.fused()) {
+    // The fluid kernels that test the cover mask (no quads, one bit per cell), no particle.
+    for (mode, name) in [(CoveredCells::Fused, "fused"), (CoveredCells::Skip, "skip")] {
+        if !modes.contains(&mode) {
+            continue;
+        }
         let options = ImbOptions {
-            covered_cells: CoveredCells::Fused,
+            covered_cells: mode,
             ..Default::default()
         };
         let mut lattice = Lattice::new(gpu.clone(), setup.clone(), Health::default(), Some(options))?;
         let mlups = lockstep_mlups(gpu, &mut lattice, steps, dem);
         println!(
-            "| 0 (fused fluid kernels, no particle: one submit and wait per step) | fused | {mlups:.1} | {:.0}% |",
+            "| 0 ({name} fluid kernels, no particle: one submit and wait per step) | {name} | {mlups:.1} | {:.0}% |",
             100.0 * mlups / lbm_only
         );
     }
@@ -490,10 +495,10 @@ fn coupled_sweep(
                 ..Default::default()
             };
             let mut lattice = Lattice::new(gpu.clone(), setup.clone(), Health::default(), Some(options))?;
-            let name = if lattice.covered_cells_fused() {
-                "fused"
-            } else {
-                "redo"
+            let name = match lattice.covered_cells() {
+                CoveredCells::Fused => "fused",
+                CoveredCells::Skip => "skip",
+                _ => "redo",
             };
             for _ in 0..5 {
                 lattice.step_coupled(&particles)?;
@@ -635,7 +640,7 @@ type PassTimes<const N: usize> = Vec<(&'static str, [f64; N])>;
 /// The time of each pass per particle count: one table per way of treating the covered cells
 /// (their passes differ) and clock; `how` the passes were timed.
 fn print_passes<const N: usize>(breakdown: &[(usize, &str, PassTimes<N>)], clocks: [&str; N], how: &str) {
-    for mode in ["redo", "fused"] {
+    for mode in ["redo", "fused", "skip"] {
         let rows: Vec<(usize, &PassTimes<N>)> = breakdown
             .iter()
             .filter(|(_, m, _)| *m == mode)

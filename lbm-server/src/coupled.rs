@@ -211,7 +211,7 @@ fn correction_warning(units: &LatticeUnits, diameter: f64) -> Option<String> {
 fn covered_cells(scene: &Scene, units: &LatticeUnits, radii: &[f64]) -> Result<CoveredCells, String> {
     let mode = CoveredCells::from_name(&scene.coupling.covered_cells).ok_or_else(|| {
         format!(
-            "coupling.covered_cells = {:?}: expected \"auto\", \"fused\" or \"redo\"",
+            "coupling.covered_cells = {:?}: expected \"auto\", \"fused\", \"redo\" or \"skip\"",
             scene.coupling.covered_cells
         )
     })?;
@@ -296,11 +296,7 @@ impl FluidSide {
             u.dx,
             u.dt,
             self.lattice.adapter(),
-            if self.lattice.covered_cells_fused() {
-                "solid term in the fluid kernels"
-            } else {
-                "covered cells redone"
-            },
+            self.lattice.covered_cells().describe(),
             if self.lubrication.is_some() {
                 ", lubrication"
             } else {

@@ -156,7 +156,8 @@ pub struct Coupling {
     /// With a `[lattice]`: where the covered cells get their solid term (docs/imb.md, "Speed"):
     /// "fused" in the fluid kernels (each cell tests one bit; suits dense beds), "redo" collided
     /// before them and stored over their result (the fluid kernels stay branch-free and run while
-    /// the DEM takes its step; suits sparse particles), "auto" (default): redo unless the initial
+    /// the DEM takes its step; suits sparse particles), "skip" collided in place before them, which
+    /// skip them (one bit per cell; built for a GPU), "auto" (default): redo unless the initial
     /// particles cover 20% of the cells or more.
     #[serde(default = "default_covered_cells")]
     pub covered_cells: String,

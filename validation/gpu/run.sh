@@ -13,7 +13,7 @@
 # also per cell, without the four-cell quads), bench_walls.txt and bench_periodic.txt (the Ten Cate
 # grid at 16 cells, 224 x 224 x 256, closed and periodic, one sphere, both ways of treating the
 # covered cells, each pass timed: what a closed box costs), coupled_trt.txt (256 x 256 x 512, 1 to
-# 32^3 particles, ratio to LBM-only, time per pass, the covered cells fused and redone),
+# 32^3 particles, ratio to LBM-only, time per pass, the covered cells fused, redone and skipped),
 # coupled_atomic_list.txt (32^3, the list joined with one atomic per cell, not per subgroup),
 # coupled_dense.txt (64^3 particles, a dense bed), coupled_dem.txt (1 and 32^3 particles, the
 # host idle 1.1 ms a step as for a DEM), default/ (the default scene), suspension/ and
@@ -101,20 +101,20 @@ for faces in walls periodic; do
         --steps $((steps / 2)) --rounds 1 --kernel ours --passes --covered-cells both
 done
 # Coupled, the seed's Fig. 5 sweep (issue 5's target: 90% of LBM-only at 32^3 particles).
-step coupled_trt 90 150 $bin/lbm-server bench --grid $coupled --operator trt --particles $counts \
-    --steps $((steps / 3)) --rounds 1 --kernel ours --passes --covered-cells both
+step coupled_trt 90 200 $bin/lbm-server bench --grid $coupled --operator trt --particles $counts \
+    --steps $((steps / 3)) --rounds 1 --kernel ours --passes --covered-cells all
 # The same at 32^3 with one atomic per covered cell on the list's counter instead of one per
 # subgroup (the default on a GPU since 2026-12-04): what the subgroups gain, by pass.
 LBM_NO_SUBGROUPS=1 step coupled_atomic_list 30 60 $bin/lbm-server bench --grid $coupled --operator trt \
     --particles ${counts##*,} --steps $((steps / 3)) --rounds 1 --kernel ours --passes --covered-cells redo
 # A dense bed: 64^3 spheres of 4 cells 4 x 4 x 8 cells apart, half the cells covered, both ways.
 step coupled_dense 40 60 $bin/lbm-server bench --grid $coupled --operator trt --particles $dense \
-    --steps $((steps / 15)) --rounds 1 --kernel ours --covered-cells both
+    --steps $((steps / 15)) --rounds 1 --kernel ours --covered-cells all
 # The coupled step with the host idle 1.1 ms after each step's loads, as for the DEM's step of 32^3
 # beads flown on this machine's cores (2026-12-04): the redo's fluid kernels run meanwhile, the
 # fused ones cannot (the lockstep row waits as long after each fluid step).
 step coupled_dem 40 60 $bin/lbm-server bench --grid $coupled --operator trt --particles 1,$dense_dem \
-    --steps $((steps / 3)) --rounds 1 --kernel ours --covered-cells both --dem-ms 1.1
+    --steps $((steps / 3)) --rounds 1 --kernel ours --covered-cells all --dem-ms 1.1
 # The default scene, the whole coupled program (DEM process and lockstep included).
 step default/log 30 60 $bin/lbm-server run .gpu/default.toml --out "$OUT/default"
 rm -rf "$OUT/default/fields"

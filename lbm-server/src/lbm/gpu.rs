@@ -313,8 +313,8 @@ impl Lattice {
         );
         // The solid term in the fluid kernels (imb.rs, `CoveredCells`): those kernels then update
         // every cell one at a time, without the four-cell quads.
-        let fused = imb.is_some_and(|o| o.covered_cells.fused());
-        let classes = CellList::new(&setup, quads && !fused);
+        let mode = imb.map_or(super::imb::CoveredCells::Redo, |o| o.covered_cells.definite());
+        let classes = CellList::new(&setup, quads && !mode.masks_cells());
         let cell_list = init(
             "cell list",
             bytemuck::cast_slice(if classes.list.is_empty() {
@@ -333,7 +333,7 @@ impl Lattice {
                 )
             })
             .collect();
-        let coupling = super::imb::Coupling::new(d, imb, cells, fused);
+        let coupling = super::imb::Coupling::new(d, imb, cells, mode);
         let source = if gpu.list.subgroups {
             format!("{SHADER}\n{IMB_SHADER}\n{LIST_SUBGROUP}")
         } else {
@@ -363,7 +363,11 @@ impl Lattice {
                     o.solid_collision == super::imb::SolidCollision::Superposition
                 }))),
             ),
-            ("FUSED", f64::from(u8::from(fused))),
+            ("FUSED", f64::from(u8::from(mode.fused()))),
+            (
+                "SKIP",
+                f64::from(u8::from(mode == super::imb::CoveredCells::Skip)),
+            ),
             ("BY_POPULATION", f64::from(u8::from(gpu.list.by_population))),
         ];
         let pipeline_kind = |entry: &str, kind: u32| {

@@ -70,15 +70,21 @@ pub enum CoveredCells {
     /// while they run) and stored over their result: the fluid kernels stay branch-free, each
     /// covered cell's populations move three times.
     Redo,
+    /// Collided with the solid term in place before the fluid kernels (the loads then go back to
+    /// the host while they run), which skip them by one bit of a cover mask per cell (no four-cell
+    /// quads): each covered cell's populations move once, and the fluid kernels carry no solid
+    /// term. Built for a GPU; not yet timed on one.
+    Skip,
 }
 
 impl CoveredCells {
-    /// The scene's `coupling.covered_cells` ("auto", "fused", "redo").
+    /// The scene's `coupling.covered_cells` ("auto", "fused", "redo", "skip").
     pub fn from_name(name: &str) -> Option<CoveredCells> {
         match name {
             "auto" => Some(CoveredCells::Auto),
             "fused" => Some(CoveredCells::Fused),
             "redo" => Some(CoveredCells::Redo),
+            "skip" => Some(CoveredCells::Skip),
             _ => None,
         }
     }
@@ -87,6 +93,28 @@ impl CoveredCells {
     /// [`CoveredCells::for_scene`]).
     pub fn fused(self) -> bool {
         self == CoveredCells::Fused
+    }
+
+    /// The way a lattice made with this choice takes (`Auto` as sparse particles: the redo).
+    pub fn definite(self) -> CoveredCells {
+        match self {
+            CoveredCells::Auto => CoveredCells::Redo,
+            mode => mode,
+        }
+    }
+
+    /// Whether the fluid kernels test each cell's bit of the cover mask (no four-cell quads).
+    pub fn masks_cells(self) -> bool {
+        matches!(self, CoveredCells::Fused | CoveredCells::Skip)
+    }
+
+    /// The name a run's first line and `bench` give it.
+    pub fn describe(self) -> &'static str {
+        match self.definite() {
+            CoveredCells::Fused => "solid term in the fluid kernels",
+            CoveredCells::Skip => "covered cells first, skipped by the fluid kernels",
+            _ => "covered cells redone",
+        }
     }
 
     /// `Auto` made definite for particles that cover `covered_fraction` of the cells: redo for
@@ -242,13 +270,14 @@ struct Passes {
     redo: Option<Redo>,
 }
 
-/// The passes of [`CoveredCells::Redo`]: `covered_groups`, then `collide_covered` (before the
-/// fluid kernels) and `store_covered` (after them) for each KIND (bit 0 the parity, bit 1 the
-/// covered cells with a link that leaves the fluid).
+/// The passes of [`CoveredCells::Redo`] and [`CoveredCells::Skip`]: `covered_groups`, then
+/// `collide_covered` (before the fluid kernels) and after them `store_covered` (the redo) or
+/// `uncover_listed` (skip), named, for each KIND (bit 0 the parity, bit 1 the covered cells with a
+/// link that leaves the fluid).
 struct Redo {
     groups: wgpu::ComputePipeline,
     collide: [wgpu::ComputePipeline; 4],
-    store: [wgpu::ComputePipeline; 4],
+    after: (&'static str, [wgpu::ComputePipeline; 4]),
 }
 
 /// Buffers and pipelines of the coupling (tiny placeholders when the scene has no particles).
@@ -269,8 +298,8 @@ pub struct Coupling {
     particle_capacity: u64,
     pair_capacity: u64,
     slots_per_cell: u32,
-    /// The solid term in the fluid kernels ([`CoveredCells::Fused`]).
-    fused: bool,
+    /// Where the covered cells get their solid term (definite: fused, redo or skip).
+    mode: CoveredCells,
     pipelines: Option<Passes>,
     /// Covered cells the `fields` buffer can hold (`Saved` records).
     saved_capacity: u32,
@@ -279,7 +308,7 @@ pub struct Coupling {
 }
 
 impl Coupling {
-    pub fn new(d: &wgpu::Device, options: Option<ImbOptions>, cells: usize, fused: bool) -> Coupling {
+    pub fn new(d: &wgpu::Device, options: Option<ImbOptions>, cells: usize, mode: CoveredCells) -> Coupling {
         let per_cell = |bytes: u64| {
             if options.is_some() {
                 bytes * cells as u64
@@ -305,7 +334,7 @@ impl Coupling {
             particle_capacity: 1,
             pair_capacity: 1,
             slots_per_cell: slots as u32,
-            fused,
+            mode: mode.definite(),
             pipelines: None,
             saved_capacity: 0,
             saved_cap: u64::MAX,
@@ -316,10 +345,15 @@ impl Coupling {
     /// covered cells' collide and store pipelines.
     pub fn with_pipelines(mut self, on: bool, make: &dyn Fn(&str, u32) -> wgpu::ComputePipeline) -> Coupling {
         if on {
-            let redo = (!self.fused).then(|| Redo {
+            let after = if self.mode == CoveredCells::Skip {
+                "uncover_listed"
+            } else {
+                "store_covered"
+            };
+            let redo = (self.mode != CoveredCells::Fused).then(|| Redo {
                 groups: make("covered_groups", 0),
                 collide: [0, 1, 2, 3].map(|kind| make("collide_covered", kind)),
-                store: [0, 1, 2, 3].map(|kind| make("store_covered", kind)),
+                after: (after, [0, 1, 2, 3].map(|kind| make(after, kind))),
             });
             self.pipelines = Some(Passes {
                 cover: make("cover", 0),
@@ -339,14 +373,14 @@ impl Coupling {
         let mut all = vec![&p.cover, &p.reduce, &p.sum_loads];
         if let Some(r) = &p.redo {
             all.push(&r.groups);
-            all.extend(r.collide.iter().chain(&r.store));
+            all.extend(r.collide.iter().chain(&r.after.1));
         }
         all
     }
 
-    /// Whether the covered cells take their solid term in the fluid kernels.
-    pub fn fused(&self) -> bool {
-        self.fused
+    /// Where the covered cells take their solid term.
+    pub fn mode(&self) -> CoveredCells {
+        self.mode
     }
 
     /// The buffers in binding order.
@@ -561,7 +595,7 @@ impl Lattice {
             (
                 r.groups.clone(),
                 [0, 1].map(|list| r.collide[kind(list)].clone()),
-                [0, 1].map(|list| r.store[kind(list)].clone()),
+                (r.after.0, [0, 1].map(|list| r.after.1[kind(list)].clone())),
             )
         });
         let parity = self.time % 2;
@@ -610,14 +644,14 @@ impl Lattice {
         // With the redo the fluid kernels, which update every cell as without particles, and the
         // covered cells' stores over their result go in a submission of their own: it runs while
         // the host reads the loads back and the DEM takes its step (docs/imb.md, "The redo").
-        if let Some((_, _, store)) = redo {
+        if let Some((_, _, (after, pipelines))) = redo {
             let mut encoder = gpu.device.create_command_encoder(&Default::default());
             self.encode_step(&mut encoder);
             encoder = split("fluid", encoder);
-            for (offset, pipeline) in [0, 16].into_iter().zip(&store) {
+            for (offset, pipeline) in [0, 16].into_iter().zip(&pipelines) {
                 self.dispatch_indirect(&mut encoder, pipeline, parity, offset);
             }
-            encoder = split("store_covered", encoder);
+            encoder = split(after, encoder);
             gpu.queue.submit([encoder.finish()]);
         }
         if bytes == 0 {
@@ -752,10 +786,9 @@ impl Lattice {
         pass.dispatch_workgroups_indirect(&self.imb.as_ref().expect("coupling").indirect, offset);
     }
 
-    /// Whether the covered cells take their solid term in the fluid kernels
-    /// ([`CoveredCells::Fused`]) rather than being redone after them.
-    pub fn covered_cells_fused(&self) -> bool {
-        self.imb.as_ref().is_some_and(|c| c.fused())
+    /// Where the covered cells take their solid term (definite; the redo without coupling).
+    pub fn covered_cells(&self) -> CoveredCells {
+        self.imb.as_ref().map_or(CoveredCells::Redo, |c| c.mode())
     }
 
     /// Particles one cell can hold.
@@ -812,7 +845,7 @@ impl Lattice {
         let d = self.gpu.device.clone();
         let coupling = self.imb.as_mut().expect("coupling");
         let mut grew = false;
-        let fused = coupling.fused;
+        let fused = coupling.mode == CoveredCells::Fused;
         if particles > coupling.particle_capacity {
             coupling.particle_capacity = particles.next_power_of_two();
             coupling.particles = storage_buffer(&d, "particles", coupling.particle_capacity * PARTICLE_BYTES);
