@@ -15,7 +15,10 @@
 //   loads are reduced and go back to the host, and meanwhile the fluid kernels update every cell as
 //   without particles and `store_covered` writes the kept populations over the covered cells'
 //   (the AA pattern: a cell reads and writes the same 19 slots, which no other cell touches in
-//   that step, so the second write simply replaces the first).
+//   that step, so the second write simply replaces the first);
+// - SKIP: as the redo, but `collide_covered` stores the covered cells in place, `cover` sets their
+//   bits of the cover mask, the fluid kernels leave those cells alone, and `uncover_listed` clears
+//   the bits after them.
 
 // Particles a cell can hold (1-4).
 override SLOTS: u32 = 2u;
@@ -28,7 +31,7 @@ override SKIP: bool = false;
 override SEED_WEIGHTING: bool = false;
 // Solid collision: false = Noble & Torczynski's, true = superposition (`immersed_boundary`).
 override SUPERPOSITION: bool = false;
-// The redo's list of covered cells (`saved`) as structure of arrays (true, on a GPU: the cells, then
+// The list of covered cells (`saved`) as structure of arrays (true, on a GPU: the cells, then
 // each population in a run of its own, so that neighbouring invocations touch neighbouring words)
 // or one 20-word record per cell (false, on a CPU driver, where each invocation's loads go one by
 // one and a record's words are best together).
@@ -44,7 +47,6 @@ struct Particle {
     // edge of the bounding box (cells)
     edge: u32,
 }
-
 
 @group(0) @binding(24) var<storage, read_write> particles: array<Particle>;
 // Hydrodynamic force and torque about the centre of each particle (lattice units), six numbers
@@ -233,7 +235,8 @@ fn join_list(k: u32, list: u32) {
     }
 }
 
-// The covered cells' workgroups for the indirect dispatches of `collide_covered` and `store_covered`:
+// The covered cells' workgroups for the indirect dispatches over the list (`collide_covered`, then
+// `store_covered` or `uncover_listed`):
 // status[5..8] (x, y, z; 2D beyond 65535 workgroups) for the front of the list, status[9..12] for
 // the back. One invocation; covered cells beyond the capacity are counted in status[2] (the run
 // stops: their solid term would be missing).
@@ -292,8 +295,8 @@ fn population(e: u32, i: u32) -> u32 {
 // Before the fluid step: each covered cell's collision with the solid term, from its
 // pre-collision populations where the fluid kernels will read them; what it sends along each link
 // (bounced back where the link leaves the fluid) is kept in `saved` until `store_covered` writes
-// it over the fluid kernels' result. The loads need nothing else: they go back to the host while
-// the fluid kernels run.
+// it over the fluid kernels' result, or (SKIP) stored in place at once. The loads need nothing
+// else: they go back to the host while the fluid kernels run.
 @compute @workgroup_size(64)
 fn collide_covered(at: Invocation) {
     let e = listed(at);

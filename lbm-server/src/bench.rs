@@ -38,7 +38,7 @@ pub struct BenchArgs {
     covered_cells: String,
     /// With --particles: the host waits this long (ms) after each coupled step's loads are back,
     /// as for a DEM process's step, before the next step (0: not at all). With the covered cells
-    /// redone the fluid kernels run meanwhile; the LBM-only lockstep row waits as long.
+    /// redone or skipped the fluid kernels run meanwhile; the LBM-only lockstep row waits as long.
     #[arg(long, default_value_t = 0.0)]
     dem_ms: f64,
     /// The grid's faces: periodic (every cell an interior or wrapping one) or walls (a closed box,
@@ -460,10 +460,11 @@ fn coupled_sweep(
     );
     drop(lattice);
     // The fluid kernels that test the cover mask (no quads, one bit per cell), no particle.
-    for (mode, name) in [(CoveredCells::Fused, "fused"), (CoveredCells::Skip, "skip")] {
+    for mode in [CoveredCells::Fused, CoveredCells::Skip] {
         if !modes.contains(&mode) {
             continue;
         }
+        let name = mode.name();
         let options = ImbOptions {
             covered_cells: mode,
             ..Default::default()
@@ -495,11 +496,7 @@ fn coupled_sweep(
                 ..Default::default()
             };
             let mut lattice = Lattice::new(gpu.clone(), setup.clone(), Health::default(), Some(options))?;
-            let name = match lattice.covered_cells() {
-                CoveredCells::Fused => "fused",
-                CoveredCells::Skip => "skip",
-                _ => "redo",
-            };
+            let name = lattice.covered_cells().name();
             for _ in 0..5 {
                 lattice.step_coupled(&particles)?;
             }

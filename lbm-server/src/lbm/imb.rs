@@ -95,6 +95,15 @@ impl CoveredCells {
         self == CoveredCells::Fused
     }
 
+    /// The scene's name of a definite way (`Auto` as the redo it takes).
+    pub fn name(self) -> &'static str {
+        match self.definite() {
+            CoveredCells::Fused => "fused",
+            CoveredCells::Skip => "skip",
+            _ => "redo",
+        }
+    }
+
     /// The way a lattice made with this choice takes (`Auto` as sparse particles: the redo).
     pub fn definite(self) -> CoveredCells {
         match self {
