@@ -327,13 +327,7 @@ fn collide_covered(at: Invocation) {
     let post = immersed_boundary(k, f, m, collide(f, m));
     var out = post;
     if KIND >= 2u {
-        let flag = flags[k];
-        //#for i
-        if leaves(flag, {i}u) {
-            let face = link_face(p, vec3<i32>({i.cx}, {i.cy}, {i.cz}));
-            out[{i}] = bounce(face, vec3<f32>({i.cx}.0, {i.cy}.0, {i.cz}.0), {i.w}, post[{i}], m);
-        }
-        //#end
+        out = sent(p, flags[k], post, m);
     }
     if SKIP {
         store_populations(k, out);
@@ -362,9 +356,9 @@ fn skipped(k: u32) -> bool {
     return false;
 }
 
-// What covered cell k sends along each link (`out`, bounced back where the link leaves the
-// fluid), stored where the next step reads it: KIND bit 0 the parity, bit 1 the list's back (the
-// cells with a link that leaves the fluid or wraps).
+// What covered cell k sends along each link (`out`, lbm.wgsl's `sent`), stored where the next step
+// reads it: KIND bit 0 the parity, bit 1 the list's back (the cells with a link that leaves the
+// fluid or wraps: lbm.wgsl's `store_sent`), the front's neighbours at fixed index offsets.
 fn store_populations(k: u32, out: array<f32, 19>) {
     if KIND == 0u || KIND == 2u {
         //#for i
@@ -375,15 +369,7 @@ fn store_populations(k: u32, out: array<f32, 19>) {
         f{i}[u32(i32(k) + offset(vec3<i32>({i.cx}, {i.cy}, {i.cz})))] = out[{i}];
         //#end
     } else {
-        let flag = flags[k];
-        let p = coords(k);
-        //#for i
-        if leaves(flag, {i}u) {
-            f{i.o}[k] = out[{i}];
-        } else {
-            f{i}[next_cell(k, p, vec3<i32>({i.cx}, {i.cy}, {i.cz}), flag)] = out[{i}];
-        }
-        //#end
+        store_sent(k, coords(k), flags[k], out);
     }
 }
 

@@ -363,15 +363,31 @@ fn stream_collide(
 // Stores the post-collision populations of cell k (at p) where the next step reads them, either
 // parity, with the boundaries of links that leave the fluid.
 fn write_populations(k: u32, p: vec3<i32>, flag: u32, post: array<f32, 19>, m: Moments) {
-    let odd = params.n.w == 1u;
+    store_sent(k, p, flag, sent(p, flag, post, m));
+}
+
+// What cell k (at p) sends along each link: its post-collision population, or where the link
+// leaves the fluid, what comes back through the boundary (`bounce`).
+fn sent(p: vec3<i32>, flag: u32, post: array<f32, 19>, m: Moments) -> array<f32, 19> {
+    var out = post;
     //#for i
     if leaves(flag, {i}u) {
         let face = link_face(p, vec3<i32>({i.cx}, {i.cy}, {i.cz}));
-        f{i.o}[k] = bounce(face, vec3<f32>({i.cx}.0, {i.cy}.0, {i.cz}.0), {i.w}, post[{i}], m);
-    } else if odd {
-        f{i}[next_cell(k, p, vec3<i32>({i.cx}, {i.cy}, {i.cz}), flag)] = post[{i}];
+        out[{i}] = bounce(face, vec3<f32>({i.cx}.0, {i.cy}.0, {i.cz}.0), {i.w}, post[{i}], m);
+    }
+    //#end
+    return out;
+}
+
+// Stores what cell k (at p) sends along each link (`sent`) where the next step reads it, either
+// parity: back into the cell where the link leaves the fluid.
+fn store_sent(k: u32, p: vec3<i32>, flag: u32, out: array<f32, 19>) {
+    let odd = params.n.w == 1u;
+    //#for i
+    if leaves(flag, {i}u) || !odd {
+        f{i.o}[k] = out[{i}];
     } else {
-        f{i.o}[k] = post[{i}];
+        f{i}[next_cell(k, p, vec3<i32>({i.cx}, {i.cy}, {i.cz}), flag)] = out[{i}];
     }
     //#end
 }

@@ -514,13 +514,8 @@ fn coupled_sweep(
             );
             if passes {
                 breakdown.push((count, name, time_passes(&mut lattice, &particles, steps)?));
-                if let Some(clock) = lattice.pass_clock() {
-                    let mut sums: PassTimes<1> = Vec::new();
-                    for _ in 0..steps {
-                        let times = lattice.step_coupled_clocked(&particles, &clock)?;
-                        add_mean(&mut sums, times.iter().map(|(name, t)| (*name, [*t])), steps);
-                    }
-                    clocked.push((count, name, sums));
+                if let Some(times) = clock_passes(&mut lattice, &particles, steps)? {
+                    clocked.push((count, name, times));
                 }
                 if host.last().is_none_or(|(c, _)| *c != count) {
                     host.push((count, lattice.host_pass_times(&particles, 21)?));
@@ -584,7 +579,7 @@ fn time_passes(
     lattice: &mut Lattice,
     particles: &[SolidParticle],
     steps: u64,
-) -> Result<Vec<(&'static str, [f64; 2])>, String> {
+) -> Result<PassTimes<2>, String> {
     let clock = || [start_of_run().elapsed().as_secs_f64(), process_cpu_seconds()];
     let mut sums: PassTimes<2> = Vec::new();
     for _ in 0..steps {
@@ -593,6 +588,24 @@ fn time_passes(
         add_mean(&mut sums, ms, steps);
     }
     Ok(sums)
+}
+
+/// Milliseconds of each pass by the device's clock over `steps` steps not split into submissions
+/// (mean), where the device has timestamps.
+fn clock_passes(
+    lattice: &mut Lattice,
+    particles: &[SolidParticle],
+    steps: u64,
+) -> Result<Option<PassTimes<1>>, String> {
+    let Some(clock) = lattice.pass_clock() else {
+        return Ok(None);
+    };
+    let mut sums = Vec::new();
+    for _ in 0..steps {
+        let times = lattice.step_coupled_clocked(particles, &clock)?;
+        add_mean(&mut sums, times.iter().map(|(name, t)| (*name, [*t])), steps);
+    }
+    Ok(Some(sums))
 }
 
 /// Adds one step's times of each pass (ms) over `steps` to `sums` (the passes in the same order).
@@ -637,7 +650,7 @@ type PassTimes<const N: usize> = Vec<(&'static str, [f64; N])>;
 /// The time of each pass per particle count: one table per way of treating the covered cells
 /// (their passes differ) and clock; `how` the passes were timed.
 fn print_passes<const N: usize>(breakdown: &[(usize, &str, PassTimes<N>)], clocks: [&str; N], how: &str) {
-    for mode in ["redo", "fused", "skip"] {
+    for mode in [CoveredCells::Redo, CoveredCells::Fused, CoveredCells::Skip].map(CoveredCells::name) {
         let rows: Vec<(usize, &PassTimes<N>)> = breakdown
             .iter()
             .filter(|(_, m, _)| *m == mode)

@@ -27,6 +27,7 @@ const LOADS_BINDING: u32 = CELL_LIST_BINDING + 1;
 const BINDINGS: u32 = LOADS_BINDING + 1;
 
 /// The device and its queue.
+#[derive(Clone)]
 pub struct Gpu {
     pub device: wgpu::Device,
     pub queue: wgpu::Queue,
@@ -112,13 +113,7 @@ impl Gpu {
     #[cfg(test)]
     pub fn with_list(&self, list: ListLayout) -> Gpu {
         assert!(!list.subgroups || self.device.features().contains(wgpu::Features::SUBGROUP));
-        Gpu {
-            device: self.device.clone(),
-            queue: self.queue.clone(),
-            adapter: self.adapter.clone(),
-            limits: self.limits.clone(),
-            list,
-        }
+        Gpu { list, ..self.clone() }
     }
 
     /// Waits for one submission (and those before it) only: later ones may still run.
@@ -311,8 +306,8 @@ impl Lattice {
             bytemuck::cast_slice(&[u32::MAX, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0]),
             STORAGE,
         );
-        // The solid term in the fluid kernels (imb.rs, `CoveredCells`): those kernels then update
-        // every cell one at a time, without the four-cell quads.
+        // Where the fluid kernels test each cell's bit of the cover mask (imb.rs, `CoveredCells`:
+        // fused and skip) they update every cell one at a time, without the four-cell quads.
         let mode = imb.map_or(super::imb::CoveredCells::Redo, |o| o.covered_cells.definite());
         let classes = CellList::new(&setup, quads && !mode.masks_cells());
         let cell_list = init(

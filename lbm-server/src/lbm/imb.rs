@@ -131,8 +131,7 @@ impl CoveredCells {
     pub fn for_scene(self, covered_fraction: f64) -> CoveredCells {
         match self {
             CoveredCells::Auto if covered_fraction >= FUSED_FROM => CoveredCells::Fused,
-            CoveredCells::Auto => CoveredCells::Redo,
-            mode => mode,
+            mode => mode.definite(),
         }
     }
 }
@@ -265,7 +264,6 @@ type Split<'a> = &'a mut dyn FnMut(&'static str, wgpu::CommandEncoder) -> wgpu::
 pub struct PassClock {
     set: wgpu::QuerySet,
     resolved: wgpu::Buffer,
-    readback: wgpu::Buffer,
 }
 
 /// Timestamps a coupled step can write (it writes at most 8).
@@ -481,29 +479,18 @@ impl Lattice {
             return None;
         }
         let d = &self.gpu.device;
-        let bytes = PASS_STAMPS as u64 * 8;
-        let buffer = |label, usage| {
-            d.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(label),
-                size: bytes,
-                usage,
-                mapped_at_creation: false,
-            })
-        };
         Some(PassClock {
             set: d.create_query_set(&wgpu::QuerySetDescriptor {
                 label: Some("pass clock"),
                 ty: wgpu::QueryType::Timestamp,
                 count: PASS_STAMPS,
             }),
-            resolved: buffer(
-                "pass clock",
-                wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
-            ),
-            readback: buffer(
-                "pass clock readback",
-                wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-            ),
+            resolved: d.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("pass clock"),
+                size: PASS_STAMPS as u64 * 8,
+                usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            }),
         })
     }
 
@@ -529,18 +516,9 @@ impl Lattice {
         let gpu = self.gpu.clone();
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
         encoder.resolve_query_set(&clock.set, 0..count, &clock.resolved, 0);
-        encoder.copy_buffer_to_buffer(&clock.resolved, 0, &clock.readback, 0, count as u64 * 8);
         gpu.queue.submit([encoder.finish()]);
-        let slice = clock.readback.slice(..count as u64 * 8);
-        slice.map_async(wgpu::MapMode::Read, |_| {});
-        gpu.wait();
-        let ticks: Vec<u64> = {
-            let data = slice
-                .get_mapped_range()
-                .map_err(|e| format!("pass clock: {e:?}"))?;
-            bytemuck::cast_slice(&data).to_vec()
-        };
-        clock.readback.unmap();
+        let ticks: Vec<u64> =
+            bytemuck::cast_slice(&gpu.read_range(&clock.resolved, 0, count as u64 * 8)).to_vec();
         let ms_per_tick = gpu.queue.get_timestamp_period() as f64 * 1e-6;
         Ok((1..names.len())
             .map(|k| (names[k], ticks[k].wrapping_sub(ticks[k - 1]) as f64 * ms_per_tick))

@@ -840,10 +840,6 @@ mod immersed_boundary {
         assert_eq!(a, b, "bitwise identical loads");
     }
 
-    /// Particles enough for three chunks of the host's passes (run in parallel, each writing its
-    /// own records and pair ranges, and converting its own loads), of different radii (box edges
-    /// 2 to 5), crowded and across the periodic faces: the f64 reference's loads and populations,
-    /// fused and redone.
     /// The periodic TRT lattice of `many_particles`.
     fn many_particles_setup() -> Setup {
         Setup::new(
@@ -854,6 +850,10 @@ mod immersed_boundary {
         )
     }
 
+    /// Particles enough for three chunks of the host's passes (run in parallel, each writing its
+    /// own records and pair ranges, and converting its own loads), of different radii (box edges
+    /// 2 to 5), crowded and across the periodic faces: the f64 reference's loads and populations,
+    /// fused and redone.
     fn many_particles(shift: f64) -> Vec<SolidParticle> {
         let mut r = Random::new(21);
         let n = [40.0, 36.0, 32.0];
