@@ -403,6 +403,18 @@ fn assert_time_split(s: &serde_json::Value, err: &str, steps: u64) {
     );
 }
 
+/// Beads of 2 mm radius at these x (mm), y = 6 mm, z = 8 mm: `[[particles.sphere]]` tables.
+fn beads_in_a_row(xs: &[f64]) -> String {
+    xs.iter()
+        .map(|x| {
+            format!(
+                "[[particles.sphere]]\nposition = [{}, 0.006, 0.008]\nradius = 0.002\n",
+                x * 1e-3
+            )
+        })
+        .collect()
+}
+
 /// Five beads in a row, 4.2 mm apart at 4 cells per diameter, one slot per cell: the cells between
 /// neighbours are covered by both, and each keeps the larger solid fraction. Two runs write the same
 /// particles.csv byte for byte (until 2026-12-01 a slot went to whichever particle arrived first:
@@ -413,15 +425,7 @@ fn assert_time_split(s: &serde_json::Value, err: &str, steps: u64) {
 /// kernels ("skip") write the same file too.
 #[test]
 fn crowded_cells_give_the_same_run_every_time() {
-    let beads: String = [3.7, 7.9, 12.1, 16.3, 20.5]
-        .iter()
-        .map(|x| {
-            format!(
-                "[[particles.sphere]]\nposition = [{}, 0.006, 0.008]\nradius = 0.002\n",
-                x * 1e-3
-            )
-        })
-        .collect();
+    let beads = beads_in_a_row(&[3.7, 7.9, 12.1, 16.3, 20.5]);
     let scene = format!(
         "name = \"crowd\"\ngravity = [0.0, 0.0, -9.81]\n[domain]\nmin = [0.0, 0.0, 0.0]\n\
          max = [0.024, 0.012, 0.016]\n[fluid]\ndensity = 1235.0\ndynamic_viscosity = 0.2\n\
@@ -456,6 +460,57 @@ fn crowded_cells_give_the_same_run_every_time() {
     assert!(
         files[0] == files[3],
         "skipped and redone covered cells give different particles.csv"
+    );
+}
+
+/// `coupling.covered_cells = "timed"`: the run times redo, skip and fused on its own steps (from
+/// step 10, each way 6 steps a round, 3 rounds), says what it measured and kept, and writes the
+/// same particles.csv as a run that redoes the covered cells throughout (the ways agree bit for
+/// bit, so changing between them changes nothing but the speed); summary.json names the way kept.
+#[test]
+fn a_timed_run_changes_ways_and_not_its_particles() {
+    let beads = beads_in_a_row(&[3.7, 7.9, 12.1]);
+    let scene = |way: &str| {
+        format!(
+            "name = \"ways\"\ngravity = [0.0, 0.0, -9.81]\n[domain]\nmin = [0.0, 0.0, 0.0]\n\
+             max = [0.016, 0.012, 0.016]\n[fluid]\ndensity = 1235.0\ndynamic_viscosity = 0.2\n\
+             [time]\nsteps = 230\n[lattice]\ndx = 0.001\noperator = \"trt\"\nvelocity_scale = 0.05\n\
+             mach = 0.1\n[output]\ninterval = 10\n[coupling]\ncovered_cells = \"{way}\"\n\
+             [particles]\ndensity = 2500.0\n{beads}"
+        )
+    };
+    let (code, redo_err, redo) = run("timed_redo", &scene("redo"));
+    assert_eq!(code, Some(0), "{redo_err}");
+    assert!(!redo_err.contains("covered cells timed"), "{redo_err}");
+    let (code, err, timed) = run("timed", &scene("timed"));
+    assert_eq!(code, Some(0), "{err}");
+    assert!(err.contains("the ways timed on the run's steps"), "{err}");
+    let line = err
+        .lines()
+        .find(|l| l.contains("covered cells timed at steps 10-63"))
+        .unwrap_or_else(|| panic!("the trial's line: {err}"));
+    let kept = ["redo", "skip", "fused"]
+        .into_iter()
+        .find(|w| line.ends_with(&format!(": {w} kept")))
+        .unwrap_or_else(|| panic!("a way kept: {line}"));
+    for way in ["redo", "skip", "fused"] {
+        assert!(
+            line.contains(&format!("{way} ")) && line.contains(" ms"),
+            "{way} timed: {line}"
+        );
+    }
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(timed.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["covered_cells"], kept, "summary.json names the way kept");
+    let particles = |out: &Path| std::fs::read_to_string(out.join("particles.csv")).unwrap();
+    assert_eq!(
+        particles(&timed).lines().count(),
+        1 + 24 * 3,
+        "rows every 10 steps and the last"
+    );
+    assert!(
+        particles(&timed) == particles(&redo),
+        "the timed run's particles.csv differs from the redone run's"
     );
 }
 

@@ -13,6 +13,7 @@ use crate::fluid::{health_of, setup_of, stability_warning};
 use crate::lbm::gpu::{Gpu, Lattice};
 use crate::lbm::imb::{covered_fraction, CoveredCells, ImbOptions, Particles, SolidCollision, SolidParticle};
 use crate::lubrication::Lubrication;
+use crate::trials::WayTrials;
 use protocol::{ParticleReply, ParticleState, Physics};
 use scene::lattice::{LatticeFace, LatticeUnits};
 use scene::Scene;
@@ -31,6 +32,10 @@ pub struct FluidSide {
     /// without it).
     deficit_product: f64,
     steps: u64,
+    /// With `coupling.covered_cells = "auto"`: the ways timed on the run's steps (trials.rs).
+    trials: Option<WayTrials>,
+    /// When the fluid side was made: the trials' clock.
+    made: std::time::Instant,
 }
 
 /// The immersed boundary's drag error against tau, measured (validation/lbm/REPORT.md, "drag
@@ -206,12 +211,16 @@ fn correction_warning(units: &LatticeUnits, diameter: f64) -> Option<String> {
     })
 }
 
-/// The scene's `coupling.covered_cells`, "auto" made definite for the scene's initial particles
-/// (their covered fraction of the lattice; `radii` in m).
+/// The scene's `coupling.covered_cells`, "auto" and "timed" made definite for the scene's initial
+/// particles (their covered fraction of the lattice; `radii` in m): the way the run starts with.
 fn covered_cells(scene: &Scene, units: &LatticeUnits, radii: &[f64]) -> Result<CoveredCells, String> {
-    let mode = CoveredCells::from_name(&scene.coupling.covered_cells).ok_or_else(|| {
+    let name = match scene.coupling.covered_cells.as_str() {
+        "timed" => "auto",
+        name => name,
+    };
+    let mode = CoveredCells::from_name(name).ok_or_else(|| {
         format!(
-            "coupling.covered_cells = {:?}: expected \"auto\", \"fused\", \"redo\" or \"skip\"",
+            "coupling.covered_cells = {:?}: expected \"auto\", \"timed\", \"fused\", \"redo\" or \"skip\"",
             scene.coupling.covered_cells
         )
     })?;
@@ -220,9 +229,21 @@ fn covered_cells(scene: &Scene, units: &LatticeUnits, radii: &[f64]) -> Result<C
     Ok(mode.for_scene(covered_fraction(radii, cells)))
 }
 
+/// Whether the run times its ways of treating the covered cells (trials.rs): "timed" on every
+/// device, "auto" on all but CPU drivers, where building the other two ways' kernels costs more
+/// than a short run gains (lavapipe, 2 cores: about 2 s each, against a default scene of 4 s) and
+/// `CoveredCells::for_scene`'s rule was measured.
+fn times_ways(scene: &Scene, gpu: &Gpu) -> bool {
+    match scene.coupling.covered_cells.as_str() {
+        "timed" => true,
+        "auto" => gpu.adapter.device_type != wgpu::DeviceType::Cpu,
+        _ => false,
+    }
+}
+
 impl FluidSide {
-    /// The fluid a scene asks for.
-    pub fn for_scene(scene: &Scene) -> Result<FluidSide, String> {
+    /// The fluid a scene asks for, for a run of `steps` steps.
+    pub fn for_scene(scene: &Scene, steps: u64) -> Result<FluidSide, String> {
         let Some(units) = scene.lattice_units.clone() else {
             return Err(format!(
                 "scene '{}' has particles but no [lattice]: the fluid needs one",
@@ -245,6 +266,7 @@ impl FluidSide {
             })?,
             covered_cells: covered_cells(scene, &units, &radii)?,
         };
+        let trials = times_ways(scene, &gpu).then(|| WayTrials::new(options.covered_cells, steps));
         let lattice = Lattice::new(gpu, setup_of(&units), health_of(&units), Some(options))?;
         let lubrication = scene.coupling.lubrication.then(|| lubrication_of(scene, &units));
         let warning = if scene.coupling.radius_correction == "none" {
@@ -264,6 +286,8 @@ impl FluidSide {
             lubrication,
             deficit_product,
             steps: 0,
+            trials,
+            made: std::time::Instant::now(),
         })
     }
 
@@ -287,7 +311,7 @@ impl FluidSide {
         let u = &self.units;
         format!(
             "lattice {}x{}x{} ({}, tau {:.4}, dx {:e} m, dt {:e} s) on {}, immersed moving boundary \
-             ({}){}{}",
+             ({}{}){}{}",
             u.n[0],
             u.n[1],
             u.n[2],
@@ -297,6 +321,11 @@ impl FluidSide {
             u.dt,
             self.lattice.adapter(),
             self.lattice.covered_cells().describe(),
+            if self.trials.is_some() {
+                "; the ways timed on the run's steps, the fastest kept"
+            } else {
+                ""
+            },
             if self.lubrication.is_some() {
                 ", lubrication"
             } else {
@@ -311,6 +340,14 @@ impl FluidSide {
                 String::new()
             }
         )
+    }
+
+    /// The way the covered cells take their solid term (with "auto": the one the last trial
+    /// kept), for summary.json.
+    pub fn covered_cells(&self) -> CoveredCells {
+        self.trials
+            .as_ref()
+            .map_or(self.lattice.covered_cells(), WayTrials::kept)
     }
 
     /// The lattice, for summary.json.
@@ -335,6 +372,13 @@ impl FluidSide {
         let pressure_acceleration: [f64; 3] =
             std::array::from_fn(|a| self.units.force[a] * dx / (dt * dt) - self.gravity[a]);
         let fluid_density = self.fluid_density;
+        if let Some(trials) = &mut self.trials {
+            let way = trials.way_for(self.steps, self.made.elapsed().as_secs_f64());
+            if let Some(report) = trials.take_report() {
+                protocol::say!("lbm-server: {report}");
+            }
+            self.lattice.set_covered_cells(way);
+        }
         self.lattice.step_coupled_with(&lattice_states, out, |j, l| {
             let s = &states[j];
             let volume = 4.0 / 3.0 * std::f64::consts::PI * s.radius.powi(3);

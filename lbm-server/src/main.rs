@@ -9,6 +9,7 @@ mod lbm;
 mod lubrication;
 mod output;
 mod run;
+mod trials;
 mod validate;
 mod vtk;
 

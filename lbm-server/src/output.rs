@@ -77,6 +77,9 @@ pub struct Summary {
     pub steps_per_second: f64,
     pub particle_steps_per_second: f64,
     pub fluid_physics: Vec<&'static str>,
+    /// Where the covered cells took their solid term ("redo", "skip" or "fused"; with
+    /// `coupling.covered_cells = "auto"` the way the run's last trial kept).
+    pub covered_cells: &'static str,
     /// The fluid's discretisation.
     pub lattice: LatticeSummary,
     pub peer: Option<PeerInfo>,

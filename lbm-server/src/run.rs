@@ -198,7 +198,7 @@ impl Session {
                 return EXIT_FAILURE;
             }
         };
-        let fluid = match FluidSide::for_scene(&p.scene) {
+        let fluid = match FluidSide::for_scene(&p.scene, p.steps) {
             Ok(f) => f,
             Err(e) => {
                 protocol::say!("lbm-server: error: {e}");
@@ -443,6 +443,7 @@ impl Session {
             steps_per_second: steps_completed as f64 / wall.max(1e-9),
             particle_steps_per_second: self.particle_steps as f64 / wall.max(1e-9),
             fluid_physics: Physics::names(self.fluid.physics()),
+            covered_cells: self.fluid.covered_cells().name(),
             lattice: LatticeSummary::of(self.fluid.units()),
             peer: self.peer.clone(),
             exit_reason,

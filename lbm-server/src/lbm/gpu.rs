@@ -187,27 +187,24 @@ pub struct Lattice {
     pub setup: Setup,
     pub(super) gpu: std::sync::Arc<Gpu>,
     populations: Vec<wgpu::Buffer>,
-    params: Vec<wgpu::Buffer>,
     flags: wgpu::Buffer,
     mrt: wgpu::Buffer,
     pub(super) fields: wgpu::Buffer,
     pub(super) status: wgpu::Buffer,
-    cell_list: wgpu::Buffer,
-    /// The classes of the cell list (see `CellList`).
-    classes: CellList,
     layout: wgpu::BindGroupLayout,
-    pub(super) bind_groups: [wgpu::BindGroup; 2],
-    /// The boundary cells, either parity.
-    pub(super) stream_collide: wgpu::ComputePipeline,
-    /// The other fluid cells: even step of all, odd step of the interior, odd step of the wrapping.
-    stream_collide_fluid: [wgpu::ComputePipeline; 3],
-    /// The even step of quads (four consecutive cells) of interior or wrapping cells.
-    stream_collide_quads: Option<wgpu::ComputePipeline>,
-    /// The odd step of quads of interior cells.
-    stream_collide_quads_odd: Option<wgpu::ComputePipeline>,
-    macroscopic: wgpu::ComputePipeline,
+    /// lbm.wgsl + imb.wgsl, compiled once; each way's pipelines set its constants.
+    module: wgpu::ShaderModule,
+    pipeline_layout: wgpu::PipelineLayout,
+    health: Health,
+    /// The coupling's settings (None: a lattice without particles).
+    options: Option<super::imb::ImbOptions>,
+    /// Whether the fluid kernels may take four-cell quads (not with `Lattice::per_cell`).
+    quads: bool,
     /// Particle coupling (immersed moving boundary), when the scene has particles.
     pub(super) imb: Option<super::imb::Coupling>,
+    /// The ways built so far ([`Lattice::set_covered_cells`]), and the one the steps take.
+    ways: Vec<Way>,
+    active: usize,
     /// Completed steps; its parity selects the AA phase.
     pub time: u64,
     /// The share of their velocity the velocity inlets and moving walls have now
@@ -215,6 +212,31 @@ pub struct Lattice {
     face_scale: f64,
     /// The fields of the last check that passed, kept on the device ([`Lattice::keep_fields`]).
     kept: Option<wgpu::Buffer>,
+}
+
+/// One way of giving the covered cells their solid term ([`super::imb::CoveredCells`]): the
+/// fluid kernels with its constants and the cell classes they take (four-cell quads or one cell
+/// at a time), their list and parameters, the coupling's passes, and the bind groups over the
+/// lattice's buffers. Every way leaves the same populations after a step (bit for bit), so a
+/// lattice may change ways between steps.
+pub(super) struct Way {
+    pub(super) mode: super::imb::CoveredCells,
+    /// The classes of the cell list (see `CellList`).
+    classes: CellList,
+    cell_list: wgpu::Buffer,
+    params: Vec<wgpu::Buffer>,
+    pub(super) bind_groups: [wgpu::BindGroup; 2],
+    /// The boundary cells, either parity.
+    stream_collide: wgpu::ComputePipeline,
+    /// The other fluid cells: even step of all, odd step of the interior, odd step of the wrapping.
+    stream_collide_fluid: [wgpu::ComputePipeline; 3],
+    /// The even step of quads (four consecutive cells) of interior or wrapping cells.
+    stream_collide_quads: Option<wgpu::ComputePipeline>,
+    /// The odd step of quads of interior cells.
+    stream_collide_quads_odd: Option<wgpu::ComputePipeline>,
+    macroscopic: wgpu::ComputePipeline,
+    /// The coupling's passes, when the lattice has particles.
+    pub(super) passes: Option<super::imb::Passes>,
 }
 
 /// The first unhealthy cell found by a health check.
@@ -306,29 +328,7 @@ impl Lattice {
             bytemuck::cast_slice(&[u32::MAX, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0]),
             STORAGE,
         );
-        // Where the fluid kernels test each cell's bit of the cover mask (imb.rs, `CoveredCells`:
-        // fused and skip) they update every cell one at a time, without the four-cell quads.
-        let mode = imb.map_or(super::imb::CoveredCells::Redo, |o| o.covered_cells.definite());
-        let classes = CellList::new(&setup, quads && !mode.masks_cells());
-        let cell_list = init(
-            "cell list",
-            bytemuck::cast_slice(if classes.list.is_empty() {
-                &[0u32]
-            } else {
-                &classes.list
-            }),
-            wgpu::BufferUsages::STORAGE,
-        );
-        let params: Vec<wgpu::Buffer> = (0..2)
-            .map(|parity| {
-                init(
-                    "params",
-                    bytemuck::bytes_of(&params(&setup, parity, health, &classes)),
-                    wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-                )
-            })
-            .collect();
-        let coupling = super::imb::Coupling::new(d, imb, cells, mode);
+        let coupling = super::imb::Coupling::new(d, imb, cells);
         let source = if gpu.list.subgroups {
             format!("{SHADER}\n{IMB_SHADER}\n{LIST_SUBGROUP}")
         } else {
@@ -344,9 +344,85 @@ impl Lattice {
             bind_group_layouts: &[Some(&layout)],
             immediate_size: 0,
         });
+        let mut lattice = Lattice {
+            setup,
+            gpu,
+            populations,
+            flags,
+            mrt,
+            fields,
+            status,
+            layout,
+            module,
+            pipeline_layout,
+            health,
+            options: imb,
+            quads,
+            imb: Some(coupling),
+            ways: Vec::new(),
+            active: 0,
+            time: 0,
+            face_scale: 1.0,
+            kept: None,
+        };
+        let mode = imb.map_or(super::imb::CoveredCells::Redo, |o| o.covered_cells);
+        lattice.set_covered_cells(mode);
+        // wgpu zero-initialises every buffer: the shifted populations start at rest (f = w, rho = 1)
+        // without an upload (which took a 5 GB host array at 256 x 256 x 512).
+        Ok(lattice)
+    }
+
+    /// Makes the steps from the next on give the covered cells their solid term the way `mode`
+    /// says (`Auto` taken as the redo), building that way's kernels the first time it is asked
+    /// for. Every way leaves the same populations bit for bit (the reference tests run each), so
+    /// a run may change ways between any two steps (`coupled::WayTrials`).
+    pub fn set_covered_cells(&mut self, mode: super::imb::CoveredCells) {
+        let mode = mode.definite();
+        if let Some(k) = self.ways.iter().position(|w| w.mode == mode) {
+            self.active = k;
+            return;
+        }
+        let way = self.build_way(mode);
+        self.compile_kernels(&way);
+        self.ways.push(way);
+        self.active = self.ways.len() - 1;
+    }
+
+    /// The way the steps take now.
+    pub(super) fn way(&self) -> &Way {
+        &self.ways[self.active]
+    }
+
+    /// The kernels, cell classes, parameters and bind groups of one way.
+    fn build_way(&self, mode: super::imb::CoveredCells) -> Way {
+        let d = &self.gpu.device;
+        let imb = self.options;
+        // Where the fluid kernels test each cell's bit of the cover mask (imb.rs, `CoveredCells`:
+        // fused and skip) they update every cell one at a time, without the four-cell quads.
+        let classes = CellList::new(&self.setup, self.quads && !mode.masks_cells());
+        let cell_list = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("cell list"),
+            contents: bytemuck::cast_slice(if classes.list.is_empty() {
+                &[0u32]
+            } else {
+                &classes.list
+            }),
+            usage: wgpu::BufferUsages::STORAGE,
+        });
+        let params: Vec<wgpu::Buffer> = (0..2)
+            .map(|parity| {
+                let mut p = params(&self.setup, parity, self.health, &classes);
+                p.face_value = face_values(&self.setup.faces, self.face_scale);
+                d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some("params"),
+                    contents: bytemuck::bytes_of(&p),
+                    usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                })
+            })
+            .collect();
         let constants = [
-            ("OPERATOR", setup.operator.code() as f64),
-            ("FORCE", f64::from(u8::from(setup.force != [0.0; 3]))),
+            ("OPERATOR", self.setup.operator.code() as f64),
+            ("FORCE", f64::from(u8::from(self.setup.force != [0.0; 3]))),
             ("SLOTS", imb.map_or(2, |o| o.slots) as f64),
             (
                 "SEED_WEIGHTING",
@@ -363,15 +439,15 @@ impl Lattice {
                 "SKIP",
                 f64::from(u8::from(mode == super::imb::CoveredCells::Skip)),
             ),
-            ("BY_POPULATION", f64::from(u8::from(gpu.list.by_population))),
+            ("BY_POPULATION", f64::from(u8::from(self.gpu.list.by_population))),
         ];
         let pipeline_kind = |entry: &str, kind: u32| {
             let mut constants = constants.to_vec();
             constants.push(("KIND", f64::from(kind)));
             d.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
                 label: Some(entry),
-                layout: Some(&pipeline_layout),
-                module: &module,
+                layout: Some(&self.pipeline_layout),
+                module: &self.module,
                 entry_point: Some(entry),
                 compilation_options: wgpu::PipelineCompilationOptions {
                     constants: &constants,
@@ -381,74 +457,62 @@ impl Lattice {
             })
         };
         let pipeline = |entry: &str| pipeline_kind(entry, 0);
-        let stream_collide = pipeline("stream_collide");
-        let stream_collide_fluid = [0, 1, 2].map(|kind| pipeline_kind("stream_collide_fluid", kind));
-        let stream_collide_quads = (classes.quads > 0).then(|| pipeline("stream_collide_quads"));
-        let stream_collide_quads_odd =
-            (classes.interior_quads > 0).then(|| pipeline("stream_collide_quads_odd"));
-        let macroscopic = pipeline("macroscopic");
-        let coupling = coupling.with_pipelines(imb.is_some(), &pipeline_kind);
-        let bind_groups = [0, 1].map(|parity| {
-            make_bind_group(
-                d,
-                &layout,
-                [&params[parity], &flags, &mrt, &fields, &status],
-                &populations,
-                &coupling,
-                &cell_list,
-            )
-        });
-        let lattice = Lattice {
-            setup,
-            gpu,
-            populations,
-            params,
-            flags,
-            mrt,
-            fields,
-            status,
-            cell_list,
+        let bind_groups = [0, 1].map(|parity| self.bind_group(&params[parity], &cell_list));
+        Way {
+            mode,
+            stream_collide: pipeline("stream_collide"),
+            stream_collide_fluid: [0, 1, 2].map(|kind| pipeline_kind("stream_collide_fluid", kind)),
+            stream_collide_quads: (classes.quads > 0).then(|| pipeline("stream_collide_quads")),
+            stream_collide_quads_odd: (classes.interior_quads > 0)
+                .then(|| pipeline("stream_collide_quads_odd")),
+            macroscopic: pipeline("macroscopic"),
+            passes: imb
+                .is_some()
+                .then(|| super::imb::Passes::new(mode, &pipeline_kind)),
             classes,
-            layout,
+            cell_list,
+            params,
             bind_groups,
-            stream_collide,
-            stream_collide_fluid,
-            stream_collide_quads,
-            stream_collide_quads_odd,
-            macroscopic,
-            imb: Some(coupling),
-            time: 0,
-            face_scale: 1.0,
-            kept: None,
-        };
-        // wgpu zero-initialises every buffer: the shifted populations start at rest (f = w, rho = 1)
-        // without an upload (which took a 5 GB host array at 256 x 256 x 512).
-        lattice.compile_kernels();
-        Ok(lattice)
+        }
     }
 
-    /// Dispatches every kernel once over no cell (zero counts in the parameters, no particle:
-    /// each returns at once, nothing is written but zero workgroup counts). CPU drivers such as
-    /// lavapipe compile a kernel at its first dispatch: without this the first steps of a run
-    /// stalled for seconds with a cold shader cache (5-9 s on this 2-core machine for 16^3 cells
-    /// with particles), while the run should be watching its peer (`tests/failures.rs`).
-    fn compile_kernels(&self) {
+    /// Dispatches every kernel of `way` once over no cell (zero counts in the parameters, no
+    /// particle, an empty list of covered cells: each returns at once), bound to scratch buffers
+    /// so that a way built during a run leaves its state alone. CPU drivers such as lavapipe
+    /// compile a kernel at its first dispatch: without this the first steps of a run stalled for
+    /// seconds with a cold shader cache (5-9 s on this 2-core machine for 16^3 cells with
+    /// particles), while the run should be watching its peer (`tests/failures.rs`).
+    fn compile_kernels(&self, way: &Way) {
         let d = &self.gpu.device;
         let empty = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("params: no cell"),
             contents: bytemuck::bytes_of(&<Params as bytemuck::Zeroable>::zeroed()),
             usage: wgpu::BufferUsages::UNIFORM,
         });
-        let coupling = self.imb.as_ref().expect("coupling buffers");
-        let bind_group = self.bind_group(&empty);
-        let mut kernels = vec![&self.stream_collide, &self.macroscopic];
-        kernels.extend(&self.stream_collide_fluid);
-        kernels.extend(
-            self.stream_collide_quads
-                .iter()
-                .chain(&self.stream_collide_quads_odd),
+        let scratch = |label: &str| storage_buffer(d, label, 64);
+        let populations: Vec<wgpu::Buffer> = (0..19).map(|_| scratch("scratch population")).collect();
+        let bind_group = make_bind_group(
+            d,
+            &self.layout,
+            [
+                &empty,
+                &self.flags,
+                &self.mrt,
+                &scratch("scratch fields"),
+                &scratch("scratch status"),
+            ],
+            &populations,
+            &super::imb::Coupling::new(d, None, 0),
+            &way.cell_list,
         );
-        kernels.extend(coupling.kernels());
+        let mut kernels = vec![&way.stream_collide, &way.macroscopic];
+        kernels.extend(&way.stream_collide_fluid);
+        kernels.extend(
+            way.stream_collide_quads
+                .iter()
+                .chain(&way.stream_collide_quads_odd),
+        );
+        kernels.extend(way.passes.iter().flat_map(|p| p.kernels()));
         let mut encoder = d.create_command_encoder(&Default::default());
         for kernel in kernels {
             let mut pass = encoder.begin_compute_pass(&Default::default());
@@ -465,20 +529,27 @@ impl Lattice {
         &self.gpu.adapter.name
     }
 
-    /// Rebuilds the bind groups (after the coupling's buffers grew).
+    /// Rebuilds every way's bind groups (after the coupling's buffers grew).
     pub(super) fn rebind(&mut self) {
-        self.bind_groups = [0, 1].map(|parity| self.bind_group(&self.params[parity]));
+        let bound: Vec<[wgpu::BindGroup; 2]> = self
+            .ways
+            .iter()
+            .map(|w| [0, 1].map(|parity| self.bind_group(&w.params[parity], &w.cell_list)))
+            .collect();
+        for (way, groups) in self.ways.iter_mut().zip(bound) {
+            way.bind_groups = groups;
+        }
     }
 
-    /// The lattice's buffers bound with `params`.
-    fn bind_group(&self, params: &wgpu::Buffer) -> wgpu::BindGroup {
+    /// The lattice's buffers bound with `params` and a way's `cell_list`.
+    fn bind_group(&self, params: &wgpu::Buffer, cell_list: &wgpu::Buffer) -> wgpu::BindGroup {
         make_bind_group(
             &self.gpu.device,
             &self.layout,
             [params, &self.flags, &self.mrt, &self.fields, &self.status],
             &self.populations,
             self.imb.as_ref().expect("coupling buffers"),
-            &self.cell_list,
+            cell_list,
         )
     }
 
@@ -507,7 +578,7 @@ impl Lattice {
         self.face_scale = scale;
         let values = face_values(&self.setup.faces, scale);
         let offset = std::mem::offset_of!(Params, face_value) as u64;
-        for params in &self.params {
+        for params in self.ways.iter().flat_map(|w| &w.params) {
             self.gpu
                 .queue
                 .write_buffer(params, offset, bytemuck::cast_slice(&values));
@@ -571,7 +642,7 @@ impl Lattice {
         let x = groups.min(MAX_GROUPS);
         let mut pass = encoder.begin_compute_pass(&Default::default());
         pass.set_pipeline(pipeline);
-        pass.set_bind_group(0, &self.bind_groups[parity as usize], &[]);
+        pass.set_bind_group(0, &self.way().bind_groups[parity as usize], &[]);
         pass.dispatch_workgroups(x, groups.div_ceil(x), 1);
     }
 
@@ -579,18 +650,19 @@ impl Lattice {
     /// then the boundary cells.
     pub(super) fn encode_step(&mut self, encoder: &mut wgpu::CommandEncoder) {
         let parity = self.time % 2;
-        let c = &self.classes;
+        let way = self.way();
+        let c = &way.classes;
         let [interior, wrapping, boundary] = c.sizes;
         let groups = |cells: u32| cells.div_ceil(WORKGROUP);
-        let fluid = &self.stream_collide_fluid;
+        let fluid = &way.stream_collide_fluid;
         if parity == 0 {
-            if let Some(quads) = &self.stream_collide_quads {
+            if let Some(quads) = &way.stream_collide_quads {
                 self.dispatch_groups(encoder, quads, parity, groups(c.quads));
             }
             let rest = interior + wrapping - c.in_quads[0] - c.in_quads[1];
             self.dispatch_groups(encoder, &fluid[0], parity, groups(rest));
         } else {
-            if let Some(quads) = &self.stream_collide_quads_odd {
+            if let Some(quads) = &way.stream_collide_quads_odd {
                 self.dispatch_groups(encoder, quads, parity, groups(c.interior_quads));
             }
             if c.interior_quads == 0 {
@@ -598,7 +670,7 @@ impl Lattice {
             }
             self.dispatch_groups(encoder, &fluid[2], parity, groups(c.wrapped().1));
         }
-        self.dispatch_groups(encoder, &self.stream_collide, parity, groups(boundary));
+        self.dispatch_groups(encoder, &way.stream_collide, parity, groups(boundary));
         self.time += 1;
     }
 
@@ -615,7 +687,7 @@ impl Lattice {
     /// unhealthy cell, reading back only the status.
     fn first_unhealthy(&self) -> Option<usize> {
         let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
-        self.dispatch(&mut encoder, &self.macroscopic, self.time % 2);
+        self.dispatch(&mut encoder, &self.way().macroscopic, self.time % 2);
         self.gpu.queue.submit([encoder.finish()]);
         let status: Vec<u32> = bytemuck::cast_slice(&self.gpu.read_buffer(&self.status, 16)).to_vec();
         (status[0] != u32::MAX).then_some(status[0] as usize)

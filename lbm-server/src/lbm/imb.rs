@@ -270,7 +270,7 @@ pub struct PassClock {
 const PASS_STAMPS: u32 = 16;
 
 /// The coupling's kernels: `cover` and `reduce`, and with the redo the passes around the fluid step.
-struct Passes {
+pub(super) struct Passes {
     cover: wgpu::ComputePipeline,
     reduce: wgpu::ComputePipeline,
     sum_loads: wgpu::ComputePipeline,
@@ -287,7 +287,40 @@ struct Redo {
     after: (&'static str, [wgpu::ComputePipeline; 4]),
 }
 
-/// Buffers and pipelines of the coupling (tiny placeholders when the scene has no particles).
+impl Passes {
+    /// The cover and reduce pipelines of the way `mode`, and with the redo and skip the covered
+    /// cells' collide and store (or uncover) pipelines; `make(entry, KIND)`.
+    pub(super) fn new(mode: CoveredCells, make: &dyn Fn(&str, u32) -> wgpu::ComputePipeline) -> Passes {
+        let after = if mode == CoveredCells::Skip {
+            "uncover_listed"
+        } else {
+            "store_covered"
+        };
+        let redo = (mode != CoveredCells::Fused).then(|| Redo {
+            groups: make("covered_groups", 0),
+            collide: [0, 1, 2, 3].map(|kind| make("collide_covered", kind)),
+            after: (after, [0, 1, 2, 3].map(|kind| make(after, kind))),
+        });
+        Passes {
+            cover: make("cover", 0),
+            reduce: make("reduce", 0),
+            sum_loads: make("sum_loads", 0),
+            redo,
+        }
+    }
+
+    /// Every kernel of the passes.
+    pub(super) fn kernels(&self) -> Vec<&wgpu::ComputePipeline> {
+        let mut all = vec![&self.cover, &self.reduce, &self.sum_loads];
+        if let Some(r) = &self.redo {
+            all.push(&r.groups);
+            all.extend(r.collide.iter().chain(&r.after.1));
+        }
+        all
+    }
+}
+
+/// Buffers of the coupling (tiny placeholders when the scene has no particles).
 pub struct Coupling {
     particles: wgpu::Buffer,
     /// Force and torque per particle, apart from the states so that only they are read back; after
@@ -305,9 +338,6 @@ pub struct Coupling {
     particle_capacity: u64,
     pair_capacity: u64,
     slots_per_cell: u32,
-    /// Where the covered cells get their solid term (definite: fused, redo or skip).
-    mode: CoveredCells,
-    pipelines: Option<Passes>,
     /// Covered cells the `fields` buffer can hold (`Saved` records).
     saved_capacity: u32,
     /// Most covered cells the list may hold (below the device's limit only in tests).
@@ -315,7 +345,7 @@ pub struct Coupling {
 }
 
 impl Coupling {
-    pub fn new(d: &wgpu::Device, options: Option<ImbOptions>, cells: usize, mode: CoveredCells) -> Coupling {
+    pub fn new(d: &wgpu::Device, options: Option<ImbOptions>, cells: usize) -> Coupling {
         let per_cell = |bytes: u64| {
             if options.is_some() {
                 bytes * cells as u64
@@ -341,53 +371,9 @@ impl Coupling {
             particle_capacity: 1,
             pair_capacity: 1,
             slots_per_cell: slots as u32,
-            mode: mode.definite(),
-            pipelines: None,
             saved_capacity: 0,
             saved_cap: u64::MAX,
         }
-    }
-
-    /// Adds the cover and reduce pipelines when the coupling is on, and with the redo the
-    /// covered cells' collide and store pipelines.
-    pub fn with_pipelines(mut self, on: bool, make: &dyn Fn(&str, u32) -> wgpu::ComputePipeline) -> Coupling {
-        if on {
-            let after = if self.mode == CoveredCells::Skip {
-                "uncover_listed"
-            } else {
-                "store_covered"
-            };
-            let redo = (self.mode != CoveredCells::Fused).then(|| Redo {
-                groups: make("covered_groups", 0),
-                collide: [0, 1, 2, 3].map(|kind| make("collide_covered", kind)),
-                after: (after, [0, 1, 2, 3].map(|kind| make(after, kind))),
-            });
-            self.pipelines = Some(Passes {
-                cover: make("cover", 0),
-                reduce: make("reduce", 0),
-                sum_loads: make("sum_loads", 0),
-                redo,
-            });
-        }
-        self
-    }
-
-    /// Every kernel of the coupling (none when it is off).
-    pub fn kernels(&self) -> Vec<&wgpu::ComputePipeline> {
-        let Some(p) = &self.pipelines else {
-            return Vec::new();
-        };
-        let mut all = vec![&p.cover, &p.reduce, &p.sum_loads];
-        if let Some(r) = &p.redo {
-            all.push(&r.groups);
-            all.extend(r.collide.iter().chain(&r.after.1));
-        }
-        all
-    }
-
-    /// Where the covered cells take their solid term.
-    pub fn mode(&self) -> CoveredCells {
-        self.mode
     }
 
     /// The buffers in binding order.
@@ -567,8 +553,9 @@ impl Lattice {
         self.ramp_faces();
         let pairs = self.stage_particles(particles)?;
         let coupling = self.imb.as_ref().expect("coupling");
-        let passes = coupling
-            .pipelines
+        let passes = self
+            .way()
+            .passes
             .as_ref()
             .ok_or("this lattice was made without particle coupling")?;
         let (cover, reduce, sum_loads) = (
@@ -769,13 +756,13 @@ impl Lattice {
     ) {
         let mut pass = encoder.begin_compute_pass(&Default::default());
         pass.set_pipeline(pipeline);
-        pass.set_bind_group(0, &self.bind_groups[parity as usize], &[]);
+        pass.set_bind_group(0, &self.way().bind_groups[parity as usize], &[]);
         pass.dispatch_workgroups_indirect(&self.imb.as_ref().expect("coupling").indirect, offset);
     }
 
-    /// Where the covered cells take their solid term (definite; the redo without coupling).
+    /// Where the covered cells take their solid term now (definite; the redo without coupling).
     pub fn covered_cells(&self) -> CoveredCells {
-        self.imb.as_ref().map_or(CoveredCells::Redo, |c| c.mode())
+        self.way().mode
     }
 
     /// Particles one cell can hold.
@@ -830,9 +817,9 @@ impl Lattice {
             ));
         }
         let d = self.gpu.device.clone();
+        let fused = self.covered_cells() == CoveredCells::Fused;
         let coupling = self.imb.as_mut().expect("coupling");
         let mut grew = false;
-        let fused = coupling.mode == CoveredCells::Fused;
         if particles > coupling.particle_capacity {
             coupling.particle_capacity = particles.next_power_of_two();
             coupling.particles = storage_buffer(&d, "particles", coupling.particle_capacity * PARTICLE_BYTES);

@@ -904,6 +904,55 @@ mod immersed_boundary {
         }
     }
 
+    /// A lattice that changes its way of treating the covered cells between steps (each of the
+    /// six changes once, at either parity; started fused, so the redo's list grows the `fields`
+    /// buffer under ways already built) gives the loads and populations of a lattice that keeps
+    /// to one, bit for bit: what lets a run time the ways on its own steps (`WayTrials`). A way
+    /// built during the run must leave its state alone (its kernels' first dispatch, which
+    /// compiles them on a CPU driver, once covered the last step's particles again).
+    #[test]
+    fn changing_ways_between_steps_gives_the_same_run() {
+        let setup = many_particles_setup();
+        let shifts = [0.0, 0.3, 0.45, 0.7, 0.8, 1.1, 1.3];
+        let ways = [
+            CoveredCells::Fused,
+            CoveredCells::Redo,
+            CoveredCells::Skip,
+            CoveredCells::Fused,
+            CoveredCells::Skip,
+            CoveredCells::Redo,
+            CoveredCells::Fused,
+        ];
+        let f0 = random_populations(&setup, 24);
+        let run = |change: bool| {
+            let options = ImbOptions {
+                covered_cells: ways[0],
+                ..ImbOptions::default()
+            };
+            let mut lattice = Lattice::new(gpu(), setup.clone(), Health::default(), Some(options)).unwrap();
+            lattice.set_populations(&f0);
+            let loads: Vec<Vec<Load>> = shifts
+                .iter()
+                .zip(ways)
+                .map(|(&shift, way)| {
+                    if change {
+                        lattice.set_covered_cells(way);
+                        assert_eq!(lattice.covered_cells(), way);
+                    }
+                    lattice.step_coupled(&many_particles(shift)).unwrap()
+                })
+                .collect();
+            assert_eq!(lattice.cover_words_left(), 0, "covers left after the last step");
+            (loads, lattice.populations())
+        };
+        let (kept, changed) = (run(false), run(true));
+        assert!(kept.0.iter().all(|l| l.iter().any(|l| l.force != [0.0; 3])));
+        for (step, (a, b)) in kept.0.iter().zip(&changed.0).enumerate() {
+            assert_eq!(a, b, "step {step} ({:?}): loads differ", ways[step]);
+        }
+        assert!(kept.1 == changed.1, "populations differ");
+    }
+
     #[test]
     fn a_particle_too_large_is_refused_by_id_in_any_chunk() {
         let setup = Setup::new([40, 36, 32], [Face::Periodic; 6], 0.7, Operator::Bgk);

@@ -1,0 +1,260 @@
+//! `coupling.covered_cells = "auto"` in a run: the ways of giving the covered cells their solid
+//! term (redo, skip, fused: docs/imb.md "Speed") leave the same populations and loads bit for bit,
+//! so a run times each on its own steps, in the lockstep with its DEM, and keeps the fastest.
+//! Which is fastest depends on the device (a GPU or a CPU driver), the grid, the particles (how
+//! many cells they cover: a suspension settling into a bed changes it) and how long the DEM's
+//! step is (the redo and skip run the fluid kernels while the DEM steps): timed, not guessed.
+//!
+//! A trial runs each way for [`BLOCK`] steps, [`ROUNDS`] times, the order turned by one each
+//! round; a block's first step is not timed (its wait includes the previous way's last fluid
+//! kernels). The way whose median time per step is the lowest is kept until the next trial,
+//! [`EVERY`] steps after this one began. A trial starts only where the run has room for
+//! [`ROOM`] trials' length after it; before the first (the first [`FIRST`] steps, with the face
+//! ramp and the first allocations) and in shorter runs the run keeps the way `auto` takes by the
+//! covered fraction (`CoveredCells::for_scene`).
+
+use crate::lbm::imb::CoveredCells;
+
+/// The ways a trial times, in the order of its first round.
+pub const WAYS: [CoveredCells; 3] = [CoveredCells::Redo, CoveredCells::Skip, CoveredCells::Fused];
+/// Steps per way and round; the first of them is not timed.
+pub const BLOCK: u64 = 6;
+/// Rounds of a trial.
+pub const ROUNDS: u64 = 3;
+/// The step at which the first trial starts.
+pub const FIRST: u64 = 10;
+/// Steps from the start of one trial to the start of the next (more than a trial's length).
+pub const EVERY: u64 = 2000;
+/// A trial starts only where the steps from its start hold this many trials' length.
+pub const ROOM: u64 = 4;
+
+/// Steps one trial takes.
+pub const fn trial_steps() -> u64 {
+    WAYS.len() as u64 * BLOCK * ROUNDS
+}
+
+/// The trials of a run: which way each step takes, from the times at which the steps start.
+#[derive(Debug, Clone)]
+pub struct WayTrials {
+    /// The way kept outside the trials.
+    kept: CoveredCells,
+    /// Steps of the run.
+    steps: u64,
+    /// The step at which the current or next trial starts.
+    start: u64,
+    /// Seconds per step of each way (index in [`WAYS`]) in each round so far.
+    times: [Vec<f64>; 3],
+    /// When the timed steps of the current block began (the start of its second step).
+    timed_from: Option<f64>,
+    /// What the last finished trial measured, for the run's log (taken once).
+    report: Option<String>,
+}
+
+impl WayTrials {
+    /// Trials for a run of `steps` steps that starts with the way `kept`.
+    pub fn new(kept: CoveredCells, steps: u64) -> WayTrials {
+        WayTrials {
+            kept: kept.definite(),
+            steps,
+            start: FIRST,
+            times: Default::default(),
+            timed_from: None,
+            report: None,
+        }
+    }
+
+    /// The way the run keeps between trials now.
+    pub fn kept(&self) -> CoveredCells {
+        self.kept
+    }
+
+    /// The way step `step` (0 for the first; called for every step in order) takes, told that
+    /// it starts at `now` (seconds on a clock that only goes forward).
+    pub fn way_for(&mut self, step: u64, now: f64) -> CoveredCells {
+        let at = step.wrapping_sub(self.start);
+        if at > 0 && at <= trial_steps() && at.is_multiple_of(BLOCK) {
+            self.close_block(at / BLOCK - 1, now);
+            if at == trial_steps() {
+                self.start += EVERY;
+            }
+        }
+        let at = step.wrapping_sub(self.start);
+        let room = self.start.saturating_add(ROOM * trial_steps()) <= self.steps;
+        if !room || at >= trial_steps() {
+            return self.kept;
+        }
+        if at % BLOCK == 1 {
+            self.timed_from = Some(now);
+        }
+        self.way_of_block(at / BLOCK)
+    }
+
+    /// The way of a trial's block: round r takes the ways turned by r.
+    fn way_of_block(&self, block: u64) -> CoveredCells {
+        let n = WAYS.len() as u64;
+        let (round, k) = (block / n, block % n);
+        WAYS[((k + round) % n) as usize]
+    }
+
+    /// Ends block `block` at `now`: its time per timed step, and after the last block the
+    /// verdict.
+    fn close_block(&mut self, block: u64, now: f64) {
+        let Some(from) = self.timed_from.take() else {
+            return;
+        };
+        let way = self.way_of_block(block);
+        let k = WAYS.iter().position(|&w| w == way).expect("a trial's way");
+        self.times[k].push((now - from) / (BLOCK - 1) as f64);
+        if block + 1 == WAYS.len() as u64 * ROUNDS {
+            self.decide();
+        }
+    }
+
+    /// Keeps the way of the lowest median and clears the times for the next trial.
+    fn decide(&mut self) {
+        let medians: Vec<f64> = self.times.iter().map(|t| median(t)).collect();
+        let best = (0..WAYS.len())
+            .filter(|&k| medians[k].is_finite())
+            .min_by(|&a, &b| medians[a].total_cmp(&medians[b]));
+        if let Some(best) = best {
+            self.kept = WAYS[best];
+        }
+        let each: Vec<String> = WAYS
+            .iter()
+            .zip(&medians)
+            .map(|(w, m)| format!("{} {:.3} ms", w.name(), m * 1e3))
+            .collect();
+        self.report = Some(format!(
+            "covered cells timed at steps {}-{} ({} per way, median of {ROUNDS} rounds): {} per step: {} kept",
+            self.start,
+            self.start + trial_steps() - 1,
+            BLOCK - 1,
+            each.join(", "),
+            self.kept.name()
+        ));
+        self.times = Default::default();
+    }
+
+    /// What the last trial measured and kept, once.
+    pub fn take_report(&mut self) -> Option<String> {
+        self.report.take()
+    }
+}
+
+/// The median of `values` (NaN when empty).
+fn median(values: &[f64]) -> f64 {
+    let mut v = values.to_vec();
+    v.sort_by(f64::total_cmp);
+    match v.len() {
+        0 => f64::NAN,
+        n if n % 2 == 1 => v[n / 2],
+        n => 0.5 * (v[n / 2 - 1] + v[n / 2]),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Runs `steps` steps of trials started with `kept`, each step lasting `cost(step, way)`
+    /// seconds plus `switch` seconds when its way differs from the previous step's; the ways taken
+    /// and the trials' reports.
+    fn run(
+        kept: CoveredCells,
+        steps: u64,
+        cost: impl Fn(u64, CoveredCells) -> f64,
+        switch: f64,
+    ) -> (Vec<CoveredCells>, Vec<String>) {
+        let mut trials = WayTrials::new(kept, steps);
+        let (mut now, mut ways, mut reports) = (0.0, Vec::new(), Vec::new());
+        for step in 0..steps {
+            let way = trials.way_for(step, now);
+            reports.extend(trials.take_report());
+            if ways.last().is_some_and(|&last| last != way) {
+                now += switch;
+            }
+            now += cost(step, way);
+            ways.push(way);
+        }
+        (ways, reports)
+    }
+
+    fn ms(way: CoveredCells, redo: f64, skip: f64, fused: f64) -> f64 {
+        1e-3 * match way {
+            CoveredCells::Skip => skip,
+            CoveredCells::Fused => fused,
+            _ => redo,
+        }
+    }
+
+    /// The first trial starts at step FIRST, takes each way BLOCK steps a round in turned order,
+    /// and keeps the fastest (skip here) from its end; the first step of each block, slowed by
+    /// the change of way, is not what decides.
+    #[test]
+    fn a_trial_keeps_the_fastest_way() {
+        let (ways, reports) = run(CoveredCells::Redo, 600, |_, w| ms(w, 2.0, 1.5, 3.0), 0.05);
+        let (redo, skip, fused) = (CoveredCells::Redo, CoveredCells::Skip, CoveredCells::Fused);
+        assert!(ways[..FIRST as usize].iter().all(|&w| w == redo));
+        let blocks: Vec<CoveredCells> = (0..9).map(|b| ways[(FIRST + b * BLOCK) as usize]).collect();
+        assert_eq!(blocks, [redo, skip, fused, skip, fused, redo, fused, redo, skip]);
+        for b in 0..9 {
+            let block = &ways[(FIRST + b * BLOCK) as usize..(FIRST + (b + 1) * BLOCK) as usize];
+            assert!(block.iter().all(|&w| w == blocks[b as usize]), "block {b}");
+        }
+        let after = (FIRST + trial_steps()) as usize;
+        assert!(
+            ways[after..].iter().all(|&w| w == skip),
+            "skip kept after the trial"
+        );
+        assert_eq!(reports.len(), 1, "{reports:?}");
+        let r = &reports[0];
+        assert!(
+            r.contains("redo 2.000 ms, skip 1.500 ms, fused 3.000 ms") && r.ends_with("skip kept"),
+            "{r}"
+        );
+    }
+
+    /// A change of way that costs more than the ways differ by does not decide either: the
+    /// block's first step is left out.
+    #[test]
+    fn the_cost_of_changing_ways_is_left_out() {
+        let (ways, _) = run(CoveredCells::Skip, 600, |_, w| ms(w, 1.0, 1.2, 1.1), 10.0);
+        assert_eq!(ways[599], CoveredCells::Redo);
+    }
+
+    /// Later trials follow the particles: the fastest way changes at step 1000, the trial at
+    /// FIRST + EVERY finds it.
+    #[test]
+    fn a_later_trial_follows_a_change() {
+        let cost = |step: u64, w| {
+            if step < 1000 {
+                ms(w, 1.0, 2.0, 3.0)
+            } else {
+                ms(w, 3.0, 2.0, 1.0)
+            }
+        };
+        let (ways, reports) = run(CoveredCells::Skip, 5000, cost, 0.0);
+        let second = (FIRST + EVERY) as usize;
+        assert_eq!(ways[second - 1], CoveredCells::Redo);
+        assert_eq!(ways[second + trial_steps() as usize], CoveredCells::Fused);
+        assert_eq!(
+            reports.len(),
+            3,
+            "trials at FIRST, FIRST + EVERY, FIRST + 2 EVERY"
+        );
+    }
+
+    /// A run too short for a trial and the room after it keeps its way throughout; so does one
+    /// whose second trial would not fit.
+    #[test]
+    fn a_short_run_keeps_its_way() {
+        let steps = FIRST + ROOM * trial_steps() - 1;
+        let (ways, reports) = run(CoveredCells::Fused, steps, |_, w| ms(w, 1.0, 2.0, 3.0), 0.0);
+        assert!(ways.iter().all(|&w| w == CoveredCells::Fused) && reports.is_empty());
+        let steps = FIRST + EVERY + ROOM * trial_steps() - 1;
+        let (ways, reports) = run(CoveredCells::Fused, steps, |_, w| ms(w, 1.0, 2.0, 3.0), 0.0);
+        assert_eq!(reports.len(), 1);
+        let after = (FIRST + trial_steps()) as usize;
+        assert!(ways[after..].iter().all(|&w| w == CoveredCells::Redo));
+    }
+}
