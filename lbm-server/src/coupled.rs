@@ -13,7 +13,7 @@ use crate::fluid::{health_of, setup_of, stability_warning};
 use crate::lbm::gpu::{Gpu, Lattice};
 use crate::lbm::imb::{covered_fraction, CoveredCells, ImbOptions, Particles, SolidCollision, SolidParticle};
 use crate::lubrication::Lubrication;
-use crate::trials::WayTrials;
+use crate::trials::{WayTrials, AUTO_MIN_SECONDS};
 use protocol::{ParticleReply, ParticleState, Physics};
 use scene::lattice::{LatticeFace, LatticeUnits};
 use scene::Scene;
@@ -229,15 +229,16 @@ fn covered_cells(scene: &Scene, units: &LatticeUnits, radii: &[f64]) -> Result<C
     Ok(mode.for_scene(covered_fraction(radii, cells)))
 }
 
-/// Whether the run times its ways of treating the covered cells (trials.rs): "timed" on every
-/// device, "auto" on all but CPU drivers, where building the other two ways' kernels costs more
-/// than a short run gains (lavapipe, 2 cores: about 2 s each, against a default scene of 4 s) and
-/// `CoveredCells::for_scene`'s rule was measured.
-fn times_ways(scene: &Scene, gpu: &Gpu) -> bool {
+/// Whether the run times its ways of treating the covered cells (trials.rs), and how long the
+/// steps left must take for a trial to start: "timed" on every device, always; "auto" on all but
+/// CPU drivers, where building the other two ways' kernels costs more than a short run gains
+/// (lavapipe, 2 cores: about 2 s each, against a default scene of 4.5 s) and
+/// `CoveredCells::for_scene`'s rule was measured, and only with [`AUTO_MIN_SECONDS`] ahead.
+fn way_trials(scene: &Scene, gpu: &Gpu) -> Option<f64> {
     match scene.coupling.covered_cells.as_str() {
-        "timed" => true,
-        "auto" => gpu.adapter.device_type != wgpu::DeviceType::Cpu,
-        _ => false,
+        "timed" => Some(0.0),
+        "auto" if gpu.adapter.device_type != wgpu::DeviceType::Cpu => Some(AUTO_MIN_SECONDS),
+        _ => None,
     }
 }
 
@@ -266,7 +267,7 @@ impl FluidSide {
             })?,
             covered_cells: covered_cells(scene, &units, &radii)?,
         };
-        let trials = times_ways(scene, &gpu).then(|| WayTrials::new(options.covered_cells, steps));
+        let trials = way_trials(scene, &gpu).map(|least| WayTrials::new(options.covered_cells, steps, least));
         let lattice = Lattice::new(gpu, setup_of(&units), health_of(&units), Some(options))?;
         let lubrication = scene.coupling.lubrication.then(|| lubrication_of(scene, &units));
         let warning = if scene.coupling.radius_correction == "none" {
@@ -321,11 +322,9 @@ impl FluidSide {
             u.dt,
             self.lattice.adapter(),
             self.lattice.covered_cells().describe(),
-            if self.trials.is_some() {
-                "; the ways timed on the run's steps, the fastest kept"
-            } else {
-                ""
-            },
+            self.trials
+                .as_ref()
+                .map_or(String::new(), |t| format!("; {}", t.describe())),
             if self.lubrication.is_some() {
                 ", lubrication"
             } else {

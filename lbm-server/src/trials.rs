@@ -9,9 +9,10 @@
 //! round; a block's first step is not timed (its wait includes the previous way's last fluid
 //! kernels). The way whose median time per step is the lowest is kept until the next trial,
 //! [`EVERY`] steps after this one began. A trial starts only where the run has room for
-//! [`ROOM`] trials' length after it; before the first (the first [`FIRST`] steps, with the face
-//! ramp and the first allocations) and in shorter runs the run keeps the way `auto` takes by the
-//! covered fraction (`CoveredCells::for_scene`).
+//! [`ROOM`] trials' length after it and, with `auto`, where the steps left would take
+//! [`AUTO_MIN_SECONDS`] at the pace so far; before the first (the first [`FIRST`] steps, with the
+//! face ramp and the first allocations) and in shorter runs the run keeps the way `auto` takes by
+//! the covered fraction (`CoveredCells::for_scene`).
 
 use crate::lbm::imb::CoveredCells;
 
@@ -27,6 +28,10 @@ pub const FIRST: u64 = 10;
 pub const EVERY: u64 = 2000;
 /// A trial starts only where the steps from its start hold this many trials' length.
 pub const ROOM: u64 = 4;
+/// With `auto` a trial starts only where the steps left would take this long at the speed of the
+/// steps so far: building the two other ways' kernels costs a run about a second on a GPU (2 s
+/// each on lavapipe), which a shorter run does not win back.
+pub const AUTO_MIN_SECONDS: f64 = 10.0;
 
 /// Steps one trial takes.
 pub const fn trial_steps() -> u64 {
@@ -40,6 +45,10 @@ pub struct WayTrials {
     kept: CoveredCells,
     /// Steps of the run.
     steps: u64,
+    /// A trial starts only where the steps left would take this long (seconds).
+    min_seconds: f64,
+    /// When step 1 started: the run's pace from there (step 0 builds and uploads).
+    step_one: Option<f64>,
     /// The step at which the current or next trial starts.
     start: u64,
     /// Seconds per step of each way (index in [`WAYS`]) in each round so far.
@@ -51,11 +60,14 @@ pub struct WayTrials {
 }
 
 impl WayTrials {
-    /// Trials for a run of `steps` steps that starts with the way `kept`.
-    pub fn new(kept: CoveredCells, steps: u64) -> WayTrials {
+    /// Trials for a run of `steps` steps that starts with the way `kept`, each where the steps
+    /// left would take at least `min_seconds` at the pace of the steps so far.
+    pub fn new(kept: CoveredCells, steps: u64, min_seconds: f64) -> WayTrials {
         WayTrials {
             kept: kept.definite(),
             steps,
+            min_seconds,
+            step_one: None,
             start: FIRST,
             times: Default::default(),
             timed_from: None,
@@ -78,15 +90,34 @@ impl WayTrials {
                 self.start += EVERY;
             }
         }
+        if step == 1 {
+            self.step_one = Some(now);
+        }
         let at = step.wrapping_sub(self.start);
-        let room = self.start.saturating_add(ROOM * trial_steps()) <= self.steps;
-        if !room || at >= trial_steps() {
+        if at == 0 && !self.worth_a_trial(step, now) {
+            self.start += EVERY;
+        }
+        let at = step.wrapping_sub(self.start);
+        if at >= trial_steps() {
             return self.kept;
         }
         if at % BLOCK == 1 {
             self.timed_from = Some(now);
         }
         self.way_of_block(at / BLOCK)
+    }
+
+    /// Whether a trial starting at `step` (at `now`) fits the run: [`ROOM`] trials' length of
+    /// steps ahead, and the steps left taking at least `min_seconds` at the pace since step 1.
+    fn worth_a_trial(&self, step: u64, now: f64) -> bool {
+        if step + ROOM * trial_steps() > self.steps {
+            return false;
+        }
+        let pace = match self.step_one {
+            Some(one) if step > 1 => (now - one) / (step - 1) as f64,
+            _ => f64::INFINITY,
+        };
+        (self.steps - step) as f64 * pace >= self.min_seconds
     }
 
     /// The way of a trial's block: round r takes the ways turned by r.
@@ -135,6 +166,18 @@ impl WayTrials {
         self.times = Default::default();
     }
 
+    /// The run's first line's words for the trials.
+    pub fn describe(&self) -> String {
+        if self.min_seconds > 0.0 {
+            format!(
+                "the ways timed on the run's steps where {} s of them are left, the fastest kept",
+                self.min_seconds
+            )
+        } else {
+            "the ways timed on the run's steps, the fastest kept".into()
+        }
+    }
+
     /// What the last trial measured and kept, once.
     pub fn take_report(&mut self) -> Option<String> {
         self.report.take()
@@ -165,7 +208,18 @@ mod tests {
         cost: impl Fn(u64, CoveredCells) -> f64,
         switch: f64,
     ) -> (Vec<CoveredCells>, Vec<String>) {
-        let mut trials = WayTrials::new(kept, steps);
+        run_for(kept, steps, cost, switch, 0.0)
+    }
+
+    /// `run` with trials only where the steps left take `min_seconds`.
+    fn run_for(
+        kept: CoveredCells,
+        steps: u64,
+        cost: impl Fn(u64, CoveredCells) -> f64,
+        switch: f64,
+        min_seconds: f64,
+    ) -> (Vec<CoveredCells>, Vec<String>) {
+        let mut trials = WayTrials::new(kept, steps, min_seconds);
         let (mut now, mut ways, mut reports) = (0.0, Vec::new(), Vec::new());
         for step in 0..steps {
             let way = trials.way_for(step, now);
@@ -256,5 +310,21 @@ mod tests {
         assert_eq!(reports.len(), 1);
         let after = (FIRST + trial_steps()) as usize;
         assert!(ways[after..].iter().all(|&w| w == CoveredCells::Redo));
+    }
+
+    /// With a minimum run time (auto), a run whose steps left take less at its pace has no trial,
+    /// and one that takes longer has.
+    #[test]
+    fn a_quick_run_has_no_trial_with_a_minimum_time() {
+        let cost = |_, w| ms(w, 2.0, 1.0, 3.0);
+        let (ways, reports) = run_for(CoveredCells::Redo, 4000, cost, 0.0, 10.0);
+        assert!(ways.iter().all(|&w| w == CoveredCells::Redo) && reports.is_empty());
+        let (ways, reports) = run_for(CoveredCells::Redo, 6000, cost, 0.0, 10.0);
+        assert_eq!(
+            reports.len(),
+            1,
+            "only the first trial has 10 s ahead: {reports:?}"
+        );
+        assert_eq!(ways[5999], CoveredCells::Skip);
     }
 }

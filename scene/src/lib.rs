@@ -160,9 +160,9 @@ pub struct Coupling {
     /// skip them (one bit per cell; built for a GPU). All three give the same run bit for bit.
     /// "timed": the run times the three on its own steps (6 steps each, 3 rounds, from step 10 and
     /// every 2000 steps; in runs of 226 steps or more) and keeps the fastest. "auto"
-    /// (default): timed on a GPU; on a CPU driver such as lavapipe (where building the other two
-    /// ways' kernels costs seconds) redo unless the initial particles cover 20% of the cells or
-    /// more, fused from there, as before a trial on a GPU.
+    /// (default): timed on a GPU where the steps left would take 10 s or more; on a CPU driver
+    /// such as lavapipe (where building the other two ways' kernels costs seconds), and until a
+    /// trial, redo unless the initial particles cover 20% of the cells or more, fused from there.
     #[serde(default = "default_covered_cells")]
     pub covered_cells: String,
     /// With a `[lattice]`: "none" (default) draws each sphere on the lattice at its radius;

@@ -35,6 +35,11 @@ else
     cp validation/scenes/suspension.toml .gpu/
 fi
 sed 's/^free_flight = true/free_flight = false/' .gpu/suspension.toml > .gpu/suspension_substeps.toml
+# The same suspension timing the three ways of treating the covered cells on its steps ("auto"
+# does so only with 10 s of steps ahead), and with each way held throughout.
+for way in timed redo skip fused; do
+    sed "s/^\[coupling\]/[coupling]\ncovered_cells = \"$way\"/" .gpu/suspension.toml > .gpu/suspension_$way.toml
+done
 # The DEM side alone (dem-client bench) on a bed of 32^3 beads in contact (4^3 for --small).
 if $small; then
     sed 's/count = \[32, 32, 32\]/count = [4, 4, 4]/' validation/scenes/bed.toml > .gpu/bed.toml

@@ -19,8 +19,10 @@
 # host idle 1.1 ms a step as for a DEM), default/ (the default scene), suspension/ and
 # suspension_substeps/ (32^3 beads settling, the whole program, free flight on and off:
 # summary.json), dem_bench_{suspension,bed}.txt (the DEM side alone on this machine's cores, 32^3
-# beads dilute and in a bed), tencate/<run>/ and bed/<run>/ (the scenes of .gpu/plan.txt: Ten Cate
-# and the fluidized bed, held and free), validate/REPORT.md (random arrays at 18 and 24 cells) and
+# beads dilute and in a bed), suspension_timed/ (the three ways of treating the covered cells timed
+# on the run's steps) and suspension_{redo,skip,fused}/ (each held throughout), tencate/<run>/ and
+# bed/<run>/ (the scenes of .gpu/plan.txt: Ten Cate and the fluidized bed, held and free),
+# validate/REPORT.md (random arrays at 18 and 24 cells) and
 # validate_wake/REPORT.md (a held sphere at Re 200 and 300 at 24 and 32): their sections go into
 # validation/lbm/REPORT.md. The steps run in order of priority; a step that would start with less
 # time left than it needs is skipped and named in batch.log.
@@ -129,6 +131,14 @@ done
 # fluid's step above, what a whole coupled step costs between these two extremes.
 step dem_bench_suspension 20 60 $bin/dem-client bench .gpu/suspension.toml --steps 40 --free-flight both
 step dem_bench_bed 20 90 $bin/dem-client bench .gpu/bed.toml --steps 4 --free-flight both
+# The suspension timing the three ways of treating the covered cells on its steps and keeping the
+# fastest (its log's "covered cells timed" line), and with each held throughout: the whole
+# program's answer, the DEM's step included, to which way a GPU should take, and what a trial
+# costs (the ways' kernels built during the run).
+for way in timed redo skip fused; do
+    step suspension_$way/log 30 60 $bin/lbm-server run .gpu/suspension_$way.toml --out "$OUT/suspension_$way"
+    rm -f "$OUT/suspension_$way/particles.csv"
+done
 # Random arrays at the fluidized bed's voidage at 18 and 24 cells per diameter (lavapipe: 6-12):
 # whether their drag at the bed's Re converges to Tenneti et al.'s (validation/lbm/REPORT.md).
 [ "$mode" = small ] || step validate/log 60 150 $bin/lbm-server validate --out "$OUT/validate" --only random-drag-fine

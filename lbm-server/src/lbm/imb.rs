@@ -73,7 +73,7 @@ pub enum CoveredCells {
     /// Collided with the solid term in place before the fluid kernels (the loads then go back to
     /// the host while they run), which skip them by one bit of a cover mask per cell (no four-cell
     /// quads): each covered cell's populations move once, and the fluid kernels carry no solid
-    /// term. Built for a GPU; not yet timed on one.
+    /// term. Built for a GPU; not yet timed on one (a timed run tries it).
     Skip,
 }
 
@@ -137,7 +137,8 @@ impl CoveredCells {
 }
 
 /// The covered fraction of the cells from which the coupled step runs faster with the solid term
-/// fused (BENCHMARKS.md). Lavapipe, 64 x 64 x 128, TRT, spheres of 4 cells: the redo runs at 94 /
+/// fused (BENCHMARKS.md): `auto`'s way on a CPU driver, and the way a timed run starts with
+/// (trials.rs). Lavapipe, 64 x 64 x 128, TRT, spheres of 4 cells: the redo runs at 94 /
 /// 64 / 44 / 30 / 26% of LBM-only at 1 / 512 / 1728 / 2744 / 4096 spheres (0.01 / 6 / 21 / 33 /
 /// 49% of the cells covered by [`covered_fraction`]), fused at 57 / 53 / 43 / 39 / 37%. NVIDIA
 /// H200, 256 x 256 x 512: the redo faster from 1 to 4096 spheres (up to 0.7% covered; 71-57%
