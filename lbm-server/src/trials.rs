@@ -104,7 +104,7 @@ impl WayTrials {
             return self.kept;
         }
         let way = self.way_of_block(at / BLOCK);
-        if at % BLOCK != 0 {
+        if !at.is_multiple_of(BLOCK) {
             let k = WAYS.iter().position(|&w| w == way).expect("a trial's way");
             self.timing = Some((k, now));
         }
