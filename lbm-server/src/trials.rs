@@ -324,7 +324,7 @@ mod tests {
     /// does not decide: each way's median step does.
     #[test]
     fn an_occasional_slow_step_does_not_decide() {
-        let cost = |step: u64, w| ms(w, 2.0, 1.8, 3.0) + if step % 10 == 0 { 0.05 } else { 0.0 };
+        let cost = |step: u64, w| ms(w, 2.0, 1.8, 3.0) + if step.is_multiple_of(10) { 0.05 } else { 0.0 };
         let (ways, reports) = run(CoveredCells::Redo, 600, cost, 0.0);
         assert_eq!(ways[599], CoveredCells::Skip, "{reports:?}");
         assert!(
