@@ -32,7 +32,8 @@ pub struct FluidSide {
     /// without it).
     deficit_product: f64,
     steps: u64,
-    /// With `coupling.covered_cells = "auto"`: the ways timed on the run's steps (trials.rs).
+    /// With `coupling.covered_cells = "timed"`, and "auto" on a GPU: the ways timed on the run's
+    /// steps (trials.rs).
     trials: Option<WayTrials>,
     /// When the fluid side was made: the trials' clock.
     made: std::time::Instant,
@@ -341,8 +342,8 @@ impl FluidSide {
         )
     }
 
-    /// The way the covered cells take their solid term (with "auto": the one the last trial
-    /// kept), for summary.json.
+    /// The way the covered cells take their solid term (when timed: the one the last trial kept),
+    /// for summary.json.
     pub fn covered_cells(&self) -> CoveredCells {
         self.trials
             .as_ref()
@@ -371,13 +372,7 @@ impl FluidSide {
         let pressure_acceleration: [f64; 3] =
             std::array::from_fn(|a| self.units.force[a] * dx / (dt * dt) - self.gravity[a]);
         let fluid_density = self.fluid_density;
-        if let Some(trials) = &mut self.trials {
-            let way = trials.way_for(self.steps, self.made.elapsed().as_secs_f64());
-            if let Some(report) = trials.take_report() {
-                protocol::say!("lbm-server: {report}");
-            }
-            self.lattice.set_covered_cells(way);
-        }
+        self.take_way();
         self.lattice.step_coupled_with(&lattice_states, out, |j, l| {
             let s = &states[j];
             let volume = 4.0 / 3.0 * std::f64::consts::PI * s.radius.powi(3);
@@ -397,6 +392,19 @@ impl FluidSide {
             self.check()?;
         }
         Ok(())
+    }
+
+    /// When the run times its ways: the one this step takes (and the last trial's line in the
+    /// log).
+    fn take_way(&mut self) {
+        let Some(trials) = &mut self.trials else {
+            return;
+        };
+        let way = trials.way_for(self.steps, self.made.elapsed().as_secs_f64());
+        if let Some(report) = trials.take_report() {
+            protocol::say!("lbm-server: {report}");
+        }
+        self.lattice.set_covered_cells(way);
     }
 
     /// After the run's last step: the health check and the covers' warning, unless the last step

@@ -77,8 +77,9 @@ pub struct Summary {
     pub steps_per_second: f64,
     pub particle_steps_per_second: f64,
     pub fluid_physics: Vec<&'static str>,
-    /// Where the covered cells took their solid term ("redo", "skip" or "fused"; with
-    /// `coupling.covered_cells = "auto"` the way the run's last trial kept).
+    /// Where the covered cells took their solid term ("redo", "skip" or "fused"; in a run that
+    /// times them, `coupling.covered_cells = "timed"` or "auto" on a GPU, the way its last trial
+    /// kept).
     pub covered_cells: &'static str,
     /// The fluid's discretisation.
     pub lattice: LatticeSummary,

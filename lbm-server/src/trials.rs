@@ -1,16 +1,17 @@
-//! `coupling.covered_cells = "auto"` in a run: the ways of giving the covered cells their solid
-//! term (redo, skip, fused: docs/imb.md "Speed") leave the same populations and loads bit for bit,
-//! so a run times each on its own steps, in the lockstep with its DEM, and keeps the fastest.
-//! Which is fastest depends on the device (a GPU or a CPU driver), the grid, the particles (how
-//! many cells they cover: a suspension settling into a bed changes it) and how long the DEM's
-//! step is (the redo and skip run the fluid kernels while the DEM steps): timed, not guessed.
+//! `coupling.covered_cells = "timed"` (and "auto" on a GPU): the ways of giving the covered cells
+//! their solid term (redo, skip, fused: docs/imb.md "Speed") leave the same populations and loads
+//! bit for bit, so a run times each on its own steps, in the lockstep with its DEM, and keeps the
+//! fastest. Which is fastest depends on the device (a GPU or a CPU driver), the grid, the
+//! particles (how many cells they cover: a suspension settling into a bed changes it) and how
+//! long the DEM's step is (the redo and skip run the fluid kernels while the DEM steps): timed,
+//! not guessed.
 //!
 //! A trial runs each way for [`BLOCK`] steps, [`ROUNDS`] times, the order turned by one each
 //! round; a block's first step is not timed (its wait includes the previous way's last fluid
 //! kernels, and it builds the way the first time). A step's time is from its start to the next
-//! step's, the DEM's step included. The way whose median step is the quickest is kept until the next trial,
-//! [`EVERY`] steps after this one began. A trial starts only where the run has room for
-//! [`ROOM`] trials' length after it and, with `auto`, where the steps left would take
+//! step's, the DEM's step included. The way whose median step is the quickest is kept until the
+//! next trial, [`EVERY`] steps after this one began. A trial starts only where the run has room
+//! for [`ROOM`] trials' length after it and, with `auto`, where the steps left would take
 //! [`AUTO_MIN_SECONDS`] at the pace so far; before the first (the first [`FIRST`] steps, with the
 //! face ramp and the first allocations) and in shorter runs the run keeps the way `auto` takes by
 //! the covered fraction (`CoveredCells::for_scene`).

@@ -375,7 +375,7 @@ impl Lattice {
     /// Makes the steps from the next on give the covered cells their solid term the way `mode`
     /// says (`Auto` taken as the redo), building that way's kernels the first time it is asked
     /// for. Every way leaves the same populations bit for bit (the reference tests run each), so
-    /// a run may change ways between any two steps (`coupled::WayTrials`).
+    /// a run may change ways between any two steps (`trials::WayTrials`).
     pub fn set_covered_cells(&mut self, mode: super::imb::CoveredCells) {
         let mode = mode.definite();
         if let Some(k) = self.ways.iter().position(|w| w.mode == mode) {
