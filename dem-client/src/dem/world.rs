@@ -321,6 +321,9 @@ pub struct World {
     contacts: usize,
     /// The largest squared distance a sphere was seen from `x_at_build` (after each drift).
     peak_drift2: f64,
+    /// The island's world of the last fluid step that had one, kept for its allocations
+    /// (`flight::Spare`).
+    spare: Option<Box<flight::Spare>>,
 }
 
 impl World {
@@ -337,12 +340,30 @@ impl World {
         let pair_materials = (0..n * n)
             .map(|k| PairMaterial::mix(&materials[k / n], &materials[k % n]))
             .collect();
-        let mut world = World {
+        let mut world = World::bare(bodies, walls, law, pair_materials, n, gravity, dt, skin);
+        world.forces(0.0, Finish::Nothing);
+        world
+    }
+
+    /// A world of these spheres and walls with no lists yet (stale), at time 0; `pair_materials`
+    /// mix `n_materials` materials.
+    #[allow(clippy::too_many_arguments)]
+    fn bare(
+        bodies: Vec<Body>,
+        walls: Vec<Wall>,
+        law: ContactLaw,
+        pair_materials: Vec<PairMaterial>,
+        n_materials: usize,
+        gravity: V3,
+        dt: f64,
+        skin: f64,
+    ) -> World {
+        World {
             bodies,
             walls,
             law,
             pair_materials,
-            n_materials: n,
+            n_materials,
             gravity,
             dt,
             skin,
@@ -368,9 +389,8 @@ impl World {
             dropped_islands: 0,
             contacts: 0,
             peak_drift2: 0.0,
-        };
-        world.forces(0.0, Finish::Nothing);
-        world
+            spare: None,
+        }
     }
 
     fn pair_material(&self, a: usize, b: usize) -> &PairMaterial {
@@ -689,8 +709,11 @@ impl World {
     /// The slots of each body: as i a contiguous range (the slots are sorted by i), as j a list.
     fn build_adjacency(&mut self) {
         let n = self.bodies.len();
-        let mut first_i = vec![0u32; n + 1];
-        let mut start = vec![0u32; n + 1];
+        let (first_i, start, as_j) = (&mut self.first_i, &mut self.as_j_start, &mut self.as_j);
+        for counts in [&mut *first_i, &mut *start] {
+            counts.clear();
+            counts.resize(n + 1, 0);
+        }
         for s in &self.slots {
             first_i[s.i as usize + 1] += 1;
             start[s.j as usize + 1] += 1;
@@ -700,14 +723,12 @@ impl World {
             start[k + 1] += start[k];
         }
         let mut fill = start.clone();
-        let mut as_j = vec![0u32; self.slots.len()];
+        as_j.clear();
+        as_j.resize(self.slots.len(), 0);
         for (k, s) in self.slots.iter().enumerate() {
             as_j[fill[s.j as usize] as usize] = k as u32;
             fill[s.j as usize] += 1;
         }
-        self.first_i = first_i;
-        self.as_j_start = start;
-        self.as_j = as_j;
     }
 
     /// Contact forces and torques at the present positions; `dt` advances the contact histories;

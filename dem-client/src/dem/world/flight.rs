@@ -21,6 +21,36 @@ const ISLAND_REACH: f64 = 0.25;
 /// A sphere outside the island.
 const FLYING: u32 = u32::MAX;
 
+/// An island's world, the slots of its pairs in the whole world and each sphere's index in the
+/// island, kept by the world between fluid steps so that their vectors are refilled, not made
+/// anew (`World::split_off`).
+pub(super) struct Spare {
+    part: World,
+    slots: Vec<u32>,
+    local: Vec<u32>,
+}
+
+impl Spare {
+    /// Empty, with the pair materials of `world`'s islands (`split_off` sets the rest).
+    fn for_islands_of(world: &World) -> Spare {
+        let part = World::bare(
+            Vec::new(),
+            world.walls.clone(),
+            world.law,
+            world.pair_materials.clone(),
+            world.n_materials,
+            world.gravity,
+            world.dt,
+            world.skin,
+        );
+        Spare {
+            part,
+            slots: Vec::new(),
+            local: Vec::new(),
+        }
+    }
+}
+
 /// a > b, false when a is NaN (a NaN gap is never clear).
 fn exceeds(a: f64, b: f64) -> bool {
     a > b
@@ -204,100 +234,103 @@ impl World {
     /// false, with nothing changed, when an island sphere went further than `ISLAND_REACH` skin
     /// from where it started (or the island's lists ran out).
     fn advance_island(&mut self, island: &[u32], span: f64, steps: u64) -> bool {
-        let mut local = vec![FLYING; self.bodies.len()];
+        let mut spare = self
+            .spare
+            .take()
+            .unwrap_or_else(|| Box::new(Spare::for_islands_of(self)));
+        spare.local.clear();
+        spare.local.resize(self.bodies.len(), FLYING);
         for (l, &k) in island.iter().enumerate() {
-            local[k as usize] = l as u32;
+            spare.local[k as usize] = l as u32;
         }
-        let (mut part, slots) = self.split_off(island, &local);
+        self.split_off(island, &mut spare);
+        let part = &mut spare.part;
         let builds = part.builds;
         part.advance(steps);
         let reach = ISLAND_REACH * self.skin;
-        if part.builds != builds || part.peak_drift2 > reach * reach {
-            return false;
+        let kept = part.builds == builds && part.peak_drift2 <= reach * reach;
+        if kept {
+            self.merge(&spare.part, island, &spare.local, &spare.slots, span);
         }
-        self.merge(&part, island, &local, &slots, span);
-        true
+        self.spare = Some(spare);
+        kept
     }
 
-    /// A world of the island's spheres (`local`: each sphere's index in it, or `FLYING`) with
-    /// their pairs among themselves that can come within the films' cut-off while each sphere
-    /// stays within its reach (state and history), their walls, and lists measured from where they
-    /// are now; and the slots of those pairs here. A pair left out is apart and stays so, as
-    /// `advance_island` checks: its force is an exact zero either way.
-    fn split_off(&self, island: &[u32], local: &[u32]) -> (World, Vec<u32>) {
+    /// Fills `spare` with the island's world: its spheres (`spare.local`: each sphere's index in
+    /// it, or `FLYING`) with their pairs among themselves that can come within the films' cut-off
+    /// while each sphere stays within its reach (state and history), their walls, and lists
+    /// measured from where they are now; and `spare.slots`, the slots of those pairs here. A pair
+    /// left out is apart and stays so, as `advance_island` checks: its force is an exact zero
+    /// either way. The vectors are refilled, not made anew: a 32^3 bed's island world is some 20
+    /// MB, which fresh allocations fault in (and then unmap) every fluid step.
+    fn split_off(&self, island: &[u32], spare: &mut Spare) {
         let apart = self.reach() + 2.0 * ISLAND_REACH * self.skin;
-        let slots: Vec<u32> = island
-            .iter()
-            .flat_map(|&k| self.first_i[k as usize]..self.first_i[k as usize + 1])
-            .filter(|&s| {
-                local[self.slots[s as usize].j as usize] != FLYING
-                    && !exceeds(self.slot_gap(s as usize), apart)
-            })
-            .collect();
+        let Spare { part, slots, local } = spare;
+        slots.clear();
+        slots.extend(
+            island
+                .iter()
+                .flat_map(|&k| self.first_i[k as usize]..self.first_i[k as usize + 1])
+                .filter(|&s| {
+                    local[self.slots[s as usize].j as usize] != FLYING
+                        && !exceeds(self.slot_gap(s as usize), apart)
+                }),
+        );
         let w = self.walls.len().max(1);
-        let mut near_start = vec![0];
-        let mut near = Vec::new();
+        part.near_start.clear();
+        part.near_start.push(0);
+        part.near.clear();
         for k in island.iter().map(|&k| k as usize) {
-            near.extend_from_slice(&self.near[self.near_start[k] as usize..self.near_start[k + 1] as usize]);
-            near_start.push(near.len() as u32);
+            part.near
+                .extend_from_slice(&self.near[self.near_start[k] as usize..self.near_start[k + 1] as usize]);
+            part.near_start.push(part.near.len() as u32);
         }
-        let bodies: Vec<Body> = island.iter().map(|&k| self.bodies[k as usize]).collect();
+        part.bodies.clear();
+        part.bodies
+            .extend(island.iter().map(|&k| self.bodies[k as usize]));
+        part.x_at_build.clear();
+        part.x_at_build.extend(part.bodies.iter().map(|b| b.x));
+        part.ids_at_build.clear();
+        part.ids_at_build.extend(part.bodies.iter().map(|b| b.id));
+        part.walls.clone_from(&self.walls);
+        part.law = self.law;
+        part.gravity = self.gravity;
+        part.dt = self.dt;
+        part.skin = self.skin;
+        part.time = self.time;
+        part.lubrication = self.lubrication;
+        part.periodic = self.periodic;
         let pick = |s: &u32| *s as usize;
-        let mut part = World {
-            x_at_build: bodies.iter().map(|b| b.x).collect(),
-            ids_at_build: bodies.iter().map(|b| b.id).collect(),
-            bodies,
-            walls: self.walls.clone(),
-            law: self.law,
-            pair_materials: self.pair_materials.clone(),
-            n_materials: self.n_materials,
-            gravity: self.gravity,
-            dt: self.dt,
-            skin: self.skin,
-            time: self.time,
-            lubrication: self.lubrication,
-            periodic: self.periodic,
-            films: if self.films.is_empty() {
-                Vec::new()
-            } else {
-                slots.iter().map(|s| self.films[pick(s)]).collect()
-            },
-            slots: slots
+        part.films.clear();
+        if !self.films.is_empty() {
+            part.films.extend(slots.iter().map(|s| self.films[pick(s)]));
+        }
+        part.slots.clear();
+        part.slots.extend(slots.iter().map(|s| {
+            let slot = self.slots[pick(s)];
+            super::Slot {
+                i: local[slot.i as usize],
+                j: local[slot.j as usize],
+                ..slot
+            }
+        }));
+        part.pair_const.clear();
+        part.pair_const
+            .extend(slots.iter().map(|s| self.pair_const[pick(s)]));
+        part.out.clear();
+        part.out.extend(slots.iter().map(|s| self.out[pick(s)]));
+        part.wall_history.clear();
+        part.wall_history.extend(island.iter().flat_map(|&k| {
+            self.wall_history[k as usize * w..(k as usize + 1) * w]
                 .iter()
-                .map(|s| {
-                    let slot = self.slots[pick(s)];
-                    super::Slot {
-                        i: local[slot.i as usize],
-                        j: local[slot.j as usize],
-                        ..slot
-                    }
-                })
-                .collect(),
-            pair_const: slots.iter().map(|s| self.pair_const[pick(s)]).collect(),
-            out: slots.iter().map(|s| self.out[pick(s)]).collect(),
-            first_i: Vec::new(),
-            as_j_start: Vec::new(),
-            as_j: Vec::new(),
-            wall_history: island
-                .iter()
-                .flat_map(|&k| {
-                    self.wall_history[k as usize * w..(k as usize + 1) * w]
-                        .iter()
-                        .copied()
-                })
-                .collect(),
-            near_start,
-            near,
-            stale: false,
-            builds: self.builds,
-            build_seconds: 0.0,
-            islands: 0,
-            dropped_islands: 0,
-            contacts: self.contacts,
-            peak_drift2: 0.0,
-        };
+                .copied()
+        }));
+        part.stale = false;
+        part.builds = self.builds;
+        part.build_seconds = 0.0;
+        part.contacts = self.contacts;
+        part.peak_drift2 = 0.0;
         part.build_adjacency();
-        (part, slots)
     }
 
     /// Takes the island's spheres, pair and wall histories back, and flies every other sphere
