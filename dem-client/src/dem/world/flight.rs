@@ -261,16 +261,17 @@ impl World {
     /// while each sphere stays within its reach (state and history), their walls, and lists
     /// measured from where they are now; and `spare.slots`, the slots of those pairs here. A pair
     /// left out is apart and stays so, as `advance_island` checks: its force is an exact zero
-    /// either way. The vectors are refilled, not made anew: a 32^3 bed's island world is some 20
-    /// MB, which fresh allocations fault in (and then unmap) every fluid step.
+    /// either way. The vectors are refilled, not made anew (a 32^3 bed's island world is some 20
+    /// MB, which fresh allocations fault in and then unmap every fluid step), in parallel chunks.
     fn split_off(&self, island: &[u32], spare: &mut Spare) {
         let apart = self.reach() + 2.0 * ISLAND_REACH * self.skin;
         let Spare { part, slots, local } = spare;
         slots.clear();
-        slots.extend(
+        slots.par_extend(
             island
-                .iter()
-                .flat_map(|&k| self.first_i[k as usize]..self.first_i[k as usize + 1])
+                .par_iter()
+                .with_min_len(CHUNK)
+                .flat_map_iter(|&k| self.first_i[k as usize]..self.first_i[k as usize + 1])
                 .filter(|&s| {
                     local[self.slots[s as usize].j as usize] != FLYING
                         && !exceeds(self.slot_gap(s as usize), apart)
@@ -286,8 +287,12 @@ impl World {
             part.near_start.push(part.near.len() as u32);
         }
         part.bodies.clear();
-        part.bodies
-            .extend(island.iter().map(|&k| self.bodies[k as usize]));
+        part.bodies.par_extend(
+            island
+                .par_iter()
+                .with_min_len(CHUNK)
+                .map(|&k| self.bodies[k as usize]),
+        );
         part.x_at_build.clear();
         part.x_at_build.extend(part.bodies.iter().map(|b| b.x));
         part.ids_at_build.clear();
@@ -300,14 +305,14 @@ impl World {
         part.time = self.time;
         part.lubrication = self.lubrication;
         part.periodic = self.periodic;
-        let pick = |s: &u32| *s as usize;
+        let pairs = || slots.par_iter().with_min_len(PAIR_CHUNK).map(|&s| s as usize);
         part.films.clear();
         if !self.films.is_empty() {
-            part.films.extend(slots.iter().map(|s| self.films[pick(s)]));
+            part.films.par_extend(pairs().map(|s| self.films[s]));
         }
         part.slots.clear();
-        part.slots.extend(slots.iter().map(|s| {
-            let slot = self.slots[pick(s)];
+        part.slots.par_extend(pairs().map(|s| {
+            let slot = self.slots[s];
             super::Slot {
                 i: local[slot.i as usize],
                 j: local[slot.j as usize],
@@ -315,16 +320,16 @@ impl World {
             }
         }));
         part.pair_const.clear();
-        part.pair_const
-            .extend(slots.iter().map(|s| self.pair_const[pick(s)]));
+        part.pair_const.par_extend(pairs().map(|s| self.pair_const[s]));
         part.out.clear();
-        part.out.extend(slots.iter().map(|s| self.out[pick(s)]));
+        part.out.par_extend(pairs().map(|s| self.out[s]));
         part.wall_history.clear();
-        part.wall_history.extend(island.iter().flat_map(|&k| {
-            self.wall_history[k as usize * w..(k as usize + 1) * w]
-                .iter()
-                .copied()
-        }));
+        part.wall_history
+            .par_extend(island.par_iter().with_min_len(CHUNK).flat_map_iter(|&k| {
+                self.wall_history[k as usize * w..(k as usize + 1) * w]
+                    .iter()
+                    .copied()
+            }));
         part.stale = false;
         part.builds = self.builds;
         part.build_seconds = 0.0;
