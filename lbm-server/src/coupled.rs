@@ -395,7 +395,8 @@ impl FluidSide {
     }
 
     /// When the run times its ways: the one this step takes (and the last trial's line in the
-    /// log).
+    /// log); a way the device does not build is left out of the trials (this step keeps the
+    /// lattice's way).
     fn take_way(&mut self) {
         let Some(trials) = &mut self.trials else {
             return;
@@ -404,7 +405,10 @@ impl FluidSide {
         if let Some(report) = trials.take_report() {
             protocol::say!("lbm-server: {report}");
         }
-        self.lattice.set_covered_cells(way);
+        if let Err(e) = self.lattice.set_covered_cells(way) {
+            protocol::say!("lbm-server: warning: {e}; the run times the other ways without it");
+            trials.refuse(way);
+        }
     }
 
     /// After the run's last step: the health check and the covers' warning, unless the last step

@@ -59,6 +59,8 @@ pub struct WayTrials {
     timing: Option<(usize, f64)>,
     /// What the last finished trial measured, for the run's log (taken once).
     report: Option<String>,
+    /// The ways the device did not build (index in [`WAYS`]): left out of the trials.
+    refused: [bool; 3],
 }
 
 impl WayTrials {
@@ -74,6 +76,7 @@ impl WayTrials {
             times: Default::default(),
             timing: None,
             report: None,
+            refused: [false; 3],
         }
     }
 
@@ -105,11 +108,21 @@ impl WayTrials {
             return self.kept;
         }
         let way = self.way_of_block(at / BLOCK);
+        let k = index(way);
+        if self.refused[k] {
+            return self.kept;
+        }
         if !at.is_multiple_of(BLOCK) {
-            let k = WAYS.iter().position(|&w| w == way).expect("a trial's way");
             self.timing = Some((k, now));
         }
         way
+    }
+
+    /// Leaves `way` out of this trial and the next (the device did not build it): the step that
+    /// asked for it is not timed.
+    pub fn refuse(&mut self, way: CoveredCells) {
+        self.refused[index(way)] = true;
+        self.timing = None;
     }
 
     /// Whether a trial starting at `step` (at `now`) fits the run: [`ROOM`] trials' length of
@@ -146,7 +159,11 @@ impl WayTrials {
         let each: Vec<String> = WAYS
             .iter()
             .zip(&medians)
-            .map(|(w, m)| format!("{} {:.3} ms", w.name(), m * 1e3))
+            .zip(self.refused)
+            .map(|((w, m), refused)| match refused {
+                true => format!("{} not built", w.name()),
+                false => format!("{} {:.3} ms", w.name(), m * 1e3),
+            })
             .collect();
         self.report = Some(format!(
             "covered cells timed at steps {}-{} (median of {} steps each): {} per step: {} kept",
@@ -175,6 +192,11 @@ impl WayTrials {
     pub fn take_report(&mut self) -> Option<String> {
         self.report.take()
     }
+}
+
+/// The index of a trial's way in [`WAYS`].
+fn index(way: CoveredCells) -> usize {
+    WAYS.iter().position(|&w| w == way).expect("a trial's way")
 }
 
 /// The median of `values` (NaN when empty).
@@ -330,6 +352,32 @@ mod tests {
         assert_eq!(ways[599], CoveredCells::Skip, "{reports:?}");
         assert!(
             reports[0].contains("redo 2.000 ms, skip 1.800 ms, fused 3.000 ms"),
+            "{reports:?}"
+        );
+    }
+
+    /// A way the device does not build is refused at its first block: it is not asked for again,
+    /// its steps take the kept way untimed, the others decide, and the report says so.
+    #[test]
+    fn a_way_not_built_is_left_out() {
+        let mut trials = WayTrials::new(CoveredCells::Redo, 600, 0.0);
+        let (mut now, mut asked, mut reports) = (0.0, Vec::new(), Vec::new());
+        let mut current = CoveredCells::Redo;
+        for step in 0..600 {
+            let way = trials.way_for(step, now);
+            reports.extend(trials.take_report());
+            asked.push(way);
+            if way == CoveredCells::Fused {
+                trials.refuse(way);
+            } else {
+                current = way;
+            }
+            now += ms(current, 2.0, 1.5, 0.5);
+        }
+        assert_eq!(asked.iter().filter(|&&w| w == CoveredCells::Fused).count(), 1);
+        assert_eq!(asked[599], CoveredCells::Skip);
+        assert!(
+            reports.len() == 1 && reports[0].contains("skip 1.500 ms, fused not built"),
             "{reports:?}"
         );
     }

@@ -212,6 +212,10 @@ pub struct Lattice {
     face_scale: f64,
     /// The fields of the last check that passed, kept on the device ([`Lattice::keep_fields`]).
     kept: Option<wgpu::Buffer>,
+    /// Test aid: the next way built gets a constant its kernels do not declare (a validation
+    /// error, as a driver refusing a kernel would give).
+    #[cfg(test)]
+    pub(super) spoil_next_way: bool,
 }
 
 /// One way of giving the covered cells their solid term ([`super::imb::CoveredCells`]): the
@@ -364,9 +368,11 @@ impl Lattice {
             time: 0,
             face_scale: 1.0,
             kept: None,
+            #[cfg(test)]
+            spoil_next_way: false,
         };
         let mode = imb.map_or(super::imb::CoveredCells::Redo, |o| o.covered_cells);
-        lattice.set_covered_cells(mode);
+        lattice.set_covered_cells(mode)?;
         // wgpu zero-initialises every buffer: the shifted populations start at rest (f = w, rho = 1)
         // without an upload (which took a 5 GB host array at 256 x 256 x 512).
         Ok(lattice)
@@ -375,17 +381,41 @@ impl Lattice {
     /// Makes the steps from the next on give the covered cells their solid term the way `mode`
     /// says (`Auto` taken as the redo), building that way's kernels the first time it is asked
     /// for. Every way leaves the same populations bit for bit (the reference tests run each), so
-    /// a run may change ways between any two steps (`trials::WayTrials`).
-    pub fn set_covered_cells(&mut self, mode: super::imb::CoveredCells) {
+    /// a run may change ways between any two steps (`trials::WayTrials`). A way whose kernels the
+    /// device does not build (a validation, internal or out-of-memory error: a driver's compiler
+    /// refusing a kernel) leaves the lattice as it was and says why.
+    pub fn set_covered_cells(&mut self, mode: super::imb::CoveredCells) -> Result<(), String> {
         let mode = mode.definite();
         if let Some(k) = self.ways.iter().position(|w| w.mode == mode) {
             self.active = k;
-            return;
+            return Ok(());
         }
+        let d = self.gpu.device.clone();
+        let scopes = [
+            wgpu::ErrorFilter::OutOfMemory,
+            wgpu::ErrorFilter::Internal,
+            wgpu::ErrorFilter::Validation,
+        ]
+        .map(|filter| d.push_error_scope(filter));
         let way = self.build_way(mode);
         self.compile_kernels(&way);
+        let errors: Vec<String> = scopes
+            .into_iter()
+            .rev()
+            .filter_map(|scope| pollster::block_on(scope.pop()))
+            .map(|e| e.to_string())
+            .collect();
+        if !errors.is_empty() {
+            return Err(format!(
+                "the covered cells' {} kernels could not be built on {}: {}",
+                mode.name(),
+                self.gpu.adapter.name,
+                errors.join("; ")
+            ));
+        }
         self.ways.push(way);
         self.active = self.ways.len() - 1;
+        Ok(())
     }
 
     /// The way the steps take now.
@@ -444,6 +474,10 @@ impl Lattice {
         let pipeline_kind = |entry: &str, kind: u32| {
             let mut constants = constants.to_vec();
             constants.push(("KIND", f64::from(kind)));
+            #[cfg(test)]
+            if self.spoil_next_way {
+                constants.push(("NO_SUCH_CONSTANT", 1.0));
+            }
             d.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
                 label: Some(entry),
                 layout: Some(&self.pipeline_layout),

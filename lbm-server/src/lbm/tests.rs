@@ -936,7 +936,7 @@ mod immersed_boundary {
                 .zip(ways)
                 .map(|(&shift, way)| {
                     if change {
-                        lattice.set_covered_cells(way);
+                        lattice.set_covered_cells(way).unwrap();
                         assert_eq!(lattice.covered_cells(), way);
                     }
                     lattice.step_coupled(&many_particles(shift)).unwrap()
@@ -951,6 +951,37 @@ mod immersed_boundary {
             assert_eq!(a, b, "step {step} ({:?}): loads differ", ways[step]);
         }
         assert!(kept.1 == changed.1, "populations differ");
+    }
+
+    /// A way whose kernels the device refuses (here a constant they do not declare, as a driver's
+    /// compiler refusing one would) is an error naming it, and the lattice goes on with its way:
+    /// the next steps match a lattice that never tried.
+    #[test]
+    fn a_way_the_device_refuses_leaves_the_lattice_as_it_was() {
+        let setup = many_particles_setup();
+        let f0 = random_populations(&setup, 25);
+        let run = |spoil: bool| {
+            let mut lattice = Lattice::new(
+                gpu(),
+                setup.clone(),
+                Health::default(),
+                Some(ImbOptions::default()),
+            )
+            .unwrap();
+            lattice.set_populations(&f0);
+            let mut loads = vec![lattice.step_coupled(&many_particles(0.0)).unwrap()];
+            if spoil {
+                lattice.spoil_next_way = true;
+                let err = lattice.set_covered_cells(CoveredCells::Skip).unwrap_err();
+                assert!(err.contains("skip kernels could not be built"), "{err}");
+                assert_eq!(lattice.covered_cells(), CoveredCells::Redo);
+            }
+            loads.push(lattice.step_coupled(&many_particles(0.3)).unwrap());
+            (loads, lattice.populations())
+        };
+        let (tried, kept) = (run(true), run(false));
+        assert_eq!(tried.0, kept.0, "loads");
+        assert!(tried.1 == kept.1, "populations");
     }
 
     #[test]
