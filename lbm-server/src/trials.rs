@@ -118,8 +118,8 @@ impl WayTrials {
         way
     }
 
-    /// Leaves `way` out of this trial and the next (the device did not build it): the step that
-    /// asked for it is not timed.
+    /// Leaves `way` out of this trial and every later one (the device did not build it): the step
+    /// that asked for it is not timed.
     pub fn refuse(&mut self, way: CoveredCells) {
         self.refused[index(way)] = true;
         self.timing = None;
