@@ -233,7 +233,7 @@ fn covered_cells(scene: &Scene, units: &LatticeUnits, radii: &[f64]) -> Result<C
 /// Whether the run times its ways of treating the covered cells (trials.rs), and how long the
 /// steps left must take for a trial to start: "timed" on every device, always; "auto" on all but
 /// CPU drivers, where building the other two ways' kernels costs more than a short run gains
-/// (lavapipe, 2 cores: about 2 s each, against a default scene of 4.5 s) and
+/// (lavapipe, 2 cores: about 1 s each, against a default scene of 4.5 s) and
 /// `CoveredCells::for_scene`'s rule was measured, and only with [`AUTO_MIN_SECONDS`] ahead.
 fn way_trials(scene: &Scene, gpu: &Gpu) -> Option<f64> {
     match scene.coupling.covered_cells.as_str() {

@@ -31,8 +31,8 @@ pub const EVERY: u64 = 2000;
 /// A trial starts only where the steps from its start hold this many trials' length.
 pub const ROOM: u64 = 4;
 /// With `auto` a trial starts only where the steps left would take this long at the speed of the
-/// steps so far: building the two other ways' kernels costs a run about a second on a GPU (2 s
-/// each on lavapipe), which a shorter run does not win back.
+/// steps so far: building the two other ways' kernels costs a run about 1 s each on lavapipe (on
+/// a GPU not yet measured), which a shorter run does not win back.
 pub const AUTO_MIN_SECONDS: f64 = 10.0;
 
 /// Steps one trial takes.
