@@ -209,6 +209,10 @@ impl World {
                 island.push(k);
             }
         }
+        if island.len() == self.bodies.len() {
+            // Every sphere is a seed (a bed): none is left to join.
+            return (0..island.len() as u32).collect();
+        }
         let mut next = 0;
         while next < island.len() {
             let a = island[next] as usize;
