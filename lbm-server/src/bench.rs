@@ -383,7 +383,7 @@ impl Naive {
 fn covered_cell_modes(name: &str) -> Result<Vec<CoveredCells>, String> {
     match name {
         "both" => return Ok(vec![CoveredCells::Redo, CoveredCells::Fused]),
-        "all" => return Ok(vec![CoveredCells::Redo, CoveredCells::Fused, CoveredCells::Skip]),
+        "all" => return Ok(CoveredCells::DEFINITE.to_vec()),
         _ => {}
     }
     CoveredCells::from_name(name)
@@ -650,7 +650,7 @@ type PassTimes<const N: usize> = Vec<(&'static str, [f64; N])>;
 /// The time of each pass per particle count: one table per way of treating the covered cells
 /// (their passes differ) and clock; `how` the passes were timed.
 fn print_passes<const N: usize>(breakdown: &[(usize, &str, PassTimes<N>)], clocks: [&str; N], how: &str) {
-    for mode in [CoveredCells::Redo, CoveredCells::Fused, CoveredCells::Skip].map(CoveredCells::name) {
+    for mode in CoveredCells::DEFINITE.map(CoveredCells::name) {
         let rows: Vec<(usize, &PassTimes<N>)> = breakdown
             .iter()
             .filter(|(_, m, _)| *m == mode)

@@ -54,13 +54,13 @@ pub struct WayTrials {
     /// The step at which the current or next trial starts.
     start: u64,
     /// The timed steps' seconds of each way (index in [`WAYS`]) so far in the trial.
-    times: [Vec<f64>; 3],
+    times: [Vec<f64>; WAYS.len()],
     /// The last step if the trial times it: its way (index in [`WAYS`]) and when it started.
     timing: Option<(usize, f64)>,
     /// What the last finished trial measured, for the run's log (taken once).
     report: Option<String>,
     /// The ways the device did not build (index in [`WAYS`]): left out of the trials.
-    refused: [bool; 3],
+    refused: [bool; WAYS.len()],
 }
 
 impl WayTrials {
@@ -76,7 +76,7 @@ impl WayTrials {
             times: Default::default(),
             timing: None,
             report: None,
-            refused: [false; 3],
+            refused: [false; WAYS.len()],
         }
     }
 

@@ -441,8 +441,7 @@ impl Lattice {
         });
         let params: Vec<wgpu::Buffer> = (0..2)
             .map(|parity| {
-                let mut p = params(&self.setup, parity, self.health, &classes);
-                p.face_value = face_values(&self.setup.faces, self.face_scale);
+                let p = params(&self.setup, parity, self.health, &classes, self.face_scale);
                 d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                     label: Some("params"),
                     contents: bytemuck::bytes_of(&p),
@@ -1038,7 +1037,7 @@ fn face_values(faces: &[Face; 6], scale: f64) -> [[f32; 4]; 6] {
     })
 }
 
-fn params(setup: &Setup, parity: usize, health: Health, classes: &CellList) -> Params {
+fn params(setup: &Setup, parity: usize, health: Health, classes: &CellList, face_scale: f64) -> Params {
     let face = |f: usize| setup.faces[f].code();
     Params {
         n: [
@@ -1056,7 +1055,7 @@ fn params(setup: &Setup, parity: usize, health: Health, classes: &CellList) -> P
             health.max_density_deviation as f32,
         ],
         force: vec4(setup.force, 0.0),
-        face_value: face_values(&setup.faces, 1.0),
+        face_value: face_values(&setup.faces, face_scale),
         ranges: [
             classes.sizes[0],
             classes.sizes[1],

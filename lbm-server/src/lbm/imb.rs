@@ -78,6 +78,9 @@ pub enum CoveredCells {
 }
 
 impl CoveredCells {
+    /// The definite ways (what `bench --covered-cells all` and the reference tests run).
+    pub const DEFINITE: [CoveredCells; 3] = [CoveredCells::Redo, CoveredCells::Fused, CoveredCells::Skip];
+
     /// The scene's `coupling.covered_cells` ("auto", "fused", "redo", "skip").
     pub fn from_name(name: &str) -> Option<CoveredCells> {
         match name {

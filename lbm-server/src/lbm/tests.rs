@@ -449,7 +449,7 @@ mod immersed_boundary {
         shifts: &[f64],
         particles_at: impl Fn(f64) -> Vec<SolidParticle>,
     ) -> (Vec<Vec<Load>>, u32) {
-        let modes = [CoveredCells::Redo, CoveredCells::Fused, CoveredCells::Skip];
+        let modes = CoveredCells::DEFINITE;
         let runs = modes.map(|covered_cells| {
             let options = ImbOptions {
                 covered_cells,
@@ -617,7 +617,7 @@ mod immersed_boundary {
                 .collect();
             (loads, lattice.populations())
         };
-        for mode in [CoveredCells::Redo, CoveredCells::Fused, CoveredCells::Skip] {
+        for mode in CoveredCells::DEFINITE {
             let (edge, f_edge) = run(mode, &f0, &|s| across[s]);
             let moved = |s: usize| std::array::from_fn(|a| (across[s][a] + shift[a] as f64) % n[a] as f64);
             let (inside, f_inside) = run(mode, &roll(&f0, shift), &moved);
