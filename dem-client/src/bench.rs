@@ -184,7 +184,7 @@ fn report(scene: &scene::Scene, p: &Particles, sub: Substeps, t: &Timing, thread
     protocol::say!(
         "  {} DEM steps, {} fluid steps flown whole, {} with an island ({} dropped), {:.1}% of the sphere-steps \
          flown; \
-         contacts {} at the start, {} at the end",
+         contacts {} at the start, {} at the end, of {} listed pairs",
         p.dem_steps,
         p.free_steps,
         p.world.islands,
@@ -192,5 +192,6 @@ fn report(scene: &scene::Scene, p: &Particles, sub: Substeps, t: &Timing, thread
         p.flown_percent(),
         t.contacts.0,
         t.contacts.1,
+        p.world.pair_count(),
     );
 }

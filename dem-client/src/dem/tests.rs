@@ -1268,3 +1268,85 @@ fn a_contact_history_follows_its_spheres_through_a_rebuild_when_they_change_plac
         kept.bodies[0].w
     );
 }
+
+/// A bed of `n`^3 spheres (radius `R`, density `RHO`) on a cubic lattice 10 um apart on the floor
+/// of a closed box, each given a different small velocity, every fifth pressed into its
+/// neighbour: wet (`film_world`: Hertz without friction, in squeeze films: most listed pairs are
+/// films, a few touch) or dry with `ContactLaw::LIGGGHTS_HERTZ` (whose pairs take the batched law).
+fn bed(n: usize, wet: bool) -> World {
+    let spacing = 2.0 * R + 10e-6;
+    let side = n as f64 * spacing;
+    let mut bodies = Vec::new();
+    for k in 0..n * n * n {
+        let (i, j, l) = (k % n, (k / n) % n, k / (n * n));
+        // Every fifth sphere 5 um into its neighbour along x.
+        let nudge = if k % 5 == 0 && i + 1 < n { 15e-6 } else { 0.0 };
+        let x = [
+            (i as f64 + 0.5) * spacing + nudge,
+            (j as f64 + 0.5) * spacing,
+            R + 5e-6 + l as f64 * spacing,
+        ];
+        let v = [
+            0.002 * ((k * 7 % 11) as f64 - 5.0),
+            0.002 * ((k * 5 % 13) as f64 - 6.0),
+            -0.01,
+        ];
+        bodies.push(ball(k as u64, x, v));
+    }
+    let wall = |point: V3, normal: V3| Wall {
+        shape: Shape::Plane { point, normal },
+        material: 0,
+    };
+    let walls = vec![
+        floor(),
+        wall(V3::zeros(), V3::x()),
+        wall(V3::new(side, 0.0, 0.0), -V3::x()),
+        wall(V3::zeros(), V3::y()),
+        wall(V3::new(0.0, side, 0.0), -V3::y()),
+    ];
+    let g = V3::new(0.0, 0.0, -9.81);
+    if wet {
+        return film_world(bodies, walls, g, 1e-5);
+    }
+    let glass = material(0.5, 0.5);
+    World::new(
+        bodies,
+        walls,
+        ContactLaw::LIGGGHTS_HERTZ,
+        &[glass],
+        g,
+        1e-6,
+        0.5 * R,
+    )
+}
+
+/// A world large enough for the compact contact passes (a copy of the spheres' motion for the
+/// pair pass; the gather adding only the touching pairs where few touch) steps to the same bits
+/// as the same world through the bodies, adding every pair: wet and dry (the batched law).
+#[test]
+fn a_large_world_steps_the_same_from_its_compact_arrays() {
+    let n = 16;
+    assert!(n * n * n >= super::world::COMPACT_FROM, "the bed is large enough");
+    for wet in [true, false] {
+        let mut compact = bed(n, wet);
+        let mut plain = bed(n, wet);
+        plain.compact_from = usize::MAX;
+        let mut few_touch = false;
+        for _ in 0..20 {
+            compact.advance(10);
+            plain.advance(10);
+            assert_eq!(compact.contact_count(), plain.contact_count(), "wet {wet}");
+            let touching = compact.contact_count();
+            few_touch |= touching > 0 && 2 * touching < compact.pair_count();
+            for (a, b) in compact.bodies.iter().zip(&plain.bodies) {
+                let (a, b, id) = ((a.x, a.v, a.w, a.f, a.t), (b.x, b.v, b.w, b.f, b.t), a.id);
+                assert_eq!(a, b, "sphere {id}, wet {wet}");
+            }
+        }
+        let (touching, pairs) = (compact.contact_count(), compact.pair_count());
+        assert!(
+            few_touch,
+            "wet {wet}: the gather never skipped: {touching} contacts, {pairs} pairs"
+        );
+    }
+}

@@ -303,6 +303,7 @@ impl World {
         part.ids_at_build.extend(part.bodies.iter().map(|b| b.id));
         part.walls.clone_from(&self.walls);
         part.law = self.law;
+        part.compact_from = self.compact_from;
         part.gravity = self.gravity;
         part.dt = self.dt;
         part.skin = self.skin;
