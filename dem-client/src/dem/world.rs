@@ -272,15 +272,15 @@ struct PairConst {
 /// Spheres from which a world's contact passes work from compact arrays (`World::compact_from`):
 /// the pair pass reads a copy of the spheres' motion (`Kin`) instead of the bodies and records
 /// which pairs touch (`World::touch`), and where few do the gather adds only those. 4096 bodies
-/// are 1.5 MB, more than a core's L2 cache (1 MB here); below that the bodies stay in the cache
+/// are 1.3 MB, more than a core's L2 cache (1 MB here); below that the bodies stay in the cache
 /// and the copy and the record cost more than they save (a 2000-sphere pour, one thread: +5% and
 /// +3% wall time). A 32^3 bed (`dem-client bench validation/scenes/bed.toml`, one thread): 1.16 s
 /// a fluid step -> 0.96 s with the copy -> 0.60 s with the touching pairs alone gathered.
 pub(crate) const COMPACT_FROM: usize = 4096;
 
 /// What the pair pass reads of a sphere, copied from the bodies before each pass in a world of
-/// `COMPACT_FROM` spheres or more: 80 bytes a sphere where a `Body` is 368. The pass visits each
-/// sphere once per listed pair, and through the bodies it pulled a 32^3 bed's 12 MB through the
+/// `COMPACT_FROM` spheres or more: 80 bytes a sphere where a `Body` is 320. The pass visits each
+/// sphere once per listed pair, and through the bodies it pulled a 32^3 bed's 10.5 MB through the
 /// caches every DEM step (the copy reads them once, in order).
 #[derive(Debug, Clone, Copy, Default)]
 struct Kin {
