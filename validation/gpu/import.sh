@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Takes a GPU batch back (validation/gpu/run.sh on the device machine): unpacks FILES_AT/gpu.tgz.*
-# into out/gpu_import/gpu/, imports its Ten Cate runs into validation/imb/runs/ and its beds into
+# into out/gpu_import/gpu/, imports its Ten Cate runs into validation/imb/runs/, its runs of E1 in
+# the experiment's box into validation/imb/runs_experiment/ and its beds into
 # validation/imb/runs_bed/ (the reports rebuilt), and lists what goes by hand into BENCHMARKS.md
 # (bench_*.txt, coupled_*.txt, suspension*/summary.json, dem_bench_*.txt) and into
 # validation/lbm/REPORT.md (the "finer grids" sections of validate/ and validate_wake/REPORT.md).
@@ -20,6 +21,10 @@ cat "$g/batch.log"
 if [ -d "$g/tencate" ]; then
     echo "== Ten Cate"
     python3 validation/imb/ten_cate.py import "$g/tencate"
+fi
+if [ -d "$g/experiment" ]; then
+    echo "== Ten Cate E1 against the experiment"
+    python3 validation/imb/experiment.py import "$g/experiment"
 fi
 if [ -d "$g/bed" ]; then
     echo "== fluidized bed"

@@ -48,6 +48,8 @@ else
 fi
 # One line per scene, in the order run.sh runs them (its priority): name, cells, tau, steps.
 scenes() { python3 validation/imb/ten_cate.py scenes .gpu/scenes "$@" >> .gpu/plan.txt; }
+# Ten Cate E1 in the experiment's box against its measured curves (validation/imb/experiment.py).
+experiment() { python3 validation/imb/experiment.py scenes .gpu/scenes "$@" >> .gpu/plan.txt; }
 # The fluidized bed at 10 and 15 cells per diameter (validation/imb/fluidized_bed.py GPU_CASES),
 # after the bed held still at 12 and 18 (GPU_HELD_CELLS: a tenth of the cost).
 beds() {
@@ -57,6 +59,7 @@ beds() {
 if $small; then
     echo small > .gpu/mode
     scenes 3 --cases E3 E4 --sim-time 0.3
+    experiment 3 --sim-time 0.3
     # One bed, 20 steps (a check that its outputs come back and import).
     beds
     head -n 1 .gpu/beds.txt >> .gpu/plan.txt
@@ -74,6 +77,9 @@ else
     scenes 16 --cases E1 --mach 0.0375 --width 210 --height 240
     scenes 16 --cases E2 --mach 0.075 --width 210 --height 240
     scenes 16 --cases E3 E4 --width 210 --height 240
+    # E1 in the experiment's box at tau 1.03 (as 9 cells at Mach 0.05): 15 cells, 1.6e10
+    # cell-steps (lavapipe: 12 cells, the largest it ran in the session of 2026-12-05).
+    experiment 15 --mach 0.03
     beds
     cat .gpu/beds.txt >> .gpu/plan.txt
     # 24 cells per diameter: 200 x 200 x 240 mm, 320 x 320 x 384 cells; E3 and E4 first (2.8e11
@@ -81,11 +87,14 @@ else
     scenes 24 --cases E3 E4 --width 200 --height 240
     scenes 24 --cases E2 --mach 0.05 --width 200 --height 240
     scenes 24 --cases E1 --mach 0.025 --width 200 --height 240
+    # E1 in the experiment's box at 24 cells, tau 1.03: 160 x 160 x 256 cells, 1.7e11 cell-steps.
+    experiment 24 --mach 0.01875
     # Runs already imported are left out: a Ten Cate run that completed (validation/imb/runs/NAME),
     # a bed that ran, to its end or to its blow-up (validation/imb/runs_bed/NAME without bed_).
     imported() {
         case $1 in
             bed_*) [ -f "validation/imb/runs_bed/${1#bed_}/log.txt" ] ;;
+            exp_*) grep -qs '"exit_code": 0' "validation/imb/runs_experiment/${1#exp_}/summary.json" ;;
             *) grep -qs '"exit_code": 0' "validation/imb/runs/$1/summary.json" ;;
         esac
     }

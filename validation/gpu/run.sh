@@ -142,11 +142,12 @@ done
 # Random arrays at the fluidized bed's voidage at 18 and 24 cells per diameter (lavapipe: 6-12):
 # whether their drag at the bed's Re converges to Tenneti et al.'s (validation/lbm/REPORT.md).
 [ "$mode" = small ] || step validate/log 60 150 $bin/lbm-server validate --out "$OUT/validate" --only random-drag-fine
-# Ten Cate and the fluidized bed (bed_*), in the order of .gpu/plan.txt.
+# Ten Cate, E1 in the experiment's box (exp_*) and the fluidized bed (bed_*), in the order of
+# .gpu/plan.txt.
 while read -r name _; do
     [ -f ".gpu/scenes/$name/scene.toml" ] || continue
     kind=tencate
-    case $name in bed_*) kind=bed ;; esac
+    case $name in bed_*) kind=bed ;; exp_*) kind=experiment ;; esac
     dir="$OUT/$kind/$name"
     step "$kind/$name/log" 20 300 $bin/lbm-server run ".gpu/scenes/$name/scene.toml" --out "$dir"
     code=$?

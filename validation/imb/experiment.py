@@ -11,6 +11,12 @@ one tau), with the code of the day they were run (each run's scene and log are k
     python3 validation/imb/experiment.py run 6 9 12     # run the missing resolutions, then report
     python3 validation/imb/experiment.py run 12 --mach 0.0375   # N = 12 at tau 1.03 (as N = 9 at Mach 0.05)
     python3 validation/imb/experiment.py report         # EXPERIMENT.md and experiment_E1.png from runs_experiment/
+    python3 validation/imb/experiment.py scenes DIR 15 --mach 0.03    # DIR/exp_E1_N15_M0p03/scene.toml, a plan line
+    python3 validation/imb/experiment.py import DIR     # DIR/exp_<run>/ (lbm-server's outputs) into runs_experiment/
+
+`scenes` and `import` are for the GPU batch (validation/gpu/prepare.sh, run.sh, import.sh): the
+experiment's box is a whole number of cells at 15, 24 and 30 cells per diameter (dx must divide
+100 and 160 mm), 24 and 30 being beyond lavapipe's storage limit.
 """
 import argparse
 import csv
@@ -46,6 +52,38 @@ def read_reference(name):
 
 def run_dir(n, mach=MACH):
     return os.path.join(RUNS, "%s_N%s_M%s" % (CASE, tc.ntag(n), tc.ntag(mach)))
+
+
+PREFIX = "exp_"       # the batch's scene folders: exp_<run folder name>
+
+
+def write_scenes(folder, ns, mach=MACH, sim_time=SIM_TIME):
+    """The scenes of `run` without running them: FOLDER/exp_<run>/scene.toml, a plan line each on
+    stdout (name, cells, tau, steps, cell-steps) for the batch script."""
+    for n in ns:
+        name = PREFIX + os.path.basename(run_dir(n, mach))
+        os.makedirs(os.path.join(folder, name), exist_ok=True)
+        ln = tc.write_scene(CASE, n, os.path.join(folder, name, "scene.toml"), mach=mach, sim_time=sim_time)
+        cells = ln["cells"][0] * ln["cells"][1] * ln["cells"][2]
+        print("%s %dx%dx%d tau %.3f steps %d cell-steps %.3g" % (name, *ln["cells"], ln["tau"], ln["steps"],
+                                                                 cells * ln["steps"]))
+
+
+def import_runs(src):
+    """Each SRC/exp_<run>/ with a summary.json goes to runs_experiment/<run>/ as `run` leaves its runs."""
+    for name in sorted(os.listdir(src)):
+        d = os.path.join(src, name)
+        if not name.startswith(PREFIX) or not os.path.exists(os.path.join(d, "summary.json")):
+            print("%s: not a finished experiment run, not imported" % name)
+            continue
+        out = os.path.join(RUNS, name[len(PREFIX):])
+        os.makedirs(out, exist_ok=True)
+        for f in ("scene.toml", "summary.json", "log.txt"):
+            if os.path.exists(os.path.join(d, f)):
+                shutil.copy(os.path.join(d, f), os.path.join(out, f))
+        if os.path.exists(os.path.join(d, "particles.csv")):
+            tc.reduce_csv(os.path.join(d, "particles.csv"), os.path.join(out, "particles.csv"))
+        print("%s: imported into %s" % (name, out))
 
 
 def run(n, mach=MACH, force=False):
@@ -116,7 +154,8 @@ def load_run(out):
     gap = [(z - tc.R) / tc.D for z in s["z"]]
     n = float(os.path.basename(out).split("_N")[1].split("_M")[0].replace("p", "."))
     mach = float(os.path.basename(out).split("_M")[1].replace("p", "."))
-    return dict(n=n, mach=mach, t=t, speed=speed, gap=gap, tau=info.get("tau"), cells=info.get("cells"), dir=out)
+    return dict(n=n, mach=mach, t=t, speed=speed, gap=gap, tau=info.get("tau"), cells=info.get("cells"), dir=out,
+                device=info.get("adapter", "?"))
 
 
 def compare(r, exp_v, exp_g):
@@ -182,15 +221,19 @@ def report():
     exp_v = read_reference("ten_cate_2002_E1_velocity.csv")
     exp_g = read_reference("ten_cate_2002_E1_gap.csv")
     dirs = [os.path.join(RUNS, d) for d in os.listdir(RUNS) if os.path.exists(os.path.join(RUNS, d, "particles.csv"))]
-    runs = sorted((load_run(d) for d in dirs), key=lambda r: (-r["mach"], r["n"]))
+    every = sorted((load_run(d) for d in dirs), key=lambda r: (-r["mach"], r["n"]))
+    # A run compared simulated the measured plateau and the first 3 s (a run stopped early did not).
+    runs = [r for r in every if r["t"] and r["t"][-1] >= 3.0]
+    short = ["%s (%.2f s simulated)" % (os.path.basename(r["dir"]), r["t"][-1] if r["t"] else 0.0)
+             for r in every if r not in runs]
     chart(runs, exp_v, exp_g, os.path.join(HERE, "experiment_E1.png"))
     rows, times = [], []
     for r in runs:
         c = compare(r, exp_v, exp_g)
-        rows.append("| %g | %g | %s | %.3f | %.4f at %.2f s | %.4f | %+.1f | %+.1f | %.2f / %+.2f (%d points) |"
+        rows.append("| %g | %g | %s | %.3f | %.4f at %.2f s | %.4f | %+.1f | %+.1f | %.2f / %+.2f (%d points) | %s |"
                     % (r["n"], r["mach"], "x".join(map(str, r["cells"] or [])), r["tau"] or float("nan"), c["peak"], c["t_peak"],
                        c["plateau"], pct(c["plateau"], c["exp_plateau"]), pct(c["plateau"], c["exp_slope"]),
-                       1e3 * c["rms"], 1e3 * c["mean"], c["points"]))
+                       1e3 * c["rms"], 1e3 * c["mean"], c["points"], r["device"]))
         cells = []
         for g in GAPS:
             ours, exp, by_speed = c["times"][g]
@@ -231,8 +274,8 @@ in the chart), and the speed is the comparison to read.
 Plateau: the mean speed from %(w0)g to %(w1)g s. Against the measured speed there (%(exp_plateau).4f m/s)
 and against the measured gap's slope there (%(exp_slope).4f m/s, least squares over its %(slope_points)d points):
 
-| N (cells per d) | Mach | lattice | tau | peak speed [m/s] | plateau [m/s] | vs measured speed [%%] | vs measured gap's slope [%%] | speed - measured speed, rms / mean over t <= 3 s [mm/s] |
-|---|---|---|---|---|---|---|---|---|
+| N (cells per d) | Mach | lattice | tau | peak speed [m/s] | plateau [m/s] | vs measured speed [%%] | vs measured gap's slope [%%] | speed - measured speed, rms / mean over t <= 3 s [mm/s] | device |
+|---|---|---|---|---|---|---|---|---|---|
 %(rows)s
 
 ## Gap: time to reach it (s: simulated / measured gap (error) / measured speed integrated (error))
@@ -242,7 +285,7 @@ and against the measured gap's slope there (%(exp_slope).4f m/s, least squares o
 %(times)s
 
 u_inf = %(u_inf)g m/s; the measured plateau is %(plateau_vs_uinf)+.1f%% from it (the walls of the
-box). Device: %(device)s.
+box).%(short)s
 """ % dict(mach=MACH, sim=SIM_TIME, exp_peak=c0["exp_peak"] if c0 else float("nan"),
            exp_plateau=c0["exp_plateau"] if c0 else float("nan"), rows="\n".join(rows),
            at=at, g_meas=drift[0], g_speed=drift[1], w0=WINDOW[0], w1=WINDOW[1],
@@ -250,7 +293,7 @@ box). Device: %(device)s.
            gap_heads=" | ".join("gap %g d" % g for g in GAPS), gap_bars="---|" * len(GAPS), times="\n".join(times),
            u_inf=tc.CASES[CASE]["u_inf"],
            plateau_vs_uinf=pct(c0["exp_plateau"], tc.CASES[CASE]["u_inf"]) if c0 else float("nan"),
-           device=tc.DEVICE)
+           short="\n\nNot compared (shorter than 3 s of fall): " + ", ".join(short) + "." if short else "")
     with open(os.path.join(HERE, "EXPERIMENT.md"), "w") as f:
         f.write(text)
     print(text)
@@ -264,7 +307,19 @@ def main():
     a.add_argument("--mach", type=float, default=MACH, help="Mach number of u_inf (default %g)" % MACH)
     a.add_argument("--force", action="store_true")
     sub.add_parser("report")
+    sc = sub.add_parser("scenes")
+    sc.add_argument("dir")
+    sc.add_argument("N", type=float, nargs="+")
+    sc.add_argument("--mach", type=float, default=MACH)
+    sc.add_argument("--sim-time", type=float, default=SIM_TIME)
+    im = sub.add_parser("import")
+    im.add_argument("dir")
     args = ap.parse_args()
+    if args.cmd == "scenes":
+        write_scenes(args.dir, args.N, args.mach, args.sim_time)
+        return
+    if args.cmd == "import":
+        import_runs(args.dir)
     if args.cmd == "run":
         for n in args.N:
             run(n, args.mach, args.force)
