@@ -194,4 +194,7 @@ fn report(scene: &scene::Scene, p: &Particles, sub: Substeps, t: &Timing, thread
         t.contacts.1,
         p.world.pair_count(),
     );
+    if let Some(line) = p.world.everyone.summary() {
+        protocol::say!("  {line}");
+    }
 }

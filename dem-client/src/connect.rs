@@ -209,6 +209,9 @@ pub fn main(args: ConnectArgs) -> ExitCode {
                 particles.world.dropped_islands,
                 particles.flown_percent()
             );
+            if let Some(line) = particles.world.everyone.summary() {
+                protocol::say!("dem-client: {line}");
+            }
             ExitCode::SUCCESS
         }
         Err(e) => {

@@ -4,6 +4,7 @@
 use super::contact::{beta_thornton, ContactLaw, Linear, Switches};
 use super::lubrication::{Lubrication, MIN_GAP_FRACTION};
 use super::timestep::{hertz_contact_time, linear_contact_time, linear_restitution};
+use super::world::everyone::{self, Way};
 use super::world::{Body, Shape, Wall, World};
 use super::V3;
 use scene::dem::{Material, NormalLaw, RollingLaw, TangentialLaw};
@@ -1149,6 +1150,7 @@ fn an_island_of_every_sphere_leaves_out_only_the_pairs_that_cannot_meet() {
         film_world(bodies, vec![], V3::zeros(), span / k as f64)
     };
     let (mut free, mut fixed) = (world(), world());
+    free.everyone.fixed = Some(Way::Island);
     let gap = |w: &World| (w.bodies[0].x - w.bodies[1].x).norm() - 2.0 * R;
     for step in 0..3 {
         assert_eq!(free.advance_span(span, k), 0, "step {step}");
@@ -1348,5 +1350,36 @@ fn a_large_world_steps_the_same_from_its_compact_arrays() {
             few_touch,
             "wet {wet}: the gather never skipped: {touching} contacts, {pairs} pairs"
         );
+    }
+}
+
+/// A fluid step whose island is every sphere gives the same bits through the island's world, as
+/// the whole world's DEM steps, and timed between the two (`world::everyone`): a bed wet and dry,
+/// through two trials (the kept way run to the next).
+#[test]
+fn a_fluid_step_whose_island_is_every_sphere_goes_either_way_with_the_same_bits() {
+    let steps = everyone::TRIAL + everyone::KEEP + everyone::TRIAL;
+    for wet in [true, false] {
+        let mut plain = bed(6, wet);
+        let mut ways = [Some(Way::Island), Some(Way::Whole), None].map(|way| {
+            let mut w = bed(6, wet);
+            w.everyone.fixed = way;
+            w
+        });
+        let span = 4.0 * plain.dt;
+        for step in 0..steps {
+            plain.advance(4);
+            for w in &mut ways {
+                assert_eq!(w.advance_span(span, 4), 0, "step {step}: nothing flies");
+                let same = w.bodies.iter().zip(&plain.bodies).all(|(a, b)| a == b);
+                assert!(same, "step {step}, wet {wet}, way {:?}", w.everyone.fixed);
+            }
+        }
+        assert_eq!(
+            ways[0].islands, steps as u64,
+            "wet {wet}: every step through the island"
+        );
+        assert_eq!(ways[1].islands, 0, "wet {wet}: none through the island");
+        assert_eq!(ways[2].everyone.trials, 2, "wet {wet}");
     }
 }

@@ -15,6 +15,7 @@ use rayon::iter::Either;
 use rayon::prelude::*;
 use std::collections::HashMap;
 
+pub mod everyone;
 mod flight;
 
 /// What the force-gathering pass does after the forces.
@@ -407,6 +408,9 @@ pub struct World {
     /// The island's world of the last fluid step that had one, kept for its allocations
     /// (`flight::Spare`).
     spare: Option<Box<flight::Spare>>,
+    /// Whether a fluid step whose island is every sphere goes through the island's world or the
+    /// whole world's lists: timed on the run's own steps (`everyone`).
+    pub everyone: everyone::Everyone,
 }
 
 impl World {
@@ -476,6 +480,7 @@ impl World {
             contacts: 0,
             peak_drift2: 0.0,
             spare: None,
+            everyone: everyone::Everyone::default(),
         }
     }
 

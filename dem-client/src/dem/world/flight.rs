@@ -12,8 +12,10 @@
 //! reach, the step is taken again with every sphere sub-stepped (the island is a copy: nothing to
 //! undo).
 
+use super::everyone::Way;
 use super::{Body, World, CHUNK, FREE_FLIGHT_MARGIN, PAIR_CHUNK};
 use rayon::prelude::*;
+use std::time::Instant;
 
 /// How far a sphere of the island may move within a fluid step, as a fraction of the skin (below
 /// half the skin, where the neighbour lists end).
@@ -77,6 +79,20 @@ impl World {
             Plan::Fly => {
                 self.fly(span);
                 self.bodies.len()
+            }
+            Plan::Island(island) if island.len() == self.bodies.len() => {
+                // The same bits either way (`everyone`): the quicker on this machine.
+                let (way, start) = (self.everyone.next(), Instant::now());
+                if way == Way::Whole {
+                    self.advance(steps);
+                } else if self.advance_island(&island, span, steps) {
+                    self.islands += 1;
+                } else {
+                    self.dropped_islands += 1;
+                    self.advance(steps);
+                }
+                self.everyone.record(way, start.elapsed().as_secs_f64());
+                0
             }
             Plan::Island(island) => {
                 if self.advance_island(&island, span, steps) {
