@@ -128,9 +128,11 @@ for s in suspension suspension_substeps; do
 done
 # The DEM side alone on this machine's cores, the fluid a stand-in (dem-client bench): 32^3 beads
 # dilute (flown) and in a bed (every bead in the DEM steps), free flight on and off. With the
-# fluid's step above, what a whole coupled step costs between these two extremes.
+# fluid's step above, what a whole coupled step costs between these two extremes. The bed's 12
+# fluid steps hold a trial of the two ways of an island of every bead (its "timed" line: through
+# the island's world or as the whole world, on this machine's cores).
 step dem_bench_suspension 20 60 $bin/dem-client bench .gpu/suspension.toml --steps 40 --free-flight both
-step dem_bench_bed 20 90 $bin/dem-client bench .gpu/bed.toml --steps 4 --free-flight both
+step dem_bench_bed 20 90 $bin/dem-client bench .gpu/bed.toml --steps 12 --free-flight both
 # The suspension timing the three ways of treating the covered cells on its steps and keeping the
 # fastest (its log's "covered cells timed" line), and with each held throughout: the whole
 # program's answer, the DEM's step included, to which way a GPU should take, and what a trial
