@@ -1057,12 +1057,13 @@ MEANING_END = (
     "slower than TRT in every case run, closer to u_inf for E3, further for E4; no operator fixes E1);\n"
     "- the experiment itself, for E1 (its measured speed and gap over time, digitized from the paper's "
     "figures): EXPERIMENT.md (`experiment.py`, runs with the current code in the experiment's box at "
-    "tau 0.85-1.2). At tau 1.03 the plateau speed (1.7-2.5 s) is +4.7 / -2.1 / -4.4 % of the measured "
-    "speed at N = 6 / 9 / 12 and +10.2 / +3.0 / +0.6 % of the measured gap's slope; the two measured "
-    "curves disagree with each other by 5 % (integrated from rest, the measured speed puts the sphere on "
-    "the floor by about 3.4 s, when the measured gap still reads 0.6 d), and from N = 9 the simulated plateau lies between them; the speed "
-    "over the first 3 s is within 1.05-1.38 mm/s rms of the measured one at N = 9-12. The other cases' "
-    "measured curves are not in the reference files.")
+    "tau 0.85-1.2). At tau 1.03 the plateau speed (1.7-2.5 s) is +4.7 / -2.1 / -4.4 / -5.6 % of the "
+    "measured speed at N = 6 / 9 / 12 / 15 and +10.2 / +3.0 / +0.6 / -0.7 % of the measured gap's "
+    "slope, converging (steps of 2.3 then 1.2 % from 9 to 15 cells); the two measured curves disagree "
+    "with each other by 5 % (integrated from rest, the measured speed puts the sphere on the floor by "
+    "about 3.4 s, when the measured gap still reads 0.6 d), and from N = 12 the simulated plateau lies "
+    "at the gap's slope; the speed over the first 3 s is within 1.05-1.71 mm/s rms of the measured one "
+    "at N = 9-15. The other cases' measured curves are not in the reference files.")
 WIDE_END = ""
 
 
