@@ -78,7 +78,7 @@ else
     scenes 16 --cases E2 --mach 0.075 --width 210 --height 240
     scenes 16 --cases E3 E4 --width 210 --height 240
     # E1 in the experiment's box at tau 1.03 (as 9 cells at Mach 0.05): 15 cells, 1.6e10
-    # cell-steps (lavapipe: 12 cells, the largest it ran in the session of 2026-12-05).
+    # cell-steps (run on lavapipe in 19 min on 2026-12-05, so left out below as imported).
     experiment 15 --mach 0.03
     beds
     cat .gpu/beds.txt >> .gpu/plan.txt

@@ -24,7 +24,7 @@ pub(crate) const KEEP: u32 = 400;
 /// The trial and the way kept (`World::everyone`).
 #[derive(Debug, Clone, Default)]
 pub struct Everyone {
-    /// A way fixed by the caller (tests; `dem-client bench --everyone`): no trials.
+    /// A way fixed by the caller (the tests): no trials.
     pub fixed: Option<Way>,
     kept: Option<Way>,
     /// Steps into the current trial, or since the way was kept.
