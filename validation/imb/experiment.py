@@ -16,7 +16,7 @@ one tau), with the code of the day they were run (each run's scene and log are k
 
 `scenes` and `import` are for the GPU batch (validation/gpu/prepare.sh, run.sh, import.sh): the
 experiment's box is a whole number of cells at 15, 24 and 30 cells per diameter (dx must divide
-100 and 160 mm), 24 and 30 being beyond lavapipe's storage limit.
+100 and 160 mm); 24 cells would take lavapipe some 3 hours, 30 cells 10.
 """
 import argparse
 import csv
@@ -265,7 +265,8 @@ measured gap reads %(g_meas).2f d, and on the floor by about 3.4 s where the gap
 0.6 d (between 1.56 and 2.44 s the gap falls at 0.0358 m/s while the speed reads 0.0376 m/s). So a
 run that follows one curve misses the other by up to 12%% in time; the gap table gives the
 simulated time against both (the measured gap, and the measured speed integrated: the dotted line
-in the chart), and the speed is the comparison to read.
+in the chart), and the speed table the plateau against both: neither curve alone is the
+reference to within 5%%.
 
 ![E1 against the experiment](experiment_E1.png)
 
