@@ -22,10 +22,7 @@ import argparse
 import csv
 import math
 import os
-import shutil
-import subprocess
 import sys
-import time
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
@@ -70,46 +67,12 @@ def write_scenes(folder, ns, mach=MACH, sim_time=SIM_TIME):
 
 
 def import_runs(src):
-    """Each SRC/exp_<run>/ with a summary.json goes to runs_experiment/<run>/ as `run` leaves its runs."""
-    for name in sorted(os.listdir(src)):
-        d = os.path.join(src, name)
-        if not name.startswith(PREFIX) or not os.path.exists(os.path.join(d, "summary.json")):
-            print("%s: not a finished experiment run, not imported" % name)
-            continue
-        out = os.path.join(RUNS, name[len(PREFIX):])
-        os.makedirs(out, exist_ok=True)
-        for f in ("scene.toml", "summary.json", "log.txt"):
-            if os.path.exists(os.path.join(d, f)):
-                shutil.copy(os.path.join(d, f), os.path.join(out, f))
-        if os.path.exists(os.path.join(d, "particles.csv")):
-            tc.reduce_csv(os.path.join(d, "particles.csv"), os.path.join(out, "particles.csv"))
-        print("%s: imported into %s" % (name, out))
+    """Each SRC/exp_<run>/ with a summary.json into runs_experiment/<run>/ (`ten_cate.import_runs`)."""
+    tc.import_runs(src, force=True, runs=RUNS, prefix=PREFIX)
 
 
 def run(n, mach=MACH, force=False):
-    out = run_dir(n, mach)
-    if os.path.exists(os.path.join(out, "summary.json")) and not force:
-        print("N=%g: already run (%s)" % (n, out))
-        return
-    os.makedirs(out, exist_ok=True)
-    scene = os.path.join(out, "scene.toml")
-    ln = tc.write_scene(CASE, n, scene, mach=mach, sim_time=SIM_TIME)
-    print("%s N=%g: %d x %d x %d cells, tau %.4f, %d steps" % (CASE, n, *ln["cells"], ln["tau"], ln["steps"]), flush=True)
-    tmp = os.path.join("/tmp", "experiment_" + os.path.basename(out))
-    shutil.rmtree(tmp, ignore_errors=True)
-    env = dict(os.environ, NODEVICE_SELECT="1")
-    t0 = time.time()
-    with open(os.path.join(out, "log.txt"), "w") as log:
-        p = subprocess.run([tc.BINARY, "run", scene, "--out", tmp], stdout=log, stderr=subprocess.STDOUT, env=env, cwd=tc.ROOT)
-    print("  exit %d after %.0f s" % (p.returncode, time.time() - t0), flush=True)
-    for name in ("summary.json",):
-        if os.path.exists(os.path.join(tmp, name)):
-            shutil.copy(os.path.join(tmp, name), os.path.join(out, name))
-    if os.path.exists(os.path.join(tmp, "particles.csv")):
-        tc.reduce_csv(os.path.join(tmp, "particles.csv"), os.path.join(out, "particles.csv"))
-    shutil.rmtree(tmp, ignore_errors=True)
-    if p.returncode != 0:
-        raise SystemExit("N=%g: lbm-server exited %d (%s)" % (n, p.returncode, os.path.join(out, "log.txt")))
+    tc.run_one(CASE, n, force, mach, sim_time=SIM_TIME, out=run_dir(n, mach))
 
 
 def interp(x, xs, ys):

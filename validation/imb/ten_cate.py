@@ -207,8 +207,10 @@ def run_scene(out, text):
     return code, work
 
 
-def run_one(case, n, force=False, mach=MACH, op=OPERATOR, width=None, height=None, sim_time=None, explicit=False):
-    out = run_dir(case, n, mach, op, width, height, explicit)
+def run_one(case, n, force=False, mach=MACH, op=OPERATOR, width=None, height=None, sim_time=None, explicit=False,
+            out=None):
+    """Runs (case, n) into `out` (default: its folder under runs/), unless it has a summary.json."""
+    out = out or run_dir(case, n, mach, op, width, height, explicit)
     if os.path.exists(os.path.join(out, "summary.json")) and not force:
         print("%s N=%g: already run (%s), skipped" % (case, n, out))
         return
@@ -1538,15 +1540,16 @@ def write_scenes(args):
                                                                      cells * ln["steps"]))
 
 
-def import_runs(src, force=False):
-    """Each DIR/<name>/ that holds a summary.json goes to runs/<name>/ as `run_one` leaves its runs: scene.toml,
-    summary.json, log.txt and the sphere's rows of particles.csv. A run already in runs/ is kept unless `force`."""
+def import_runs(src, force=False, runs=RUNS, prefix=""):
+    """Each DIR/<prefix><name>/ that holds a summary.json goes to RUNS/<name>/ as `run_one` leaves its runs:
+    scene.toml, summary.json, log.txt and the sphere's rows of particles.csv. A run already there is kept unless
+    `force`."""
     for name in sorted(os.listdir(src)):
         d = os.path.join(src, name)
-        if not os.path.exists(os.path.join(d, "summary.json")):
+        if not name.startswith(prefix) or not os.path.exists(os.path.join(d, "summary.json")):
             print("%s: no summary.json, not imported" % name)
             continue
-        out = os.path.join(RUNS, name)
+        out = os.path.join(runs, name[len(prefix):])
         if os.path.exists(os.path.join(out, "summary.json")) and not force:
             print("%s: already in %s, kept (--force replaces it)" % (name, out))
             continue

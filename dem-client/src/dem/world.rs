@@ -534,6 +534,11 @@ impl World {
         self.contacts
     }
 
+    /// Whether the contact passes work from compact arrays (`COMPACT_FROM`).
+    fn compact(&self) -> bool {
+        self.bodies.len() >= self.compact_from
+    }
+
     /// Pairs in the neighbour list (within contact, the film cut-off and the skin).
     pub fn pair_count(&self) -> usize {
         self.slots.len()
@@ -857,6 +862,7 @@ impl World {
     /// its contact, in the same pass); returns how many touch. In a world of `compact_from`
     /// spheres or more, from a compact copy of their motion, recording which pairs touch.
     fn pair_forces<L: LawRef>(&mut self, law: L, dt: f64) -> usize {
+        let compact = self.compact();
         self.touch.resize(self.slots.len(), false);
         let lists = PairLists {
             slots: &mut self.slots,
@@ -866,7 +872,7 @@ impl World {
             touch: &mut self.touch,
         };
         let (pm, lubrication) = (&self.pair_materials[..], self.lubrication);
-        if self.bodies.len() < self.compact_from {
+        if !compact {
             self.kin.clear();
             let pass = PairPass {
                 motion: &self.bodies[..],
@@ -901,8 +907,7 @@ impl World {
             finish,
             g: self.gravity,
             out: &self.out,
-            touch: (self.bodies.len() >= self.compact_from && 2 * pair_contacts < self.slots.len())
-                .then_some(&self.touch[..]),
+            touch: (self.compact() && 2 * pair_contacts < self.slots.len()).then_some(&self.touch[..]),
             films: &self.films,
             lubrication: self.lubrication,
             first_i: &self.first_i,
