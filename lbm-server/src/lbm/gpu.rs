@@ -52,8 +52,72 @@ pub struct ListLayout {
     pub by_population: bool,
 }
 
+/// What an adapter offers the lattice: enough to choose one and to say why none will do.
+#[derive(Debug, Clone, PartialEq)]
+struct AdapterOffer {
+    name: String,
+    backend: wgpu::Backend,
+    device_type: wgpu::DeviceType,
+    storage_buffers: u32,
+}
+
+impl AdapterOffer {
+    fn of(adapter: &wgpu::Adapter) -> AdapterOffer {
+        let info = adapter.get_info();
+        AdapterOffer {
+            name: info.name,
+            backend: info.backend,
+            device_type: info.device_type,
+            storage_buffers: adapter.limits().max_storage_buffers_per_shader_stage,
+        }
+    }
+}
+
+/// The adapter to run on: of those with the [`BINDINGS`] storage buffers a lattice kernel binds,
+/// a discrete GPU before an integrated one, before a virtual one, before a CPU driver (Mesa
+/// lavapipe), and within each kind a Vulkan, Metal or DirectX 12 driver before OpenGL; the first
+/// listed of equals. None: an error that names every adapter found and what it lacks (where
+/// only OpenGL is found, as where Vulkan is not installed: its llvmpipe binds 16).
+fn choose_adapter(found: &[AdapterOffer]) -> Result<usize, String> {
+    let rank = |a: &AdapterOffer| {
+        let kind = match a.device_type {
+            wgpu::DeviceType::DiscreteGpu => 0,
+            wgpu::DeviceType::IntegratedGpu => 1,
+            wgpu::DeviceType::VirtualGpu => 2,
+            wgpu::DeviceType::Cpu => 3,
+            wgpu::DeviceType::Other => 4,
+        };
+        (kind, u8::from(a.backend == wgpu::Backend::Gl))
+    };
+    let usable = found
+        .iter()
+        .enumerate()
+        .filter(|(_, a)| a.storage_buffers >= BINDINGS);
+    if let Some((i, _)) = usable.min_by_key(|(i, a)| (rank(a), *i)) {
+        return Ok(i);
+    }
+    const INSTALL: &str = "on a machine without a GPU install Mesa lavapipe (Debian: apt-get install mesa-vulkan-drivers libvulkan1), on one with a GPU its Vulkan driver";
+    if found.is_empty() {
+        return Err(format!("no GPU adapter found ({INSTALL})"));
+    }
+    let each: Vec<String> = found
+        .iter()
+        .map(|a| {
+            format!(
+                "{} ({:?}, {:?}) binds {}",
+                a.name, a.backend, a.device_type, a.storage_buffers
+            )
+        })
+        .collect();
+    Err(format!(
+        "no adapter binds the {BINDINGS} storage buffers per shader stage that the lattice's kernels need: {} ({INSTALL})",
+        each.join("; ")
+    ))
+}
+
 impl Gpu {
-    /// Picks the first adapter of the backends allowed by WGPU_BACKEND (default: all).
+    /// Opens the adapter [`choose_adapter`] picks among those of the backends allowed by
+    /// WGPU_BACKEND (default: all).
     pub fn new() -> Result<Gpu, String> {
         // WGPU_BACKEND (vulkan, metal, dx12, gl) and friends are honoured.
         let mut descriptor = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
@@ -61,21 +125,16 @@ impl Gpu {
         // barriers, four times per coupled step with the redo; `covered_groups` (imb.wgsl) writes
         // them within the limits itself. WGPU_VALIDATION_INDIRECT_CALL=1 turns the check back on.
         descriptor.flags = (descriptor.flags - wgpu::InstanceFlags::VALIDATION_INDIRECT_CALL).with_env();
+        let backends = descriptor.backends;
         let instance = wgpu::Instance::new(descriptor);
-        let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
-            power_preference: wgpu::PowerPreference::HighPerformance,
-            ..Default::default()
-        }))
-        .map_err(|e| format!("no GPU adapter found (on a machine without a GPU install Mesa lavapipe: mesa-vulkan-drivers): {e}"))?;
+        let adapters = pollster::block_on(instance.enumerate_adapters(backends));
+        let found: Vec<AdapterOffer> = adapters.iter().map(AdapterOffer::of).collect();
+        let chosen = choose_adapter(&found)?;
+        let adapter = adapters
+            .into_iter()
+            .nth(chosen)
+            .expect("an index into the adapters");
         let limits = adapter.limits();
-        let need = BINDINGS;
-        if limits.max_storage_buffers_per_shader_stage < need {
-            return Err(format!(
-                "adapter {} allows {} storage buffers per shader stage, the lattice needs {need}",
-                adapter.get_info().name,
-                limits.max_storage_buffers_per_shader_stage
-            ));
-        }
         // Timestamps between passes where the device has them (`bench --passes`: each pass's time
         // by the device's clock).
         let stamps = wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS;
@@ -1180,5 +1239,61 @@ mod quad_tests {
             Operator::Trt { magic: 3.0 / 16.0 },
         );
         check(setup, 14);
+    }
+}
+
+#[cfg(test)]
+mod adapter_tests {
+    use super::*;
+    use wgpu::{Backend, DeviceType};
+
+    fn offer(name: &str, backend: Backend, device_type: DeviceType, storage_buffers: u32) -> AdapterOffer {
+        AdapterOffer {
+            name: name.into(),
+            backend,
+            device_type,
+            storage_buffers,
+        }
+    }
+
+    #[test]
+    fn a_gpu_goes_before_a_cpu_driver_and_vulkan_before_opengl() {
+        let gl = offer("llvmpipe", Backend::Gl, DeviceType::Cpu, 16);
+        let lavapipe = offer("llvmpipe", Backend::Vulkan, DeviceType::Cpu, 4096);
+        let gl_enough = offer("llvmpipe", Backend::Gl, DeviceType::Cpu, 64);
+        let gpu = offer("NVIDIA H200", Backend::Vulkan, DeviceType::DiscreteGpu, 4096);
+        assert_eq!(choose_adapter(&[gl.clone(), lavapipe.clone()]), Ok(1));
+        assert_eq!(choose_adapter(&[gl_enough.clone(), lavapipe.clone()]), Ok(1));
+        assert_eq!(
+            choose_adapter(&[lavapipe.clone(), gpu.clone(), gl_enough.clone()]),
+            Ok(1)
+        );
+        assert_eq!(
+            choose_adapter(&[gl_enough, lavapipe.clone(), lavapipe]),
+            Ok(1),
+            "the first of equals"
+        );
+    }
+
+    #[test]
+    fn without_an_adapter_that_binds_enough_the_error_names_each_and_what_to_install() {
+        let why = choose_adapter(&[offer(
+            "llvmpipe (LLVM 15.0.6, 256 bits)",
+            Backend::Gl,
+            DeviceType::Cpu,
+            16,
+        )])
+        .expect_err("16 storage buffers are too few");
+        assert!(why.contains(&format!("the {BINDINGS} storage buffers")), "{why}");
+        assert!(
+            why.contains("llvmpipe (LLVM 15.0.6, 256 bits) (Gl, Cpu) binds 16"),
+            "{why}"
+        );
+        assert!(why.contains("mesa-vulkan-drivers"), "{why}");
+        let none = choose_adapter(&[]).expect_err("no adapter");
+        assert!(
+            none.starts_with("no GPU adapter found") && none.contains("mesa-vulkan-drivers"),
+            "{none}"
+        );
     }
 }
