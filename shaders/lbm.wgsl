@@ -474,8 +474,11 @@ fn stream_collide_quads(
     let pb = collide(b, moments(b));
     let pc = collide(c, moments(c));
     let pd = collide(d, moments(d));
+    // A skipped cell (SKIP: covered, updated in place before) sends f_{i.o} along i: each slot
+    // keeps what it holds.
+    let skip = skipped_lanes(q);
     //#for i
-    q{i.o}[q] = vec4<f32>(pa[{i}], pb[{i}], pc[{i}], pd[{i}]);
+    q{i.o}[q] = select(vec4<f32>(pa[{i}], pb[{i}], pc[{i}], pd[{i}]), vec4<f32>(a[{i.o}], b[{i.o}], c[{i.o}], d[{i.o}]), skip);
     //#end
 }
 
@@ -525,22 +528,26 @@ fn stream_collide_quads_odd(
     let pb = collide(b, moments(b));
     let pc = collide(c, moments(c));
     let pd = collide(d, moments(d));
+    // A skipped cell (SKIP) sends f_{i.o} along i: slot i of cell 4q + t + c_i, which it read as
+    // f_{i.o}, keeps what it holds.
+    let skip = skipped_lanes(u32(q));
     //#for i
     {
         // post_i of cell 4q + t goes to slot i of cell 4q + t + c_i.
         let e = q + row * ({i.cy} + ny * {i.cz});
+        let v = select(vec4<f32>(pa[{i}], pb[{i}], pc[{i}], pd[{i}]), vec4<f32>(a[{i.o}], b[{i.o}], c[{i.o}], d[{i.o}]), skip);
         if {i.cx} == 0 {
-            q{i}[u32(e)] = vec4<f32>(pa[{i}], pb[{i}], pc[{i}], pd[{i}]);
+            q{i}[u32(e)] = v;
         } else if {i.cx} == 1 {
-            q{i}[u32(e)].y = pa[{i}];
-            q{i}[u32(e)].z = pb[{i}];
-            q{i}[u32(e)].w = pc[{i}];
-            q{i}[u32(e + 1)].x = pd[{i}];
+            q{i}[u32(e)].y = v.x;
+            q{i}[u32(e)].z = v.y;
+            q{i}[u32(e)].w = v.z;
+            q{i}[u32(e + 1)].x = v.w;
         } else {
-            q{i}[u32(e - 1)].w = pa[{i}];
-            q{i}[u32(e)].x = pb[{i}];
-            q{i}[u32(e)].y = pc[{i}];
-            q{i}[u32(e)].z = pd[{i}];
+            q{i}[u32(e - 1)].w = v.x;
+            q{i}[u32(e)].x = v.y;
+            q{i}[u32(e)].y = v.z;
+            q{i}[u32(e)].z = v.w;
         }
     }
     //#end

@@ -486,9 +486,10 @@ impl Lattice {
     fn build_way(&self, mode: super::imb::CoveredCells) -> Way {
         let d = &self.gpu.device;
         let imb = self.options;
-        // Where the fluid kernels test each cell's bit of the cover mask (imb.rs, `CoveredCells`:
-        // fused and skip) they update every cell one at a time, without the four-cell quads.
-        let classes = CellList::new(&self.setup, self.quads && !mode.masks_cells());
+        // Fused, the fluid kernels give the covered cells their solid term one cell at a time,
+        // without the four-cell quads (the term would be compiled into them four times); skip's
+        // quads leave their covered cells as they are (`skipped_lanes`).
+        let classes = CellList::new(&self.setup, self.quads && !mode.fuses());
         let cell_list = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("cell list"),
             contents: bytemuck::cast_slice(if classes.list.is_empty() {

@@ -71,9 +71,10 @@ pub enum CoveredCells {
     /// covered cell's populations move three times.
     Redo,
     /// Collided with the solid term in place before the fluid kernels (the loads then go back to
-    /// the host while they run), which skip them by one bit of a cover mask per cell (no four-cell
-    /// quads): each covered cell's populations move once, and the fluid kernels carry no solid
-    /// term. Built for a GPU; not yet timed on one (a timed run tries it).
+    /// the host while they run), which skip them by one bit of a cover mask per cell (the
+    /// four-cell quads by four bits, storing a covered cell's populations back as they were): each
+    /// covered cell's populations move once, and the fluid kernels carry no solid term. Built for
+    /// a GPU; not yet timed on one (a timed run tries it).
     Skip,
 }
 
@@ -115,9 +116,9 @@ impl CoveredCells {
         }
     }
 
-    /// Whether the fluid kernels test each cell's bit of the cover mask (no four-cell quads).
-    pub fn masks_cells(self) -> bool {
-        matches!(self, CoveredCells::Fused | CoveredCells::Skip)
+    /// Whether the fluid kernels give the covered cells their solid term (no four-cell quads).
+    pub fn fuses(self) -> bool {
+        self == CoveredCells::Fused
     }
 
     /// The name a run's first line and `bench` give it.
