@@ -243,31 +243,40 @@ impl Wall {
     }
 }
 
-/// A pair of the Verlet list with its contact history. Not touching implies a zero history and a
-/// zero force in `World::out` (so a pair that stays apart costs no writes).
+/// A pair of the Verlet list: its spheres, their pair material and whether they touch. Not
+/// touching implies a zero history in `World::pair_history` and a zero force in `World::out` (so a
+/// pair that stays apart costs no writes). 16 bytes, read by every pair pass: the constants that
+/// follow from the radii and masses (r_i + r_j, R*, m*) are computed where a pass needs them, and
+/// the history (24 bytes) and the periodic shift (24) are kept apart, read only by the pairs that
+/// touch and in periodic worlds. A 32^3 bed lists 280,000 pairs, of which 2-14,000 touch; with
+/// 104 bytes a pair read every DEM step (history and constants with the pair) its pair pass was
+/// 70% of the step, and this layout took 10-12% off the step (docs/dem.md, "Throughput").
 #[derive(Debug, Clone, Copy)]
 struct Slot {
     i: u32,
     j: u32,
-    touching: bool,
-    history: V3,
-}
-
-/// The constants of a listed pair, computed once per neighbour-list build with the same
-/// expressions as in the contact loop (so the same bits).
-#[derive(Debug, Clone, Copy)]
-struct PairConst {
-    /// (r_i + r_j)^2.
-    cut2: f64,
-    /// r_i + r_j.
-    r_sum: f64,
-    /// R* = r_i r_j / (r_i + r_j), m* = m_i m_j / (m_i + m_j).
-    r_eff: f64,
-    m_eff: f64,
     /// Index into the pair materials.
     material: u32,
-    /// The periodic image of j that i meets: x_i - (x_j + shift) (zero without periodic axes).
-    shift: V3,
+    touching: bool,
+}
+
+/// The constants of a pair that follow from the spheres' radii and masses, with the same
+/// expressions wherever they are needed (so the same bits).
+#[inline(always)]
+fn r_sum(a: &impl Motion, b: &impl Motion) -> f64 {
+    a.r() + b.r()
+}
+
+/// R* = r_i r_j / (r_i + r_j).
+#[inline(always)]
+fn r_eff(a: &impl Motion, b: &impl Motion) -> f64 {
+    a.r() * b.r() / (a.r() + b.r())
+}
+
+/// m* = m_i m_j / (m_i + m_j).
+#[inline(always)]
+fn m_eff(a: &impl Motion, b: &impl Motion) -> f64 {
+    a.m() * b.m() / (a.m() + b.m())
 }
 
 /// Spheres from which a world's contact passes work from compact arrays (`World::compact_from`):
@@ -280,7 +289,7 @@ struct PairConst {
 pub(crate) const COMPACT_FROM: usize = 4096;
 
 /// What the pair pass reads of a sphere, copied from the bodies before each pass in a world of
-/// `COMPACT_FROM` spheres or more: 80 bytes a sphere where a `Body` is 320. The pass visits each
+/// `COMPACT_FROM` spheres or more: 88 bytes a sphere where a `Body` is 320. The pass visits each
 /// sphere once per listed pair, and through the bodies it pulled a 32^3 bed's 10.5 MB through the
 /// caches every DEM step (the copy reads them once, in order).
 #[derive(Debug, Clone, Copy, Default)]
@@ -289,6 +298,7 @@ struct Kin {
     v: V3,
     w: V3,
     r: f64,
+    m: f64,
 }
 
 /// A sphere's motion as the pair pass reads it: a `Body` or its `Kin`.
@@ -300,9 +310,10 @@ trait Motion: Sync {
     fn v(&self) -> V3;
     fn w(&self) -> V3;
     fn r(&self) -> f64;
+    fn m(&self) -> f64;
 }
 
-/// `Motion` from the fields x, v, w, r, which `Body` and `Kin` share.
+/// `Motion` from the fields x, v, w, r, m, which `Body` and `Kin` share.
 macro_rules! motion_of_fields {
     ($t:ty, touch: $touch:expr) => {
         impl Motion for $t {
@@ -323,6 +334,10 @@ macro_rules! motion_of_fields {
             fn r(&self) -> f64 {
                 self.r
             }
+            #[inline(always)]
+            fn m(&self) -> f64 {
+                self.m
+            }
         }
     };
 }
@@ -338,6 +353,7 @@ impl Kin {
             v: b.v,
             w: b.w,
             r: b.r,
+            m: b.m,
         }
     }
 }
@@ -345,9 +361,10 @@ impl Kin {
 /// The particles, the walls and the contact model.
 pub struct World {
     /// The spheres. Between steps their state (x, v, w) and external loads may be changed freely;
-    /// radius, mass and material are read into the pair constants at each neighbour-list build, so
-    /// a sphere changes those only by `pop` and `insert`. The walls are fixed: each build lists per
-    /// sphere those within its reach (a change in their number forces a build).
+    /// the pair material is read into the pair list at each neighbour-list build, so a sphere
+    /// changes its material (and its radius, which the list's reach assumes) only by `pop` and
+    /// `insert`. The walls are fixed: each build lists per sphere those within its reach (a
+    /// change in their number forces a build).
     pub bodies: Vec<Body>,
     pub walls: Vec<Wall>,
     pub law: ContactLaw,
@@ -372,7 +389,11 @@ pub struct World {
     pub(crate) compact_from: usize,
     /// The Verlet pairs (i < j), sorted by i then j.
     slots: Vec<Slot>,
-    pair_const: Vec<PairConst>,
+    /// Tangential contact history of each pair (zero when not touching).
+    pair_history: Vec<V3>,
+    /// The periodic image of j that i meets, per pair: x_i - (x_j + shift) (empty in a world
+    /// without periodic axes, where it is zero).
+    pair_shift: Vec<V3>,
     /// Force on i and torques of each pair at the last evaluation (zero when not touching).
     out: Vec<ContactForce>,
     /// Whether each pair touches, written by the pair pass of a world of `compact_from` spheres or
@@ -462,7 +483,8 @@ impl World {
             compact_from: COMPACT_FROM,
             touch: Vec::new(),
             slots: Vec::new(),
-            pair_const: Vec::new(),
+            pair_history: Vec::new(),
+            pair_shift: Vec::new(),
             out: Vec::new(),
             first_i: Vec::new(),
             as_j_start: Vec::new(),
@@ -684,31 +706,28 @@ impl World {
         let history = self.carried_history(&ids);
         let nm = self.n_materials;
         let bodies = &self.bodies;
-        let (slots, pair_const): (Vec<Slot>, Vec<PairConst>) = pairs
+        let (slots, pair_history): (Vec<Slot>, Vec<V3>) = pairs
             .par_iter()
             .with_min_len(PAIR_CHUNK)
-            .map(|&(i, j, shift)| {
+            .map(|&(i, j, _)| {
                 let (a, b) = (&bodies[i as usize], &bodies[j as usize]);
                 let history = history(i, j);
                 let slot = Slot {
                     i,
                     j,
-                    touching: history != V3::zeros(),
-                    history,
-                };
-                let constants = PairConst {
-                    cut2: (a.r + b.r) * (a.r + b.r),
-                    r_sum: a.r + b.r,
-                    r_eff: a.r * b.r / (a.r + b.r),
-                    m_eff: a.m * b.m / (a.m + b.m),
                     material: (a.material * nm + b.material) as u32,
-                    shift,
+                    touching: history != V3::zeros(),
                 };
-                (slot, constants)
+                (slot, history)
             })
             .unzip();
         drop(history);
-        (self.slots, self.pair_const) = (slots, pair_const);
+        (self.slots, self.pair_history) = (slots, pair_history);
+        self.pair_shift.clear();
+        if self.periodic.is_some() {
+            self.pair_shift
+                .par_extend(pairs.par_iter().with_min_len(PAIR_CHUNK).map(|p| p.2));
+        }
         self.out.clear();
         self.out.resize(self.slots.len(), ContactForce::default());
         self.films.clear();
@@ -737,13 +756,14 @@ impl World {
         } else {
             self.slots
                 .iter()
-                .filter(|s| s.touching)
-                .filter_map(|s| {
+                .zip(&self.pair_history)
+                .filter(|(s, _)| s.touching)
+                .filter_map(|(s, h)| {
                     let (a, b) = (
                         self.ids_at_build.get(s.i as usize)?,
                         self.ids_at_build.get(s.j as usize)?,
                     );
-                    Some(((*a, *b), s.history))
+                    Some(((*a, *b), *h))
                 })
                 .collect()
         };
@@ -753,11 +773,11 @@ impl World {
                 if j as usize >= common {
                     return V3::zeros();
                 }
-                let own =
-                    &self.slots[self.first_i[i as usize] as usize..self.first_i[i as usize + 1] as usize];
+                let first = self.first_i[i as usize] as usize;
+                let own = &self.slots[first..self.first_i[i as usize + 1] as usize];
                 return own
                     .binary_search_by_key(&j, |s| s.j)
-                    .map_or_else(|_| V3::zeros(), |k| own[k].history);
+                    .map_or_else(|_| V3::zeros(), |k| self.pair_history[first + k]);
             }
             let (a, b) = (ids[i as usize], ids[j as usize]);
             by_ids
@@ -866,7 +886,8 @@ impl World {
         self.touch.resize(self.slots.len(), false);
         let lists = PairLists {
             slots: &mut self.slots,
-            consts: &self.pair_const,
+            history: &mut self.pair_history,
+            shifts: &self.pair_shift,
             out: &mut self.out,
             films: &mut self.films,
             touch: &mut self.touch,
@@ -943,10 +964,10 @@ impl World {
 }
 
 /// A pair that stopped touching forgets its tangential history and its force.
-fn apart(s: &mut Slot, out: &mut ContactForce) {
+fn apart(s: &mut Slot, history: &mut V3, out: &mut ContactForce) {
     if s.touching {
         s.touching = false;
-        s.history = V3::zeros();
+        *history = V3::zeros();
         *out = ContactForce::default();
     }
 }
@@ -961,13 +982,22 @@ struct PairPass<'a, L, K> {
 }
 
 impl<L: LawRef, K: Motion> PairPass<'_, L, K> {
-    /// The separation x_i - x_j of a pair, and with lubrication its squeeze film into
-    /// `films[m]`.
+    /// The separation x_i - x_j of a pair (`shifts[m]` its periodic shift, none when empty), and
+    /// with lubrication its squeeze film into `films[m]`.
     #[inline(always)]
-    fn separation(&self, a: &K, b: &K, p: &PairConst, films: &mut [V3], m: usize) -> V3 {
-        let d = a.x() - b.x() - p.shift;
+    fn separation(&self, a: &K, b: &K, shifts: &[V3], films: &mut [V3], m: usize) -> V3 {
+        let d = match shifts.get(m) {
+            Some(shift) => a.x() - b.x() - shift,
+            None => a.x() - b.x(),
+        };
         if let Some(lub) = &self.lubrication {
-            films[m] = lub.pair_force(d, a.v() - b.v(), p.r_sum, p.r_eff);
+            let r_sum = r_sum(a, b);
+            // Beyond the cut-off the film is zero (`pair_force` would say so): R* only within it.
+            films[m] = if d.norm() - r_sum >= lub.cutoff {
+                V3::zeros()
+            } else {
+                lub.pair_force(d, a.v() - b.v(), r_sum, r_eff(a, b))
+            };
         }
         d
     }
@@ -975,25 +1005,20 @@ impl<L: LawRef, K: Motion> PairPass<'_, L, K> {
     /// One Verlet pair: its contact force into `out` (zero when apart), its film into `films[m]`;
     /// 1 when touching.
     #[inline(always)]
-    fn pair_force(
-        &self,
-        s: &mut Slot,
-        p: &PairConst,
-        out: &mut ContactForce,
-        films: &mut [V3],
-        m: usize,
-    ) -> usize {
+    fn pair_force(&self, s: &mut Slot, history: &mut V3, out: &mut ContactForce, lists: PairRow) -> usize {
+        let PairRow { shifts, films, m } = lists;
         let (a, b) = (&self.motion[s.i as usize], &self.motion[s.j as usize]);
-        let d = self.separation(a, b, p, films, m);
+        let d = self.separation(a, b, shifts, films, m);
         let dist2 = d.norm_squared();
-        if dist2 >= p.cut2 {
-            apart(s, out);
+        let r_sum = r_sum(a, b);
+        if dist2 >= r_sum * r_sum {
+            apart(s, history, out);
             return 0;
         }
         let dist = dist2.sqrt();
-        let overlap = p.r_sum - dist;
+        let overlap = r_sum - dist;
         if overlap <= 0.0 {
-            apart(s, out);
+            apart(s, history, out);
             return 0;
         }
         let n = if dist > 0.0 { d / dist } else { V3::z() };
@@ -1002,70 +1027,100 @@ impl<L: LawRef, K: Motion> PairPass<'_, L, K> {
             overlap,
             r_i: a.r(),
             r_j: b.r(),
-            r_eff: p.r_eff,
-            m_eff: p.m_eff,
+            r_eff: r_eff(a, b),
+            m_eff: m_eff(a, b),
             dv: a.v() - b.v(),
             w_i: a.w(),
             w_j: b.w(),
         };
         s.touching = true;
         let law = self.law.law();
-        *out = contact_force(law, &self.pm[p.material as usize], &c, &mut s.history, self.dt);
+        *out = contact_force(law, &self.pm[s.material as usize], &c, history, self.dt);
         1
     }
 }
 
-/// The pair lists a pair pass writes (and the constants it reads).
+/// Where a pair's shift and film are in its chunk's lists.
+struct PairRow<'a> {
+    shifts: &'a [V3],
+    films: &'a mut [V3],
+    m: usize,
+}
+
+/// The pair lists a pair pass writes (and the shifts it reads), or one chunk of them.
 struct PairLists<'a> {
     slots: &'a mut [Slot],
-    consts: &'a [PairConst],
+    history: &'a mut [V3],
+    /// Empty in a world without periodic axes.
+    shifts: &'a [V3],
     out: &'a mut [ContactForce],
     /// Empty in a dry world.
     films: &'a mut [V3],
     touch: &'a mut [bool],
 }
 
+/// A list's chunks of `PAIR_CHUNK` pairs, as many empty slices where the list is empty.
+fn chunks_or_empty<'a>(list: &'a [V3], chunks: usize) -> impl IndexedParallelIterator<Item = &'a [V3]> + 'a {
+    match list.is_empty() {
+        false => Either::Left(list.par_chunks(PAIR_CHUNK)),
+        true => Either::Right((0..chunks).into_par_iter().map(|_| &[][..])),
+    }
+}
+
 /// The pair pass: contacts and films of every listed pair, in parallel over chunks of them, and
 /// whether each touches into `touch`; returns how many touch.
 fn pair_pass<L: LawRef, K: Motion>(pass: &PairPass<L, K>, lists: PairLists) -> usize {
-    let PairLists {
-        slots,
-        consts,
-        out,
-        films,
-        touch,
-    } = lists;
-    // A dry world has no films: each chunk gets an empty slice.
-    let chunks = slots.len().div_ceil(PAIR_CHUNK);
+    // A dry world has no films, one without periodic axes no shifts: empty slices then.
+    let chunks = lists.slots.len().div_ceil(PAIR_CHUNK);
     let films = match pass.lubrication {
-        Some(_) => Either::Left(films.par_chunks_mut(PAIR_CHUNK)),
+        Some(_) => Either::Left(lists.films.par_chunks_mut(PAIR_CHUNK)),
         None => Either::Right((0..chunks).into_par_iter().map(|_| &mut [][..])),
     };
-    slots
+    lists
+        .slots
         .par_chunks_mut(PAIR_CHUNK)
-        .zip(consts.par_chunks(PAIR_CHUNK))
-        .zip(out.par_chunks_mut(PAIR_CHUNK))
+        .zip(lists.history.par_chunks_mut(PAIR_CHUNK))
+        .zip(chunks_or_empty(lists.shifts, chunks))
+        .zip(lists.out.par_chunks_mut(PAIR_CHUNK))
         .zip(films)
-        .zip(touch.par_chunks_mut(PAIR_CHUNK))
+        .zip(lists.touch.par_chunks_mut(PAIR_CHUNK))
         // One batch per worker's run of chunks (zeroing one per chunk cost a tenth of the pass).
         .map_init(
             || L::BATCHED.then(Batch::default),
-            |batch, ((((slots, consts), outs), films), touch)| {
-                if let Some(batch) = batch {
-                    return pair_forces_batched(pass, batch, slots, consts, outs, films, touch);
+            |batch, (((((slots, history), shifts), out), films), touch)| {
+                let chunk = PairLists {
+                    slots,
+                    history,
+                    shifts,
+                    out,
+                    films,
+                    touch,
+                };
+                match batch {
+                    Some(batch) => pair_forces_batched(pass, batch, chunk),
+                    None => pair_forces_each(pass, chunk),
                 }
-                let mut touching = 0;
-                let each = slots.iter_mut().zip(consts).zip(outs).zip(touch.iter_mut());
-                for (m, (((s, p), out), t)) in each.enumerate() {
-                    touching += pass.pair_force(s, p, out, films, m);
-                    if K::TOUCH {
-                        *t = s.touching;
-                    }
-                }
-                touching
             },
         )
         .sum()
+}
+
+/// The pairs of a chunk one by one (`PairPass::pair_force`); returns how many touch.
+fn pair_forces_each<L: LawRef, K: Motion>(pass: &PairPass<L, K>, chunk: PairLists) -> usize {
+    let mut touching = 0;
+    for m in 0..chunk.slots.len() {
+        let row = PairRow {
+            shifts: chunk.shifts,
+            films: &mut *chunk.films,
+            m,
+        };
+        let s = &mut chunk.slots[m];
+        touching += pass.pair_force(s, &mut chunk.history[m], &mut chunk.out[m], row);
+        if K::TOUCH {
+            chunk.touch[m] = s.touching;
+        }
+    }
+    touching
 }
 
 /// The pairs of a chunk with `ContactLaw::LIGGGHTS_HERTZ`: the geometry per pair, the law in
@@ -1073,46 +1128,51 @@ fn pair_pass<L: LawRef, K: Motion>(pass: &PairPass<L, K>, lists: PairLists) -> u
 fn pair_forces_batched<L: LawRef, K: Motion>(
     pass: &PairPass<L, K>,
     batch: &mut Batch,
-    slots: &mut [Slot],
-    consts: &[PairConst],
-    outs: &mut [ContactForce],
-    films: &mut [V3],
-    touch: &mut [bool],
+    chunk: PairLists,
 ) -> usize {
+    let PairLists {
+        slots,
+        history,
+        shifts,
+        out: outs,
+        films,
+        touch,
+    } = chunk;
     let (motion, pm, dt) = (pass.motion, pass.pm, pass.dt);
     let damping = ContactLaw::LIGGGHTS_HERTZ.switches.damping as usize;
     batch.len = 0;
-    let flush = |batch: &mut Batch, slots: &mut [Slot], outs: &mut [ContactForce]| {
+    let flush = |batch: &mut Batch, history: &mut [V3], outs: &mut [ContactForce]| {
         batch.run(dt);
         for k in 0..batch.len {
             let m = batch.slot[k] as usize;
-            let (force, torque_i, torque_j, history) = batch.result(k);
+            let (force, torque_i, torque_j, h) = batch.result(k);
             outs[m] = ContactForce {
                 force,
                 torque_i,
                 torque_j,
             };
-            slots[m].history = history;
+            history[m] = h;
         }
         batch.len = 0;
     };
     let mut touching = 0;
     for m in 0..slots.len() {
-        let (s, p) = (&mut slots[m], &consts[m]);
+        let s = &mut slots[m];
         let (a, b) = (&motion[s.i as usize], &motion[s.j as usize]);
-        let d = pass.separation(a, b, p, films, m);
+        let d = pass.separation(a, b, shifts, films, m);
         let dist2 = d.norm_squared();
-        if dist2 >= p.cut2 {
-            apart(s, &mut outs[m]);
+        let r_sum = r_sum(a, b);
+        if dist2 >= r_sum * r_sum {
+            apart(s, &mut history[m], &mut outs[m]);
             if K::TOUCH {
                 touch[m] = false;
             }
             continue;
         }
         let dist = dist2.sqrt();
-        let overlap = p.r_sum - dist;
+        let overlap = r_sum - dist;
         if overlap <= 0.0 {
-            apart(s, &mut outs[m]);
+            apart(s, &mut history[m], &mut outs[m]);
             if K::TOUCH {
                 touch[m] = false;
             }
@@ -1120,18 +1180,19 @@ fn pair_forces_batched<L: LawRef, K: Motion>(
         }
         let n = if dist > 0.0 { d / dist } else { V3::z() };
         let dv = a.v() - b.v();
-        let mat = &pm[p.material as usize];
+        let mat = &pm[s.material as usize];
         let k = batch.len;
         batch.slot[k] = m as u32;
         (batch.nx[k], batch.ny[k], batch.nz[k]) = (n.x, n.y, n.z);
         batch.overlap[k] = overlap;
         (batch.r_i[k], batch.r_j[k]) = (a.r(), b.r());
-        (batch.r_eff[k], batch.m_eff[k]) = (p.r_eff, p.m_eff);
+        (batch.r_eff[k], batch.m_eff[k]) = (r_eff(a, b), m_eff(a, b));
         (batch.dvx[k], batch.dvy[k], batch.dvz[k]) = (dv.x, dv.y, dv.z);
         let (wi, wj) = (a.w(), b.w());
         (batch.wix[k], batch.wiy[k], batch.wiz[k]) = (wi.x, wi.y, wi.z);
         (batch.wjx[k], batch.wjy[k], batch.wjz[k]) = (wj.x, wj.y, wj.z);
-        (batch.hx[k], batch.hy[k], batch.hz[k]) = (s.history.x, s.history.y, s.history.z);
+        let h = history[m];
+        (batch.hx[k], batch.hy[k], batch.hz[k]) = (h.x, h.y, h.z);
         batch.y_star[k] = mat.y_star;
         batch.g_star[k] = mat.g_star;
         batch.damping[k] = mat.damping_factor[damping];
@@ -1144,11 +1205,11 @@ fn pair_forces_batched<L: LawRef, K: Motion>(
         touching += 1;
         batch.len += 1;
         if batch.len == LANES {
-            flush(batch, slots, outs);
+            flush(batch, history, outs);
         }
     }
     if batch.len > 0 {
-        flush(batch, slots, outs);
+        flush(batch, history, outs);
     }
     touching
 }

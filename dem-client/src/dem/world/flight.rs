@@ -13,7 +13,7 @@
 //! undo).
 
 use super::everyone::Way;
-use super::{Body, World, CHUNK, FREE_FLIGHT_MARGIN, PAIR_CHUNK};
+use super::{Body, World, CHUNK, FREE_FLIGHT_MARGIN, PAIR_CHUNK, V3};
 use rayon::prelude::*;
 use std::time::Instant;
 
@@ -173,9 +173,10 @@ impl World {
 
     /// The gap between the spheres of slot `s` (negative: overlap).
     fn slot_gap(&self, s: usize) -> f64 {
-        let (slot, p) = (&self.slots[s], &self.pair_const[s]);
+        let slot = &self.slots[s];
         let (a, b) = (&self.bodies[slot.i as usize], &self.bodies[slot.j as usize]);
-        (a.x - b.x - p.shift).norm() - p.r_sum
+        let shift = self.pair_shift.get(s).copied().unwrap_or_else(V3::zeros);
+        (a.x - b.x - shift).norm() - super::r_sum(a, b)
     }
 
     /// The spheres that could touch something, or come within the films' cut-off, if every sphere
@@ -340,8 +341,13 @@ impl World {
                 ..slot
             }
         }));
-        part.pair_const.clear();
-        part.pair_const.par_extend(pairs().map(|s| self.pair_const[s]));
+        part.pair_history.clear();
+        part.pair_history
+            .par_extend(pairs().map(|s| self.pair_history[s]));
+        part.pair_shift.clear();
+        if !self.pair_shift.is_empty() {
+            part.pair_shift.par_extend(pairs().map(|s| self.pair_shift[s]));
+        }
         part.out.clear();
         part.out.par_extend(pairs().map(|s| self.out[s]));
         part.wall_history.clear();
@@ -381,7 +387,7 @@ impl World {
         for (l, &s) in slots.iter().enumerate() {
             let s = s as usize;
             self.slots[s].touching = part.slots[l].touching;
-            self.slots[s].history = part.slots[l].history;
+            self.pair_history[s] = part.pair_history[l];
             self.out[s] = part.out[l];
             if !self.films.is_empty() {
                 self.films[s] = part.films[l];
