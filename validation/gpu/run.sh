@@ -18,8 +18,8 @@
 # coupled_dense.txt (64^3 particles, a dense bed), coupled_dem.txt (1 and 32^3 particles, the
 # host idle 1.1 ms a step as for a DEM), default/ (the default scene), suspension/ and
 # suspension_substeps/ (32^3 beads settling, the whole program, free flight on and off:
-# summary.json), dem_bench_{suspension,bed}.txt (the DEM side alone on this machine's cores, 32^3
-# beads dilute and in a bed), suspension_timed/ (the three ways of treating the covered cells timed
+# summary.json), dem_bench_{suspension,bed,bed_skin}.txt (the DEM side alone on this machine's
+# cores, 32^3 beads dilute and in a bed, the bed also with a thinner skin), suspension_timed/ (the three ways of treating the covered cells timed
 # on the run's steps) and suspension_{redo,skip,fused}/ (each held throughout), tencate/<run>/ and
 # bed/<run>/ (the scenes of .gpu/plan.txt: Ten Cate and the fluidized bed, held and free),
 # validate/REPORT.md (random arrays at 18 and 24 cells) and
@@ -133,6 +133,7 @@ done
 # the island's world or as the whole world, on this machine's cores).
 step dem_bench_suspension 20 60 $bin/dem-client bench .gpu/suspension.toml --steps 40 --free-flight both
 step dem_bench_bed 20 90 $bin/dem-client bench .gpu/bed.toml --steps 12 --free-flight both
+step dem_bench_bed_skin 15 60 $bin/dem-client bench .gpu/bed_skin.toml --steps 12 --free-flight on
 # The suspension timing the three ways of treating the covered cells on its steps and keeping the
 # fastest (its log's "covered cells timed" line), and with each held throughout: the whole
 # program's answer, the DEM's step included, to which way a GPU should take, and what a trial
