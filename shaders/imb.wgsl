@@ -388,17 +388,17 @@ fn store_covered(at: Invocation) {
     store_populations(k, out);
 }
 
-// The word of the cover mask that holds cell k's bit, and the bit.
 // SKIP: which of the four cells of quad q (cells 4q to 4q + 3, four bits of one mask word) the
 // fluid kernels leave alone.
 fn skipped_lanes(q: u32) -> vec4<bool> {
     if SKIP {
-        let bits = atomicLoad(&covered[cell_count() + (q >> 3u)]) >> ((q & 7u) * 4u);
+        let bits = atomicLoad(&covered[mask_word(4u * q)]) >> ((q & 7u) * 4u);
         return (vec4<u32>(bits) & vec4<u32>(1u, 2u, 4u, 8u)) != vec4<u32>(0u);
     }
     return vec4<bool>(false);
 }
 
+// The word of the cover mask that holds cell k's bit, and the bit.
 fn mask_word(k: u32) -> u32 {
     return cell_count() + (k >> 5u);
 }

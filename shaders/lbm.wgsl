@@ -474,8 +474,8 @@ fn stream_collide_quads(
     let pb = collide(b, moments(b));
     let pc = collide(c, moments(c));
     let pd = collide(d, moments(d));
-    // A skipped cell (SKIP: covered, updated in place before) sends f_{i.o} along i: each slot
-    // keeps what it holds.
+    // A skipped cell (SKIP: covered, updated in place before) sends along each link what it read
+    // as the opposite link's population, from that very slot: each slot keeps what it holds.
     let skip = skipped_lanes(q);
     //#for i
     q{i.o}[q] = select(vec4<f32>(pa[{i}], pb[{i}], pc[{i}], pd[{i}]), vec4<f32>(a[{i.o}], b[{i.o}], c[{i.o}], d[{i.o}]), skip);
@@ -528,8 +528,8 @@ fn stream_collide_quads_odd(
     let pb = collide(b, moments(b));
     let pc = collide(c, moments(c));
     let pd = collide(d, moments(d));
-    // A skipped cell (SKIP) sends f_{i.o} along i: slot i of cell 4q + t + c_i, which it read as
-    // f_{i.o}, keeps what it holds.
+    // A skipped cell (SKIP) sends along link i what it read as the opposite link's population:
+    // slot i of cell 4q + t + c_i, which it was read from, keeps what it holds.
     let skip = skipped_lanes(u32(q));
     //#for i
     {

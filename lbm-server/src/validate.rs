@@ -20,10 +20,9 @@ pub struct ValidateArgs {
     #[arg(long, default_value = "validation/lbm")]
     out: PathBuf,
     /// Run only these sections (channel, wall, taylor-green, mass, array-drag,
-    /// array-drag-solid-collision, drag-tau,
-    /// radius-deficit, sphere-drag, sphere-correction, moving-boundary, stability, wake-drag,
-    /// wake-drag-superposition, bed-drag, random-drag, momentum; wake-drag-fine and
-    /// random-drag-fine, a GPU's grids, only
+    /// array-drag-solid-collision, drag-tau, radius-deficit, sphere-drag, sphere-correction,
+    /// moving-boundary, stability, wake-drag, wake-drag-superposition, bed-drag, random-drag,
+    /// random-drag-staircase, momentum; wake-drag-fine and random-drag-fine, a GPU's grids, only
     /// when named), print them and replace them in an existing REPORT.md (the other sections are
     /// kept as they are).
     #[arg(long, value_delimiter = ',')]
@@ -32,7 +31,7 @@ pub struct ValidateArgs {
 
 type Section = fn(&Arc<Gpu>) -> String;
 
-const SECTIONS: [(&str, Section); 19] = [
+const SECTIONS: [(&str, Section); 20] = [
     ("channel", channel_convergence),
     ("wall", wall_location),
     ("taylor-green", taylor_green),
@@ -51,6 +50,7 @@ const SECTIONS: [(&str, Section); 19] = [
     ("bed-drag", bed_drag::section),
     ("random-drag", bed_drag::random_section),
     ("random-drag-fine", bed_drag::random_fine_section),
+    ("random-drag-staircase", bed_drag::random_staircase_section),
     ("momentum", momentum),
 ];
 

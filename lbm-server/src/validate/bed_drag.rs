@@ -5,7 +5,7 @@
 //! random, against Tenneti et al.'s random arrays.
 
 use crate::lbm::gpu::Gpu;
-use crate::lbm::validation::{self, schiller_naumann, Array, WeightedArray};
+use crate::lbm::validation::{self, schiller_naumann, Array, Spheres, WeightedArray};
 use std::f64::consts::PI;
 use std::fmt::Write as _;
 use std::sync::Arc;
@@ -86,16 +86,21 @@ fn richardson_zaki(ar: f64, voidage: f64) -> f64 {
 fn run(gpu: &Arc<Gpu>, phi: f64, diameter: f64, expected: f64) -> WeightedArray {
     let n = ((diameter / (6.0 * phi / PI).cbrt()).round() as usize).max(MIN_BOX);
     let array = Array::simple_cubic(n, phi);
-    at_weight(gpu, &array, expected, MAX_STEPS)
+    at_weight(gpu, &array, (expected, Spheres::Immersed), MAX_STEPS)
 }
 
 /// `array` carrying the bed's grain weight, nu set so that U nears [`VELOCITY`] at Re `expected`,
-/// for at most `max_steps`.
-fn at_weight(gpu: &Arc<Gpu>, array: &Array, expected: f64, max_steps: u64) -> WeightedArray {
+/// for at most `max_steps`, its spheres meeting the fluid as `boundary` says.
+fn at_weight(
+    gpu: &Arc<Gpu>,
+    array: &Array,
+    (expected, boundary): (f64, Spheres),
+    max_steps: u64,
+) -> WeightedArray {
     let nu = VELOCITY * array.diameter / expected;
     let weight = archimedes() * PI / 6.0;
     let mrt = super::operator_named("MRT", 0.5 + 3.0 * nu);
-    validation::array_at_weight(gpu, array, [nu, weight], mrt, VELOCITY, max_steps)
+    validation::array_at_weight(gpu, array, [nu, weight], (mrt, boundary), VELOCITY, max_steps)
 }
 
 pub(super) fn section(gpu: &Arc<Gpu>) -> String {
@@ -177,16 +182,28 @@ const STOKES_MAX_STEPS: u64 = 40_000;
 /// instead of on a cubic lattice, against Tenneti et al.'s random arrays, in Stokes flow and
 /// carrying the bed's weight.
 pub(super) fn random_section(gpu: &Arc<Gpu>) -> String {
-    random_arrays(gpu, "by resolution", &RANDOM_DIAMETERS)
+    random_arrays(gpu, "by resolution", &RANDOM_DIAMETERS, Spheres::Immersed)
+}
+
+/// `--only random-drag-staircase`: the same arrays as solid cells (half-way bounce-back on a
+/// staircase of each sphere) instead of the immersed boundary: whether the excess drag at the bed's
+/// Reynolds numbers is the immersed boundary's or the grid's.
+pub(super) fn random_staircase_section(gpu: &Arc<Gpu>) -> String {
+    random_arrays(
+        gpu,
+        "as solid cells (a staircase), by resolution",
+        &RANDOM_DIAMETERS,
+        Spheres::Staircase,
+    )
 }
 
 /// `--only random-drag-fine`: the same at 18 and 24 cells per diameter (a GPU's).
 pub(super) fn random_fine_section(gpu: &Arc<Gpu>) -> String {
-    random_arrays(gpu, "finer grids", &FINE_DIAMETERS)
+    random_arrays(gpu, "finer grids", &FINE_DIAMETERS, Spheres::Immersed)
 }
 
 /// The random arrays' section at these diameters (cells), its heading ending in `grids`.
-fn random_arrays(gpu: &Arc<Gpu>, grids: &str, diameters: &[f64]) -> String {
+fn random_arrays(gpu: &Arc<Gpu>, grids: &str, diameters: &[f64], boundary: Spheres) -> String {
     let ar = archimedes();
     let phi = SOLID_FRACTIONS[0];
     let bed = tenneti_reynolds(ar, phi);
@@ -197,7 +214,7 @@ fn random_arrays(gpu: &Arc<Gpu>, grids: &str, diameters: &[f64]) -> String {
          spheres in line shelter each other in their wakes. Here {RANDOM_COUNT} spheres at the same \
          solid fraction {phi} lie at random in a periodic box (random sequential addition, none \
          overlapping; two placements), held, the fluid driven by a mean pressure gradient as above \
-         (MRT, Noble-Torczynski weighting, 2 particles per cell as in the bed), and the superficial \
+         ({}), and the superficial \
          Reynolds number Re = U d / nu at which the spheres carry the force is measured at each \
          resolution (U: the mean velocity over the box; the liquid inside a held sphere is at rest). \
          Reference: Tenneti, Garg & Subramaniam (2011), particle-resolved simulations of fixed random \
@@ -212,6 +229,12 @@ fn random_arrays(gpu: &Arc<Gpu>, grids: &str, diameters: &[f64]) -> String {
          steps (mean and range of the last checks). A higher Re than Tenneti's: less drag.\n\n\
          | flow | placement | box n | d (cells) | tau | steps | outcome | Re mean | Re range | Tenneti Re | error | grid error of Re vs finest |\n\
          |---|---:|---:|---:|---:|---:|---|---:|---:|---:|---:|---:|\n",
+        match boundary {
+            Spheres::Immersed => "MRT, the immersed boundary with Noble-Torczynski weighting, 2 particles per cell as in the bed",
+            Spheres::Staircase => "MRT; here each sphere is the solid cells whose centre lies within it, with half-way \
+                bounce-back, as a staircase: no solid fractions, no immersed boundary; the force acts on the \
+                fluid cells, its total the same",
+        },
         richardson_zaki(ar, 1.0 - phi),
         validation::WEIGHT_SAMPLES,
         validation::WEIGHT_CHECK,
@@ -228,9 +251,9 @@ fn random_arrays(gpu: &Arc<Gpu>, grids: &str, diameters: &[f64]) -> String {
         let u = STOKES_RE * nu / array.diameter;
         let mrt = super::operator_named("MRT", STOKES_TAU);
         let force = tenneti_force(phi, STOKES_RE);
-        validation::array_at_weight(gpu, array, [nu, force], mrt, u, STOKES_MAX_STEPS)
+        validation::array_at_weight(gpu, array, [nu, force], (mrt, boundary), u, STOKES_MAX_STEPS)
     };
-    let weight = |array: &Array| at_weight(gpu, array, bed, RANDOM_MAX_STEPS);
+    let weight = |array: &Array| at_weight(gpu, array, (bed, boundary), RANDOM_MAX_STEPS);
     type Flow<'a> = (&'a str, &'a dyn Fn(&Array) -> WeightedArray, f64, u64);
     let flows: [Flow; 2] = [
         ("Stokes", &stokes, STOKES_RE, STOKES_MAX_STEPS),
