@@ -190,10 +190,7 @@ const CORRECTION_BOUNDARY_LAYER_CELLS: f64 = 2.0;
 /// resolved by fewer than [`CORRECTION_BOUNDARY_LAYER_CELLS`] cells with TRT: the particle
 /// Reynolds number of the lattice's velocity scale and the largest sphere (`diameter`, m).
 fn correction_warning(units: &LatticeUnits, diameter: f64) -> Option<String> {
-    let speed = units.mach / 3f64.sqrt();
-    let cells = diameter / units.dx;
-    let reynolds = speed * cells / units.nu;
-    let layer = cells / reynolds.sqrt();
+    let (reynolds, cells, layer) = boundary_layer(units, diameter);
     (units.operator == "trt" && layer < CORRECTION_BOUNDARY_LAYER_CELLS).then(|| {
         format!(
             "coupling.radius_correction = \"calibrated\" with TRT at particle Reynolds number \
@@ -208,6 +205,42 @@ fn correction_warning(units: &LatticeUnits, diameter: f64) -> Option<String> {
              to {:.0} cells per diameter, or use lattice.operator = \"bgk\" or \"mrt\" (held and \
              towed within 2%; E4 at 6 cells settled -2.6% corrected with BGK, -2.2% with MRT)",
             (CORRECTION_BOUNDARY_LAYER_CELLS * reynolds.sqrt()).ceil()
+        )
+    })
+}
+
+/// The boundary-layer cells below which the immersed boundary's drag was measured well above the
+/// drag laws at the Reynolds numbers of fluidized beds (validation/lbm/REPORT.md, "a held sphere
+/// at the fluidized bed's Reynolds numbers": +5.7 to +6.5% at 0.92-1.13 cells, +25 to +29% at
+/// 0.35-0.42).
+const DRAG_BOUNDARY_LAYER_CELLS: f64 = 1.0;
+
+/// The particle Reynolds number of the lattice's velocity scale and a sphere of `diameter` (m),
+/// with its cells per diameter and boundary-layer cells (d / sqrt(Re), in cells).
+fn boundary_layer(units: &LatticeUnits, diameter: f64) -> (f64, f64, f64) {
+    let speed = units.mach / 3f64.sqrt();
+    let cells = diameter / units.dx;
+    let reynolds = speed * cells / units.nu;
+    (reynolds, cells, cells / reynolds.sqrt())
+}
+
+/// The warning for spheres whose boundary layer spans fewer than [`DRAG_BOUNDARY_LAYER_CELLS`]
+/// cells at the particle Reynolds number of the lattice's velocity scale and the largest sphere
+/// (`diameter`, m): their drag comes out too high on such a grid, whatever the operator or tau.
+fn resolution_warning(units: &LatticeUnits, diameter: f64) -> Option<String> {
+    let (reynolds, cells, layer) = boundary_layer(units, diameter);
+    (layer < DRAG_BOUNDARY_LAYER_CELLS).then(|| {
+        format!(
+            "particle Reynolds number {reynolds:.0} (lattice.velocity_scale x the largest diameter / \
+             viscosity) at {cells:.1} cells per diameter: the sphere's boundary layer (about d / \
+             sqrt(Re)) spans {layer:.2} cells, and the drag comes out too high. A sphere held in a \
+             stream at Re 200-300 (MRT) dragged +25 to +29% above Schiller & Naumann at 0.35-0.42 \
+             cells, +12% at 0.69-0.85 and +6% at 0.92-1.13, whatever the tau, Mach number or \
+             operator; a random array at solid fraction 0.24 carried its weight at 1.5-1.7 times \
+             Tenneti et al.'s drag at 6 to 18 cells per diameter, and solid cells instead of the \
+             immersed boundary drag more still (validation/lbm/REPORT.md; docs/imb.md, \
+             \"Stability near tau = 1/2\"). Refine to {:.0} cells per diameter for one cell",
+            (DRAG_BOUNDARY_LAYER_CELLS * reynolds.sqrt()).ceil()
         )
     })
 }
@@ -271,12 +304,18 @@ impl FluidSide {
         let trials = way_trials(scene, &gpu).map(|least| WayTrials::new(options.covered_cells, steps, least));
         let lattice = Lattice::new(gpu, setup_of(&units), health_of(&units), Some(options))?;
         let lubrication = scene.coupling.lubrication.then(|| lubrication_of(scene, &units));
+        let diameter = 2.0 * radii.iter().fold(0.0, |a, &r| r.max(a));
         let warning = if scene.coupling.radius_correction == "none" {
             tau_warning(&units.operator, units.tau)
         } else {
-            correction_warning(&units, 2.0 * radii.iter().fold(0.0, |a, &r| r.max(a)))
+            correction_warning(&units, diameter)
         };
-        for warning in warning.into_iter().chain(stability_warning(&units, true)) {
+        let warnings = [
+            warning,
+            resolution_warning(&units, diameter),
+            stability_warning(&units, true),
+        ];
+        for warning in warnings.into_iter().flatten() {
             protocol::say!("lbm-server: warning: {warning}");
         }
         Ok(FluidSide {
@@ -662,6 +701,40 @@ mod tests {
             correction_warning(&units(&e4_bgk), 0.015),
             None,
             "BGK's held and towed sphere agree"
+        );
+    }
+
+    #[test]
+    fn spheres_whose_boundary_layer_spans_under_a_cell_are_warned_of_too_much_drag() {
+        let e1 = TEN_CATE_E1;
+        assert_eq!(resolution_warning(&units(e1), 0.015), None, "E1: Re 1.5");
+        let e4 = e1
+            .replace("density = 970.0", "density = 960.0")
+            .replace("dynamic_viscosity = 0.373", "dynamic_viscosity = 0.058")
+            .replace("velocity_scale = 0.038", "velocity_scale = 0.128");
+        assert_eq!(
+            resolution_warning(&units(&e4), 0.015),
+            None,
+            "E4: Re 32, 6 cells: 1.06"
+        );
+        // Water and a 3 mm grain at 0.1 m/s: Re 300 (the fluidized bed's).
+        let bed = e4
+            .replace("density = 960.0", "density = 1000.0")
+            .replace("dynamic_viscosity = 0.058", "dynamic_viscosity = 0.001")
+            .replace("velocity_scale = 0.128", "velocity_scale = 0.1")
+            .replace("dx = 0.0025", "dx = 0.0005");
+        let warning = resolution_warning(&units(&bed), 0.003).expect("Re 300, 6 cells: 0.35");
+        assert!(
+            warning.contains("Reynolds number 300")
+                && warning.contains("spans 0.35 cells")
+                && warning.contains("Refine to 18 cells per diameter"),
+            "{warning}"
+        );
+        let slow = bed.replace("velocity_scale = 0.1", "velocity_scale = 0.008");
+        assert_eq!(
+            resolution_warning(&units(&slow), 0.003),
+            None,
+            "Re 24, 6 cells: 1.22"
         );
     }
 
