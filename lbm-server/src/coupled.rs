@@ -665,6 +665,14 @@ mod tests {
 
     const TEN_CATE_E1: &str = include_str!("../../validation/scenes/ten-cate-e1.toml");
 
+    /// Ten Cate E4 (Re 32) at 6 cells per diameter: E1's scene with E4's fluid.
+    fn ten_cate_e4() -> String {
+        TEN_CATE_E1
+            .replace("density = 970.0", "density = 960.0")
+            .replace("dynamic_viscosity = 0.373", "dynamic_viscosity = 0.058")
+            .replace("velocity_scale = 0.038", "velocity_scale = 0.128")
+    }
+
     /// The lattice units of a scene's text.
     fn units(text: &str) -> LatticeUnits {
         let scene = scene::Scene::parse(text, "e1.toml").expect("scene");
@@ -679,10 +687,7 @@ mod tests {
             None,
             "E1: Re 1.5, 6 cells per diameter: 4.9 cells"
         );
-        let e4 = e1
-            .replace("density = 970.0", "density = 960.0")
-            .replace("dynamic_viscosity = 0.373", "dynamic_viscosity = 0.058")
-            .replace("velocity_scale = 0.038", "velocity_scale = 0.128");
+        let e4 = ten_cate_e4();
         let warning = correction_warning(&units(&e4), 0.015).expect("E4: Re 32, 6 cells: 1.06");
         assert!(
             warning.contains("Reynolds number 31.8")
@@ -708,10 +713,7 @@ mod tests {
     fn spheres_whose_boundary_layer_spans_under_a_cell_are_warned_of_too_much_drag() {
         let e1 = TEN_CATE_E1;
         assert_eq!(resolution_warning(&units(e1), 0.015), None, "E1: Re 1.5");
-        let e4 = e1
-            .replace("density = 970.0", "density = 960.0")
-            .replace("dynamic_viscosity = 0.373", "dynamic_viscosity = 0.058")
-            .replace("velocity_scale = 0.038", "velocity_scale = 0.128");
+        let e4 = ten_cate_e4();
         assert_eq!(
             resolution_warning(&units(&e4), 0.015),
             None,
