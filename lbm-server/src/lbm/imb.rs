@@ -325,6 +325,24 @@ impl Passes {
     }
 }
 
+/// The pipelines of one coupled step.
+struct StepPasses {
+    cover: wgpu::ComputePipeline,
+    reduce: wgpu::ComputePipeline,
+    sum_loads: wgpu::ComputePipeline,
+    /// The redo and skip: the passes over the list of covered cells.
+    covered: Option<CoveredPasses>,
+}
+
+/// The passes over the covered cells of one step's parity, for the front and the back of the list.
+struct CoveredPasses {
+    groups: wgpu::ComputePipeline,
+    collide: [wgpu::ComputePipeline; 2],
+    /// "store_covered" (the redo) or "uncover_listed" (skip), and its pipelines.
+    after: &'static str,
+    after_pipelines: [wgpu::ComputePipeline; 2],
+}
+
 /// Buffers of the coupling (tiny placeholders when the scene has no particles).
 pub struct Coupling {
     particles: wgpu::Buffer,
@@ -554,92 +572,145 @@ impl Lattice {
         split: Split,
         read: &mut dyn FnMut(&[GpuLoad]) -> Result<(), String>,
     ) -> Result<(), String> {
-        let n = particles.count();
         self.ramp_faces();
         let pairs = self.stage_particles(particles)?;
+        let passes = self.step_passes()?;
+        let n = particles.count() as u32;
+        let gpu = self.gpu.clone();
         let coupling = self.imb.as_ref().expect("coupling");
+        let info = [n, pairs as u32, 0, coupling.saved_capacity];
+        gpu.queue
+            .write_buffer(&coupling.info, 0, bytemuck::cast_slice(&info));
+        let encoder = split("upload", gpu.device.create_command_encoder(&Default::default()));
+        let mut encoder = self.encode_cover(encoder, &passes.cover, n, split);
+        encoder = match &passes.covered {
+            // The fluid kernels give the covered cells their solid term (shaders/lbm.wgsl).
+            None => {
+                self.encode_step(&mut encoder);
+                split("fluid", encoder)
+            }
+            Some(covered) => self.encode_covered_collision(encoder, covered, split),
+        };
+        encoder = self.encode_reduce(encoder, &passes, n, split);
+        let bytes = n as u64 * LOAD_BYTES;
+        let coupling = self.imb.as_ref().expect("coupling");
+        if bytes > 0 {
+            encoder.copy_buffer_to_buffer(&coupling.loads, 0, &coupling.readback, 0, bytes);
+        }
+        let with_loads = gpu.queue.submit([encoder.finish()]);
+        if let Some(covered) = &passes.covered {
+            self.submit_fluid_after_loads(covered, split);
+        }
+        self.read_loads(bytes, with_loads, read)
+    }
+
+    /// The pipelines of this step's passes, those over the covered cells of this parity.
+    fn step_passes(&self) -> Result<StepPasses, String> {
         let passes = self
             .way()
             .passes
             .as_ref()
             .ok_or("this lattice was made without particle coupling")?;
-        let (cover, reduce, sum_loads) = (
-            passes.cover.clone(),
-            passes.reduce.clone(),
-            passes.sum_loads.clone(),
-        );
-        let redo = passes.redo.as_ref().map(|r| {
-            // KIND = parity + 2 * (list of the cells with a link that leaves the fluid).
-            let kind = |list: usize| (self.time % 2) as usize + 2 * list;
-            (
-                r.groups.clone(),
-                [0, 1].map(|list| r.collide[kind(list)].clone()),
-                (r.after.0, [0, 1].map(|list| r.after.1[kind(list)].clone())),
-            )
-        });
-        let parity = self.time % 2;
-        let gpu = self.gpu.clone();
-        gpu.queue.write_buffer(
-            &coupling.info,
-            0,
-            bytemuck::cast_slice(&[n as u32, pairs as u32, 0, coupling.saved_capacity]),
-        );
-        let mut encoder = split("upload", gpu.device.create_command_encoder(&Default::default()));
-        let n = n as u32;
-        // The cover counts, slots and mask are all 0 here: `reduce` clears them. With the redo the
-        // covered cells are listed by `cover` (status[4], status[8]) and dispatched indirectly
-        // (status[5..8], status[9..12]).
+        // KIND = parity + 2 * (list of the cells with a link that leaves the fluid).
+        let kind = |list: usize| (self.time % 2) as usize + 2 * list;
+        Ok(StepPasses {
+            cover: passes.cover.clone(),
+            reduce: passes.reduce.clone(),
+            sum_loads: passes.sum_loads.clone(),
+            covered: passes.redo.as_ref().map(|r| CoveredPasses {
+                groups: r.groups.clone(),
+                collide: [0, 1].map(|list| r.collide[kind(list)].clone()),
+                after: r.after.0,
+                after_pipelines: [0, 1].map(|list| r.after.1[kind(list)].clone()),
+            }),
+        })
+    }
+
+    /// The solid fractions: `cover` over the `n` particles' boxes. The cover counts, slots and
+    /// mask are all 0 here (`reduce` clears them); with the redo and skip the covered cells are
+    /// listed by `cover` (status[4], status[8]) and dispatched indirectly (status[5..8],
+    /// status[9..12]).
+    fn encode_cover(
+        &self,
+        mut encoder: wgpu::CommandEncoder,
+        cover: &wgpu::ComputePipeline,
+        n: u32,
+        split: Split,
+    ) -> wgpu::CommandEncoder {
         encoder.clear_buffer(&self.status, 16, Some(32));
-        self.dispatch_groups(&mut encoder, &cover, parity, n);
-        encoder = split("cover", encoder);
-        match &redo {
-            // The fluid kernels give the covered cells their solid term (shaders/lbm.wgsl).
-            None => {
-                self.encode_step(&mut encoder);
-                encoder = split("fluid", encoder);
-            }
-            // The covered cells collide with the solid term first, from their pre-collision
-            // populations, and keep the result (shaders/imb.wgsl).
-            Some((groups, collide, _)) => {
-                self.dispatch_groups(&mut encoder, groups, parity, 1);
-                let indirect = &self.imb.as_ref().expect("coupling").indirect;
-                encoder.copy_buffer_to_buffer(&self.status, 20, indirect, 0, 28);
-                encoder = split("covered_groups", encoder);
-                for (offset, pipeline) in [0, 16].into_iter().zip(collide) {
-                    self.dispatch_indirect(&mut encoder, pipeline, parity, offset);
-                }
-                encoder = split("collide_covered", encoder);
-            }
+        self.dispatch_groups(&mut encoder, cover, self.time % 2, n);
+        split("cover", encoder)
+    }
+
+    /// The redo and skip: the covered cells collide with the solid term first, from their
+    /// pre-collision populations, and keep the result (shaders/imb.wgsl).
+    fn encode_covered_collision(
+        &self,
+        mut encoder: wgpu::CommandEncoder,
+        covered: &CoveredPasses,
+        split: Split,
+    ) -> wgpu::CommandEncoder {
+        let parity = self.time % 2;
+        self.dispatch_groups(&mut encoder, &covered.groups, parity, 1);
+        let indirect = &self.imb.as_ref().expect("coupling").indirect;
+        encoder.copy_buffer_to_buffer(&self.status, 20, indirect, 0, 28);
+        encoder = split("covered_groups", encoder);
+        for (offset, pipeline) in [0, 16].into_iter().zip(&covered.collide) {
+            self.dispatch_indirect(&mut encoder, pipeline, parity, offset);
         }
-        self.dispatch_groups(&mut encoder, &reduce, parity, (n * REDUCE_SLICES).div_ceil(64));
-        self.dispatch_groups(&mut encoder, &sum_loads, parity, n.div_ceil(64));
-        encoder = split("reduce", encoder);
-        let coupling = self.imb.as_ref().expect("coupling");
-        let bytes = n as u64 * LOAD_BYTES;
-        if bytes > 0 {
-            encoder.copy_buffer_to_buffer(&coupling.loads, 0, &coupling.readback, 0, bytes);
+        split("collide_covered", encoder)
+    }
+
+    /// Force and torque per particle (eq. 10-11): each particle's slices of its box summed, then
+    /// the slices into the particle's load; the covers cleared for the next step.
+    fn encode_reduce(
+        &self,
+        mut encoder: wgpu::CommandEncoder,
+        passes: &StepPasses,
+        n: u32,
+        split: Split,
+    ) -> wgpu::CommandEncoder {
+        let parity = self.time % 2;
+        self.dispatch_groups(
+            &mut encoder,
+            &passes.reduce,
+            parity,
+            (n * REDUCE_SLICES).div_ceil(64),
+        );
+        self.dispatch_groups(&mut encoder, &passes.sum_loads, parity, n.div_ceil(64));
+        split("reduce", encoder)
+    }
+
+    /// With the redo and skip the fluid kernels, which update every cell as without particles
+    /// (skip: all but the listed ones), and the store (or uncover) over the covered cells go in a
+    /// submission of their own: it runs while the host reads the loads back and the DEM takes its
+    /// step (docs/imb.md, "The redo").
+    fn submit_fluid_after_loads(&mut self, covered: &CoveredPasses, split: Split) {
+        let parity = self.time % 2;
+        let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
+        self.encode_step(&mut encoder);
+        encoder = split("fluid", encoder);
+        for (offset, pipeline) in [0, 16].into_iter().zip(&covered.after_pipelines) {
+            self.dispatch_indirect(&mut encoder, pipeline, parity, offset);
         }
-        let with_loads = gpu.queue.submit([encoder.finish()]);
-        // With the redo the fluid kernels, which update every cell as without particles, and the
-        // covered cells' stores over their result go in a submission of their own: it runs while
-        // the host reads the loads back and the DEM takes its step (docs/imb.md, "The redo").
-        if let Some((_, _, (after, pipelines))) = redo {
-            let mut encoder = gpu.device.create_command_encoder(&Default::default());
-            self.encode_step(&mut encoder);
-            encoder = split("fluid", encoder);
-            for (offset, pipeline) in [0, 16].into_iter().zip(&pipelines) {
-                self.dispatch_indirect(&mut encoder, pipeline, parity, offset);
-            }
-            encoder = split(after, encoder);
-            gpu.queue.submit([encoder.finish()]);
-        }
+        encoder = split(covered.after, encoder);
+        self.gpu.queue.submit([encoder.finish()]);
+    }
+
+    /// The `bytes` of loads, once the submission `with_loads` is done, handed to `read`.
+    fn read_loads(
+        &self,
+        bytes: u64,
+        with_loads: wgpu::SubmissionIndex,
+        read: &mut dyn FnMut(&[GpuLoad]) -> Result<(), String>,
+    ) -> Result<(), String> {
         if bytes == 0 {
             return read(&[]);
         }
         let coupling = self.imb.as_ref().expect("coupling");
         let slice = coupling.readback.slice(..bytes);
         slice.map_async(wgpu::MapMode::Read, |_| {});
-        gpu.wait_for(with_loads);
+        self.gpu.wait_for(with_loads);
         let read_out = {
             let data = slice
                 .get_mapped_range()
