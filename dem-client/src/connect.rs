@@ -97,40 +97,89 @@ fn lubrication(scene: &scene::Scene, welcome: &Welcome) -> Option<Lubrication> {
 }
 
 pub fn main(args: ConnectArgs) -> ExitCode {
-    let scene = match crate::scene_or_default(args.scene.as_ref()) {
-        Ok(s) => s,
+    let (scene, setup) = match load(&args) {
+        Ok(ok) => ok,
         Err(e) => {
             protocol::say!("dem-client: error: {e}");
             return ExitCode::from(2);
         }
     };
-    if !(args.timeout.is_finite() && args.timeout > 0.0) {
-        protocol::say!(
-            "dem-client: error: --timeout = {} s: must be a finite number > 0",
-            args.timeout
-        );
-        return ExitCode::from(2);
-    }
     let interrupted = Arc::new(AtomicBool::new(false));
     let flag = interrupted.clone();
     if let Err(e) = ctrlc::set_handler(move || flag.store(true, Ordering::SeqCst)) {
         protocol::say!("dem-client: warning: cannot install the Ctrl-C handler: {e}");
     }
+    let mut particles = Particles::new(setup.world, &scene);
+    let (link, welcome) = match join(&args, &scene, &particles) {
+        Ok(ok) => ok,
+        Err(e) => {
+            protocol::say!("dem-client: error: {e}");
+            return ExitCode::from(1);
+        }
+    };
+    let mut last = None;
+    let faults = Faults {
+        churn: args.churn,
+        skip_step: args.skip_step,
+        stall_at: args.stall_at,
+        stall_for: args.stall_for.map(Duration::from_secs_f64),
+        stall_busy: args.stall_busy,
+    };
+    let (sub, limits) = particles.couple(&scene, &welcome, setup.dt_max);
+    protocol::say!(
+        "dem-client: {}",
+        coupling_line(&particles, sub, setup.contact_time, limits)
+    );
+    match step_loop(
+        &link,
+        &welcome,
+        &mut particles,
+        sub,
+        &interrupted,
+        faults,
+        &mut last,
+    ) {
+        Ok(steps) => {
+            protocol::say!("dem-client: {}", finish_line(&particles, steps));
+            if let Some(line) = particles.world.everyone.summary() {
+                protocol::say!("dem-client: {line}");
+            }
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            protocol::say!("dem-client: error: {}", failure(&e, last));
+            ExitCode::from(1)
+        }
+    }
+}
+
+/// The scene (or the default one) and its DEM set up, with the arguments checked.
+fn load(args: &ConnectArgs) -> Result<(scene::Scene, crate::dem::Setup), String> {
+    let scene = crate::scene_or_default(args.scene.as_ref()).map_err(|e| e.to_string())?;
+    if !(args.timeout.is_finite() && args.timeout > 0.0) {
+        return Err(format!(
+            "--timeout = {} s: must be a finite number > 0",
+            args.timeout
+        ));
+    }
     let file = args
         .scene
         .as_ref()
         .map_or(scene::DEFAULT_SCENE_FILE.to_string(), |p| p.display().to_string());
-    let setup = match crate::dem::setup(&scene, &file) {
-        Ok(s) => s,
-        Err(e) => {
-            protocol::say!("dem-client: error: {e}");
-            return ExitCode::from(2);
-        }
-    };
-    let mut particles = Particles::new(setup.world, &scene);
+    let setup = crate::dem::setup(&scene, &file).map_err(|e| e.to_string())?;
+    Ok((scene, setup))
+}
+
+/// The handshake with the fluid server: Hello (this DEM's physics and spheres), Welcome; both
+/// sides must wrap the same axes.
+fn join(
+    args: &ConnectArgs,
+    scene: &scene::Scene,
+    particles: &Particles,
+) -> Result<(DemLink, Welcome), String> {
     let mut hello = Hello::new(
         Units::SI,
-        physics(&scene),
+        physics(scene),
         particles.world.bodies.len(),
         &format!("dem-client {} (soft-sphere DEM)", env!("CARGO_PKG_VERSION")),
     );
@@ -141,39 +190,27 @@ pub fn main(args: ConnectArgs) -> ExitCode {
         run: args.service.clone(),
         timeout: Duration::from_secs_f64(args.timeout),
     };
-    let (link, welcome) = match DemLink::connect(options, hello) {
-        Ok(ok) => ok,
-        Err(e) => {
-            protocol::say!("dem-client: error: {e}");
-            return ExitCode::from(1);
-        }
-    };
+    let (link, welcome) = DemLink::connect(options, hello).map_err(|e| e.to_string())?;
     if welcome.periodic_axes() != scene.periodic_axes() {
         let names =
             |axes: [bool; 3]| -> Vec<&str> { (0..3).filter(|&a| axes[a]).map(|a| scene::AXES[a]).collect() };
-        protocol::say!(
-            "dem-client: error: the fluid's domain is periodic along {:?} (Welcome.periodic), this scene's along {:?}: \
+        return Err(format!(
+            "the fluid's domain is periodic along {:?} (Welcome.periodic), this scene's along {:?}: \
              both sides must wrap the same axes",
             names(welcome.periodic_axes()),
             names(scene.periodic_axes())
-        );
-        return ExitCode::from(1);
+        ));
     }
-    let mut last = None;
-    let faults = Faults {
-        churn: args.churn,
-        skip_step: args.skip_step,
-        stall_at: args.stall_at,
-        stall_for: args.stall_for.map(Duration::from_secs_f64),
-        stall_busy: args.stall_busy,
-    };
-    let (sub, limits) = particles.couple(&scene, &welcome, setup.dt_max);
-    let dt = particles.world.dt;
-    protocol::say!(
-        "dem-client: DEM step {dt:.3e} s = fluid step / {} (shortest contact time {:.3e} s, step limits: \
+    Ok((link, welcome))
+}
+
+/// The DEM step against the fluid's and what limits it, the walls, free flight and lubrication.
+fn coupling_line(particles: &Particles, sub: Substeps, contact_time: f64, limits: [f64; 3]) -> String {
+    format!(
+        "DEM step {:.3e} s = fluid step / {} (shortest contact time {contact_time:.3e} s, step limits: \
          contacts {:.3e} s, sub-step drag {:.3e} s, squeeze films {:.3e} s){}, {} walls{}",
+        particles.world.dt,
         sub.contact,
-        setup.contact_time,
         limits[0],
         limits[1],
         limits[2],
@@ -187,38 +224,22 @@ pub fn main(args: ConnectArgs) -> ExitCode {
             Some(l) => format!(", lubrication below {:.3e} m", l.cutoff),
             None => String::new(),
         }
-    );
-    match step_loop(
-        &link,
-        &welcome,
-        &mut particles,
-        sub,
-        &interrupted,
-        faults,
-        &mut last,
-    ) {
-        Ok(steps) => {
-            protocol::say!(
-                "dem-client: finished after {steps} steps ({} DEM steps, {} neighbour-list builds, {} steps \
-                 in free flight, {} with an island ({} dropped for a sphere beyond its reach); {:.1}% of the \
-                 sphere-steps flown)",
-                particles.dem_steps,
-                particles.world.builds,
-                particles.free_steps,
-                particles.world.islands,
-                particles.world.dropped_islands,
-                particles.flown_percent()
-            );
-            if let Some(line) = particles.world.everyone.summary() {
-                protocol::say!("dem-client: {line}");
-            }
-            ExitCode::SUCCESS
-        }
-        Err(e) => {
-            protocol::say!("dem-client: error: {}", failure(&e, last));
-            ExitCode::from(1)
-        }
-    }
+    )
+}
+
+/// What the DEM did over the run's `steps` fluid steps.
+fn finish_line(particles: &Particles, steps: u64) -> String {
+    format!(
+        "finished after {steps} steps ({} DEM steps, {} neighbour-list builds, {} steps in free \
+         flight, {} with an island ({} dropped for a sphere beyond its reach); {:.1}% of the \
+         sphere-steps flown)",
+        particles.dem_steps,
+        particles.world.builds,
+        particles.free_steps,
+        particles.world.islands,
+        particles.world.dropped_islands,
+        particles.flown_percent()
+    )
 }
 
 /// What the DEM says when the lockstep fails: the error, for a silent fluid server what to raise,
