@@ -359,54 +359,23 @@ impl Lattice {
         quads: bool,
     ) -> Result<Lattice, String> {
         fits_device(&gpu.limits, setup.n)?;
-        let cells = setup.cells();
-        let bytes = (cells * 4) as u64;
         let d = &gpu.device;
-        let populations: Vec<wgpu::Buffer> = (0..19)
-            .map(|i| storage_buffer(d, &format!("f{i}"), bytes.div_ceil(16) * 16))
-            .collect();
-        let init = |label: &str, contents: &[u8], usage| {
-            d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some(label),
-                contents,
-                usage,
-            })
-        };
-        let flags = init(
-            "flags",
-            bytemuck::cast_slice(&cell_flags(&setup)),
-            wgpu::BufferUsages::STORAGE,
-        );
-        let mrt = init(
-            "mrt",
-            bytemuck::cast_slice(&mrt_matrices(&setup)),
-            wgpu::BufferUsages::UNIFORM,
-        );
-        let fields = storage_buffer(d, "fields", bytes * 4);
-        // [0] first unhealthy cell, [1] dropped covers, [2] covered cells beyond the list's room,
-        // [4] and [8] covered cells (two lists),
-        // [5..8] and [9..12] their workgroups.
-        let status = init(
-            "status",
-            bytemuck::cast_slice(&[u32::MAX, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0]),
-            STORAGE,
-        );
-        let coupling = super::imb::Coupling::new(d, imb, cells);
-        let source = if gpu.list.subgroups {
-            format!("{SHADER}\n{IMB_SHADER}\n{LIST_SUBGROUP}")
-        } else {
-            format!("{SHADER}\n{IMB_SHADER}\n{LIST_ATOMIC}")
-        };
-        let module = d.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("lbm.wgsl + imb.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(super::unroll::unroll(&source).into()),
-        });
+        let buffers = LatticeBuffers::new(d, &setup);
+        let coupling = super::imb::Coupling::new(d, imb, setup.cells());
+        let module = shader_module(&gpu);
         let layout = bind_group_layout(d);
         let pipeline_layout = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("lattice"),
             bind_group_layouts: &[Some(&layout)],
             immediate_size: 0,
         });
+        let LatticeBuffers {
+            populations,
+            flags,
+            mrt,
+            fields,
+            status,
+        } = buffers;
         let mut lattice = Lattice {
             setup,
             gpu,
@@ -432,8 +401,6 @@ impl Lattice {
         };
         let mode = imb.map_or(super::imb::CoveredCells::Redo, |o| o.covered_cells);
         lattice.set_covered_cells(mode)?;
-        // wgpu zero-initialises every buffer: the shifted populations start at rest (f = w, rho = 1)
-        // without an upload (which took a 5 GB host array at 256 x 256 x 512).
         Ok(lattice)
     }
 
@@ -485,7 +452,6 @@ impl Lattice {
     /// The kernels, cell classes, parameters and bind groups of one way.
     fn build_way(&self, mode: super::imb::CoveredCells) -> Way {
         let d = &self.gpu.device;
-        let imb = self.options;
         // Fused, the fluid kernels give the covered cells their solid term one cell at a time,
         // without the four-cell quads (the term would be compiled into them four times); skip's
         // quads leave their covered cells as they are (`skipped_lanes`).
@@ -509,46 +475,8 @@ impl Lattice {
                 })
             })
             .collect();
-        let constants = [
-            ("OPERATOR", self.setup.operator.code() as f64),
-            ("FORCE", f64::from(u8::from(self.setup.force != [0.0; 3]))),
-            ("SLOTS", imb.map_or(2, |o| o.slots) as f64),
-            (
-                "SEED_WEIGHTING",
-                f64::from(u8::from(imb.is_some_and(|o| o.seed_weighting))),
-            ),
-            (
-                "SUPERPOSITION",
-                f64::from(u8::from(imb.is_some_and(|o| {
-                    o.solid_collision == super::imb::SolidCollision::Superposition
-                }))),
-            ),
-            ("FUSED", f64::from(u8::from(mode.fused()))),
-            (
-                "SKIP",
-                f64::from(u8::from(mode == super::imb::CoveredCells::Skip)),
-            ),
-            ("BY_POPULATION", f64::from(u8::from(self.gpu.list.by_population))),
-        ];
-        let pipeline_kind = |entry: &str, kind: u32| {
-            let mut constants = constants.to_vec();
-            constants.push(("KIND", f64::from(kind)));
-            #[cfg(test)]
-            if self.spoil_next_way {
-                constants.push(("NO_SUCH_CONSTANT", 1.0));
-            }
-            d.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(entry),
-                layout: Some(&self.pipeline_layout),
-                module: &self.module,
-                entry_point: Some(entry),
-                compilation_options: wgpu::PipelineCompilationOptions {
-                    constants: &constants,
-                    ..Default::default()
-                },
-                cache: None,
-            })
-        };
+        let constants = self.way_constants(mode);
+        let pipeline_kind = |entry: &str, kind: u32| self.pipeline(entry, &constants, kind);
         let pipeline = |entry: &str| pipeline_kind(entry, 0);
         let bind_groups = [0, 1].map(|parity| self.bind_group(&params[parity], &cell_list));
         Way {
@@ -559,7 +487,8 @@ impl Lattice {
             stream_collide_quads_odd: (classes.interior_quads > 0)
                 .then(|| pipeline("stream_collide_quads_odd")),
             macroscopic: pipeline("macroscopic"),
-            passes: imb
+            passes: self
+                .options
                 .is_some()
                 .then(|| super::imb::Passes::new(mode, &pipeline_kind)),
             classes,
@@ -567,6 +496,48 @@ impl Lattice {
             params,
             bind_groups,
         }
+    }
+
+    /// The shaders' override constants of a way: the operator, the forcing, the coupling's
+    /// settings and `mode`.
+    fn way_constants(&self, mode: super::imb::CoveredCells) -> Vec<(&'static str, f64)> {
+        let imb = self.options;
+        let flag = |on: bool| f64::from(u8::from(on));
+        let superposition =
+            imb.is_some_and(|o| o.solid_collision == super::imb::SolidCollision::Superposition);
+        vec![
+            ("OPERATOR", self.setup.operator.code() as f64),
+            ("FORCE", flag(self.setup.force != [0.0; 3])),
+            ("SLOTS", imb.map_or(2, |o| o.slots) as f64),
+            ("SEED_WEIGHTING", flag(imb.is_some_and(|o| o.seed_weighting))),
+            ("SUPERPOSITION", flag(superposition)),
+            ("FUSED", flag(mode.fused())),
+            ("SKIP", flag(mode == super::imb::CoveredCells::Skip)),
+            ("BY_POPULATION", flag(self.gpu.list.by_population)),
+        ]
+    }
+
+    /// The kernel `entry` of the lattice's module with a way's `constants` and KIND `kind`.
+    fn pipeline(&self, entry: &str, constants: &[(&str, f64)], kind: u32) -> wgpu::ComputePipeline {
+        let mut constants = constants.to_vec();
+        constants.push(("KIND", f64::from(kind)));
+        #[cfg(test)]
+        if self.spoil_next_way {
+            constants.push(("NO_SUCH_CONSTANT", 1.0));
+        }
+        self.gpu
+            .device
+            .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(entry),
+                layout: Some(&self.pipeline_layout),
+                module: &self.module,
+                entry_point: Some(entry),
+                compilation_options: wgpu::PipelineCompilationOptions {
+                    constants: &constants,
+                    ..Default::default()
+                },
+                cache: None,
+            })
     }
 
     /// Dispatches every kernel of `way` once over no cell (zero counts in the parameters, no
@@ -848,6 +819,68 @@ impl Lattice {
             })
             .collect()
     }
+}
+
+/// A lattice's own buffers: the 19 populations, the cell flags, the MRT matrices, the fields
+/// (density and velocity) and the status words.
+struct LatticeBuffers {
+    populations: Vec<wgpu::Buffer>,
+    flags: wgpu::Buffer,
+    mrt: wgpu::Buffer,
+    fields: wgpu::Buffer,
+    status: wgpu::Buffer,
+}
+
+impl LatticeBuffers {
+    fn new(d: &wgpu::Device, setup: &Setup) -> LatticeBuffers {
+        let bytes = (setup.cells() * 4) as u64;
+        let init = |label: &str, contents: &[u8], usage| {
+            d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents,
+                usage,
+            })
+        };
+        // [0] first unhealthy cell, [1] dropped covers, [2] covered cells beyond the list's room,
+        // [4] and [8] covered cells (two lists),
+        // [5..8] and [9..12] their workgroups.
+        let mut status = [0u32; 16];
+        status[0] = u32::MAX;
+        LatticeBuffers {
+            // wgpu zero-initialises every buffer: the shifted populations start at rest (f = w,
+            // rho = 1) without an upload (which took a 5 GB host array at 256 x 256 x 512).
+            populations: (0..19)
+                .map(|i| storage_buffer(d, &format!("f{i}"), bytes.div_ceil(16) * 16))
+                .collect(),
+            flags: init(
+                "flags",
+                bytemuck::cast_slice(&cell_flags(setup)),
+                wgpu::BufferUsages::STORAGE,
+            ),
+            mrt: init(
+                "mrt",
+                bytemuck::cast_slice(&mrt_matrices(setup)),
+                wgpu::BufferUsages::UNIFORM,
+            ),
+            fields: storage_buffer(d, "fields", bytes * 4),
+            status: init("status", bytemuck::cast_slice(&status), STORAGE),
+        }
+    }
+}
+
+/// lbm.wgsl and imb.wgsl with the list's join for this device (subgroups or one atomic per cell),
+/// unrolled and compiled once.
+fn shader_module(gpu: &Gpu) -> wgpu::ShaderModule {
+    let list = if gpu.list.subgroups {
+        LIST_SUBGROUP
+    } else {
+        LIST_ATOMIC
+    };
+    let source = format!("{SHADER}\n{IMB_SHADER}\n{list}");
+    gpu.device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some("lbm.wgsl + imb.wgsl"),
+        source: wgpu::ShaderSource::Wgsl(super::unroll::unroll(&source).into()),
+    })
 }
 
 /// Params (uniform), flags (read-only), MRT matrices (uniform), then fields, status, the 19
