@@ -1009,19 +1009,10 @@ impl<L: LawRef, K: Motion> PairPass<'_, L, K> {
         let PairRow { shifts, films, m } = lists;
         let (a, b) = (&self.motion[s.i as usize], &self.motion[s.j as usize]);
         let d = self.separation(a, b, shifts, films, m);
-        let dist2 = d.norm_squared();
-        let r_sum = r_sum(a, b);
-        if dist2 >= r_sum * r_sum {
+        let Some((n, overlap)) = contact_geometry(d, r_sum(a, b)) else {
             apart(s, history, out);
             return 0;
-        }
-        let dist = dist2.sqrt();
-        let overlap = r_sum - dist;
-        if overlap <= 0.0 {
-            apart(s, history, out);
-            return 0;
-        }
-        let n = if dist > 0.0 { d / dist } else { V3::z() };
+        };
         let c = Contact {
             n,
             overlap,
@@ -1160,50 +1151,20 @@ fn pair_forces_batched<L: LawRef, K: Motion>(
         let s = &mut slots[m];
         let (a, b) = (&motion[s.i as usize], &motion[s.j as usize]);
         let d = pass.separation(a, b, shifts, films, m);
-        let dist2 = d.norm_squared();
-        let r_sum = r_sum(a, b);
-        if dist2 >= r_sum * r_sum {
+        let Some(geometry) = contact_geometry(d, r_sum(a, b)) else {
             apart(s, &mut history[m], &mut outs[m]);
             if K::TOUCH {
                 touch[m] = false;
             }
             continue;
-        }
-        let dist = dist2.sqrt();
-        let overlap = r_sum - dist;
-        if overlap <= 0.0 {
-            apart(s, &mut history[m], &mut outs[m]);
-            if K::TOUCH {
-                touch[m] = false;
-            }
-            continue;
-        }
-        let n = if dist > 0.0 { d / dist } else { V3::z() };
-        let dv = a.v() - b.v();
+        };
         let mat = &pm[s.material as usize];
-        let k = batch.len;
-        batch.slot[k] = m as u32;
-        (batch.nx[k], batch.ny[k], batch.nz[k]) = (n.x, n.y, n.z);
-        batch.overlap[k] = overlap;
-        (batch.r_i[k], batch.r_j[k]) = (a.r(), b.r());
-        (batch.r_eff[k], batch.m_eff[k]) = (r_eff(a, b), m_eff(a, b));
-        (batch.dvx[k], batch.dvy[k], batch.dvz[k]) = (dv.x, dv.y, dv.z);
-        let (wi, wj) = (a.w(), b.w());
-        (batch.wix[k], batch.wiy[k], batch.wiz[k]) = (wi.x, wi.y, wi.z);
-        (batch.wjx[k], batch.wjy[k], batch.wjz[k]) = (wj.x, wj.y, wj.z);
-        let h = history[m];
-        (batch.hx[k], batch.hy[k], batch.hz[k]) = (h.x, h.y, h.z);
-        batch.y_star[k] = mat.y_star;
-        batch.g_star[k] = mat.g_star;
-        batch.damping[k] = mat.damping_factor[damping];
-        batch.shear_to_normal[k] = mat.shear_to_normal_sqrt;
-        batch.friction[k] = mat.friction;
+        queue_contact(batch, m, geometry, [a, b], mat, history[m], damping);
         s.touching = true;
         if K::TOUCH {
             touch[m] = true;
         }
         touching += 1;
-        batch.len += 1;
         if batch.len == LANES {
             flush(batch, history, outs);
         }
@@ -1212,6 +1173,55 @@ fn pair_forces_batched<L: LawRef, K: Motion>(
         flush(batch, history, outs);
     }
     touching
+}
+
+/// The unit normal (from j to i) and the overlap of two spheres whose centres are `d` = x_i - x_j
+/// apart and whose radii sum to `r_sum`; None where they do not touch.
+#[inline(always)]
+fn contact_geometry(d: V3, r_sum: f64) -> Option<(V3, f64)> {
+    let dist2 = d.norm_squared();
+    if dist2 >= r_sum * r_sum {
+        return None;
+    }
+    let dist = dist2.sqrt();
+    let overlap = r_sum - dist;
+    if overlap <= 0.0 {
+        return None;
+    }
+    let n = if dist > 0.0 { d / dist } else { V3::z() };
+    Some((n, overlap))
+}
+
+/// Puts the contact of pair `m` (its normal and overlap, spheres `a` and `b`, pair material
+/// `mat`, tangential history `h`) in the batch's next lane; `damping` the law's damping switch.
+#[inline(always)]
+fn queue_contact<K: Motion>(
+    batch: &mut Batch,
+    m: usize,
+    (n, overlap): (V3, f64),
+    [a, b]: [&K; 2],
+    mat: &PairMaterial,
+    h: V3,
+    damping: usize,
+) {
+    let k = batch.len;
+    batch.slot[k] = m as u32;
+    (batch.nx[k], batch.ny[k], batch.nz[k]) = (n.x, n.y, n.z);
+    batch.overlap[k] = overlap;
+    (batch.r_i[k], batch.r_j[k]) = (a.r(), b.r());
+    (batch.r_eff[k], batch.m_eff[k]) = (r_eff(a, b), m_eff(a, b));
+    let dv = a.v() - b.v();
+    (batch.dvx[k], batch.dvy[k], batch.dvz[k]) = (dv.x, dv.y, dv.z);
+    let (wi, wj) = (a.w(), b.w());
+    (batch.wix[k], batch.wiy[k], batch.wiz[k]) = (wi.x, wi.y, wi.z);
+    (batch.wjx[k], batch.wjy[k], batch.wjz[k]) = (wj.x, wj.y, wj.z);
+    (batch.hx[k], batch.hy[k], batch.hz[k]) = (h.x, h.y, h.z);
+    batch.y_star[k] = mat.y_star;
+    batch.g_star[k] = mat.g_star;
+    batch.damping[k] = mat.damping_factor[damping];
+    batch.shear_to_normal[k] = mat.shear_to_normal_sqrt;
+    batch.friction[k] = mat.friction;
+    batch.len += 1;
 }
 
 /// What the gather pass reads.
