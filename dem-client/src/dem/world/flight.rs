@@ -285,8 +285,18 @@ impl World {
     /// either way. The vectors are refilled, not made anew (a 32^3 bed's island world is some 20
     /// MB, which fresh allocations fault in and then unmap every fluid step), in parallel chunks.
     fn split_off(&self, island: &[u32], spare: &mut Spare) {
-        let apart = self.reach() + 2.0 * ISLAND_REACH * self.skin;
         let Spare { part, slots, local } = spare;
+        self.island_pairs(island, local, slots);
+        self.copy_spheres(island, part);
+        self.copy_settings(part);
+        self.copy_pairs(slots, local, part);
+        part.build_adjacency();
+    }
+
+    /// Into `slots`, the pairs of the island's spheres (`local`: their index in the island, or
+    /// FLYING) with both spheres in the island and within reach of each other.
+    fn island_pairs(&self, island: &[u32], local: &[u32], slots: &mut Vec<u32>) {
+        let apart = self.reach() + 2.0 * ISLAND_REACH * self.skin;
         slots.clear();
         slots.par_extend(
             island
@@ -298,7 +308,11 @@ impl World {
                         && !exceeds(self.slot_gap(s as usize), apart)
                 }),
         );
-        let w = self.walls.len().max(1);
+    }
+
+    /// The island's spheres into `part`: their bodies, where they were at the last build, the
+    /// walls near each and their wall histories.
+    fn copy_spheres(&self, island: &[u32], part: &mut World) {
         part.near_start.clear();
         part.near_start.push(0);
         part.near.clear();
@@ -318,6 +332,18 @@ impl World {
         part.x_at_build.extend(part.bodies.iter().map(|b| b.x));
         part.ids_at_build.clear();
         part.ids_at_build.extend(part.bodies.iter().map(|b| b.id));
+        let w = self.walls.len().max(1);
+        part.wall_history.clear();
+        part.wall_history
+            .par_extend(island.par_iter().with_min_len(CHUNK).flat_map_iter(|&k| {
+                self.wall_history[k as usize * w..(k as usize + 1) * w]
+                    .iter()
+                    .copied()
+            }));
+    }
+
+    /// The world's walls, law and settings into `part`, its neighbour lists fresh.
+    fn copy_settings(&self, part: &mut World) {
         part.walls.clone_from(&self.walls);
         part.law = self.law;
         part.compact_from = self.compact_from;
@@ -327,6 +353,16 @@ impl World {
         part.time = self.time;
         part.lubrication = self.lubrication;
         part.periodic = self.periodic;
+        part.stale = false;
+        part.builds = self.builds;
+        part.build_seconds = 0.0;
+        part.contacts = self.contacts;
+        part.peak_drift2 = 0.0;
+    }
+
+    /// The island's pairs `slots` into `part`, their spheres renumbered by `local`, with their
+    /// films, histories, periodic shifts and last forces.
+    fn copy_pairs(&self, slots: &[u32], local: &[u32], part: &mut World) {
         let pairs = || slots.par_iter().with_min_len(PAIR_CHUNK).map(|&s| s as usize);
         part.films.clear();
         if !self.films.is_empty() {
@@ -350,19 +386,6 @@ impl World {
         }
         part.out.clear();
         part.out.par_extend(pairs().map(|s| self.out[s]));
-        part.wall_history.clear();
-        part.wall_history
-            .par_extend(island.par_iter().with_min_len(CHUNK).flat_map_iter(|&k| {
-                self.wall_history[k as usize * w..(k as usize + 1) * w]
-                    .iter()
-                    .copied()
-            }));
-        part.stale = false;
-        part.builds = self.builds;
-        part.build_seconds = 0.0;
-        part.contacts = self.contacts;
-        part.peak_drift2 = 0.0;
-        part.build_adjacency();
     }
 
     /// Takes the island's spheres, pair and wall histories back, and flies every other sphere
