@@ -444,79 +444,10 @@ impl Dem {
 
     fn validate_materials(&self, file: &str) -> Result<(), SceneError> {
         for (i, m) in self.material.iter().enumerate() {
-            let field = |f: &str| format!("dem.material[{i}].{f}");
-            if m.name.is_empty() || self.material[..i].iter().any(|o| o.name == m.name) {
-                return Err(fail(
-                    file,
-                    field("name"),
-                    format!("{:?}", m.name),
-                    "must be non-empty and unique",
-                ));
-            }
-            positive(file, &field("young_modulus"), m.young_modulus, "Pa")?;
-            if !(0.0..0.5).contains(&m.poisson_ratio) {
-                return Err(fail(
-                    file,
-                    field("poisson_ratio"),
-                    m.poisson_ratio,
-                    "must lie in [0, 0.5)",
-                ));
-            }
-            if !(m.restitution > 0.0 && m.restitution <= 1.0) {
-                return Err(fail(
-                    file,
-                    field("restitution"),
-                    m.restitution,
-                    "must lie in (0, 1]",
-                ));
-            }
-            for (name, v) in [("friction", m.friction), ("rolling_friction", m.rolling_friction)] {
-                if !(v.is_finite() && v >= 0.0) {
-                    return Err(fail(file, field(name), v, "must be a finite number >= 0"));
-                }
-            }
-            if let Some(rho) = m.density {
-                positive(file, &field("density"), rho, "kg/m^3")?;
-            }
+            self.validate_material(file, i, m)?;
         }
-        let names: Vec<(String, Option<&String>)> = [
-            (
-                "dem.particle_material".to_string(),
-                self.particle_material.as_ref(),
-            ),
-            (
-                "dem.domain_wall_material".to_string(),
-                self.domain_wall_material.as_ref(),
-            ),
-        ]
-        .into_iter()
-        .chain(
-            self.plane
-                .iter()
-                .enumerate()
-                .map(|(i, p)| (format!("dem.plane[{i}].material"), p.material.as_ref())),
-        )
-        .chain(
-            self.boxes
-                .iter()
-                .enumerate()
-                .map(|(i, b)| (format!("dem.box[{i}].material"), b.material.as_ref())),
-        )
-        .chain(
-            self.insert
-                .iter()
-                .enumerate()
-                .map(|(i, b)| (format!("dem.insert[{i}].material"), b.material.as_ref())),
-        )
-        .chain(
-            self.csv
-                .iter()
-                .enumerate()
-                .map(|(i, b)| (format!("dem.csv[{i}].material"), b.material.as_ref())),
-        )
-        .collect();
         let known: Vec<String> = self.materials().into_iter().map(|m| m.name).collect();
-        for (field, name) in names {
+        for (field, name) in self.material_references() {
             if let Some(name) = name.filter(|n| !known.contains(n)) {
                 return Err(fail(
                     file,
@@ -527,6 +458,72 @@ impl Dem {
             }
         }
         Ok(())
+    }
+
+    /// Material `m`, the scene's `i`-th: a unique name, its moduli, restitution, frictions and
+    /// density in range.
+    fn validate_material(&self, file: &str, i: usize, m: &Material) -> Result<(), SceneError> {
+        let field = |f: &str| format!("dem.material[{i}].{f}");
+        if m.name.is_empty() || self.material[..i].iter().any(|o| o.name == m.name) {
+            return Err(fail(
+                file,
+                field("name"),
+                format!("{:?}", m.name),
+                "must be non-empty and unique",
+            ));
+        }
+        positive(file, &field("young_modulus"), m.young_modulus, "Pa")?;
+        if !(0.0..0.5).contains(&m.poisson_ratio) {
+            return Err(fail(
+                file,
+                field("poisson_ratio"),
+                m.poisson_ratio,
+                "must lie in [0, 0.5)",
+            ));
+        }
+        if !(m.restitution > 0.0 && m.restitution <= 1.0) {
+            return Err(fail(
+                file,
+                field("restitution"),
+                m.restitution,
+                "must lie in (0, 1]",
+            ));
+        }
+        for (name, v) in [("friction", m.friction), ("rolling_friction", m.rolling_friction)] {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(fail(file, field(name), v, "must be a finite number >= 0"));
+            }
+        }
+        if let Some(rho) = m.density {
+            positive(file, &field("density"), rho, "kg/m^3")?;
+        }
+        Ok(())
+    }
+
+    /// Every field that names a material, with the name it gives (None: the default).
+    fn material_references(&self) -> Vec<(String, Option<&String>)> {
+        let mut names = vec![
+            (
+                "dem.particle_material".to_string(),
+                self.particle_material.as_ref(),
+            ),
+            (
+                "dem.domain_wall_material".to_string(),
+                self.domain_wall_material.as_ref(),
+            ),
+        ];
+        let listed: [(&str, Vec<&Option<String>>); 4] = [
+            ("plane", self.plane.iter().map(|p| &p.material).collect()),
+            ("box", self.boxes.iter().map(|b| &b.material).collect()),
+            ("insert", self.insert.iter().map(|b| &b.material).collect()),
+            ("csv", self.csv.iter().map(|b| &b.material).collect()),
+        ];
+        for (kind, materials) in listed {
+            for (i, m) in materials.into_iter().enumerate() {
+                names.push((format!("dem.{kind}[{i}].material"), m.as_ref()));
+            }
+        }
+        names
     }
 
     fn validate_contact(&self, file: &str) -> Result<(), SceneError> {
@@ -916,6 +913,46 @@ density = 2500.0
         assert!(e.contains("dem.contact.normal"), "{e}");
         let e = parse("[dem]\nparticle_material = \"steel\"\n").unwrap_err();
         assert!(e.contains("no such material"), "{e}");
+    }
+
+    #[test]
+    fn every_field_that_names_a_material_is_checked_against_the_materials() {
+        let materials = "[[particles.sphere]]\nposition = [0.05, 0.05, 0.05]\nradius = 0.001\n\
+                         [[dem.material]]\nname = \"sand\"\n[[dem.material]]\nname = \"smooth\"\nfriction = 0.0\n";
+        let plane = |m: &str| {
+            format!("[[dem.plane]]\npoint = [0.0, 0.0, 0.0]\nnormal = [0.0, 0.0, 1.0]\nmaterial = \"{m}\"\n")
+        };
+        let ok = parse(&format!("{materials}{}", plane("smooth")));
+        assert!(ok.is_ok(), "{ok:?}");
+        let e = parse(&format!("{materials}{}{}", plane("smooth"), plane("smoth"))).unwrap_err();
+        assert_eq!(
+            e,
+            "s.toml: dem.plane[1].material = \"smoth\": no such material (known: sand, smooth)"
+        );
+        let boxed = "[[dem.box]]\nmin = [0.0, 0.0, 0.0]\nmax = [0.1, 0.1, 0.1]\nmaterial = \"x\"\n";
+        let e = parse(&format!("{materials}{boxed}")).unwrap_err();
+        assert!(
+            e.starts_with("s.toml: dem.box[0].material = \"x\": no such material"),
+            "{e}"
+        );
+        let e = parse(&format!("{materials}[dem]\ndomain_wall_material = \"glass\"\n")).unwrap_err();
+        assert!(
+            e.starts_with("s.toml: dem.domain_wall_material = \"glass\":"),
+            "{e}"
+        );
+        let e = parse("[[dem.material]]\nname = \"sand\"\n[[dem.material]]\nname = \"sand\"\n").unwrap_err();
+        assert_eq!(
+            e,
+            "s.toml: dem.material[1].name = \"sand\": must be non-empty and unique"
+        );
+        let e = parse(&format!(
+            "{materials}[[dem.material]]\nname = \"r\"\nrolling_friction = -0.1\n"
+        ))
+        .unwrap_err();
+        assert!(
+            e.starts_with("s.toml: dem.material[2].rolling_friction = -0.1:"),
+            "{e}"
+        );
     }
 
     #[test]

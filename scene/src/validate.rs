@@ -62,6 +62,8 @@ impl Scene {
         let c = Checker { file };
         self.validate_header(&c)?;
         self.validate_fluid_and_time(&c)?;
+        self.validate_output_lines(&c)?;
+        self.validate_coupling(&c)?;
         self.validate_particles(&c)
     }
 
@@ -151,6 +153,11 @@ impl Scene {
         if self.output.interval == 0 {
             return Err(c.fail("output.interval", 0, "must be at least 1 step"));
         }
+        Ok(())
+    }
+
+    /// Each `output.line`: an axis, through a point within the domain.
+    fn validate_output_lines(&self, c: &Checker) -> Result<(), SceneError> {
         for (i, line) in self.output.line.iter().enumerate() {
             if !["x", "y", "z"].contains(&line.axis.as_str()) {
                 let field = format!("output.line[{i}].axis");
@@ -171,6 +178,12 @@ impl Scene {
                 ));
             }
         }
+        Ok(())
+    }
+
+    /// The `[coupling]` settings: timeout, slots, weighting, solid collision, radius correction
+    /// (with what it was measured with) and covered cells.
+    fn validate_coupling(&self, c: &Checker) -> Result<(), SceneError> {
         c.positive("coupling.timeout", self.coupling.timeout, "s")?;
         if !(1..=4).contains(&self.coupling.slots) {
             return Err(c.fail(
