@@ -225,6 +225,57 @@ fn fail(file: &str, field: &str, value: impl ToString, problem: impl Into<String
     }
 }
 
+/// The time step [s] and tau of the lattice of cell size `dx`: from `lattice.tau` where given,
+/// else from the Mach number of `lattice.velocity_scale`; refused where tau lies too near 1/2.
+fn time_step(scene: &Scene, lattice: &Lattice, dx: f64, file: &str) -> Result<(f64, f64), SceneError> {
+    let nu_si = scene.fluid.dynamic_viscosity / scene.fluid.density;
+    positive(file, "lattice.velocity_scale", lattice.velocity_scale, "m/s")?;
+    let dt = match lattice.tau {
+        Some(tau) => (tau - 0.5) * dx * dx / (3.0 * nu_si),
+        None => {
+            positive(file, "lattice.mach", lattice.mach, "")?;
+            lattice.mach / 3f64.sqrt() * dx / lattice.velocity_scale
+        }
+    };
+    let tau = 0.5 + 3.0 * nu_si * dt / (dx * dx);
+    let field = if lattice.tau.is_some() {
+        "lattice.tau"
+    } else {
+        "lattice (derived tau)"
+    };
+    if tau.is_nan() || tau - 0.5 < TAU_MARGIN {
+        let remedy = if lattice.tau.is_some() {
+            "raise lattice.tau"
+        } else {
+            "refine dx or raise lattice.mach (tau - 1/2 grows as mach / dx)"
+        };
+        return Err(fail(
+            file,
+            field,
+            format!("{tau:.5}"),
+            format!("is below 0.5 + {TAU_MARGIN}: unstable; {remedy}"),
+        ));
+    }
+    Ok((dt, tau))
+}
+
+/// The lattice Mach number of `lattice.velocity_scale`, refused above operator `op`'s limit.
+fn lattice_mach(lattice: &Lattice, op: &str, dx: f64, dt: f64, file: &str) -> Result<f64, SceneError> {
+    let mach = lattice.velocity_scale * dt / dx * 3f64.sqrt();
+    if mach > mach_limit(op) {
+        return Err(fail(
+            file,
+            "lattice.velocity_scale",
+            format!("{} m/s", lattice.velocity_scale),
+            format!(
+                "gives lattice Mach {mach:.3}, above {} for {op}: lower tau or coarsen dx",
+                mach_limit(op)
+            ),
+        ));
+    }
+    Ok(mach)
+}
+
 /// TRT's magic parameter at `tau`: `lattice.magic`, or less where `lattice.max_tau_minus` bounds
 /// tau- = 1/2 + magic / (tau - 1/2).
 fn trt_magic(lattice: &Lattice, tau: f64, file: &str) -> Result<f64, SceneError> {
@@ -272,46 +323,8 @@ impl LatticeUnits {
                 "expected \"bgk\", \"trt\" or \"mrt\"",
             ));
         }
-        let nu_si = scene.fluid.dynamic_viscosity / scene.fluid.density;
-        positive(file, "lattice.velocity_scale", lattice.velocity_scale, "m/s")?;
-        let dt = match lattice.tau {
-            Some(tau) => (tau - 0.5) * dx * dx / (3.0 * nu_si),
-            None => {
-                positive(file, "lattice.mach", lattice.mach, "")?;
-                lattice.mach / 3f64.sqrt() * dx / lattice.velocity_scale
-            }
-        };
-        let tau = 0.5 + 3.0 * nu_si * dt / (dx * dx);
-        let field = if lattice.tau.is_some() {
-            "lattice.tau"
-        } else {
-            "lattice (derived tau)"
-        };
-        if tau.is_nan() || tau - 0.5 < TAU_MARGIN {
-            let remedy = if lattice.tau.is_some() {
-                "raise lattice.tau"
-            } else {
-                "refine dx or raise lattice.mach (tau - 1/2 grows as mach / dx)"
-            };
-            return Err(fail(
-                file,
-                field,
-                format!("{tau:.5}"),
-                format!("is below 0.5 + {TAU_MARGIN}: unstable; {remedy}"),
-            ));
-        }
-        let mach = lattice.velocity_scale * dt / dx * 3f64.sqrt();
-        if mach > mach_limit(op) {
-            return Err(fail(
-                file,
-                "lattice.velocity_scale",
-                format!("{} m/s", lattice.velocity_scale),
-                format!(
-                    "gives lattice Mach {mach:.3}, above {} for {op}: lower tau or coarsen dx",
-                    mach_limit(op)
-                ),
-            ));
-        }
+        let (dt, tau) = time_step(scene, lattice, dx, file)?;
+        let mach = lattice_mach(lattice, op, dx, dt, file)?;
         let faces = lattice_faces(scene, lattice, dx, dt, file)?;
         let solid = solid_cells(scene, lattice, n, dx, file)?;
         if lattice.check_interval == 0 {
