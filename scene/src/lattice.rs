@@ -425,45 +425,68 @@ fn lattice_faces(
     dt: f64,
     file: &str,
 ) -> Result<[LatticeFace; 6], SceneError> {
-    let to_lattice = |u: [f64; 3]| u.map(|v| v * dt / dx);
     let mut out = [LatticeFace::Wall; 6];
     for (k, (name, spec)) in lattice.faces.all().into_iter().enumerate() {
-        let field = format!("lattice.faces.{name}");
-        out[k] = match spec {
-            FaceSpec::Name(s) if s == "periodic" => LatticeFace::Periodic,
-            FaceSpec::Name(s) if s == "wall" => LatticeFace::Wall,
-            FaceSpec::Table(t) => match (t.kind.as_str(), t.velocity, t.pressure) {
-                ("moving_wall", Some(u), None) => LatticeFace::MovingWall(to_lattice(u)),
-                ("velocity_inlet", Some(u), None) => LatticeFace::VelocityInlet(to_lattice(u)),
-                ("pressure_outlet", None, Some(p)) => {
-                    // rho_lattice = 1 + p / (rho c_s^2), c_s^2 = dx^2 / (3 dt^2)
-                    LatticeFace::PressureOutlet(1.0 + 3.0 * p * dt * dt / (scene.fluid.density * dx * dx))
-                }
-                (kind, ..) => {
-                    return Err(fail(
-                        file,
-                        &field,
-                        format!("{t:?}"),
-                        format!(
-                            "type {kind:?} needs: moving_wall or velocity_inlet with velocity, \
-                             pressure_outlet with pressure"
-                        ),
-                    ))
-                }
-            },
-            FaceSpec::Name(s) => {
+        out[k] = lattice_face(scene, spec, [dx, dt], &format!("lattice.faces.{name}"), file)?;
+    }
+    check_face_speeds(lattice, &out, [dx, dt], file)?;
+    check_periodic_pairs(&out, file)?;
+    Ok(out)
+}
+
+/// The face that `spec` (the scene's field `field`) describes, in lattice units of cell size and
+/// time step `[dx, dt]`.
+fn lattice_face(
+    scene: &Scene,
+    spec: &FaceSpec,
+    [dx, dt]: [f64; 2],
+    field: &str,
+    file: &str,
+) -> Result<LatticeFace, SceneError> {
+    let to_lattice = |u: [f64; 3]| u.map(|v| v * dt / dx);
+    Ok(match spec {
+        FaceSpec::Name(s) if s == "periodic" => LatticeFace::Periodic,
+        FaceSpec::Name(s) if s == "wall" => LatticeFace::Wall,
+        FaceSpec::Table(t) => match (t.kind.as_str(), t.velocity, t.pressure) {
+            ("moving_wall", Some(u), None) => LatticeFace::MovingWall(to_lattice(u)),
+            ("velocity_inlet", Some(u), None) => LatticeFace::VelocityInlet(to_lattice(u)),
+            ("pressure_outlet", None, Some(p)) => {
+                // rho_lattice = 1 + p / (rho c_s^2), c_s^2 = dx^2 / (3 dt^2)
+                LatticeFace::PressureOutlet(1.0 + 3.0 * p * dt * dt / (scene.fluid.density * dx * dx))
+            }
+            (kind, ..) => {
                 return Err(fail(
                     file,
-                    &field,
-                    format!("{s:?}"),
-                    "expected \"periodic\", \"wall\" or a table",
+                    field,
+                    format!("{t:?}"),
+                    format!(
+                        "type {kind:?} needs: moving_wall or velocity_inlet with velocity, \
+                         pressure_outlet with pressure"
+                    ),
                 ))
             }
-        };
-    }
+        },
+        FaceSpec::Name(s) => {
+            return Err(fail(
+                file,
+                field,
+                format!("{s:?}"),
+                "expected \"periodic\", \"wall\" or a table",
+            ))
+        }
+    })
+}
+
+/// Refuses a moving wall or inlet faster than the operator's lattice Mach limit.
+fn check_face_speeds(
+    lattice: &Lattice,
+    faces: &[LatticeFace; 6],
+    [dx, dt]: [f64; 2],
+    file: &str,
+) -> Result<(), SceneError> {
     let limit = mach_limit(&lattice.operator);
     for (k, (name, _)) in lattice.faces.all().into_iter().enumerate() {
-        if let LatticeFace::MovingWall(u) | LatticeFace::VelocityInlet(u) = out[k] {
+        if let LatticeFace::MovingWall(u) | LatticeFace::VelocityInlet(u) = faces[k] {
             let mach = u.iter().map(|v| v * v).sum::<f64>().sqrt() * 3f64.sqrt();
             if mach > limit {
                 let si = u.map(|v| v * dx / dt);
@@ -479,10 +502,15 @@ fn lattice_faces(
             }
         }
     }
+    Ok(())
+}
+
+/// Refuses an axis with one periodic face: periodic faces come in pairs.
+fn check_periodic_pairs(faces: &[LatticeFace; 6], file: &str) -> Result<(), SceneError> {
     for (a, axis) in ["x", "y", "z"].iter().enumerate() {
         let (lo, hi) = (
-            out[2 * a] == LatticeFace::Periodic,
-            out[2 * a + 1] == LatticeFace::Periodic,
+            faces[2 * a] == LatticeFace::Periodic,
+            faces[2 * a + 1] == LatticeFace::Periodic,
         );
         if lo != hi {
             return Err(fail(
@@ -493,7 +521,7 @@ fn lattice_faces(
             ));
         }
     }
-    Ok(out)
+    Ok(())
 }
 
 fn solid_cells(
