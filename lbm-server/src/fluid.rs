@@ -149,31 +149,8 @@ enum Stop {
 /// Runs a fluid-only scene; returns the exit code.
 pub fn run(scene: &Scene, scene_file: &str, steps: u64, out: &Path, interrupted: Arc<AtomicBool>) -> u8 {
     let units = scene.lattice_units.as_ref().expect("fluid scenes have a lattice");
-    let gpu = match Gpu::new() {
-        Ok(g) => Arc::new(g),
-        Err(e) => {
-            protocol::say!("lbm-server: error: {e}");
-            return 1;
-        }
-    };
-    protocol::say!(
-        "lbm-server: scene '{}': {}x{}x{} cells, dx {:e} m, dt {:e} s, tau {:.4}, Mach {:.3}, {} on {}",
-        scene.name,
-        units.n[0],
-        units.n[1],
-        units.n[2],
-        units.dx,
-        units.dt,
-        units.tau,
-        units.mach,
-        units.operator,
-        gpu.adapter.name
-    );
-    if let Some(warning) = stability_warning(units, false) {
-        protocol::say!("lbm-server: warning: {warning}");
-    }
-    let mut lattice = match Lattice::new(gpu.clone(), setup_of(units), health_of(units), None) {
-        Ok(l) => l,
+    let (gpu, mut lattice) = match start_lattice(scene, units) {
+        Ok(started) => started,
         Err(e) => {
             protocol::say!("lbm-server: error: {e}");
             return 1;
@@ -206,10 +183,7 @@ pub fn run(scene: &Scene, scene_file: &str, steps: u64, out: &Path, interrupted:
         exit_reason: reason,
         exit_code: code,
     };
-    let text = serde_json::to_string_pretty(&summary).unwrap_or_default();
-    if let Err(e) = std::fs::write(out.join("summary.json"), text + "\n") {
-        protocol::say!("lbm-server: error: summary.json: {e}");
-    }
+    write_summary(&summary, out);
     if code == 0 {
         protocol::say!(
             "lbm-server: {} steps in {wall:.2} s ({:.2} MLUPS); output in {}",
@@ -219,6 +193,38 @@ pub fn run(scene: &Scene, scene_file: &str, steps: u64, out: &Path, interrupted:
         );
     }
     code
+}
+
+/// The device and the scene's lattice on it, the run's first line said (and a warning where its
+/// tau is near 1/2).
+fn start_lattice(scene: &Scene, units: &LatticeUnits) -> Result<(Arc<Gpu>, Lattice), String> {
+    let gpu = Arc::new(Gpu::new()?);
+    protocol::say!(
+        "lbm-server: scene '{}': {}x{}x{} cells, dx {:e} m, dt {:e} s, tau {:.4}, Mach {:.3}, {} on {}",
+        scene.name,
+        units.n[0],
+        units.n[1],
+        units.n[2],
+        units.dx,
+        units.dt,
+        units.tau,
+        units.mach,
+        units.operator,
+        gpu.adapter.name
+    );
+    if let Some(warning) = stability_warning(units, false) {
+        protocol::say!("lbm-server: warning: {warning}");
+    }
+    let lattice = Lattice::new(gpu.clone(), setup_of(units), health_of(units), None)?;
+    Ok((gpu, lattice))
+}
+
+/// summary.json in `out` (an error said, not fatal: the run's other outputs are written).
+fn write_summary(summary: &FluidSummary, out: &Path) {
+    let text = serde_json::to_string_pretty(summary).unwrap_or_default();
+    if let Err(e) = std::fs::write(out.join("summary.json"), text + "\n") {
+        protocol::say!("lbm-server: error: summary.json: {e}");
+    }
 }
 
 /// The outputs of one fluid run.
