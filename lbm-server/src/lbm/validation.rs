@@ -916,20 +916,7 @@ pub fn array_at_weight(
     u_start: f64,
     max_steps: u64,
 ) -> WeightedArray {
-    let n = array.cells;
-    let tau = 0.5 + 3.0 * nu;
-    let mut setup = Setup::new([n, n, n], [Face::Periodic; 6], tau, operator);
-    if boundary == Spheres::Staircase {
-        setup.solid = array.staircase();
-    }
-    // The force acts on the fluid cells (solid cells are not updated): f times their count is
-    // the weight of every sphere.
-    let fluid = setup.solid.iter().filter(|&&s| !s).count();
-    setup.force = [
-        weight * nu * nu * array.centres.len() as f64 / fluid as f64,
-        0.0,
-        0.0,
-    ];
+    let setup = weighted_array_setup(array, [nu, weight], operator, boundary);
     let mut lattice = match boundary {
         Spheres::Immersed => coupled_lattice(gpu, &setup, Default::default()),
         Spheres::Staircase => {
@@ -964,15 +951,8 @@ pub fn array_at_weight(
             unhealthy = bad;
             break;
         }
-        let flux = array
-            .planes
-            .iter()
-            .map(|&x| plane_flux(&fields, n, x))
-            .sum::<f64>();
-        history.push(flux / array.planes.len() as f64 * array.diameter / nu);
-        let last = &history[history.len().saturating_sub(WEIGHT_SAMPLES)..];
-        let (low, high) = range(last);
-        if last.len() == WEIGHT_SAMPLES && high - low < 1e-3 * high.abs() {
+        history.push(array_reynolds(array, &fields, nu));
+        if steady(&history) {
             break;
         }
     }
@@ -980,13 +960,56 @@ pub fn array_at_weight(
     let mean = last.iter().sum::<f64>() / last.len().max(1) as f64;
     let (low, high) = range(last);
     WeightedArray {
-        cells: n,
+        cells: array.cells,
         diameter: array.diameter,
-        tau,
+        tau: setup.tau,
         steps,
         reynolds: [mean, low, high],
         unhealthy,
     }
+}
+
+/// The periodic box of `array` with viscosity `nu` and the body force that carries `weight`
+/// (in nu^2, per sphere) on the fluid cells: the spheres' solid cells with `Spheres::Staircase`.
+fn weighted_array_setup(
+    array: &Array,
+    [nu, weight]: [f64; 2],
+    operator: Operator,
+    boundary: Spheres,
+) -> Setup {
+    let n = array.cells;
+    let tau = 0.5 + 3.0 * nu;
+    let mut setup = Setup::new([n, n, n], [Face::Periodic; 6], tau, operator);
+    if boundary == Spheres::Staircase {
+        setup.solid = array.staircase();
+    }
+    // The force acts on the fluid cells (solid cells are not updated): f times their count is
+    // the weight of every sphere.
+    let fluid = setup.solid.iter().filter(|&&s| !s).count();
+    setup.force = [
+        weight * nu * nu * array.centres.len() as f64 / fluid as f64,
+        0.0,
+        0.0,
+    ];
+    setup
+}
+
+/// The superficial Reynolds number of `array`'s flow: the mean flux through its planes times the
+/// diameter over `nu`.
+fn array_reynolds(array: &Array, fields: &[[f32; 4]], nu: f64) -> f64 {
+    let flux = array
+        .planes
+        .iter()
+        .map(|&x| plane_flux(fields, array.cells, x))
+        .sum::<f64>();
+    flux / array.planes.len() as f64 * array.diameter / nu
+}
+
+/// Whether the last `WEIGHT_SAMPLES` Reynolds numbers of `history` agree within 0.1%.
+fn steady(history: &[f64]) -> bool {
+    let last = &history[history.len().saturating_sub(WEIGHT_SAMPLES)..];
+    let (low, high) = range(last);
+    last.len() == WEIGHT_SAMPLES && high - low < 1e-3 * high.abs()
 }
 
 /// The lowest and highest of `values`.
