@@ -9,6 +9,7 @@
 //! that the lattice does not carry either; the particles feel its share rho_f V a, added here too
 //! (without it a fixed bed's drag is short by that share: the Zick-Homsy check in docs/imb.md).
 
+use crate::fields::FieldOutput;
 use crate::fluid::{health_of, setup_of, stability_warning};
 use crate::lbm::gpu::{Gpu, Lattice};
 use crate::lbm::imb::{covered_fraction, CoveredCells, ImbOptions, Particles, SolidCollision, SolidParticle};
@@ -17,6 +18,7 @@ use crate::trials::{WayTrials, AUTO_MIN_SECONDS};
 use protocol::{ParticleReply, ParticleState, Physics};
 use scene::lattice::{LatticeFace, LatticeUnits};
 use scene::Scene;
+use std::path::Path;
 use std::sync::Arc;
 
 /// What computes the particles' hydrodynamic loads: the lattice with its units, the buoyancy it
@@ -37,6 +39,14 @@ pub struct FluidSide {
     trials: Option<WayTrials>,
     /// When the fluid side was made: the trials' clock.
     made: std::time::Instant,
+    /// The run's field outputs, where the scene asks for any (`output.fields_interval` above 0,
+    /// `output.line`).
+    fields: Option<FieldOutput>,
+    /// `output.fields_interval` and `output.interval` (the probe lines'), in steps.
+    fields_every: u64,
+    lines_every: u64,
+    /// Steps of the run (its last gets a snapshot and the lines).
+    run_steps: u64,
 }
 
 /// The immersed boundary's drag error against tau, measured (validation/lbm/REPORT.md, "drag
@@ -277,8 +287,8 @@ fn way_trials(scene: &Scene, gpu: &Gpu) -> Option<f64> {
 }
 
 impl FluidSide {
-    /// The fluid a scene asks for, for a run of `steps` steps.
-    pub fn for_scene(scene: &Scene, steps: u64) -> Result<FluidSide, String> {
+    /// The fluid a scene asks for, for a run of `steps` steps writing its field outputs into `out`.
+    pub fn for_scene(scene: &Scene, steps: u64, out: &Path) -> Result<FluidSide, String> {
         let Some(units) = scene.lattice_units.clone() else {
             return Err(format!(
                 "scene '{}' has particles but no [lattice]: the fluid needs one",
@@ -318,6 +328,11 @@ impl FluidSide {
         for warning in warnings.into_iter().flatten() {
             protocol::say!("lbm-server: warning: {warning}");
         }
+        let wants_fields = scene.output.fields_interval > 0 || !scene.output.line.is_empty();
+        let fields = match wants_fields {
+            true => Some(FieldOutput::new(scene, &units, out)?),
+            false => None,
+        };
         Ok(FluidSide {
             lattice,
             units,
@@ -329,6 +344,10 @@ impl FluidSide {
             steps: 0,
             trials,
             made: std::time::Instant::now(),
+            fields,
+            fields_every: scene.output.fields_interval,
+            lines_every: scene.output.interval,
+            run_steps: steps,
         })
     }
 
@@ -429,6 +448,36 @@ impl FluidSide {
         self.steps += 1;
         if self.steps.is_multiple_of(self.units.check_interval) {
             self.check()?;
+        }
+        self.write_fields()
+    }
+
+    /// The field outputs due after this step: a snapshot every `output.fields_interval` steps
+    /// (where it is above 0) and after the run's last step, the probe lines every
+    /// `output.interval` steps and after the last (fields/, fields.pvd, line<N>.csv).
+    fn write_fields(&mut self) -> Result<(), String> {
+        let Some(out) = &mut self.fields else {
+            return Ok(());
+        };
+        let (step, last) = (self.steps, self.steps == self.run_steps);
+        let due = |every: u64| every > 0 && (step.is_multiple_of(every) || last);
+        let (snapshot, lines) = (due(self.fields_every), out.has_lines() && due(self.lines_every));
+        if !(snapshot || lines) {
+            return Ok(());
+        }
+        let (fields, bad) = self.lattice.fields();
+        if let Some(bad) = bad {
+            let what = bad.describe(&health_of(&self.units));
+            return Err(format!("the fluid became unstable by step {step}: {what}"));
+        }
+        if lines {
+            out.write_lines(step, &fields)?;
+        }
+        if snapshot {
+            out.write_snapshot(step, &fields)?;
+        }
+        if last {
+            out.flush()?;
         }
         Ok(())
     }

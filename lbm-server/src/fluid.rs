@@ -1,15 +1,14 @@
 //! A fluid-only scene (a `[lattice]` and no particles): the GPU lattice alone, with health checks,
 //! VTK snapshots, probe lines and a summary.
 
+use crate::fields::FieldOutput;
 use crate::lbm::geometry::{tau_minus, Face, Operator, Setup};
 use crate::lbm::gpu::{Gpu, Health, Lattice, Unhealthy};
 use crate::lbm::mrt::Rates;
 use crate::output::{LatticeSummary, Progress};
-use crate::vtk::{write_vti, Grid, Series};
 use scene::lattice::{mach_limit, LatticeFace, LatticeUnits};
 use scene::Scene;
 use serde::Serialize;
-use std::io::Write;
 use std::path::Path;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
@@ -231,36 +230,17 @@ fn write_summary(summary: &FluidSummary, out: &Path) {
 struct FluidRun<'a> {
     scene: &'a Scene,
     units: &'a LatticeUnits,
-    out: &'a Path,
-    grid: Grid,
-    series: Series,
-    lines: Vec<std::io::BufWriter<std::fs::File>>,
+    fields: FieldOutput,
     /// The step of the last check that passed (its fields kept on the device).
     last_good: Option<u64>,
 }
 
 impl<'a> FluidRun<'a> {
     fn new(scene: &'a Scene, units: &'a LatticeUnits, out: &'a Path) -> Result<Self, Stop> {
-        let io = |e: std::io::Error| Stop::Failed(format!("{}: {e}", out.display()));
-        std::fs::create_dir_all(out.join("fields")).map_err(io)?;
-        let mut lines = Vec::new();
-        for i in 0..scene.output.line.len() {
-            let mut w =
-                std::io::BufWriter::new(std::fs::File::create(out.join(format!("line{i}.csv"))).map_err(io)?);
-            writeln!(w, "step,time,s,density,ux,uy,uz").map_err(io)?;
-            lines.push(w);
-        }
         Ok(Self {
             scene,
             units,
-            out,
-            grid: Grid {
-                n: units.n,
-                origin: scene.domain.min,
-                dx: units.dx,
-            },
-            series: Series::new(out.join("fields.pvd")),
-            lines,
+            fields: FieldOutput::new(scene, units, out).map_err(Stop::Failed)?,
             last_good: None,
         })
     }
@@ -291,10 +271,10 @@ impl<'a> FluidRun<'a> {
                     return Err(self.blow_up(lattice, next, check, bad));
                 }
                 if lines {
-                    self.write_lines(next, &fields)?;
+                    self.fields.write_lines(next, &fields).map_err(Stop::Failed)?;
                 }
                 if snapshot {
-                    self.write_snapshot(next, &fields)?;
+                    self.fields.write_snapshot(next, &fields).map_err(Stop::Failed)?;
                 }
             } else if let Some(bad) = lattice.health() {
                 return Err(self.blow_up(lattice, next, check, bad));
@@ -303,70 +283,12 @@ impl<'a> FluidRun<'a> {
             self.last_good = Some(next);
             progress.update(next);
             if interrupted.load(Ordering::SeqCst) {
-                self.flush()?;
+                self.fields.flush().map_err(Stop::Failed)?;
                 return Err(Stop::Interrupted);
             }
         }
         progress.finish();
-        self.flush()
-    }
-
-    fn flush(&mut self) -> Result<(), Stop> {
-        for w in &mut self.lines {
-            w.flush().map_err(|e| Stop::Failed(format!("line probe: {e}")))?;
-        }
-        Ok(())
-    }
-
-    /// Density [kg/m^3] and velocity [m/s] of every cell.
-    fn si_fields(&self, fields: &[[f32; 4]]) -> (Vec<f32>, Vec<[f32; 3]>) {
-        let rho = self.scene.fluid.density as f32;
-        let c = (self.units.dx / self.units.dt) as f32;
-        (
-            fields.iter().map(|f| f[0] * rho).collect(),
-            fields.iter().map(|f| [f[1] * c, f[2] * c, f[3] * c]).collect(),
-        )
-    }
-
-    fn write_snapshot(&mut self, step: u64, fields: &[[f32; 4]]) -> Result<(), Stop> {
-        let name = format!("fields/step{step:09}.vti");
-        let (density, velocity) = self.si_fields(fields);
-        let io = |e: std::io::Error| Stop::Failed(format!("{name}: {e}"));
-        write_vti(&self.out.join(&name), &self.grid, &density, &velocity).map_err(io)?;
-        self.series.add(step as f64 * self.units.dt, &name).map_err(io)
-    }
-
-    fn write_lines(&mut self, step: u64, fields: &[[f32; 4]]) -> Result<(), Stop> {
-        let n = self.units.n;
-        let (rho, c) = (self.scene.fluid.density, self.units.dx / self.units.dt);
-        for (line, w) in self.scene.output.line.iter().zip(self.lines.iter_mut()) {
-            let axis = ["x", "y", "z"]
-                .iter()
-                .position(|a| *a == line.axis)
-                .expect("validated axis");
-            let cell_of = |a: usize| {
-                let v = ((line.through[a] - self.scene.domain.min[a]) / self.units.dx).floor();
-                (v.max(0.0) as usize).min(n[a] - 1)
-            };
-            let mut idx = [cell_of(0), cell_of(1), cell_of(2)];
-            for i in 0..n[axis] {
-                idx[axis] = i;
-                let f = fields[idx[0] + n[0] * (idx[1] + n[1] * idx[2])];
-                let s = self.scene.domain.min[axis] + (i as f64 + 0.5) * self.units.dx;
-                let u = [f[1] as f64 * c, f[2] as f64 * c, f[3] as f64 * c];
-                writeln!(
-                    w,
-                    "{step},{:e},{s:e},{:e},{:e},{:e},{:e}",
-                    step as f64 * self.units.dt,
-                    f[0] as f64 * rho,
-                    u[0],
-                    u[1],
-                    u[2]
-                )
-                .map_err(|e| Stop::Failed(format!("line probe: {e}")))?;
-            }
-        }
-        Ok(())
+        self.fields.flush().map_err(Stop::Failed)
     }
 
     /// Describes an unhealthy cell and writes the last good snapshot.
@@ -377,14 +299,9 @@ impl<'a> FluidRun<'a> {
             bad.describe(&health_of(self.units))
         );
         if let Some((good, fields)) = self.last_good.take().zip(lattice.kept_fields()) {
-            let (density, velocity) = self.si_fields(&fields);
-            let path = self.out.join("last_good.vti");
-            match write_vti(&path, &self.grid, &density, &velocity) {
-                Ok(()) => msg += &format!("; last good snapshot (step {good}) in {}", path.display()),
-                Err(e) => msg += &format!("; could not write the last good snapshot: {e}"),
-            }
+            msg += &self.fields.write_last_good(good, &fields);
         }
-        let _ = self.flush();
+        let _ = self.fields.flush();
         Stop::Failed(msg)
     }
 }

@@ -3,6 +3,7 @@
 mod bench;
 mod bench_link;
 mod coupled;
+mod fields;
 mod fluid;
 mod launch;
 mod lbm;

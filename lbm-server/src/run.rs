@@ -198,7 +198,7 @@ impl Session {
                 return EXIT_FAILURE;
             }
         };
-        let fluid = match FluidSide::for_scene(&p.scene, p.steps) {
+        let fluid = match FluidSide::for_scene(&p.scene, p.steps, &p.out) {
             Ok(f) => f,
             Err(e) => {
                 protocol::say!("lbm-server: error: {e}");

@@ -89,7 +89,9 @@ pub struct Output {
     /// probes (the last step is always written).
     #[serde(default = "default_interval")]
     pub interval: u64,
-    /// Steps between two VTK snapshots of the fluid (fields/*.vti + fields.pvd); 0: last step only.
+    /// Steps between two VTK snapshots of the fluid (fields/*.vti + fields.pvd), the last step's
+    /// always among them; 0: a fluid run writes the last step's only, a coupled run (particles)
+    /// none (its field is large and seldom wanted).
     #[serde(default)]
     pub fields_interval: u64,
     /// Probe lines through the fluid, written as line<N>.csv.

@@ -1,0 +1,127 @@
+//! The fluid's field outputs, for fluid runs and coupled runs alike: VTK snapshots of density and
+//! velocity (fields/stepNNNNNNNNN.vti, listed with their times in fields.pvd) and the probe lines
+//! of `output.line` (line<N>.csv), all in SI units.
+
+use crate::vtk::{write_vti, Grid, Series};
+use scene::lattice::LatticeUnits;
+use scene::{ProbeLine, Scene};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+/// The field outputs of one run, in its output folder.
+pub struct FieldOutput {
+    out: PathBuf,
+    grid: Grid,
+    series: Series,
+    probes: Vec<(ProbeLine, std::io::BufWriter<std::fs::File>)>,
+    domain_min: [f64; 3],
+    fluid_density: f64,
+    dt: f64,
+}
+
+impl FieldOutput {
+    /// The outputs of a run of `scene` on the lattice `units` into `out`: fields/ made, a
+    /// line<N>.csv with its header for each probe line.
+    pub fn new(scene: &Scene, units: &LatticeUnits, out: &Path) -> Result<FieldOutput, String> {
+        let io = |e: std::io::Error| format!("{}: {e}", out.display());
+        std::fs::create_dir_all(out.join("fields")).map_err(io)?;
+        let mut probes = Vec::new();
+        for (i, line) in scene.output.line.iter().enumerate() {
+            let file = std::fs::File::create(out.join(format!("line{i}.csv"))).map_err(io)?;
+            let mut w = std::io::BufWriter::new(file);
+            writeln!(w, "step,time,s,density,ux,uy,uz").map_err(io)?;
+            probes.push((line.clone(), w));
+        }
+        Ok(FieldOutput {
+            out: out.to_path_buf(),
+            grid: Grid {
+                n: units.n,
+                origin: scene.domain.min,
+                dx: units.dx,
+            },
+            series: Series::new(out.join("fields.pvd")),
+            probes,
+            domain_min: scene.domain.min,
+            fluid_density: scene.fluid.density,
+            dt: units.dt,
+        })
+    }
+
+    /// Whether the run has probe lines.
+    pub fn has_lines(&self) -> bool {
+        !self.probes.is_empty()
+    }
+
+    /// Density [kg/m^3] and velocity [m/s] of every cell of the lattice `fields`.
+    fn si_fields(&self, fields: &[[f32; 4]]) -> (Vec<f32>, Vec<[f32; 3]>) {
+        let rho = self.fluid_density as f32;
+        let c = (self.grid.dx / self.dt) as f32;
+        (
+            fields.iter().map(|f| f[0] * rho).collect(),
+            fields.iter().map(|f| [f[1] * c, f[2] * c, f[3] * c]).collect(),
+        )
+    }
+
+    /// The snapshot after `step` steps: fields/stepNNNNNNNNN.vti, added to fields.pvd.
+    pub fn write_snapshot(&mut self, step: u64, fields: &[[f32; 4]]) -> Result<(), String> {
+        let name = format!("fields/step{step:09}.vti");
+        let (density, velocity) = self.si_fields(fields);
+        let io = |e: std::io::Error| format!("{name}: {e}");
+        write_vti(&self.out.join(&name), &self.grid, &density, &velocity).map_err(io)?;
+        self.series.add(step as f64 * self.dt, &name).map_err(io)
+    }
+
+    /// The snapshot of the last check that passed (step `good`), where a run blew up: a line
+    /// for the run's error message.
+    pub fn write_last_good(&self, good: u64, fields: &[[f32; 4]]) -> String {
+        let (density, velocity) = self.si_fields(fields);
+        let path = self.out.join("last_good.vti");
+        match write_vti(&path, &self.grid, &density, &velocity) {
+            Ok(()) => format!("; last good snapshot (step {good}) in {}", path.display()),
+            Err(e) => format!("; could not write the last good snapshot: {e}"),
+        }
+    }
+
+    /// A row per cell of each probe line after `step` steps.
+    pub fn write_lines(&mut self, step: u64, fields: &[[f32; 4]]) -> Result<(), String> {
+        let (n, dx) = (self.grid.n, self.grid.dx);
+        let (rho, c) = (self.fluid_density, dx / self.dt);
+        let (min, dt) = (self.domain_min, self.dt);
+        for (line, w) in &mut self.probes {
+            let axis = ["x", "y", "z"]
+                .iter()
+                .position(|a| *a == line.axis)
+                .expect("validated axis");
+            let cell_of = |a: usize| {
+                let v = ((line.through[a] - min[a]) / dx).floor();
+                (v.max(0.0) as usize).min(n[a] - 1)
+            };
+            let mut idx = [cell_of(0), cell_of(1), cell_of(2)];
+            for i in 0..n[axis] {
+                idx[axis] = i;
+                let f = fields[idx[0] + n[0] * (idx[1] + n[1] * idx[2])];
+                let s = min[axis] + (i as f64 + 0.5) * dx;
+                let u = [f[1] as f64 * c, f[2] as f64 * c, f[3] as f64 * c];
+                writeln!(
+                    w,
+                    "{step},{:e},{s:e},{:e},{:e},{:e},{:e}",
+                    step as f64 * dt,
+                    f[0] as f64 * rho,
+                    u[0],
+                    u[1],
+                    u[2]
+                )
+                .map_err(|e| format!("line probe: {e}"))?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Writes out what the probe lines hold.
+    pub fn flush(&mut self) -> Result<(), String> {
+        for (_, w) in &mut self.probes {
+            w.flush().map_err(|e| format!("line probe: {e}"))?;
+        }
+        Ok(())
+    }
+}
