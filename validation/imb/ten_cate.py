@@ -151,7 +151,7 @@ def write_scene(case, n, path, mach=MACH, op=OPERATOR, width=None, height=None, 
     interval = max(1, ln["steps"] // 300)
     text = sub1(r"^\[output\]\ninterval = .*",
                 "[output]\ninterval = %d                         # steps between rows of particles.csv\n"
-                "fields_interval = 0                  # last step's snapshot only (deleted after the run)" % interval, text)
+                "fields_interval = 0                  # no snapshots (a coupled run writes them only above 0)" % interval, text)
     text = sub1(r"^density = 1120\.0.*", "density = %r                     # kg/m^3" % RHO_P, text)
     if wide:
         text = sub1(r"^position = .*", "position = [%r, %r, %r]      # m: centred in x, y; bottom %g mm above the floor"
