@@ -116,6 +116,34 @@ fn a_blow_up_is_caught_with_step_cell_and_quantity() {
     );
 }
 
+/// The unstable cavity with a sphere in it: the coupled run says the fluid blew up (not the DEM,
+/// whose states go NaN from the fluid's forces when that comes between two checks), keeps the
+/// fields of the last check that passed and writes no NaN to particles.csv; caught at a check
+/// (every 10 steps) and between checks (every 50).
+#[test]
+fn a_coupled_blow_up_is_the_fluids_with_its_last_good_fields() {
+    let sphere = "\n[particles]\ndensity = 1100.0\n[[particles.sphere]]\nposition = [0.008, 0.008, 0.008]\nradius = 0.002\n";
+    for every in [10, 50] {
+        let text = CAVITY.replace("check_interval = 50", &format!("check_interval = {every}")) + sphere;
+        let (code, err, out) = run(&format!("coupledblowup{every}"), &text);
+        assert_eq!(code, Some(1), "{err}");
+        assert!(err.contains("immersed moving boundary"), "{err}");
+        assert!(err.contains("error: the fluid became unstable by step"), "{err}");
+        assert!(err.contains("last good snapshot (step"), "{err}");
+        assert!(out.join("last_good.vti").is_file());
+        let rows = particle_rows(&out);
+        assert!(
+            rows.len() > 1 && rows.iter().flatten().all(|v| v.is_finite()),
+            "{rows:?}"
+        );
+        let summary = std::fs::read_to_string(out.join("summary.json")).unwrap();
+        assert!(
+            summary.contains("\"exit_reason\": \"error: the fluid became unstable"),
+            "{summary}"
+        );
+    }
+}
+
 #[test]
 fn lattice_scene_mistakes_name_the_field() {
     let cases = [

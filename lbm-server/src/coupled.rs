@@ -11,7 +11,7 @@
 
 use crate::fields::FieldOutput;
 use crate::fluid::{health_of, setup_of, stability_warning};
-use crate::lbm::gpu::{Gpu, Lattice};
+use crate::lbm::gpu::{Gpu, Lattice, Unhealthy};
 use crate::lbm::imb::{covered_fraction, CoveredCells, ImbOptions, Particles, SolidCollision, SolidParticle};
 use crate::lubrication::Lubrication;
 use crate::trials::{WayTrials, AUTO_MIN_SECONDS};
@@ -39,9 +39,11 @@ pub struct FluidSide {
     trials: Option<WayTrials>,
     /// When the fluid side was made: the trials' clock.
     made: std::time::Instant,
-    /// The run's field outputs, where the scene asks for any (`output.fields_interval` above 0,
-    /// `output.line`).
-    fields: Option<FieldOutput>,
+    /// The run's field outputs: those the scene asks for (`output.fields_interval` above 0,
+    /// `output.line`), and last_good.vti where the fluid blows up.
+    fields: FieldOutput,
+    /// The step of the last health check that passed (its fields kept on the device).
+    last_good: Option<u64>,
     /// `output.fields_interval` and `output.interval` (the probe lines'), in steps.
     fields_every: u64,
     lines_every: u64,
@@ -328,11 +330,7 @@ impl FluidSide {
         for warning in warnings.into_iter().flatten() {
             protocol::say!("lbm-server: warning: {warning}");
         }
-        let wants_fields = scene.output.fields_interval > 0 || !scene.output.line.is_empty();
-        let fields = match wants_fields {
-            true => Some(FieldOutput::new(scene, &units, out)?),
-            false => None,
-        };
+        let fields = FieldOutput::new(scene, &units, out)?;
         Ok(FluidSide {
             lattice,
             units,
@@ -345,6 +343,7 @@ impl FluidSide {
             trials,
             made: std::time::Instant::now(),
             fields,
+            last_good: None,
             fields_every: scene.output.fields_interval,
             lines_every: scene.output.interval,
             run_steps: steps,
@@ -446,6 +445,9 @@ impl FluidSide {
             lubrication.apply(states, out);
         }
         self.steps += 1;
+        if let Some(reply) = out.iter().find(|r| !finite_load(r)) {
+            return Err(self.not_finite(reply));
+        }
         if self.steps.is_multiple_of(self.units.check_interval) {
             self.check()?;
         }
@@ -456,20 +458,18 @@ impl FluidSide {
     /// (where it is above 0) and after the run's last step, the probe lines every
     /// `output.interval` steps and after the last (fields/, fields.pvd, line<N>.csv).
     fn write_fields(&mut self) -> Result<(), String> {
-        let Some(out) = &mut self.fields else {
-            return Ok(());
-        };
         let (step, last) = (self.steps, self.steps == self.run_steps);
         let due = |every: u64| every > 0 && (step.is_multiple_of(every) || last);
-        let (snapshot, lines) = (due(self.fields_every), out.has_lines() && due(self.lines_every));
+        let has_lines = self.fields.has_lines();
+        let (snapshot, lines) = (due(self.fields_every), has_lines && due(self.lines_every));
         if !(snapshot || lines) {
             return Ok(());
         }
         let (fields, bad) = self.lattice.fields();
         if let Some(bad) = bad {
-            let what = bad.describe(&health_of(&self.units));
-            return Err(format!("the fluid became unstable by step {step}: {what}"));
+            return Err(self.unstable(bad));
         }
+        let out = &mut self.fields;
         if lines {
             out.write_lines(step, &fields)?;
         }
@@ -502,23 +502,21 @@ impl FluidSide {
     /// After the run's last step: the health check and the covers' warning, unless the last step
     /// was a check already (a run shorter than `lattice.check_interval`, or its tail beyond the
     /// last multiple, went unchecked).
-    pub fn check_last_step(&self) -> Result<(), String> {
+    pub fn check_last_step(&mut self) -> Result<(), String> {
         if self.steps.is_multiple_of(self.units.check_interval) {
             return Ok(());
         }
         self.check()
     }
 
-    /// The health check of the lattice, and a warning when cells had more particles than slots.
-    fn check(&self) -> Result<(), String> {
-        let bad = self.lattice.health();
-        if let Some(bad) = bad {
-            let what = bad.describe(&health_of(&self.units));
-            return Err(format!(
-                "the fluid became unstable by step {}: {what}",
-                self.steps
-            ));
+    /// The health check of the lattice (a pass keeps its fields on the device for
+    /// last_good.vti), and a warning when cells had more particles than slots.
+    fn check(&mut self) -> Result<(), String> {
+        if let Some(bad) = self.lattice.health() {
+            return Err(self.unstable(bad));
         }
+        self.lattice.keep_fields();
+        self.last_good = Some(self.steps);
         let lost = self.lattice.lost_covers();
         let (unlisted, dropped) = (lost.unlisted, lost.dropped);
         if unlisted > 0 {
@@ -539,6 +537,44 @@ impl FluidSide {
         }
         Ok(())
     }
+
+    /// The error of a blow-up found at this step: the step, the cell and its quantities, and
+    /// the fields of the last check that passed written as last_good.vti.
+    fn unstable(&mut self, bad: Unhealthy) -> String {
+        let what = bad.describe(&health_of(&self.units));
+        let mut msg = format!("the fluid became unstable by step {}: {what}", self.steps);
+        if let Some((good, fields)) = self.last_good.take().zip(self.lattice.kept_fields()) {
+            msg += &self.fields.write_last_good(good, &fields);
+        }
+        let _ = self.fields.flush();
+        msg
+    }
+
+    /// The fluid's blow-up, where the health check finds one now (run when the particles' states
+    /// went wrong: the fluid's forces may be why).
+    pub fn unstable_now(&mut self) -> Option<String> {
+        let bad = self.lattice.health()?;
+        Some(self.unstable(bad))
+    }
+
+    /// The error where a particle's load is not a finite number: the fluid's blow-up where the
+    /// health check finds one now (before a NaN reaches the DEM, which would otherwise be
+    /// blamed for the state it integrates from it), else the particle and its load.
+    fn not_finite(&mut self, reply: &ParticleReply) -> String {
+        if let Some(cause) = self.unstable_now() {
+            return cause;
+        }
+        format!(
+            "the fluid's load on particle id {} at step {} is not finite (force {:?} N, torque {:?} N m), \
+             though the fluid passed its health check",
+            reply.id, self.steps, reply.force, reply.torque
+        )
+    }
+}
+
+/// Whether a particle's force and torque are finite numbers.
+fn finite_load(reply: &ParticleReply) -> bool {
+    reply.force.iter().chain(&reply.torque).all(|v| v.is_finite())
 }
 
 /// Lubrication with the lattice's cut-off (one cell) and the domain faces that are walls.

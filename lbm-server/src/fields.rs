@@ -20,11 +20,10 @@ pub struct FieldOutput {
 }
 
 impl FieldOutput {
-    /// The outputs of a run of `scene` on the lattice `units` into `out`: fields/ made, a
-    /// line<N>.csv with its header for each probe line.
+    /// The outputs of a run of `scene` on the lattice `units` into `out`: a line<N>.csv with its
+    /// header for each probe line (fields/ is made with the first snapshot).
     pub fn new(scene: &Scene, units: &LatticeUnits, out: &Path) -> Result<FieldOutput, String> {
         let io = |e: std::io::Error| format!("{}: {e}", out.display());
-        std::fs::create_dir_all(out.join("fields")).map_err(io)?;
         let mut probes = Vec::new();
         for (i, line) in scene.output.line.iter().enumerate() {
             let file = std::fs::File::create(out.join(format!("line{i}.csv"))).map_err(io)?;
@@ -67,6 +66,7 @@ impl FieldOutput {
         let name = format!("fields/step{step:09}.vti");
         let (density, velocity) = self.si_fields(fields);
         let io = |e: std::io::Error| format!("{name}: {e}");
+        std::fs::create_dir_all(self.out.join("fields")).map_err(io)?;
         write_vti(&self.out.join(&name), &self.grid, &density, &velocity).map_err(io)?;
         self.series.add(step as f64 * self.dt, &name).map_err(io)
     }

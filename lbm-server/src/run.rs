@@ -303,6 +303,13 @@ impl Session {
             let (bad, count) = {
                 let states = if in_si { received.particles() } else { &si[..] };
                 let bad = check_states(states, step, &self.p.scene.domain);
+                if let Some(why) = &bad {
+                    // A blown-up fluid sends forces that throw the particles out or make them
+                    // NaN: the cause is said first.
+                    if let Some(cause) = self.fluid.unstable_now() {
+                        return Err(self.describe_fluid(format!("{cause}; then {why}")));
+                    }
+                }
                 self.times.exchange += clock.lap();
                 replies.clear();
                 self.fluid
