@@ -23,6 +23,12 @@ const MISTAKES: &[(&str, &str, &str, &[&str])] = &[
     ("relaxation time too low", "tau = 0.8", "tau = 0.5001", &["lattice.tau = 0.50010", "unstable", "raise lattice.tau"]),
     ("negative ramp time", "tau = 0.8", "tau = 0.8\nramp_time = -0.1", &["lattice.ramp_time = -0.1 s", ">= 0"]),
     ("zero steps", "steps = 100", "steps = 0", &["time.steps = 0"]),
+    (
+        "steps and duration",
+        "steps = 100",
+        "steps = 100\nduration = 0.1",
+        &["time.duration = 0.1 s", "time.steps is given too"],
+    ),
     ("negative viscosity", "dynamic_viscosity = 1.0", "dynamic_viscosity = -1.0", &["fluid.dynamic_viscosity = -1 Pa s"]),
     (
         "inverted domain",

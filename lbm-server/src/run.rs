@@ -271,9 +271,10 @@ impl Session {
             physics: Physics::names(hello.physics),
         });
         protocol::say!(
-            "lbm-server: scene '{}', {} steps, DEM: {} (pid {}); {fluid}",
+            "lbm-server: scene '{}', {} steps ({:.4e} s), DEM: {} (pid {}); {fluid}",
             scene.name,
             steps,
+            steps as f64 * scene.time.dt,
             protocol::handshake::field_text(&hello.software),
             hello.pid
         );

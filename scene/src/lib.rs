@@ -78,21 +78,43 @@ pub struct Time {
     /// Fluid (coupling) time step [s]. With a `[lattice]` it is derived and must not be given.
     #[serde(default = "unset")]
     pub dt: f64,
-    /// Number of coupled steps.
+    /// Number of coupled steps, as given (`time.steps`).
+    #[serde(rename = "steps", default)]
+    pub(crate) given_steps: Option<u64>,
+    /// Simulated time [s], instead of `steps`: the run takes the whole steps that cover it.
+    #[serde(default)]
+    pub duration: Option<f64>,
+    /// Number of coupled steps: `time.steps`, or those of `time.duration` (times.rs).
+    #[serde(skip)]
     pub steps: u64,
 }
 
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Output {
+    /// `output.interval` as given.
+    #[serde(rename = "interval", default)]
+    pub(crate) given_interval: Option<u64>,
+    /// Time between two rows [s], instead of `interval`: the nearest whole number of steps.
+    #[serde(default)]
+    pub time_interval: Option<f64>,
     /// Steps between two rows of particles.csv per particle, and between two rows of the line
-    /// probes (the last step is always written).
-    #[serde(default = "default_interval")]
+    /// probes (the last step is always written): `output.interval` (default 100) or those of
+    /// `output.time_interval`.
+    #[serde(skip)]
     pub interval: u64,
+    /// `output.fields_interval` as given.
+    #[serde(rename = "fields_interval", default)]
+    pub(crate) given_fields_interval: Option<u64>,
+    /// Time between two snapshots [s], instead of `fields_interval`: the nearest whole number
+    /// of steps.
+    #[serde(default)]
+    pub fields_time_interval: Option<f64>,
     /// Steps between two VTK snapshots of the fluid (fields/*.vti + fields.pvd), the last step's
     /// always among them; 0: a fluid run writes the last step's only, a coupled run (particles)
-    /// none (its field is large and seldom wanted).
-    #[serde(default)]
+    /// none (its field is large and seldom wanted). `output.fields_interval` (default 0) or those
+    /// of `output.fields_time_interval`.
+    #[serde(skip)]
     pub fields_interval: u64,
     /// Probe lines through the fluid, written as line<N>.csv.
     #[serde(default)]
@@ -102,7 +124,11 @@ pub struct Output {
 impl Default for Output {
     fn default() -> Self {
         Self {
+            given_interval: None,
+            time_interval: None,
             interval: default_interval(),
+            given_fields_interval: None,
+            fields_time_interval: None,
             fields_interval: 0,
             line: Vec::new(),
         }
@@ -279,7 +305,7 @@ fn unset() -> f64 {
 fn default_gravity() -> [f64; 3] {
     [0.0, 0.0, -9.81]
 }
-fn default_interval() -> u64 {
+pub(crate) fn default_interval() -> u64 {
     100
 }
 fn default_timeout() -> f64 {
@@ -354,6 +380,7 @@ impl Scene {
             problem: e.to_string().trim_end().replace('\n', "\n  "),
         })?;
         scene.resolve_lattice(file)?;
+        scene.resolve_steps(file)?;
         scene.dem.load(file)?;
         scene.validate(file)?;
         dem::validate_placement(&scene, file)?;
@@ -479,6 +506,7 @@ fn block_centres(b: &Block) -> impl Iterator<Item = [f64; 3]> + '_ {
 pub mod dem;
 pub mod lattice;
 pub mod overlap;
+mod times;
 mod validate;
 
 #[cfg(test)]
