@@ -59,6 +59,10 @@ fn simulate(
     interrupted: &AtomicBool,
 ) -> std::io::Result<bool> {
     std::fs::create_dir_all(out)?;
+    let removed = scene::outputs::clear_earlier(out, scene::outputs::DEM_CLIENT)?;
+    if removed > 0 {
+        protocol::say!("dem-client: removed {removed} output files of an earlier run");
+    }
     let mut world = setup.world;
     let (k, dt) = substeps(scene.time.dt, setup.dt_max);
     world.dt = dt;

@@ -94,6 +94,7 @@ fn prepare(args: &RunArgs) -> Result<Prepared, String> {
         .unwrap_or_else(|| PathBuf::from("out").join(&scene.name));
     std::fs::create_dir_all(&out)
         .map_err(|e| format!("cannot create the output folder {}: {e}", out.display()))?;
+    clear_earlier_outputs(&out)?;
     let scene_copy = out.join("scene.toml");
     std::fs::write(&scene_copy, text).map_err(|e| format!("{}: {e}", scene_copy.display()))?;
     Ok(Prepared {
@@ -104,6 +105,23 @@ fn prepare(args: &RunArgs) -> Result<Prepared, String> {
         scene_copy,
         connect_timeout: Duration::try_from_secs_f64(connect_timeout).unwrap_or(Duration::MAX),
     })
+}
+
+/// Removes what an earlier run wrote into `out` under this run's output names, saying so.
+fn clear_earlier_outputs(out: &std::path::Path) -> Result<(), String> {
+    let removed = scene::outputs::clear_earlier(out, scene::outputs::LBM_SERVER).map_err(|e| {
+        format!(
+            "cannot remove an earlier run's outputs from {}: {e}",
+            out.display()
+        )
+    })?;
+    if removed > 0 {
+        protocol::say!(
+            "lbm-server: removed {removed} output files of an earlier run from {}",
+            out.display()
+        );
+    }
+    Ok(())
 }
 
 /// A scene with particles runs coupled to the lattice: without a `[lattice]` it is refused.

@@ -505,6 +505,7 @@ fn block_centres(b: &Block) -> impl Iterator<Item = [f64; 3]> + '_ {
 
 pub mod dem;
 pub mod lattice;
+pub mod outputs;
 pub mod overlap;
 mod times;
 mod validate;
