@@ -118,8 +118,9 @@ fn a_blow_up_is_caught_with_step_cell_and_quantity() {
 
 /// The unstable cavity with a sphere in it: the coupled run says the fluid blew up (not the DEM,
 /// whose states go NaN from the fluid's forces when that comes between two checks), keeps the
-/// fields of the last check that passed and writes no NaN to particles.csv; caught at a check
-/// (every 10 steps) and between checks (every 50).
+/// fields of the last check that passed, writes no NaN to particles.csv and tells the DEM to stop
+/// (STOP on its last reply: the DEM ends on its own); caught at a check (every 10 steps) and
+/// between checks (every 50).
 #[test]
 fn a_coupled_blow_up_is_the_fluids_with_its_last_good_fields() {
     let sphere = "\n[particles]\ndensity = 1100.0\n[[particles.sphere]]\nposition = [0.008, 0.008, 0.008]\nradius = 0.002\n";
@@ -131,6 +132,10 @@ fn a_coupled_blow_up_is_the_fluids_with_its_last_good_fields() {
         assert!(err.contains("error: the fluid became unstable by step"), "{err}");
         assert!(err.contains("last good snapshot (step"), "{err}");
         assert!(out.join("last_good.vti").is_file());
+        assert!(
+            err.contains("dem-client: finished after") && !err.contains("dem-client: error"),
+            "{err}"
+        );
         let rows = particle_rows(&out);
         assert!(
             rows.len() > 1 && rows.iter().flatten().all(|v| v.is_finite()),

@@ -183,6 +183,8 @@ struct Session {
     peer: Option<PeerInfo>,
     hello: Option<Hello>,
     last_completed: Option<u64>,
+    /// Whether a reply carried FINAL or STOP: the DEM ends on its own and is given the time to.
+    told_to_end: bool,
     particle_steps: u64,
     started: Instant,
     times: TimeSplit,
@@ -233,6 +235,7 @@ impl Session {
             peer: None,
             hello: None,
             last_completed: None,
+            told_to_end: false,
             particle_steps: 0,
             started: Instant::now(),
             times: TimeSplit::default(),
@@ -321,28 +324,23 @@ impl Session {
             let last = step + 1 == self.p.steps;
             let (bad, count) = {
                 let states = if in_si { received.particles() } else { &si[..] };
-                let bad = check_states(states, step, &self.p.scene.domain);
-                if let Some(why) = &bad {
-                    // A blown-up fluid sends forces that throw the particles out or make them
-                    // NaN: the cause is said first.
-                    if let Some(cause) = self.fluid.unstable_now() {
-                        return Err(self.describe_fluid(format!("{cause}; then {why}")));
-                    }
-                }
                 self.times.exchange += clock.lap();
-                replies.clear();
-                self.fluid
-                    .step(states, &mut replies)
-                    .map_err(|e| self.describe_fluid(e))?;
-                if last {
-                    self.fluid.check_last_step().map_err(|e| self.describe_fluid(e))?;
-                }
+                let ended = answer(
+                    &mut self.fluid,
+                    states,
+                    step,
+                    last,
+                    &self.p.scene.domain,
+                    &mut replies,
+                );
                 self.times.fluid += clock.lap();
-                (bad, states.len())
+                (ended.map(|e| self.describe_fluid(e)), states.len())
             };
             let stop =
                 header.has(StepFlags::STOP) || self.interrupted.load(Ordering::SeqCst) || bad.is_some();
-            let output = step % self.p.scene.output.interval == 0 || last || stop;
+            // A step that ends the run in failure gets no row: its loads are the zeros of the
+            // STOP reply, and the error names what went wrong.
+            let output = (step % self.p.scene.output.interval == 0 || last || stop) && bad.is_none();
             // The sample goes back before the reply (the DEM loans the next one once it has the
             // forces); particles.csv, written after the reply, gets a copy of its states.
             if in_si && output {
@@ -358,6 +356,7 @@ impl Session {
                 self.link.send_forces(reply, |i| units.reply_from_si(&replies[i]))
             };
             sent.map_err(|e| self.describe(e))?;
+            self.told_to_end = last || stop;
             self.last_completed = Some(step);
             self.particle_steps += count as u64;
             self.times.exchange += clock.lap();
@@ -414,7 +413,7 @@ impl Session {
         if let Err(e) = self.csv.flush() {
             protocol::say!("lbm-server: error: particles.csv: {e}");
         }
-        let grace = if result.is_ok() {
+        let grace = if result.is_ok() || self.told_to_end {
             Duration::from_secs(2)
         } else {
             Duration::ZERO
@@ -519,6 +518,40 @@ fn welcome_for(scene: &Scene, steps: u64, hello: &Hello, physics: u64) -> Welcom
     w.physics = physics;
     w.periodic = Welcome::periodic_bits(scene.periodic_axes());
     w
+}
+
+/// The fluid's replies to the states of `step` in `replies`, or why the run ends at this step
+/// (then `replies` holds zero loads, for the reply that carries STOP): states the fluid rejects,
+/// with the fluid's own blow-up first where it has one (a blown-up fluid sends forces that throw
+/// the particles out or make them NaN), or the fluid's failure (a health check).
+fn answer(
+    fluid: &mut FluidSide,
+    states: &[ParticleState],
+    step: u64,
+    last: bool,
+    domain: &scene::Domain,
+    replies: &mut Vec<ParticleReply>,
+) -> Option<String> {
+    replies.clear();
+    let ended = match check_states(states, step, domain) {
+        Some(why) => Some(match fluid.unstable_now() {
+            Some(cause) => format!("{cause}; then {why}"),
+            None => why,
+        }),
+        None => fluid
+            .step(states, replies)
+            .and_then(|()| if last { fluid.check_last_step() } else { Ok(()) })
+            .err(),
+    };
+    if ended.is_some() {
+        replies.clear();
+        replies.extend(states.iter().map(|s| ParticleReply {
+            id: s.id,
+            force: [0.0; 3],
+            torque: [0.0; 3],
+        }));
+    }
+    ended
 }
 
 /// Health check of the DEM's states: every number finite, every radius positive.
