@@ -21,8 +21,13 @@ fn a_core_to_spin() -> RwLockWriteGuard<'static, ()> {
 
 /// Starts a long run (spawned DEM) and waits until it is stepping; returns (server, dem pid, out).
 fn long_run(tag: &str, timeout_s: f64) -> (Proc, u32, std::path::PathBuf) {
+    long_run_of(tag, &scene_text(tag, [4, 4, 4], 10_000_000, 1000, timeout_s))
+}
+
+/// Starts the long run of the scene `text`, as `long_run`.
+fn long_run_of(tag: &str, text: &str) -> (Proc, u32, std::path::PathBuf) {
     let dir = temp_dir(tag);
-    let scene = write_scene(&dir, &scene_text(tag, [4, 4, 4], 10_000_000, 1000, timeout_s));
+    let scene = write_scene(&dir, text);
     let out = dir.join("out");
     let server = start(server(&scene, &out, &[]));
     Proc::wait_line(&server.stderr, "lbm-server: scene", Duration::from_secs(20));
@@ -194,10 +199,16 @@ fn a_dem_that_works_without_answering_is_caught_at_the_busy_limit() {
     assert!(stderr.contains("without answering"), "{stderr}");
 }
 
+/// Ctrl-C ends both processes at once, and the run writes the field outputs of the step it
+/// stopped at, as of a last step (its scene asks for snapshots far apart and a probe line).
 #[test]
 fn ctrl_c_stops_both_cleanly() {
     let _cores = shared_cores();
-    let (mut server, dem, out) = long_run("ctrl-c", 30.0);
+    let text = scene_text("ctrl-c", [4, 4, 4], 10_000_000, 1000, 30.0).replace(
+        "interval = 1000\n",
+        "interval = 1000\nfields_interval = 1000000\n[[output.line]]\naxis = \"z\"\nthrough = [0.008, 0.008, 0.008]\n",
+    );
+    let (mut server, dem, out) = long_run_of("ctrl-c", &text);
     // A terminal's Ctrl-C reaches the foreground process group: lbm-server (the DEM has its own).
     assert_eq!(
         unsafe { libc::kill(-(server.child.id() as i32), libc::SIGINT) },
@@ -214,6 +225,53 @@ fn ctrl_c_stops_both_cleanly() {
     );
     let s = summary(&out);
     assert_eq!(s["exit_reason"], "interrupted");
+    let completed = s["steps_completed"].as_u64().unwrap();
+    let snapshot = out.join(format!("fields/step{completed:09}.vti"));
+    assert!(snapshot.is_file(), "{} missing", snapshot.display());
+    let pvd = std::fs::read_to_string(out.join("fields.pvd")).unwrap();
+    assert_eq!(pvd.matches("<DataSet").count(), 1, "{pvd}");
+    let line = std::fs::read_to_string(out.join("line0.csv")).unwrap();
+    let steps: Vec<&str> = line
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').next().unwrap())
+        .collect();
+    assert_eq!(
+        steps.last().copied(),
+        Some(completed.to_string().as_str()),
+        "{line}"
+    );
     let run = s["run"].as_str().unwrap();
     assert!(leftover_files(run).is_empty(), "{:?}", leftover_files(run));
+}
+
+/// A fluid-only run stopped by Ctrl-C writes the outputs of a last step where it stopped: the
+/// snapshot and the probe line of that step (Poiseuille's scene, made long).
+#[test]
+fn ctrl_c_on_a_fluid_run_writes_the_step_it_stopped_at() {
+    let _cores = shared_cores();
+    let text = include_str!("../validation/scenes/poiseuille.toml");
+    assert!(text.contains("steps = 3000"));
+    let dir = temp_dir("ctrl-c-fluid");
+    let scene = write_scene(&dir, &text.replace("steps = 3000", "steps = 100000000"));
+    let out = dir.join("out");
+    let mut server = start(server(&scene, &out, &[]));
+    Proc::wait_line(&server.stderr, "lbm-server: scene", Duration::from_secs(20));
+    std::thread::sleep(Duration::from_millis(500));
+    signal(server.child.id(), libc::SIGINT);
+    let (code, _) = server.wait_exit(Duration::from_secs(20));
+    assert_eq!(code, Some(130), "{}", Proc::drain(&server.stderr));
+    let s = summary(&out);
+    assert_eq!(s["exit_reason"], "interrupted");
+    let completed = s["steps_completed"].as_u64().unwrap();
+    assert!(completed > 0 && completed < 100000000, "{completed}");
+    let snapshot = out.join(format!("fields/step{completed:09}.vti"));
+    assert!(snapshot.is_file(), "{} missing", snapshot.display());
+    let line = std::fs::read_to_string(out.join("line0.csv")).unwrap();
+    let last = line.lines().last().and_then(|l| l.split(',').next());
+    assert_eq!(
+        last,
+        Some(completed.to_string().as_str()),
+        "the probe line's last step"
+    );
 }

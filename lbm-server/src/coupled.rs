@@ -460,24 +460,35 @@ impl FluidSide {
     fn write_fields(&mut self) -> Result<(), String> {
         let (step, last) = (self.steps, self.steps == self.run_steps);
         let due = |every: u64| every > 0 && (step.is_multiple_of(every) || last);
-        let has_lines = self.fields.has_lines();
-        let (snapshot, lines) = (due(self.fields_every), has_lines && due(self.lines_every));
-        if !(snapshot || lines) {
-            return Ok(());
-        }
-        let (fields, bad) = self.lattice.fields();
-        if let Some(bad) = bad {
-            return Err(self.unstable(bad));
-        }
-        let out = &mut self.fields;
-        if lines {
-            out.write_lines(step, &fields)?;
-        }
-        if snapshot {
-            out.write_snapshot(step, &fields)?;
+        self.write_outputs(due(self.fields_every), due(self.lines_every), last)
+    }
+
+    /// Where a run ends before its last step (Ctrl-C, the DEM's STOP): the field outputs a last
+    /// step gets, less those this step wrote already.
+    pub fn write_fields_of_early_end(&mut self) -> Result<(), String> {
+        let step = self.steps;
+        let left = |every: u64| every > 0 && !step.is_multiple_of(every);
+        self.write_outputs(left(self.fields_every), left(self.lines_every), true)
+    }
+
+    /// Writes a snapshot and the probe lines (where the scene has any) of this step; `last`
+    /// flushes the lines.
+    fn write_outputs(&mut self, snapshot: bool, lines: bool, last: bool) -> Result<(), String> {
+        let lines = lines && self.fields.has_lines();
+        if snapshot || lines {
+            let (fields, bad) = self.lattice.fields();
+            if let Some(bad) = bad {
+                return Err(self.unstable(bad));
+            }
+            if lines {
+                self.fields.write_lines(self.steps, &fields)?;
+            }
+            if snapshot {
+                self.fields.write_snapshot(self.steps, &fields)?;
+            }
         }
         if last {
-            out.flush()?;
+            self.fields.flush()?;
         }
         Ok(())
     }

@@ -261,7 +261,9 @@ impl<'a> FluidRun<'a> {
                 .min()
                 .expect("steps");
             lattice.step(next - now);
-            let last = next == steps;
+            // Interrupted (Ctrl-C), the run ends here: this step gets a last step's outputs.
+            let stopping = interrupted.load(Ordering::SeqCst);
+            let last = next == steps || stopping;
             let (lines, snapshot) = (due(next, lines_every) || last, due(next, fields_every) || last);
             // The whole field crosses the bus only when something is written from it; a check
             // alone reads the status and, if it fails, one cell.
@@ -282,7 +284,7 @@ impl<'a> FluidRun<'a> {
             lattice.keep_fields();
             self.last_good = Some(next);
             progress.update(next);
-            if interrupted.load(Ordering::SeqCst) {
+            if stopping {
                 self.fields.flush().map_err(Stop::Failed)?;
                 return Err(Stop::Interrupted);
             }
