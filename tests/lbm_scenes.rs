@@ -391,6 +391,22 @@ fn a_coupled_run_writes_the_fields_the_scene_asks_for() {
         far < 2.0 * vz.abs(),
         "no cell of the line faster than twice the sphere: {far}"
     );
+    // The particles for ParaView (`dem.output.vtk`, on by default) at the steps of particles.csv,
+    // with the fluid's force as particles.csv has it.
+    let pvd = std::fs::read_to_string(out.join("particles.pvd")).unwrap();
+    let steps = csv_steps(&out);
+    assert_eq!(pvd.matches("<DataSet").count(), steps.len(), "{pvd}");
+    let last = steps.keys().last().unwrap();
+    let vtp = std::fs::read_to_string(out.join(format!("particles_{last:06}.vtp"))).unwrap();
+    let force = vtp
+        .split("Name=\"fluid_force\"")
+        .nth(1)
+        .unwrap()
+        .lines()
+        .nth(1)
+        .unwrap();
+    let fz: f64 = force.split(' ').nth(2).unwrap().parse().unwrap();
+    assert_eq!(fz, sphere[14], "the vtp's fluid force against particles.csv's");
 }
 
 /// The default scene (no file given) is a coupled run: the lattice, the immersed moving boundary

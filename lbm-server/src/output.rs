@@ -7,22 +7,62 @@ use std::io::{BufWriter, IsTerminal, Write};
 use std::path::Path;
 use std::time::{Duration, Instant};
 
-/// One row per particle per output step, SI units, header row first.
-pub struct ParticleCsv {
+/// The particles of a coupled run at its output steps, SI units: particles.csv (one row per
+/// particle per output step, header row first) and, with `dem.output.vtk`, particles_NNNNNN.vtp
+/// + particles.pvd for ParaView (each particle's state and the fluid's load on it).
+pub struct ParticleOutput {
     writer: BufWriter<File>,
+    vtk: Option<scene::vtp::ParticleSeries>,
 }
 
-impl ParticleCsv {
+impl ParticleOutput {
     pub const HEADER: &'static str = "step,time,id,x,y,z,vx,vy,vz,wx,wy,wz,fx,fy,fz,tx,ty,tz";
 
-    pub fn create(path: &Path) -> std::io::Result<Self> {
-        let mut writer = BufWriter::with_capacity(1 << 20, File::create(path)?);
+    /// particles.csv in `out`, with its header; the .vtp series where `vtk`.
+    pub fn create(out: &Path, vtk: bool) -> std::io::Result<Self> {
+        let mut writer = BufWriter::with_capacity(1 << 20, File::create(out.join("particles.csv"))?);
         writeln!(writer, "{}", Self::HEADER)?;
-        Ok(Self { writer })
+        let vtk = vtk.then(|| scene::vtp::ParticleSeries::new(out));
+        Ok(Self { writer, vtk })
     }
 
-    /// Writes the particles of one step (states and replies in SI, same order).
+    /// Writes the particles of one step (states and replies in SI, same order); an error names
+    /// the file.
     pub fn write_step(
+        &mut self,
+        step: u64,
+        time: f64,
+        states: &[ParticleState],
+        replies: &[ParticleReply],
+    ) -> Result<(), String> {
+        self.write_rows(step, time, states, replies)
+            .map_err(|e| format!("particles.csv: {e}"))?;
+        let Some(vtk) = &mut self.vtk else {
+            return Ok(());
+        };
+        let ids: Vec<u64> = states.iter().map(|s| s.id).collect();
+        let positions: Vec<[f64; 3]> = states.iter().map(|s| s.position).collect();
+        let radii: Vec<f64> = states.iter().map(|s| s.radius).collect();
+        let vectors = [
+            ("velocity", states.iter().map(|s| s.velocity).collect()),
+            (
+                "angular_velocity",
+                states.iter().map(|s| s.angular_velocity).collect(),
+            ),
+            ("fluid_force", replies.iter().map(|r| r.force).collect()),
+            ("fluid_torque", replies.iter().map(|r| r.torque).collect()),
+        ];
+        let frame = scene::vtp::Frame {
+            ids: &ids,
+            positions: &positions,
+            radii: &radii,
+            vectors: &vectors,
+        };
+        vtk.write(step, time, &frame)
+            .map_err(|e| format!("particles_{step:06}.vtp: {e}"))
+    }
+
+    fn write_rows(
         &mut self,
         step: u64,
         time: f64,

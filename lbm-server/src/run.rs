@@ -2,7 +2,7 @@
 
 use crate::coupled::FluidSide;
 use crate::launch;
-use crate::output::{LatticeSummary, ParticleCsv, PeerInfo, Progress, Summary, TimeSplit};
+use crate::output::{LatticeSummary, ParticleOutput, PeerInfo, Progress, Summary, TimeSplit};
 use protocol::transport::{new_run_name, LinkOptions};
 use protocol::{
     FluidLink, Hello, LinkError, ParticleReply, ParticleState, Physics, StepFlags, StepHeader, Units, Welcome,
@@ -177,7 +177,7 @@ struct Session {
     p: Prepared,
     link: FluidLink,
     child: Option<Child>,
-    csv: ParticleCsv,
+    csv: ParticleOutput,
     fluid: FluidSide,
     interrupted: Arc<AtomicBool>,
     peer: Option<PeerInfo>,
@@ -208,7 +208,7 @@ impl Session {
                 return EXIT_FAILURE;
             }
         };
-        let csv = match ParticleCsv::create(&p.out.join("particles.csv")) {
+        let csv = match ParticleOutput::create(&p.out, p.scene.dem.output.vtk) {
             Ok(csv) => csv,
             Err(e) => {
                 protocol::say!(
@@ -362,9 +362,7 @@ impl Session {
             self.times.exchange += clock.lap();
             if output {
                 let time = header.time * units.time_s;
-                self.csv
-                    .write_step(step, time, &si, &replies)
-                    .map_err(|e| format!("particles.csv: {e}"))?;
+                self.csv.write_step(step, time, &si, &replies)?;
             }
             progress.update(step + 1);
             self.times.output += clock.lap();

@@ -294,11 +294,14 @@ pub struct CsvInsert {
     pub material: Option<String>,
 }
 
-/// What `dem-client run` writes besides particles.csv and energy.csv.
+/// What `dem-client run` writes besides particles.csv and energy.csv, and a coupled
+/// `lbm-server run` besides particles.csv.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct DemOutput {
-    /// VTK polydata (particles_NNNNNN.vtp and particles.pvd) every `output.interval` steps.
+    /// VTK polydata (particles_NNNNNN.vtp and particles.pvd) every `output.interval` steps (at
+    /// the steps of particles.csv): velocity, angular velocity and, by dem-client alone, the
+    /// contact force and torque, in a coupled run the fluid's force and torque.
     #[serde(default = "yes")]
     pub vtk: bool,
 }

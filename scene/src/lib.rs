@@ -509,6 +509,7 @@ pub mod outputs;
 pub mod overlap;
 mod times;
 mod validate;
+pub mod vtp;
 
 #[cfg(test)]
 mod shipped_scenes {

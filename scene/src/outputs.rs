@@ -7,6 +7,8 @@ use std::path::Path;
 /// The outputs of `lbm-server run` (a fluid-only or a coupled run).
 pub const LBM_SERVER: &[&str] = &[
     "particles.csv",
+    "particles.pvd",
+    "particles_*.vtp",
     "summary.json",
     "last_good.vti",
     "fields.pvd",

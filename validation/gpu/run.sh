@@ -126,7 +126,7 @@ rm -rf "$OUT/default/fields"
 # time goes (summary.json time_s), the DEM flying its steps and sub-stepped throughout.
 for s in suspension suspension_substeps; do
     step $s/log 40 120 $bin/lbm-server run .gpu/$s.toml --out "$OUT/$s"
-    rm -f "$OUT/$s/particles.csv"
+    rm -f "$OUT/$s/particles.csv" "$OUT/$s"/particles_*.vtp "$OUT/$s/particles.pvd"
 done
 # The DEM side alone on this machine's cores, the fluid a stand-in (dem-client bench): 32^3 beads
 # dilute (flown) and in a bed (every bead in the DEM steps), free flight on and off. With the
@@ -142,7 +142,7 @@ step dem_bench_bed_skin 15 60 $bin/dem-client bench .gpu/bed_skin.toml --steps 1
 # costs (the ways' kernels built during the run).
 for way in timed redo skip fused; do
     step suspension_$way/log 30 60 $bin/lbm-server run .gpu/suspension_$way.toml --out "$OUT/suspension_$way"
-    rm -f "$OUT/suspension_$way/particles.csv"
+    rm -f "$OUT/suspension_$way/particles.csv" "$OUT/suspension_$way"/particles_*.vtp "$OUT/suspension_$way/particles.pvd"
 done
 # Random arrays at the fluidized bed's voidage at 18 and 24 cells per diameter (lavapipe: 6-12):
 # whether their drag at the bed's Re converges to Tenneti et al.'s (validation/lbm/REPORT.md).
@@ -157,7 +157,7 @@ while read -r name _; do
     step "$kind/$name/log" 20 300 $bin/lbm-server run ".gpu/scenes/$name/scene.toml" --out "$dir"
     code=$?
     [ "$code" -ne 125 ] && echo "$code" > "$dir/exit_code" && cp ".gpu/scenes/$name/scene.toml" "$dir/"
-    rm -rf "$dir/fields"
+    rm -rf "$dir/fields" "$dir"/particles_*.vtp "$dir/particles.pvd"
 done < .gpu/plan.txt
 # A sphere held in a stream at Re 200 and 300 at 24 and 32 cells per diameter (lavapipe: 6-16):
 # whether its drag keeps falling as 1 / d towards Schiller-Naumann (validation/lbm/REPORT.md).
