@@ -124,6 +124,58 @@ fn drag_error_at(operator: &str, tau: f64) -> Option<f64> {
     measured_at(&DRAG_AGAINST_TAU, operator, tau)
 }
 
+/// Stokes drag of spheres of a few cells, by diameter in cells (validation/lbm/REPORT.md,
+/// "spheres of a few cells and less": a dilute array against Sangani & Acrivos; TRT moving
+/// through the lattice, BGK and MRT at rest): (diameter, [BGK, TRT, MRT] x [tau 0.6, tau 1]) in %.
+const SMALL_SPHERE_DRAG: [(f64, [[f64; 2]; 3]); 7] = [
+    (0.5, [[-100.0, -100.0], [-100.1, -100.0], [-100.0, -100.0]]),
+    (1.0, [[-100.0, -100.0], [-91.9, -94.1], [-100.0, -100.0]]),
+    (1.5, [[-61.5, -72.3], [-63.8, -73.0], [-61.5, -71.3]]),
+    (2.0, [[-41.0, -58.2], [-44.9, -57.1], [-40.9, -55.1]]),
+    (3.0, [[-10.3, -33.2], [-22.4, -34.0], [-9.5, -26.4]]),
+    (4.0, [[-10.5, -26.0], [-15.8, -22.2], [-10.2, -20.9]]),
+    (6.0, [[-4.5, -16.6], [-9.5, -15.3], [-4.2, -11.7]]),
+];
+
+/// Where the smallest particles span fewer cells than the immersed boundary resolves: the drag
+/// measured for their diameter (`diameter` in m), at the measured tau nearer the lattice's.
+fn small_sphere_warning(units: &LatticeUnits, diameter: f64) -> Option<String> {
+    let k = operator_index(&units.operator)?;
+    let cells = diameter / units.dx;
+    let (last, column) = (SMALL_SPHERE_DRAG.len() - 1, usize::from(units.tau > 0.8));
+    if cells >= SMALL_SPHERE_DRAG[last].0 {
+        return None;
+    }
+    let at = |d: f64| -> [f64; 2] {
+        let upper = SMALL_SPHERE_DRAG
+            .iter()
+            .position(|r| r.0 >= d)
+            .unwrap_or(last)
+            .max(1);
+        let ((d0, e0), (d1, e1)) = (SMALL_SPHERE_DRAG[upper - 1], SMALL_SPHERE_DRAG[upper]);
+        let w = ((d - d0) / (d1 - d0)).clamp(0.0, 1.0);
+        std::array::from_fn(|t| e0[k][t] + (e1[k][t] - e0[k][t]) * w)
+    };
+    let error = at(cells);
+    (error[column].abs() > DRAG_ERROR_WARN).then(|| {
+        format!(
+            "the smallest particles are {cells:.1} cells across (diameter {diameter:e} m / lattice.dx): \
+             the immersed boundary under-resolves spheres of a few cells, whose drag comes out low: \
+             in Stokes flow a sphere of this size measured {:+.0}% at tau 0.6 and {:+.0}% at tau 1 \
+             ({}; this lattice's tau {:.3}), and at a cell or less one that sits on a cell corner \
+             covers no cell's centre and feels no drag (validation/lbm/REPORT.md, \"spheres of a few \
+             cells and less\"); a particle with too little drag settles too fast. Refine lattice.dx to \
+             {:.3e} m ({} cells per diameter) or less",
+            error[0],
+            error[1],
+            units.operator,
+            units.tau,
+            diameter / SMALL_SPHERE_DRAG[last].0,
+            SMALL_SPHERE_DRAG[last].0
+        )
+    })
+}
+
 /// `coupling.radius_correction` as the product deficit x radius (cells^2): a sphere of r cells is
 /// drawn r + product / max(r, 2). 0 for "none"; for "calibrated" the measured deficit at the lattice's
 /// tau times its radius (refused beyond the operator's calibrated taus).
@@ -317,6 +369,7 @@ impl FluidSide {
         let lattice = Lattice::new(gpu, setup_of(&units), health_of(&units), Some(options))?;
         let lubrication = scene.coupling.lubrication.then(|| lubrication_of(scene, &units));
         let diameter = 2.0 * radii.iter().fold(0.0, |a, &r| r.max(a));
+        let smallest = 2.0 * radii.iter().fold(f64::INFINITY, |a, &r| r.min(a));
         let warning = if scene.coupling.radius_correction == "none" {
             tau_warning(&units.operator, units.tau)
         } else {
@@ -325,6 +378,7 @@ impl FluidSide {
         let warnings = [
             warning,
             resolution_warning(&units, diameter),
+            small_sphere_warning(&units, smallest),
             stability_warning(&units, true),
         ];
         for warning in warnings.into_iter().flatten() {
@@ -802,6 +856,67 @@ mod tests {
             correction_warning(&units(&e4_bgk), 0.015),
             None,
             "BGK's held and towed sphere agree"
+        );
+    }
+
+    /// SMALL_SPHERE_DRAG holds the runs of validation/lbm/REPORT.md's section, row by row: BGK
+    /// and MRT at rest, TRT moving.
+    #[test]
+    fn the_small_sphere_drag_is_the_reports() {
+        let section =
+            crate::validate::report_section("## Immersed moving boundary: spheres of a few cells and less");
+        for (d, [bgk, trt, mrt]) in SMALL_SPHERE_DRAG {
+            let row = section
+                .lines()
+                .find(|l| l.starts_with(&format!("| {d:.1} |")))
+                .unwrap_or_else(|| panic!("no row for {d} cells"));
+            let cells: Vec<&str> = row.split(" | ").collect();
+            let pct = |e: f64| format!("{e:+.1}%");
+            let expected = [bgk[0], bgk[1], trt[0], trt[1], mrt[0], mrt[1]].map(pct);
+            let found = [
+                cells[3],
+                cells[4],
+                cells[6],
+                cells[8],
+                cells[9],
+                cells[10].trim_end_matches(" |"),
+            ];
+            assert_eq!(found, expected.each_ref().map(|s| s.as_str()), "{row}");
+        }
+    }
+
+    /// E1's lattice (TRT, tau 1.2, dx 2.5 mm): its 15 mm sphere (6 cells) is not warned of; a 10
+    /// mm one (4 cells) is, with the measured -16% / -22%, 5 mm (2 cells) -45% / -57%; MRT at tau
+    /// 0.6 drags enough at 5 cells (-7%) but not at 4 (-10%).
+    #[test]
+    fn particles_of_a_few_cells_are_warned_of_too_little_drag() {
+        let e1 = units(TEN_CATE_E1);
+        assert_eq!(small_sphere_warning(&e1, 0.015), None, "6 cells");
+        let four = small_sphere_warning(&e1, 0.010).expect("4 cells");
+        assert!(
+            four.contains("are 4.0 cells across")
+                && four.contains("measured -16% at tau 0.6 and -22% at tau 1 (trt")
+                && four.contains("Refine lattice.dx to 1.667e-3 m (6 cells per diameter)"),
+            "{four}"
+        );
+        let two = small_sphere_warning(&e1, 0.005).expect("2 cells");
+        assert!(
+            two.contains("measured -45% at tau 0.6 and -57% at tau 1"),
+            "{two}"
+        );
+        let mrt = units(
+            &TEN_CATE_E1
+                .replace("operator = \"trt\"", "operator = \"mrt\"")
+                .replace("mach = 0.1", "mach = 0.1\ntau = 0.6"),
+        );
+        assert_eq!(
+            small_sphere_warning(&mrt, 0.0125),
+            None,
+            "MRT, 5 cells, tau 0.6: -7.4%"
+        );
+        assert!(
+            small_sphere_warning(&mrt, 0.010).is_some(),
+            "MRT, 4 cells, tau 0.6: -10.2%"
         );
     }
 

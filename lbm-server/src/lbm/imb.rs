@@ -151,15 +151,19 @@ impl CoveredCells {
 /// measured there.
 pub const FUSED_FROM: f64 = 0.2;
 
+/// How far from the centre of a sphere of radius `r` (cells) a cell's centre gets a solid
+/// fraction: r + 1/2 - 1/(12 r). The fraction at distance d is clamp(reach - d, 0, 1)
+/// (imb.wgsl `solid_fraction`, docs/imb.md "Solid fraction").
+pub fn solid_reach(r: f64) -> f64 {
+    r - 1.0 / (12.0 * r) + 0.5
+}
+
 /// The fraction of the cells that spheres of these radii (cells) cover: those whose centre lies
-/// within r + 1/2 - 1/(12 r) of a sphere's centre (where the solid fraction is above 0), counted
-/// per sphere (overlaps twice).
+/// within [`solid_reach`] of a sphere's centre (where the solid fraction is above 0), counted per
+/// sphere (overlaps twice).
 pub fn covered_fraction(radii: impl Iterator<Item = f64>, cells: usize) -> f64 {
     let covered: f64 = radii
-        .map(|r| {
-            let reach = r - 1.0 / (12.0 * r) + 0.5;
-            4.0 / 3.0 * std::f64::consts::PI * reach.powi(3)
-        })
+        .map(|r| 4.0 / 3.0 * std::f64::consts::PI * solid_reach(r).powi(3))
         .sum();
     covered / cells as f64
 }
@@ -1060,7 +1064,7 @@ mod tests {
 
     /// Cells whose centre lies where the solid fraction of a sphere at `c` (radius r) is above 0.
     fn cells_covered(c: [f64; 3], r: f64) -> usize {
-        let reach = r - 1.0 / (12.0 * r) + 0.5;
+        let reach = solid_reach(r);
         let m = reach.ceil() as i64 + 1;
         let base = c.map(|x| x.floor() as i64);
         let mut count = 0;
