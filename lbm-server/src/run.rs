@@ -371,9 +371,11 @@ impl Session {
             }
             if stop {
                 progress.finish();
-                self.fluid
-                    .write_fields_of_early_end()
-                    .map_err(|e| self.describe_fluid(e))?;
+                if !last {
+                    self.fluid
+                        .write_fields_of_early_end()
+                        .map_err(|e| self.describe_fluid(e))?;
+                }
                 // Ctrl-C on a terminal reaches both processes: our own interrupt takes precedence.
                 let ours = self.interrupted.load(Ordering::SeqCst);
                 return Ok(if ours {
