@@ -149,6 +149,31 @@ fn a_coupled_blow_up_is_the_fluids_with_its_last_good_fields() {
     }
 }
 
+/// The same blow-up with the DEM joined from outside (`--dem external`): the fluid's STOP
+/// reaches it, so the DEM ends cleanly (exit 0) while the server reports the fluid's failure (a
+/// server that failed without replying left the DEM to find it gone and fail too).
+#[test]
+fn an_external_dem_is_told_to_stop_when_the_fluid_blows_up() {
+    let sphere = "\n[particles]\ndensity = 1100.0\n[[particles.sphere]]\nposition = [0.008, 0.008, 0.008]\nradius = 0.002\n";
+    let text = CAVITY.replace("check_interval = 50", "check_interval = 10") + sphere;
+    let dir = temp_dir("externalblowup");
+    let scene = write_scene(&dir, &text);
+    let out = dir.join("out");
+    let (mut server, run) = start_external(&scene, &out);
+    let client = std::process::Command::new(bin("dem-client"))
+        .args(["connect", "--service", &run, "--scene"])
+        .arg(&scene)
+        .output()
+        .unwrap();
+    let client_err = String::from_utf8_lossy(&client.stderr);
+    assert!(client.status.success(), "{client_err}");
+    assert!(client_err.contains("finished after"), "{client_err}");
+    let (code, _) = server.wait_exit(std::time::Duration::from_secs(60));
+    let err = Proc::drain(&server.stderr);
+    assert_eq!(code, Some(1), "{err}");
+    assert!(err.contains("error: the fluid became unstable by step"), "{err}");
+}
+
 #[test]
 fn lattice_scene_mistakes_name_the_field() {
     let cases = [

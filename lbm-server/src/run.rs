@@ -416,14 +416,16 @@ impl Session {
         if let Err(e) = self.csv.flush() {
             protocol::say!("lbm-server: error: particles.csv: {e}");
         }
-        let grace = if result.is_ok() || self.told_to_end {
+        // A DEM whose last reply said FINAL or STOP ends on its own: it is given the time to.
+        let told = result.is_ok() || self.told_to_end;
+        let grace = if told {
             Duration::from_secs(2)
         } else {
             Duration::ZERO
         };
         if let Some(child) = self.child.as_mut() {
             launch::end_child(child, grace);
-        } else if result.is_ok() {
+        } else if told {
             // An external DEM: let it read the last reply before our ports close.
             self.link.linger(protocol::transport::LINGER);
         }
