@@ -167,7 +167,11 @@ fn an_external_dem_is_told_to_stop_when_the_fluid_blows_up() {
         .unwrap();
     let client_err = String::from_utf8_lossy(&client.stderr);
     assert!(client.status.success(), "{client_err}");
-    assert!(client_err.contains("finished after"), "{client_err}");
+    assert!(
+        client_err.contains("finished after")
+            && client_err.contains("the fluid server stopped the run after"),
+        "{client_err}"
+    );
     let (code, _) = server.wait_exit(std::time::Duration::from_secs(60));
     let err = Proc::drain(&server.stderr);
     assert_eq!(code, Some(1), "{err}");

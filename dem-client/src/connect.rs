@@ -141,6 +141,12 @@ pub fn main(args: ConnectArgs) -> ExitCode {
     ) {
         Ok(steps) => {
             protocol::say!("dem-client: {}", finish_line(&particles, steps));
+            if steps < welcome.steps && !interrupted.load(Ordering::SeqCst) {
+                protocol::say!(
+                    "dem-client: the fluid server stopped the run after {steps} of {} steps",
+                    welcome.steps
+                );
+            }
             if let Some(line) = particles.world.everyone.summary() {
                 protocol::say!("dem-client: {line}");
             }
