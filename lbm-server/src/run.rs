@@ -371,22 +371,27 @@ impl Session {
             }
             if stop {
                 progress.finish();
-                if !last {
-                    self.fluid
-                        .write_fields_of_early_end()
-                        .map_err(|e| self.describe_fluid(e))?;
-                }
-                // Ctrl-C on a terminal reaches both processes: our own interrupt takes precedence.
-                let ours = self.interrupted.load(Ordering::SeqCst);
-                return Ok(if ours {
-                    Ending::Interrupted
-                } else {
-                    Ending::StoppedByPeer
-                });
+                return self.end_early(last);
             }
         }
         progress.finish();
         Ok(Ending::Completed)
+    }
+
+    /// A run stopped by Ctrl-C or the DEM's STOP: the field outputs of the step it stopped at
+    /// (unless it was the last, which wrote them), and how it ended.
+    fn end_early(&mut self, last: bool) -> Result<Ending, String> {
+        if !last {
+            self.fluid
+                .write_fields_of_early_end()
+                .map_err(|e| self.describe_fluid(e))?;
+        }
+        // Ctrl-C on a terminal reaches both processes: our own interrupt takes precedence.
+        Ok(if self.interrupted.load(Ordering::SeqCst) {
+            Ending::Interrupted
+        } else {
+            Ending::StoppedByPeer
+        })
     }
 
     fn describe_fluid(&self, e: String) -> String {
