@@ -77,6 +77,23 @@ fn tau_below_the_limit_is_refused() {
     assert!(!out.exists());
 }
 
+/// `--duration` runs the steps that cover it (Poiseuille's dt is 0.1 s: 0.45 s is 5 steps), and
+/// is refused beside `--steps`.
+#[test]
+fn a_duration_on_the_command_line_runs_the_steps_that_cover_it() {
+    let dir = temp_dir("duration");
+    let scene = write_scene(&dir, POISEUILLE);
+    let out = dir.join("out");
+    let result = server(&scene, &out, &["--duration", "0.45"]).output().unwrap();
+    let err = String::from_utf8_lossy(&result.stderr);
+    assert_eq!(result.status.code(), Some(0), "{err}");
+    assert_eq!(summary(&out)["steps_completed"], 5, "{err}");
+    let both = server(&scene, &out, &["--duration", "0.45", "--steps", "3"])
+        .output()
+        .unwrap();
+    assert_eq!(both.status.code(), Some(2));
+}
+
 #[test]
 fn too_high_a_lattice_mach_number_is_refused() {
     let (code, err, _) = run(

@@ -18,6 +18,10 @@ pub struct RunArgs {
     /// Number of output steps (overrides the scene's time.steps).
     #[arg(long)]
     steps: Option<u64>,
+    /// Simulated time [s] (overrides the scene's time.steps or time.duration): the steps that
+    /// cover it.
+    #[arg(long, conflicts_with = "steps")]
+    duration: Option<f64>,
     /// Output folder (default: out/SCENE_NAME).
     #[arg(long)]
     out: Option<PathBuf>,
@@ -33,7 +37,14 @@ pub fn main(args: RunArgs) -> ExitCode {
             return ExitCode::from(2);
         }
     };
-    let steps = args.steps.unwrap_or(scene.time.steps);
+    let steps = match args.duration.map(|d| scene.steps_covering(d, "--duration")) {
+        Some(Ok(steps)) => steps,
+        Some(Err(e)) => {
+            protocol::say!("dem-client: error: {e}");
+            return ExitCode::from(2);
+        }
+        None => args.steps.unwrap_or(scene.time.steps),
+    };
     let out = args.out.unwrap_or_else(|| PathBuf::from("out").join(&scene.name));
     let interrupted = Arc::new(AtomicBool::new(false));
     let flag = interrupted.clone();

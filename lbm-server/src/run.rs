@@ -21,6 +21,10 @@ pub struct RunArgs {
     /// Number of steps (overrides the scene's time.steps).
     #[arg(long)]
     steps: Option<u64>,
+    /// Simulated time [s] (overrides the scene's time.steps or time.duration): the steps that
+    /// cover it.
+    #[arg(long, conflicts_with = "steps")]
+    duration: Option<f64>,
     /// Output folder (default: out/SCENE_NAME).
     #[arg(long)]
     out: Option<PathBuf>,
@@ -75,7 +79,10 @@ fn prepare(args: &RunArgs) -> Result<Prepared, String> {
         ),
     };
     require_lattice(&scene, &scene_file)?;
-    let steps = args.steps.unwrap_or(scene.time.steps);
+    let steps = match args.duration {
+        Some(duration) => scene.steps_covering(duration, "--duration")?,
+        None => args.steps.unwrap_or(scene.time.steps),
+    };
     if steps == 0 {
         return Err("--steps = 0: must be at least 1".into());
     }

@@ -69,6 +69,24 @@ impl Scene {
     }
 }
 
+impl Scene {
+    /// The steps of `time.dt` that cover `duration` seconds, as `time.duration` gives them; a
+    /// bad duration is refused naming `field` (e.g. a command-line option).
+    pub fn steps_covering(&self, duration: f64, field: &str) -> Result<u64, String> {
+        let run = Either {
+            steps_field: "",
+            steps: None,
+            time_field: field,
+            time: Some(duration),
+            round: Round::Up,
+        };
+        let steps = run
+            .resolve(self.time.dt, "")
+            .map_err(|e| format!("{} = {}: {}", e.field, e.value, e.problem))?;
+        Ok(steps.expect("a duration given"))
+    }
+}
+
 impl Either<'_> {
     /// The steps given, or those of the time given; None when neither is.
     fn resolve(&self, dt: f64, file: &str) -> Result<Option<u64>, SceneError> {
@@ -159,6 +177,17 @@ mod tests {
                 scene.output.fields_interval
             ),
             (900, 100, 0)
+        );
+    }
+
+    /// `--duration` on the command line: the steps that cover it, a bad one named by the option.
+    #[test]
+    fn a_duration_given_apart_from_the_scene_is_the_steps_that_cover_it() {
+        let scene = with(STEPS, STEPS).unwrap();
+        assert_eq!(scene.steps_covering(1.04, "--duration"), Ok(901));
+        assert_eq!(
+            scene.steps_covering(-1.0, "--duration"),
+            Err("--duration = -1 s: must be a finite number > 0".to_string())
         );
     }
 
