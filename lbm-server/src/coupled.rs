@@ -19,6 +19,7 @@ use protocol::{ParticleReply, ParticleState, Physics};
 use scene::lattice::{LatticeFace, LatticeUnits};
 use scene::Scene;
 use std::path::Path;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 
 /// What computes the particles' hydrodynamic loads: the lattice with its units, the buoyancy it
@@ -523,23 +524,30 @@ impl FluidSide {
             std::array::from_fn(|a| self.units.force[a] * dx / (dt * dt) - self.gravity[a]);
         let fluid_density = self.fluid_density;
         self.take_way();
+        // Set where a load is not finite, by the pass that converts the loads (no pass of its own).
+        let not_finite = AtomicBool::new(false);
         self.lattice.step_coupled_with(&lattice_states, out, |j, l| {
             let s = &states[j];
             let volume = 4.0 / 3.0 * std::f64::consts::PI * s.radius.powi(3);
-            ParticleReply {
+            let reply = ParticleReply {
                 id: s.id,
                 force: std::array::from_fn(|a| {
                     l.force[a] * force_unit + fluid_density * volume * pressure_acceleration[a]
                 }),
                 torque: l.torque.map(|t| t * torque_unit),
+            };
+            if !finite_load(&reply) {
+                not_finite.store(true, Ordering::Relaxed);
             }
+            reply
         })?;
         if let Some(lubrication) = &self.lubrication {
             lubrication.apply(states, out);
         }
         self.steps += 1;
-        if let Some(reply) = out.iter().find(|r| !finite_load(r)) {
-            return Err(self.not_finite(reply));
+        if not_finite.into_inner() {
+            let reply = *out.iter().find(|r| !finite_load(r)).expect("a load not finite");
+            return Err(self.not_finite(&reply));
         }
         if self.steps.is_multiple_of(self.units.check_interval) {
             self.check()?;

@@ -184,7 +184,7 @@ struct Session {
     p: Prepared,
     link: FluidLink,
     child: Option<Child>,
-    csv: ParticleOutput,
+    particles: ParticleOutput,
     fluid: FluidSide,
     interrupted: Arc<AtomicBool>,
     peer: Option<PeerInfo>,
@@ -215,8 +215,8 @@ impl Session {
                 return EXIT_FAILURE;
             }
         };
-        let csv = match ParticleOutput::create(&p.out, p.scene.dem.output.vtk) {
-            Ok(csv) => csv,
+        let particles = match ParticleOutput::create(&p.out, p.scene.dem.output.vtk) {
+            Ok(particles) => particles,
             Err(e) => {
                 protocol::say!(
                     "lbm-server: error: {}: {e}",
@@ -236,7 +236,7 @@ impl Session {
             p,
             link,
             child: None,
-            csv,
+            particles,
             fluid,
             interrupted,
             peer: None,
@@ -369,7 +369,7 @@ impl Session {
             self.times.exchange += clock.lap();
             if output {
                 let time = header.time * units.time_s;
-                self.csv.write_step(step, time, &si, &replies)?;
+                self.particles.write_step(step, time, &si, &replies)?;
             }
             progress.update(step + 1);
             self.times.output += clock.lap();
@@ -425,7 +425,7 @@ impl Session {
         if let (Err(msg), false) = (&result, code == EXIT_INTERRUPTED) {
             protocol::say!("lbm-server: error: {msg}");
         }
-        if let Err(e) = self.csv.flush() {
+        if let Err(e) = self.particles.flush() {
             protocol::say!("lbm-server: error: particles.csv: {e}");
         }
         // A DEM whose last reply said FINAL or STOP ends on its own: it is given the time to.
