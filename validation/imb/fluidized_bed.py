@@ -402,8 +402,13 @@ def tenneti_voidage(re_):
     return 0.5 * (low + high)
 
 
-def held_rows():
-    """The held bed's report lines."""
+# The command that makes a case's run on a GPU (the batch of validation/gpu/: prepare.sh writes the
+# scenes, run.sh runs them on the device machine, import.sh takes them into the results).
+GPU_BATCH = "bash validation/gpu/prepare.sh"
+
+
+def held_rows(opening):
+    """The held bed's report lines; its rows of the summary appended to OPENING."""
     operator, re_, depth, _ = HELD_FROM
     ar, re_t = settling_reynolds()
     lines = [
@@ -442,6 +447,12 @@ def held_rows():
             error = "%+.0f%%" % (100.0 * (mean / expected - 1.0))
         if "largest_displacement_m" in rec:
             moved = "%.2g" % (rec["largest_displacement_m"] / (D / cells))
+        command = GPU_BATCH if cells in GPU_HELD_CELLS else \
+            "python3 validation/imb/fluidized_bed.py %s" % ("held-superposed" if held_operator == "mrts" else "held")
+        opening.append(("held bed, %d cells per d, %s term: liquid's force / buoyant weight" % (
+            cells, "superposition" if held_operator == "mrts" else "Noble-Torczynski"),
+            "%.3f, Tenneti et al. (2011)" % expected, force.split(" ")[0] or columns[0],
+            error.replace("%", " %") or "-", command))
         lines.append(
             "| %d | %.4f | %s | %s | %s | %s | %s | %s | %s | %.3f | %s | %.3f | %.0f | %s |"
             % (
@@ -677,6 +688,7 @@ def report():
         "|---|---:|---:|---:|---:|---:|---|---:|---:|---:|---|---|---:|---|---|---:|---:|---:|---:|---:|",
     ]
     records = compact.runs(SCRIPT)
+    opening = []
     for operator, re_, depth, cells in CASES + GPU_CASES:
         rec = records.get(name(operator, re_, depth, cells))
         if rec is None:
@@ -695,6 +707,11 @@ def report():
                 share = rec["weight_carried"]
                 carried = "%.3f" % share
                 excess = "%.2f" % (share * buoyant_weight(re_) / tenneti(1.0 - mean, re_))
+        gpu = (operator, re_, depth, cells) in GPU_CASES
+        opening.append(("%s, Re %d, slab %d d, %d cells per d: bed voidage" % (label(operator), re_, depth, cells),
+                        "%.3f, Richardson-Zaki" % eps_rz, measured.split(" ")[0] or columns[0],
+                        error.replace("%", " %") or "-",
+                        GPU_BATCH if gpu else "python3 validation/imb/fluidized_bed.py %s" % name(operator, re_, depth, cells)))
         lines.append(
             "| %s | %d | %d | %d | %.4f | %.4f | %s | %s | %s | %s | %s | %s | %s | %s | %s | %.3f | %s | %s | %.3f | %s |"
             % (
@@ -757,7 +774,9 @@ def report():
     lines.append("is it the grains rubbing on")
     lines.append("the walls: with the walls frictionless for them (\"MRT, walls frictionless\") the bed expands to")
     lines.append("0.761 at 6 cells (+30.2%), as with friction. The periodic slab at 15 cells is in the GPU batch.")
-    lines += held_rows()
+    lines += held_rows(opening)
+    lines[2:2] = [compact.summary(opening, "python3 validation/imb/fluidized_bed.py --report",
+                                  "`%s` writes the scenes of the GPU batch (validation/gpu/)." % GPU_BATCH), ""]
     with open(REPORT, "w") as f:
         f.write("\n".join(lines) + "\n")
     print("\n".join(lines))

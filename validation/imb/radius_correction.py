@@ -126,7 +126,7 @@ def refinement(series):
 
 
 def report():
-    rows = []
+    rows, opening = [], []
     series = {}
     at_radius = ten_cate.records()
     for name, rc in sorted(compact.runs(SCRIPT).items()):
@@ -137,7 +137,11 @@ def report():
         rows.append("| %s | %s | %g | %.3f | %.3f | %.4f | %+.1f | %.4f | %+.1f |" % (
             name, case, n, tau, product / r_cells, v, e, v_rc, e_rc))
         series.setdefault(box_of(name), []).append((n, e, e_rc))
+        opening.append(("%s (%s, N = %g, tau %.3f), corrected: terminal speed" % (name, case, n, tau),
+                        "u_inf %.3f m/s (unbounded)" % ten_cate.CASES[case]["u_inf"], "%.4f m/s" % v_rc, "%+.1f %%" % e_rc,
+                        "python3 validation/imb/radius_correction.py %s" % name))
     text = ("# Ten Cate in larger boxes with the calibrated radius correction\n\n"
+            + compact.summary(opening, "python3 validation/imb/radius_correction.py --report") + "\n\n"
             "Written by `python3 validation/imb/radius_correction.py --report` from "
             "`results/radius_correction.json` and `results/ten_cate.json` (runs on lavapipe, this repository's CPU "
             "machine). Each Ten Cate run (`ten_cate.py`) named in the first column run again with "

@@ -69,6 +69,16 @@ def dumps(value, indent=0):
     return json.dumps(value)
 
 
+def summary(rows, rebuilt_by, note=""):
+    """The table that opens a report: one row per case (case, reference, measured, error, the command that
+    makes its run), then what rebuilds the report (REBUILT_BY, a command) and NOTE."""
+    lines = ["| case | reference | measured | error | command |", "|---|---|---|---|---|"]
+    lines += ["| %s | %s | %s | %s | `%s` |" % tuple(row) for row in rows]
+    lines += ["", "The command of a row makes its run and adds it to the results; `%s` rebuilds this report "
+              "from the results alone.%s" % (rebuilt_by, " " + note if note else "")]
+    return "\n".join(lines)
+
+
 def imported(name):
     """Whether the GPU batch's run NAME (bed_<case>, exp_<run> or a Ten Cate run) is in the results: a bed
     that ran (to its end or not), a Ten Cate run that completed."""
