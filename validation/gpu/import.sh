@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # Takes a GPU batch back (validation/gpu/run.sh on the device machine): unpacks FILES_AT/gpu.tgz.*
-# into out/gpu_import/gpu/, imports its Ten Cate runs into validation/imb/runs/, its runs of E1 in
-# the experiment's box into validation/imb/runs_experiment/ and its beds into
-# validation/imb/runs_bed/ (the reports rebuilt), and lists what goes by hand into BENCHMARKS.md
+# into out/gpu_import/gpu/, imports its Ten Cate runs, its runs of E1 in the experiment's box and its
+# beds into the work folders validation/imb/work/{ten_cate,experiment,fluidized_bed}/ and their records
+# into validation/imb/results/*.json (the reports rebuilt), and lists what goes by hand into BENCHMARKS.md
 # (bench_*.txt, coupled_*.txt, suspension*/summary.json, dem_bench_*.txt) and into
 # validation/lbm/REPORT.md (the "finer grids" sections of validate/ and validate_wake/REPORT.md).
 #
@@ -29,7 +29,7 @@ fi
 if [ -d "$g/bed" ]; then
     echo "== fluidized bed"
     python3 validation/imb/fluidized_bed.py import "$g/bed" > /dev/null
-    ls validation/imb/runs_bed
+    ls validation/imb/work/fluidized_bed
 fi
 echo "== by hand: BENCHMARKS.md and validation/lbm/REPORT.md from"
 find "$g" -maxdepth 2 \( -name 'bench_*.txt' -o -name 'coupled_*.txt' -o -name 'dem_bench_*.txt' \

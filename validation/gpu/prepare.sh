@@ -92,14 +92,11 @@ else
     scenes 24 --cases E1 --mach 0.025 --width 200 --height 240
     # E1 in the experiment's box at 24 cells, tau 1.03: 160 x 160 x 256 cells, 1.7e11 cell-steps.
     experiment 24 --mach 0.01875
-    # Runs already imported are left out: a Ten Cate run that completed (validation/imb/runs/NAME),
-    # a bed that ran, to its end or to its blow-up (validation/imb/runs_bed/NAME without bed_).
+    # Runs already imported are left out: a Ten Cate run that completed (its record in
+    # validation/imb/results/ten_cate.json, experiment.json for exp_NAME), a bed that ran, to its end
+    # or to its blow-up (results/fluidized_bed.json, NAME without bed_).
     imported() {
-        case $1 in
-            bed_*) [ -f "validation/imb/runs_bed/${1#bed_}/log.txt" ] ;;
-            exp_*) grep -qs '"exit_code": 0' "validation/imb/runs_experiment/${1#exp_}/summary.json" ;;
-            *) grep -qs '"exit_code": 0' "validation/imb/runs/$1/summary.json" ;;
-        esac
+        python3 validation/imb/results.py imported "$1"
     }
     while read -r name rest; do
         if imported "$name"; then

@@ -3,12 +3,15 @@
 squeeze film (`coupling.lubrication`, integrated in the DEM's sub-steps), every fluid step recorded.
 
     python3 validation/imb/approach.py run [N ...]     # runs missing (default N = 6)
-    python3 validation/imb/approach.py report          # APPROACH.md and approach.png from runs_approach/
+    python3 validation/imb/approach.py report          # APPROACH.md and approach.png from results/approach.json
+    python3 validation/imb/approach.py distil DIR      # DIR/<case>_N<n>_lub-<on|off>/ into results/approach.json
 
 Scenes as validation/imb/ten_cate.py writes them (the experiment's 100 x 100 x 160 mm box, TRT,
 Mach 0.1), with one row of particles.csv per fluid step and, for "off", `coupling.lubrication = false`.
-Runs go to runs_approach/<case>_N<n>_lub-<on|off>/ (scene.toml, summary.json, log.txt, particles.csv
-reduced to the sphere from 40 mm above the floor on).
+Runs go to the ignored work folder validation/imb/work/approach/<case>_N<n>_lub-<on|off>/ (scene.toml,
+summary.json, log.txt, particles.csv reduced to the sphere from 40 mm above the floor on); what the
+report needs of each (its figures, and the sphere's time and height for the chart) is its record in
+validation/imb/results/approach.json, from which the report is built.
 """
 
 import argparse
@@ -22,10 +25,13 @@ import sys
 import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import results as compact  # noqa: E402
 import ten_cate as tc  # noqa: E402
 
 HERE = tc.HERE
-RUNS = os.path.join(HERE, "runs_approach")
+SCRIPT = "approach"
+RUNS = compact.work(SCRIPT)
+NAME_RE = re.compile(r"(E\d)_N([0-9p]+)_lub-(on|off)$")
 KEEP_BELOW = 0.040       # m: rows kept once the gap is below this
 SETTINGS = ("on", "off")
 TIME_FACTOR = 1.6        # simulated time = TIME_FACTOR x 120 mm / u_inf (E4 needs more than ten_cate.py's 1.3 to settle)
@@ -48,7 +54,7 @@ def write_scene(case, n, lub, path):
 
 def run_one(case, n, lub):
     out = run_dir(case, n, lub)
-    if os.path.exists(os.path.join(out, "summary.json")):
+    if os.path.exists(os.path.join(out, "summary.json")) or os.path.basename(out) in compact.runs(SCRIPT):
         print("%s N=%g lubrication %s: already run" % (case, n, lub))
         return
     os.makedirs(out, exist_ok=True)
@@ -70,6 +76,7 @@ def run_one(case, n, lub):
                       keep=("step", "time", "z", "vz", "fz"), digits=9,
                       row_kept=lambda row: float(row["z"]) - tc.R < KEEP_BELOW)
     shutil.rmtree(tmp, ignore_errors=True)
+    distil([out])
 
 
 def at_crossing(y, gap, level):
@@ -90,8 +97,9 @@ def film_alone_time(case, dx, h0, h1):
     return k / weight * (math.log(h0 / h1) - (h0 - h1) / dx)
 
 
-def analyse(case, n, lub):
-    out = run_dir(case, n, lub)
+def analyse(out, case, n, lub):
+    """The record of the run in folder OUT: the report's figures and the chart's series (None without
+    particles.csv)."""
     p = os.path.join(out, "particles.csv")
     if not os.path.exists(p):
         return None
@@ -102,7 +110,7 @@ def analyse(case, n, lub):
     log = open(os.path.join(out, "log.txt")).read()
     m = re.search(r"DEM step ([0-9.eE+-]+) s = fluid step / (\d+)", log)
     dx = tc.D / n
-    res = dict(case=case, N=n, lub=lub, dx=dx, dir=os.path.relpath(out, HERE), exit_reason=s.get("exit_reason"),
+    res = dict(case=case, N=n, lub=lub, dx=dx, dir=os.path.basename(out), exit_reason=s.get("exit_reason"),
                wall_time_s=s.get("wall_time_s"), tau=info.get("tau"), dt=info.get("dt"),
                dem_substeps=int(m.group(2)) if m else None,
                dem_physics=(s.get("peer") or {}).get("physics"), fluid_physics=s.get("fluid_physics"))
@@ -126,8 +134,35 @@ def analyse(case, n, lub):
     tail = [v for tk, v in zip(t, speed) if first is not None and tk >= t[-1] - (t[-1] - t[first]) / 3.0]
     res["rms_speed_end"] = (sum(v * v for v in tail) / len(tail)) ** 0.5 if tail else None
     res["final_gap"] = gap[-1]
-    res["series"] = dict(t=t, gap=gap, speed=speed)
+    res["series"] = dict(t=t, z=d["z"])     # as particles.csv has them (9 digits): the chart's series
     return res
+
+
+def distil(folders):
+    """The records of the run FOLDERS (named <case>_N<n>_lub-<on|off>) into results/approach.json."""
+    out = {}
+    for folder in folders:
+        name = os.path.basename(os.path.normpath(folder))
+        m = NAME_RE.match(name)
+        res = analyse(folder, m.group(1), float(m.group(2).replace("p", ".")), m.group(3)) if m else None
+        if res is None:
+            print("%s: no run, not distilled" % folder)
+            continue
+        out[name] = res
+    compact.merge(SCRIPT, out, about="The settling sphere's approach to the floor: one record per run of "
+                  "validation/imb/approach.py (its figures; the series t, z of the sphere, 9 digits, from 40 mm "
+                  "above the floor on).")
+
+
+def records():
+    """The records of results/approach.json in the order of their names, the series as the chart reads
+    them (t, gap)."""
+    out = []
+    for _, r in sorted(compact.runs(SCRIPT).items()):
+        r = dict(r)
+        r["series"] = dict(t=r["series"]["t"], gap=[z - tc.R for z in r["series"]["z"]])
+        out.append(r)
+    return out
 
 
 def chart(results, path):
@@ -162,11 +197,28 @@ def fmt(v, f="%.3g"):
     return "-" if v is None else f % v
 
 
+def summary_rows(results):
+    """Per run with the films on: the closing time of the gap from 0.5 to 0.1 mm against the film alone's."""
+    rows = []
+    for r in sorted(results, key=lambda r: (r["case"], r["N"])):
+        ratio = r["film_ratio"].get("0.5-0.1")
+        if r["lub"] != "on" or ratio is None:
+            continue
+        alone = film_alone_time(r["case"], r["dx"], 0.5e-3, 0.1e-3)
+        rows.append(("%s, N = %g, films on: time for the gap to close from 0.5 to 0.1 mm" % (r["case"], r["N"]),
+                     "%.3g s, the quasi-steady film alone" % alone, "%.3g s" % (ratio * alone),
+                     "%+.0f %%" % (100.0 * (ratio - 1.0)),
+                     "python3 validation/imb/approach.py run %g --cases %s" % (r["N"], r["case"])))
+    return rows
+
+
 def report(results):
     lines = [
         "# The settling sphere's approach to the floor, with and without the squeeze film",
         "",
-        "Generated by `python3 validation/imb/approach.py report` from `runs_approach/`. **Device: a CPU** "
+        compact.summary(summary_rows(results), "python3 validation/imb/approach.py report"),
+        "",
+        "Generated by `python3 validation/imb/approach.py report` from `results/approach.json`. **Device: a CPU** "
         "(Mesa lavapipe, 2 shared cores; no GPU in this session).",
         "",
         "Ten Cate et al. (2002) E1-E4 as in `validation/imb/REPORT.md` (the experiment's 100 x 100 x 160 mm "
@@ -208,8 +260,6 @@ def report(results):
     if os.path.exists(findings):
         lines += [open(findings).read().rstrip(), ""]
     open(os.path.join(HERE, "APPROACH.md"), "w").write("\n".join(lines))
-    slim = [{k: v for k, v in r.items() if k != "series"} for r in results]
-    json.dump(slim, open(os.path.join(HERE, "approach.json"), "w"), indent=1)
 
 
 def main():
@@ -219,6 +269,8 @@ def main():
     r.add_argument("N", nargs="*", type=float, default=[6.0])
     r.add_argument("--cases", nargs="+", default=list(tc.CASES), choices=list(tc.CASES))
     sub.add_parser("report")
+    d = sub.add_parser("distil")
+    d.add_argument("dir")
     args = a.parse_args()
     if args.cmd == "run":
         for n in args.N:
@@ -226,18 +278,14 @@ def main():
                 for lub in SETTINGS:
                     run_one(case, n, lub)
         return
-    results = []
-    for name in sorted(os.listdir(RUNS)) if os.path.isdir(RUNS) else []:
-        m = re.match(r"(E\d)_N([0-9p]+)_lub-(on|off)$", name)
-        if m:
-            res = analyse(m.group(1), float(m.group(2).replace("p", ".")), m.group(3))
-            if res:
-                results.append(res)
+    if args.cmd == "distil":
+        distil([os.path.join(args.dir, name) for name in sorted(os.listdir(args.dir))])
+    results = records()
     if not results:
-        raise SystemExit("no runs in %s" % RUNS)
+        raise SystemExit("no runs in %s" % compact.path(SCRIPT))
     chart(results, os.path.join(HERE, "approach.png"))
     report(results)
-    print("wrote APPROACH.md, approach.png, approach.json (%d runs)" % len(results))
+    print("wrote APPROACH.md, approach.png (%d runs)" % len(results))
 
 
 if __name__ == "__main__":

@@ -6,13 +6,17 @@ The runs are the experiment's: the closed 100 x 100 x 160 mm box, the sphere rel
 with its bottom 120 mm above the floor (scenes from validation/imb/ten_cate.py's `write_scene`),
 TRT, Mach 0.05 by default (tau 0.85 / 1.03 / 1.20 at 6 / 9 / 12 cells per diameter: at Mach 0.1
 E1's tau is 1.2-2.25, which biases the boundary: REPORT.md, "Tau check"; `--mach` for a series at
-one tau), with the code of the day they were run (each run's scene and log are kept).
+one tau), with the code of the day they were run. The runs are made in the ignored work folder
+validation/imb/work/experiment/<run>/; what the report needs of each (its lattice, tau, device and the
+sphere's time, height and vertical velocity) is its record in validation/imb/results/experiment.json,
+from which the report and the chart are built.
 
     python3 validation/imb/experiment.py run 6 9 12     # run the missing resolutions, then report
     python3 validation/imb/experiment.py run 12 --mach 0.0375   # N = 12 at tau 1.03 (as N = 9 at Mach 0.05)
-    python3 validation/imb/experiment.py report         # EXPERIMENT.md and experiment_E1.png from runs_experiment/
+    python3 validation/imb/experiment.py report         # EXPERIMENT.md and experiment_E1.png from the results
     python3 validation/imb/experiment.py scenes DIR 15 --mach 0.03    # DIR/exp_E1_N15_M0p03/scene.toml, a plan line
-    python3 validation/imb/experiment.py import DIR     # DIR/exp_<run>/ (lbm-server's outputs) into runs_experiment/
+    python3 validation/imb/experiment.py import DIR     # DIR/exp_<run>/ (lbm-server's outputs) into the results
+    python3 validation/imb/experiment.py distil DIR     # DIR/<run>/ (folders as `run` leaves them) into the results
 
 `scenes` and `import` are for the GPU batch (validation/gpu/prepare.sh, run.sh, import.sh): the
 experiment's box is a whole number of cells at 15, 24 and 30 cells per diameter (dx must divide
@@ -20,15 +24,18 @@ experiment's box is a whole number of cells at 15, 24 and 30 cells per diameter 
 """
 import argparse
 import csv
+import json
 import math
 import os
 import sys
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
+import results as compact  # noqa: E402
 import ten_cate as tc  # noqa: E402  (the scene writer, the binary and the csv reduction)
 
-RUNS = os.path.join(HERE, "runs_experiment")
+SCRIPT = "experiment"
+RUNS = compact.work(SCRIPT)
 REFERENCE = os.path.join(HERE, "reference")
 CASE = "E1"
 MACH = 0.05
@@ -67,12 +74,37 @@ def write_scenes(folder, ns, mach=MACH, sim_time=SIM_TIME):
 
 
 def import_runs(src):
-    """Each SRC/exp_<run>/ with a summary.json into runs_experiment/<run>/ (`ten_cate.import_runs`)."""
-    tc.import_runs(src, force=True, runs=RUNS, prefix=PREFIX)
+    """Each SRC/exp_<run>/ with a summary.json into the work folder (`ten_cate.import_runs`), then into
+    the results."""
+    distil(tc.import_runs(src, force=True, runs=RUNS, prefix=PREFIX))
 
 
 def run(n, mach=MACH, force=False):
-    tc.run_one(CASE, n, force, mach, sim_time=SIM_TIME, out=run_dir(n, mach))
+    out = run_dir(n, mach)
+    if os.path.basename(out) in compact.runs(SCRIPT) and not force:
+        print("%s: already run, skipped" % os.path.basename(out))
+        return
+    tc.run_one(CASE, n, force, mach, sim_time=SIM_TIME, out=out)
+    distil([out])
+
+
+def distil(folders):
+    """The records of the run FOLDERS (E1_N<n>_M<mach>, with particles.csv) into the results."""
+    out = {}
+    for folder in folders:
+        if not os.path.exists(os.path.join(folder, "particles.csv")):
+            print("%s: no particles.csv, not distilled" % folder)
+            continue
+        s = tc.load_series(os.path.join(folder, "particles.csv"))
+        info = tc.parse_log(os.path.join(folder, "log.txt"))
+        name = os.path.basename(os.path.normpath(folder))
+        summary = os.path.join(folder, "summary.json")
+        code = json.load(open(summary)).get("exit_code") if os.path.exists(summary) else None
+        out[name] = dict(tau=info.get("tau"), cells=info.get("cells"), device=info.get("adapter", "?"), exit_code=code,
+                         series=dict(t=s["time"], z=s["z"], vz=s["vz"]))
+    compact.merge(SCRIPT, out, about="Ten Cate E1 against the experiment: one record per run of "
+                  "validation/imb/experiment.py (tau, lattice, device from its log; the exit code; the series t, z, "
+                  "vz of the sphere as its reduced particles.csv has them, 7 digits).")
 
 
 def interp(x, xs, ys):
@@ -109,16 +141,16 @@ def gap_from_speed(exp_v):
     return ts, gaps
 
 
-def load_run(out):
-    s = tc.load_series(os.path.join(out, "particles.csv"))
-    info = tc.parse_log(os.path.join(out, "log.txt"))
-    t = s["time"]
+def load_run(out, r):
+    """The run OUT (its name) from its record R: its series as the report reads them."""
+    s = r["series"]
+    t = s["t"]
     speed = [-v for v in s["vz"]]
     gap = [(z - tc.R) / tc.D for z in s["z"]]
     n = float(os.path.basename(out).split("_N")[1].split("_M")[0].replace("p", "."))
     mach = float(os.path.basename(out).split("_M")[1].replace("p", "."))
-    return dict(n=n, mach=mach, t=t, speed=speed, gap=gap, tau=info.get("tau"), cells=info.get("cells"), dir=out,
-                device=info.get("adapter", "?"))
+    return dict(n=n, mach=mach, t=t, speed=speed, gap=gap, tau=r["tau"], cells=r["cells"], dir=out,
+                device=r["device"])
 
 
 def compare(r, exp_v, exp_g):
@@ -183,16 +215,20 @@ def pct(a, b):
 def report():
     exp_v = read_reference("ten_cate_2002_E1_velocity.csv")
     exp_g = read_reference("ten_cate_2002_E1_gap.csv")
-    dirs = [os.path.join(RUNS, d) for d in os.listdir(RUNS) if os.path.exists(os.path.join(RUNS, d, "particles.csv"))]
-    every = sorted((load_run(d) for d in dirs), key=lambda r: (-r["mach"], r["n"]))
+    every = sorted((load_run(d, r) for d, r in compact.runs(SCRIPT).items()), key=lambda r: (-r["mach"], r["n"]))
     # A run compared simulated the measured plateau and the first 3 s (a run stopped early did not).
     runs = [r for r in every if r["t"] and r["t"][-1] >= 3.0]
     short = ["%s (%.2f s simulated)" % (os.path.basename(r["dir"]), r["t"][-1] if r["t"] else 0.0)
              for r in every if r not in runs]
     chart(runs, exp_v, exp_g, os.path.join(HERE, "experiment_E1.png"))
-    rows, times = [], []
+    rows, times, opening = [], [], []
     for r in runs:
         c = compare(r, exp_v, exp_g)
+        opening.append(("E1, N = %g, Mach %g (tau %.2f): plateau speed, %g-%g s" % (r["n"], r["mach"], r["tau"] or float("nan"),
+                                                                                WINDOW[0], WINDOW[1]),
+                        "%.4f m/s, measured" % c["exp_plateau"], "%.4f m/s" % c["plateau"],
+                        "%+.1f %%" % pct(c["plateau"], c["exp_plateau"]),
+                        "python3 validation/imb/experiment.py run %g --mach %g" % (r["n"], r["mach"])))
         rows.append("| %g | %g | %s | %.3f | %.4f at %.2f s | %.4f | %+.1f | %+.1f | %.2f / %+.2f (%d points) | %s |"
                     % (r["n"], r["mach"], "x".join(map(str, r["cells"] or [])), r["tau"] or float("nan"), c["peak"], c["t_peak"],
                        c["plateau"], pct(c["plateau"], c["exp_plateau"]), pct(c["plateau"], c["exp_slope"]),
@@ -209,8 +245,10 @@ def report():
     drift = (interp(at, *exp_g), interp(at, ti, gi))
     text = """# Ten Cate et al. (2002) E1 against the experiment's own curves (issue 5)
 
-Generated by `python3 validation/imb/experiment.py report` from `runs_experiment/` (runs made by
-`experiment.py run N...`, each with its scene and log). REPORT.md compares every case with u_inf,
+%(opening)s
+
+Generated by `python3 validation/imb/experiment.py report` from `results/experiment.json` (runs
+made by `experiment.py run N...`). REPORT.md compares every case with u_inf,
 the unbounded terminal velocity; here E1 (Re 1.5, the case the experiment's walls slow most) is
 compared with what the experiment measured in its box: the sphere's speed and its gap to the floor
 over time, digitized from the paper's figures (`reference/ten_cate_2002_E1_velocity.csv` and
@@ -250,7 +288,7 @@ and against the measured gap's slope there (%(exp_slope).4f m/s, least squares o
 
 u_inf = %(u_inf)g m/s; the measured plateau is %(plateau_vs_uinf)+.1f%% from it (the walls of the
 box).%(short)s
-""" % dict(mach=MACH, sim=SIM_TIME, exp_peak=c0["exp_peak"] if c0 else float("nan"),
+""" % dict(opening=compact.summary(opening, "python3 validation/imb/experiment.py report"), mach=MACH, sim=SIM_TIME, exp_peak=c0["exp_peak"] if c0 else float("nan"),
            exp_plateau=c0["exp_plateau"] if c0 else float("nan"), rows="\n".join(rows),
            at=at, g_meas=drift[0], g_speed=drift[1], w0=WINDOW[0], w1=WINDOW[1],
            exp_slope=c0["exp_slope"] if c0 else float("nan"), slope_points=c0["slope_points"] if c0 else 0,
@@ -278,12 +316,16 @@ def main():
     sc.add_argument("--sim-time", type=float, default=SIM_TIME)
     im = sub.add_parser("import")
     im.add_argument("dir")
+    di = sub.add_parser("distil")
+    di.add_argument("dir")
     args = ap.parse_args()
     if args.cmd == "scenes":
         write_scenes(args.dir, args.N, args.mach, args.sim_time)
         return
     if args.cmd == "import":
         import_runs(args.dir)
+    if args.cmd == "distil":
+        distil([os.path.join(args.dir, d) for d in sorted(os.listdir(args.dir))])
     if args.cmd == "run":
         for n in args.N:
             run(n, args.mach, args.force)

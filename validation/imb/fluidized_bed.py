@@ -2,21 +2,24 @@
 """The fluidized bed of validation/scenes/fluidized-bed.toml at Re 200 and 400 with each operator.
 
 The seed paper's bed (BGK, 10 cells per diameter) ran at Re 200 and diverged at Re 400. For each
-case this script writes the scene with its operator and inflow (Re = U d / nu) into
-validation/imb/runs_bed/<operator>_Re<re>/, runs `lbm-server run` there (or records why the scene
-was refused), keeps summary.json, the log and the grains' mean height per output row, and writes
-validation/imb/FLUIDIZED_BED.md: whether each case ran to its end, and where it did, the expanded
-bed's voidage against Richardson & Zaki (1954).
+case this script writes the scene with its operator and inflow (Re = U d / nu) into the ignored work
+folder validation/imb/work/fluidized_bed/<operator>_Re<re>/, runs `lbm-server run` there (or records why
+the scene was refused), keeps summary.json, the log and the grains' mean height per output row, distils
+what the report needs (the run's outcome, the bed's voidage and the weight the liquid carries) into the
+case's record in validation/imb/results/fluidized_bed.json, and writes validation/imb/FLUIDIZED_BED.md from
+the records: whether each case ran to its end, and where it did, the expanded bed's voidage against
+Richardson & Zaki (1954).
 
     python3 validation/imb/fluidized_bed.py                  # every case (about an hour on lavapipe)
     python3 validation/imb/fluidized_bed.py mrt_Re400        # one case
-    python3 validation/imb/fluidized_bed.py --report         # only the report, from runs_bed/
+    python3 validation/imb/fluidized_bed.py --report         # only the report, from the results
+    python3 validation/imb/fluidized_bed.py distil DIR       # DIR/<case>/ (folders as a run leaves them) into the results
     python3 validation/imb/fluidized_bed.py held             # the bed held still at 6 and 9 cells, and with the
                                                              # superposition term at 6 (25 min)
     python3 validation/imb/fluidized_bed.py held-superposed  # only the last (4 min)
     python3 validation/imb/fluidized_bed.py scenes DIR       # write the GPU cases' scenes (validation/gpu/)
     python3 validation/imb/fluidized_bed.py held-scenes DIR  # the held bed's GPU scenes
-    python3 validation/imb/fluidized_bed.py import DIR       # take a GPU batch's runs into runs_bed/
+    python3 validation/imb/fluidized_bed.py import DIR       # take a GPU batch's runs into the results
 
 LBM_SERVER names another lbm-server (as for ten_cate.py).
 """
@@ -32,11 +35,13 @@ import sys
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
+import results as compact  # noqa: E402
 import ten_cate  # noqa: E402  (lbm-server, LBM_SERVER and how a scene is run)
 
 ROOT = os.path.dirname(os.path.dirname(HERE))
 SCENE = os.path.join(ROOT, "validation", "scenes", "fluidized-bed.toml")
-OUT = os.path.join(HERE, "runs_bed")
+SCRIPT = "fluidized_bed"
+OUT = compact.work(SCRIPT)
 REPORT = os.path.join(HERE, "FLUIDIZED_BED.md")
 
 # The scene's physics (validation/scenes/fluidized-bed.toml).
@@ -267,7 +272,7 @@ def voidage(mean_height, count, depth):
 
 
 def keep(out, work, code):
-    """What runs_bed/ keeps of a run whose outputs are in WORK: its exit code, summary.json, the
+    """What the work folder keeps of a run whose outputs are in WORK: its exit code, summary.json, the
     grains' mean height and the liquid's force on them per row (heights.csv) and where the grains
     were in the last row (grains.csv, what `held` holds)."""
     with open(os.path.join(out, "exit_code"), "w") as f:
@@ -287,7 +292,7 @@ def keep(out, work, code):
                 f.write("%.8g,%.8g,%.8g\n" % tuple(p))
 
 
-# The bed held still: the grains where the MRT Re 200 run left them (runs_bed/mrt_Re200/grains.csv)
+# The bed held still: the grains where the MRT Re 200 run left them (its grains.csv, in its record)
 # held in place (no gravity, density HELD_DENSITY: they move less than a hundredth of a cell), the
 # same inflow, HELD_TIME s; the liquid's force on them over their buoyant weight, averaged from
 # HELD_AVERAGE_FROM s on. Whether a grain's drag in this bed is the moving grains' doing or the
@@ -343,9 +348,7 @@ def held_scene_text(cells, operator=HELD_FROM[0]):
     """HELD_FROM's scene at this many cells per diameter with its last row's grains held (with
     OPERATOR's fluid: "mrts" for the superposition term)."""
     _, re_, depth, _ = HELD_FROM
-    source = os.path.join(OUT, name(*HELD_FROM), "grains.csv")
-    with open(source) as f:
-        grains = separated([[float(r[k]) for k in ("x", "y", "z")] for r in csv.DictReader(f)], depth)
+    grains = separated(compact.runs(SCRIPT)[name(*HELD_FROM)]["last_grains"], depth)
     text = scene_text(operator, re_, depth, cells)
     spheres = "".join(
         "[[particles.sphere]]\nposition = [%.8g, %.8g, %.8g]\nradius = %g\n" % (*p, D / 2.0) for p in grains
@@ -369,6 +372,7 @@ def run_held(cells, operator=HELD_FROM[0]):
     code, work = ten_cate.run_scene(out, held_scene_text(cells, operator))
     keep(out, work, code)
     shutil.rmtree(work, ignore_errors=True)
+    distil([out])
 
 
 def tenneti(phi, re_):
@@ -398,16 +402,20 @@ def tenneti_voidage(re_):
     return 0.5 * (low + high)
 
 
-def held_rows():
-    """The held bed's report lines."""
+# The command that makes a case's run on a GPU (the batch of validation/gpu/: prepare.sh writes the
+# scenes, run.sh runs them on the device machine, import.sh takes them into the results).
+GPU_BATCH = "bash validation/gpu/prepare.sh"
+
+
+def held_rows(opening):
+    """The held bed's report lines; its rows of the summary appended to OPENING."""
     operator, re_, depth, _ = HELD_FROM
     ar, re_t = settling_reynolds()
-    buoyant = (RHO_P - RHO_F) * math.pi / 6.0 * D**3 * G
     lines = [
         "",
         "## The bed held still",
         "",
-        "The grains where the %s Re %d run left them (its last row, runs_bed/%s/grains.csv, pushed apart"
+        "The grains where the %s Re %d run left them (its last row, in the record of %s, pushed apart"
         % (label(operator), re_, name(*HELD_FROM)),
         "to %g um where they touched) held in place (no gravity and density %g kg/m^3 in the scene), the"
         % (HELD_GAP * 1e6, HELD_DENSITY),
@@ -422,29 +430,29 @@ def held_rows():
         "|---:|---:|---|---|---:|---:|---:|---|---|---:|---:|---:|---:|---:|",
     ]
     runs = [(cells, operator) for cells in HELD_CELLS + GPU_HELD_CELLS] + [(cells, "mrts") for cells in HELD_SUPERPOSED_CELLS]
+    records = compact.runs(SCRIPT)
     for cells, held_operator in runs:
-        folder = os.path.join(OUT, held_name(cells, held_operator))
-        if not os.path.exists(os.path.join(folder, "exit_code")):
+        rec = records.get(held_name(cells, held_operator))
+        if rec is None:
             continue
-        done, columns = run_columns(folder)
-        start = held_grains(folder)
-        eps = voidage(sum(p[2] - FLOOR for p in start) / len(start), len(start), depth)
+        done, columns = run_columns(rec)
+        eps = rec["start_voidage"]
         expected = 3.0 * math.pi * re_ * tenneti(1.0 - eps, re_) / (ar * math.pi / 6.0)
         n_rz, _, _ = richardson_zaki(re_, depth)
         re_rz = re_t * eps**n_rz
         force = error = moved = ""
-        hpath = os.path.join(folder, "heights.csv")
-        if done and os.path.exists(hpath):
-            with open(hpath) as f:
-                rows = [r for r in csv.DictReader(f) if float(r["time"]) >= HELD_AVERAGE_FROM]
-            ratio = [float(r["fluid_fz"]) / (len(start) * buoyant) for r in rows]
-            if ratio:
-                mean = sum(ratio) / len(ratio)
-                force = "%.3f (%.3f-%.3f)" % (mean, min(ratio), max(ratio))
-                error = "%+.0f%%" % (100.0 * (mean / expected - 1.0))
-            with open(os.path.join(folder, "grains.csv")) as f:
-                end = [[float(r[k]) for k in ("x", "y", "z")] for r in csv.DictReader(f)]
-            moved = "%.2g" % (max(math.dist(a, b) for a, b in zip(start, end)) / (D / cells))
+        if "force_over_buoyant_weight" in rec:
+            mean = rec["force_over_buoyant_weight"][0]
+            force = "%.3f (%.3f-%.3f)" % tuple(rec["force_over_buoyant_weight"])
+            error = "%+.0f%%" % (100.0 * (mean / expected - 1.0))
+        if "largest_displacement_m" in rec:
+            moved = "%.2g" % (rec["largest_displacement_m"] / (D / cells))
+        command = GPU_BATCH if cells in GPU_HELD_CELLS else \
+            "python3 validation/imb/fluidized_bed.py %s" % ("held-superposed" if held_operator == "mrts" else "held")
+        opening.append(("held bed, %d cells per d, %s term: liquid's force / buoyant weight" % (
+            cells, "superposition" if held_operator == "mrts" else "Noble-Torczynski"),
+            "%.3f, Tenneti et al. (2011)" % expected, force.split(" ")[0] or columns[0],
+            error.replace("%", " %") or "-", command))
         lines.append(
             "| %d | %.4f | %s | %s | %s | %s | %s | %s | %s | %.3f | %s | %.3f | %.0f | %s |"
             % (
@@ -468,6 +476,7 @@ def run(operator, re_, depth, cells=CELLS):
     code, work = ten_cate.run_scene(out, scene_text(operator, re_, depth, cells))
     keep(out, work, code)
     shutil.rmtree(work, ignore_errors=True)
+    distil([out])
 
 
 def plan_line(path, depth, cells):
@@ -504,7 +513,8 @@ def write_held_scenes(folder):
 
 def import_runs(folder):
     """FOLDER/bed_<name>/ of a GPU batch (scene.toml, log.txt, exit_code, summary.json,
-    particles.csv) into runs_bed/<name>/ as `run` leaves its runs."""
+    particles.csv) into the work folder as `run` leaves its runs, then into the results."""
+    done = []
     for entry in sorted(os.listdir(folder)):
         src = os.path.join(folder, entry)
         if not entry.startswith("bed_") or not os.path.exists(os.path.join(src, "exit_code")):
@@ -516,6 +526,8 @@ def import_runs(folder):
             shutil.copy(os.path.join(src, f), os.path.join(out, f))
         keep(out, src, int(open(os.path.join(src, "exit_code")).read()))
         print("%s: imported into %s" % (entry, out))
+        done.append(out)
+    distil(done)
 
 
 # lbm-server's exit status when stopped by SIGINT (validation/gpu/run.sh's time limit): outputs written.
@@ -553,17 +565,80 @@ def outcome(folder):
     return False, reason, summary.get("steps_completed"), summary.get("wall_time_s"), summary.get("fluid_mlups")
 
 
-def run_columns(folder):
-    """(ran to the end, the report's outcome, steps, wall time, MLUPS and device columns) of a run."""
-    done, reason, steps, wall, mlups = outcome(folder)
-    text = "ran %.2f s" % simulated(folder, steps) if done else reason.replace("|", "/")
+def run_columns(rec):
+    """(ran to the end, the report's outcome, steps, wall time, MLUPS and device columns) of a run's record."""
+    done, reason, steps, wall, mlups = (rec[k] for k in ("ran_to_end", "reason", "steps", "wall_time_s", "fluid_mlups"))
+    text = "ran %.2f s" % rec["simulated_s"] if done else reason.replace("|", "/")
     return done, [
         text,
         steps if steps is not None else "",
         "%.0f" % wall if wall else "",
         "%.2f" % mlups if mlups else "",
-        device(folder),
+        rec["device"],
     ]
+
+
+def stats(values):
+    """[mean, min, max] of VALUES."""
+    return [sum(values) / len(values), min(values), max(values)]
+
+
+def distil(folders):
+    """The records of the run FOLDERS (named as `name` or `held_name` name them, with exit_code) into the results."""
+    out = {}
+    for folder in folders:
+        run = os.path.basename(os.path.normpath(folder))
+        if not os.path.exists(os.path.join(folder, "exit_code")):
+            print("%s: no exit_code (not run), not distilled" % folder)
+            continue
+        out[run] = distil_run(folder, run)
+    compact.merge(SCRIPT, out, about="The fluidized bed: one record per run of validation/imb/fluidized_bed.py (its "
+                  "outcome; the last row's grains at the top; from 0.5 s on (the held bed: 0.4 s) the voidage, that of "
+                  "the band 1-3 d and the weight the liquid carries, as [mean, min, max]; the held bed's starting "
+                  "voidage and largest displacement [m]; the grains where the MRT Re 200 run left them, which the "
+                  "held bed holds).")
+
+
+def distil_run(folder, run):
+    """What the report needs of the run in FOLDER (the case RUN)."""
+    done, reason, steps, wall, mlups = outcome(folder)
+    rec = dict(exit_code=int(open(os.path.join(folder, "exit_code")).read()), ran_to_end=done, reason=reason,
+               steps=steps, wall_time_s=wall, fluid_mlups=mlups, simulated_s=simulated(folder, steps) if done else None,
+               device=device(folder))
+    rows = []
+    hpath = os.path.join(folder, "heights.csv")
+    if os.path.exists(hpath):
+        with open(hpath) as f:
+            rows = list(csv.DictReader(f))
+        last = rows[-1]
+        rec["last_row"] = dict(time=float(last["time"]), grains=int(last["grains"]), at_top=int(last["at_top"]))
+    held = run.startswith("held_")
+    if held:
+        start = held_grains(folder)
+        rec["start_voidage"] = voidage(sum(p[2] - FLOOR for p in start) / len(start), len(start), HELD_FROM[2])
+    if not (done and rows):
+        return rec
+    if held:
+        buoyant = (RHO_P - RHO_F) * math.pi / 6.0 * D**3 * G
+        ratio = [float(r["fluid_fz"]) / (len(start) * buoyant) for r in rows if float(r["time"]) >= HELD_AVERAGE_FROM]
+        if ratio:
+            rec["force_over_buoyant_weight"] = stats(ratio)
+        with open(os.path.join(folder, "grains.csv")) as f:
+            end = [[float(r[k]) for k in ("x", "y", "z")] for r in csv.DictReader(f)]
+        rec["largest_displacement_m"] = max(math.dist(a, b) for a, b in zip(start, end))
+        return rec
+    depth = next(c[2] for c in CASES + GPU_CASES if name(*c) == run)
+    late = [r for r in rows if float(r["time"]) >= AVERAGE_FROM]
+    if late:
+        rec["voidage"] = stats([voidage(float(r["mean_height"]), int(r["grains"]), depth) for r in late])
+        rec["band_voidage"] = stats([band_voidage(int(r["in_band"]), depth) for r in late])
+        if "fluid_fz" in late[0]:
+            weight = int(late[0]["grains"]) * RHO_P * math.pi / 6.0 * D**3 * G
+            rec["weight_carried"] = sum(float(r["fluid_fz"]) for r in late) / len(late) / weight
+    if run == name(*HELD_FROM):
+        with open(os.path.join(folder, "grains.csv")) as f:
+            rec["last_grains"] = [[float(r[k]) for k in ("x", "y", "z")] for r in csv.DictReader(f)]
+    return rec
 
 
 def device(folder):
@@ -580,8 +655,9 @@ def report():
     lines = [
         "# A fluidized bed at Re 200 and 400 by operator (the seed paper's section 5)",
         "",
-        "Written by `python3 validation/imb/fluidized_bed.py` (lavapipe, this repository's 2-core CPU",
-        "machine, shared with other runs: read wall time and MLUPS as +-50%). The scene:",
+        "Written by `python3 validation/imb/fluidized_bed.py --report` from `results/fluidized_bed.json`",
+        "(runs on lavapipe, this repository's 2-core CPU machine, shared with other runs: read wall time and",
+        "MLUPS as +-50%; the device column names the others). The scene:",
         "validation/scenes/fluidized-bed.toml, 216 sand grains (d = 3 mm, density ratio 2.65) in",
         "water-like liquid (nu = %.3g m^2/s), a slab 10 x 4 x 24 diameters (60 x 24 x 144 cells; one case" % NU,
         "8 diameters deep with 504 grains, 7 rows across; five with periodic sides, one of them 8 deep, one with walls frictionless for the grains), 6 cells per diameter (9 and 12; 10 and 15 on a GPU:",
@@ -611,33 +687,31 @@ def report():
         "| case | Re | slab depth [d] | cells per d | tau | U [m/s] | outcome | steps | wall time [s] | MLUPS | device | grains at the top, last row | weight the liquid carries | voidage (range) | voidage 1-3 d (range) | Richardson-Zaki | walled | error | Tenneti | drag / Tenneti's |",
         "|---|---:|---:|---:|---:|---:|---|---:|---:|---:|---|---|---:|---|---|---:|---:|---:|---:|---:|",
     ]
+    records = compact.runs(SCRIPT)
+    opening = []
     for operator, re_, depth, cells in CASES + GPU_CASES:
-        folder = os.path.join(OUT, name(operator, re_, depth, cells))
-        if not os.path.exists(os.path.join(folder, "exit_code")):
+        rec = records.get(name(operator, re_, depth, cells))
+        if rec is None:
             continue
-        done, columns = run_columns(folder)
+        done, columns = run_columns(rec)
         n, eps_rz, eps_walled = richardson_zaki(re_, depth)
         measured = band = error = top = carried = excess = ""
-        hpath = os.path.join(folder, "heights.csv")
-        if os.path.exists(hpath):
-            with open(hpath) as f:
-                last = list(csv.DictReader(f))[-1]
-            top = "%s of %s (%.2f s)" % (last["at_top"], last["grains"], float(last["time"]))
-        if done and os.path.exists(hpath):
-            with open(hpath) as f:
-                rows = [r for r in csv.DictReader(f) if float(r["time"]) >= AVERAGE_FROM]
-            late = [voidage(float(r["mean_height"]), int(r["grains"]), depth) for r in rows]
-            if late:
-                mean = sum(late) / len(late)
-                measured = "%.3f (%.3f-%.3f)" % (mean, min(late), max(late))
-                error = "%+.1f%%" % (100.0 * (mean / eps_rz - 1.0))
-                local = [band_voidage(int(r["in_band"]), depth) for r in rows]
-                band = "%.3f (%.3f-%.3f)" % (sum(local) / len(local), min(local), max(local))
-                if "fluid_fz" in rows[0]:
-                    weight = int(rows[0]["grains"]) * RHO_P * math.pi / 6.0 * D**3 * G
-                    share = sum(float(r["fluid_fz"]) for r in rows) / len(rows) / weight
-                    carried = "%.3f" % share
-                    excess = "%.2f" % (share * buoyant_weight(re_) / tenneti(1.0 - mean, re_))
+        if "last_row" in rec:
+            top = "%s of %s (%.2f s)" % (rec["last_row"]["at_top"], rec["last_row"]["grains"], rec["last_row"]["time"])
+        if "voidage" in rec:
+            mean = rec["voidage"][0]
+            measured = "%.3f (%.3f-%.3f)" % tuple(rec["voidage"])
+            error = "%+.1f%%" % (100.0 * (mean / eps_rz - 1.0))
+            band = "%.3f (%.3f-%.3f)" % tuple(rec["band_voidage"])
+            if "weight_carried" in rec:
+                share = rec["weight_carried"]
+                carried = "%.3f" % share
+                excess = "%.2f" % (share * buoyant_weight(re_) / tenneti(1.0 - mean, re_))
+        gpu = (operator, re_, depth, cells) in GPU_CASES
+        opening.append(("%s, Re %d, slab %d d, %d cells per d: bed voidage" % (label(operator), re_, depth, cells),
+                        "%.3f, Richardson-Zaki" % eps_rz, measured.split(" ")[0] or columns[0],
+                        error.replace("%", " %") or "-",
+                        GPU_BATCH if gpu else "python3 validation/imb/fluidized_bed.py %s" % name(operator, re_, depth, cells)))
         lines.append(
             "| %s | %d | %d | %d | %.4f | %.4f | %s | %s | %s | %s | %s | %s | %s | %s | %s | %.3f | %s | %s | %.3f | %s |"
             % (
@@ -700,7 +774,9 @@ def report():
     lines.append("is it the grains rubbing on")
     lines.append("the walls: with the walls frictionless for them (\"MRT, walls frictionless\") the bed expands to")
     lines.append("0.761 at 6 cells (+30.2%), as with friction. The periodic slab at 15 cells is in the GPU batch.")
-    lines += held_rows()
+    lines += held_rows(opening)
+    lines[2:2] = [compact.summary(opening, "python3 validation/imb/fluidized_bed.py --report",
+                                  "`%s` writes the scenes of the GPU batch (validation/gpu/)." % GPU_BATCH), ""]
     with open(REPORT, "w") as f:
         f.write("\n".join(lines) + "\n")
     print("\n".join(lines))
@@ -719,7 +795,7 @@ def main():
             run_held(cells, "mrts")
         report()
         return
-    if sys.argv[1:2] in (["scenes"], ["held-scenes"], ["import"]):
+    if sys.argv[1:2] in (["scenes"], ["held-scenes"], ["import"], ["distil"]):
         if len(sys.argv) != 3:
             raise SystemExit("usage: fluidized_bed.py %s DIR" % sys.argv[1])
         if sys.argv[1] == "scenes":
@@ -728,12 +804,15 @@ def main():
         if sys.argv[1] == "held-scenes":
             write_held_scenes(sys.argv[2])
             return
-        import_runs(sys.argv[2])
+        if sys.argv[1] == "distil":
+            distil([os.path.join(sys.argv[2], entry) for entry in sorted(os.listdir(sys.argv[2]))])
+        else:
+            import_runs(sys.argv[2])
         report()
         return
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("cases", nargs="*", help="cases to run (e.g. mrt_Re400); default: all")
-    parser.add_argument("--report", action="store_true", help="only write the report from runs_bed/")
+    parser.add_argument("--report", action="store_true", help="only write the report from the results")
     args = parser.parse_args()
     if not args.report:
         wanted = args.cases or [name(*c) for c in CASES]

@@ -1,15 +1,19 @@
 #!/usr/bin/env python3
 """Ten Cate runs in a larger box again with `coupling.radius_correction = "calibrated"` (issue 5).
 
-For each run folder of validation/imb/runs/ named on the command line (a larger-box run, whose
-terminal speed is a plateau), this script takes its scene.toml, adds the correction, runs
-`lbm-server run` into validation/imb/runs_rc/<run>/, keeps the sphere's rows of particles.csv
-(reduced as in runs/), and writes validation/imb/RADIUS_CORRECTION.md: the terminal (plateau)
-speed of each run drawn at its radius and drawn with the calibrated hydrodynamic radius deficit
-(docs/imb.md, "Radius correction"), both against u_inf.
+For each Ten Cate run named on the command line (a larger-box run of validation/imb/ten_cate.py,
+whose terminal speed is a plateau), this script takes its scene (from ten_cate.py's work folder, or
+written again by ten_cate.py for the steps its record ran), adds the correction, runs `lbm-server run`
+into the ignored work folder validation/imb/work/radius_correction/<run>/ (the sphere's rows of
+particles.csv reduced as ten_cate.py reduces them), distils its terminal speed into its record in
+validation/imb/results/radius_correction.json, and writes validation/imb/RADIUS_CORRECTION.md from the
+records: the terminal (plateau) speed of each run drawn at its radius (its record in
+results/ten_cate.json) and drawn with the calibrated hydrodynamic radius deficit (docs/imb.md, "Radius
+correction"), both against u_inf.
 
     python3 validation/imb/radius_correction.py E1_N6_M0p05_W200_H240 E3_N6_W200_H240
-    python3 validation/imb/radius_correction.py --report      # only the report, from runs_rc/
+    python3 validation/imb/radius_correction.py --report      # only the report, from the results
+    python3 validation/imb/radius_correction.py --distil DIR  # DIR/<run>/ (folders as a run leaves them) into the results
 
 LBM_SERVER names another lbm-server (as for ten_cate.py).
 """
@@ -23,9 +27,11 @@ import sys
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
+import results as compact  # noqa: E402
 import ten_cate  # noqa: E402  (the same box geometry, plateau and reduction)
 
-OUT = os.path.join(HERE, "runs_rc")
+SCRIPT = "radius_correction"
+OUT = compact.work(SCRIPT)
 REPORT = os.path.join(HERE, "RADIUS_CORRECTION.md")
 
 
@@ -38,9 +44,24 @@ def corrected_scene(text, timeout=None):
     return text.rstrip("\n") + "\n\n[coupling]\nradius_correction = \"calibrated\"\n" + extra
 
 
+def ten_cate_scene(name):
+    """The scene of the Ten Cate run NAME: its scene.toml in ten_cate.py's work folder, or the scene
+    ten_cate.py writes for it now, for the steps its record ran."""
+    kept = os.path.join(ten_cate.RUNS, name, "scene.toml")
+    if os.path.exists(kept):
+        return open(kept).read()
+    sp, r = ten_cate.spec_of(name), ten_cate.records().get(name)
+    if sp is None or r is None:
+        raise SystemExit("%s: no such Ten Cate run in %s" % (name, compact.path("ten_cate")))
+    path = os.path.join(OUT, name + ".scene.toml")
+    os.makedirs(OUT, exist_ok=True)
+    ten_cate.write_scene(sp["case"], sp["n"], path, sp["mach"], sp["op"], sp["width"], sp["height"],
+                         (r["steps_requested"] - 0.5) * r["dt"], sp["explicit"])
+    return open(path).read()
+
+
 def run(name, timeout=None):
-    src = os.path.join(ten_cate.RUNS, name)
-    scene = open(os.path.join(src, "scene.toml")).read()
+    scene = ten_cate_scene(name)
     out = os.path.join(OUT, name)
     code, work = ten_cate.run_scene(out, corrected_scene(scene, timeout))
     if code != 0:
@@ -48,6 +69,25 @@ def run(name, timeout=None):
     shutil.copy(os.path.join(work, "summary.json"), os.path.join(out, "summary.json"))
     ten_cate.reduce_csv(os.path.join(work, "particles.csv"), os.path.join(out, "particles.csv"))
     shutil.rmtree(work)
+    distil([out])
+
+
+def distil(folders):
+    """The records of the corrected run FOLDERS (named as the Ten Cate run they repeat) into the results:
+    case, N, tau, terminal speed and its error, and how much larger the sphere was drawn."""
+    out = {}
+    for folder in folders:
+        if not os.path.exists(os.path.join(folder, "summary.json")):
+            continue
+        case, n, tau, v, e = terminal(folder)
+        with open(os.path.join(folder, "log.txt")) as f:
+            drawn = re.search(r"drawn larger by (-?[0-9.]+) cells\^2", f.read())
+        out[os.path.basename(os.path.normpath(folder))] = dict(
+            case=case, N=n, tau=tau, terminal_speed=v, terminal_error_pct=e,
+            drawn_larger_cells2=float(drawn.group(1)) if drawn else float("nan"))
+    compact.merge(SCRIPT, out, about="Ten Cate in larger boxes with the calibrated radius correction: one record "
+                  "per run of validation/imb/radius_correction.py (its tau, terminal speed and error against u_inf, "
+                  "and the product the log names, radius x how much larger the sphere is drawn, in cells^2).")
 
 
 def terminal(folder):
@@ -86,24 +126,25 @@ def refinement(series):
 
 
 def report():
-    rows = []
+    rows, opening = [], []
     series = {}
-    for name in sorted(os.listdir(OUT)):
-        corrected = os.path.join(OUT, name)
-        if not os.path.exists(os.path.join(corrected, "summary.json")):
-            continue
-        case, n, tau, v_rc, e_rc = terminal(corrected)
-        _, _, _, v, e = terminal(os.path.join(ten_cate.RUNS, name))
-        with open(os.path.join(corrected, "log.txt")) as f:
-            drawn = re.search(r"drawn larger by (-?[0-9.]+) cells\^2", f.read())
-        product = float(drawn.group(1)) if drawn else float("nan")
+    at_radius = ten_cate.records()
+    for name, rc in sorted(compact.runs(SCRIPT).items()):
+        case, n, tau, v_rc, e_rc = rc["case"], rc["N"], rc["tau"], rc["terminal_speed"], rc["terminal_error_pct"]
+        v, e = at_radius[name]["terminal_speed"], at_radius[name]["terminal_error_pct"]
+        product = rc["drawn_larger_cells2"]
         r_cells = n / 2.0
         rows.append("| %s | %s | %g | %.3f | %.3f | %.4f | %+.1f | %.4f | %+.1f |" % (
             name, case, n, tau, product / r_cells, v, e, v_rc, e_rc))
         series.setdefault(box_of(name), []).append((n, e, e_rc))
+        opening.append(("%s (%s, N = %g, tau %.3f), corrected: terminal speed" % (name, case, n, tau),
+                        "u_inf %.3f m/s (unbounded)" % ten_cate.CASES[case]["u_inf"], "%.4f m/s" % v_rc, "%+.1f %%" % e_rc,
+                        "python3 validation/imb/radius_correction.py %s" % name))
     text = ("# Ten Cate in larger boxes with the calibrated radius correction\n\n"
-            "Written by `python3 validation/imb/radius_correction.py` (lavapipe, this repository's CPU "
-            "machine). Each run of validation/imb/runs/ named in the first column run again with "
+            + compact.summary(opening, "python3 validation/imb/radius_correction.py --report") + "\n\n"
+            "Written by `python3 validation/imb/radius_correction.py --report` from "
+            "`results/radius_correction.json` and `results/ten_cate.json` (runs on lavapipe, this repository's CPU "
+            "machine). Each Ten Cate run (`ten_cate.py`) named in the first column run again with "
             "`coupling.radius_correction = \"calibrated\"` (docs/imb.md, \"Radius correction\": the sphere "
             "drawn on the lattice larger by the hydrodynamic radius deficit measured on the Zick-Homsy "
             "array at the lattice's tau, scaled as 1 / radius), everything else the same. Terminal speed: "
@@ -134,13 +175,16 @@ def report():
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("runs", nargs="*", help="run folders of validation/imb/runs/ (larger boxes)")
-    ap.add_argument("--report", action="store_true", help="only write the report from runs_rc/")
+    ap.add_argument("runs", nargs="*", help="Ten Cate runs (larger boxes) by name, e.g. E3_N6_W200_H240")
+    ap.add_argument("--report", action="store_true", help="only write the report from the results")
+    ap.add_argument("--distil", metavar="DIR", help="distil DIR/<run>/ into the results, then write the report")
     ap.add_argument("--timeout", type=float, help="coupling.timeout [s] of the runs (default: the scene's)")
     args = ap.parse_args()
-    if not args.report:
+    if args.distil:
+        distil([os.path.join(args.distil, name) for name in sorted(os.listdir(args.distil))])
+    elif not args.report:
         for name in args.runs:
-            if os.path.exists(os.path.join(OUT, name, "summary.json")):
+            if os.path.exists(os.path.join(OUT, name, "summary.json")) or name in compact.runs(SCRIPT):
                 print("%s: already run, skipped" % name)
                 continue
             print("%s: running" % name, flush=True)

@@ -2,17 +2,20 @@
 """Ten Cate et al. (2002) settling sphere, cases E1-E4, with the immersed moving boundary (issue 5).
 
 For each case and each resolution (cells per diameter N, dx = 15 mm / N) this script writes a scene
-derived from validation/scenes/ten-cate-e1.toml, runs `lbm-server run` (which starts dem-client), keeps
-a reduced particles.csv, the summary.json and the log under validation/imb/runs/<case>_N<n>/, and then
-writes results.json, REPORT.md and the charts in validation/imb/.
+derived from validation/scenes/ten-cate-e1.toml, runs `lbm-server run` (which starts dem-client) in
+the work folder validation/imb/work/ten_cate/<case>_N<n>/ (ignored by git: a reduced particles.csv, the
+summary.json and the log), distils what the report needs of the run into its record in
+validation/imb/results/ten_cate.json (committed), and writes REPORT.md and the charts in validation/imb/
+from those records alone.
 
     python3 validation/imb/ten_cate.py run 3 6 7.5          # run the missing (case, N) pairs, then report
     python3 validation/imb/ten_cate.py run 6 --cases E1 E4  # a subset
-    python3 validation/imb/ten_cate.py report               # only rebuild results/report/charts from runs/
+    python3 validation/imb/ten_cate.py report               # only rebuild the report and charts from the results
+    python3 validation/imb/ten_cate.py distil DIR           # DIR/<run>/ (folders as `run` leaves them) into the results
     python3 validation/imb/ten_cate.py run 6 --cases E4 --width 300 --height 320 --sim-time 2.5
-                                        # a larger closed box (mm): runs/E4_N6_W300_H320, terminal (plateau) speed
-    python3 validation/imb/ten_cate.py run 3 6 9 --cases E3 --op bgk    # another operator: runs/E3_N<n>_bgk
-    python3 validation/imb/ten_cate.py run 3 6 9 --cases E3 --op-suffix # TRT rerun: runs/E3_N<n>_trt (timing)
+                                        # a larger closed box (mm): run E4_N6_W300_H320, terminal (plateau) speed
+    python3 validation/imb/ten_cate.py run 3 6 9 --cases E3 --op bgk    # another operator: runs E3_N<n>_bgk
+    python3 validation/imb/ten_cate.py run 3 6 9 --cases E3 --op-suffix # TRT rerun: runs E3_N<n>_trt (timing)
 
 Geometry: sphere d = 15 mm, rho_p = 1120 kg/m^3, closed box 100 x 100 x 160 mm, released from rest
 with its *bottom* 120 mm above the floor (centre at z = 127.5 mm). Fluid properties and u_inf from
@@ -35,13 +38,17 @@ import subprocess
 import sys
 import time
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import results as compact  # noqa: E402  (validation/imb/results/ten_cate.json and the work folder)
+
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.abspath(os.path.join(HERE, "..", ".."))
 TEMPLATE = os.path.join(ROOT, "validation", "scenes", "ten-cate-e1.toml")
 # LBM_SERVER: another lbm-server (with its dem-client beside it), e.g. a copy that a rebuild of
 # target/ during a long run cannot replace.
 BINARY = os.environ.get("LBM_SERVER", os.path.join(ROOT, "target", "release", "lbm-server"))
-RUNS = os.path.join(HERE, "runs")
+RUNS = compact.work("ten_cate")
+SCRIPT = "ten_cate"          # its results: validation/imb/results/ten_cate.json
 
 D = 0.015            # m
 R = D / 2
@@ -93,7 +100,7 @@ def geometry(width=None, height=None):
 
 
 def run_dir(case, n, mach=MACH, op=OPERATOR, width=None, height=None, explicit=False):
-    """runs/<case>_N<n>[_M<mach>][_W<w>_H<h>][_<op>]: the suffixes only where not the default
+    """RUNS/<case>_N<n>[_M<mach>][_W<w>_H<h>][_<op>] (the run's name): the suffixes only where not the default
     (Mach 0.1, the experiment's 100 x 100 x 160 mm box, TRT); w and h in mm."""
     tail = "" if mach == MACH else "_M%s" % ntag(mach)
     if width is not None or height is not None:
@@ -209,11 +216,21 @@ def run_scene(out, text):
 
 def run_one(case, n, force=False, mach=MACH, op=OPERATOR, width=None, height=None, sim_time=None, explicit=False,
             out=None):
-    """Runs (case, n) into `out` (default: its folder under runs/), unless it has a summary.json."""
-    out = out or run_dir(case, n, mach, op, width, height, explicit)
-    if os.path.exists(os.path.join(out, "summary.json")) and not force:
-        print("%s N=%g: already run (%s), skipped" % (case, n, out))
+    """Runs (case, n) into `out` (default: its folder in the work folder RUNS, then distilled into the
+    results), unless the folder has a summary.json or the results a record of it."""
+    folder = out or run_dir(case, n, mach, op, width, height, explicit)
+    done = os.path.exists(os.path.join(folder, "summary.json")) or (not out and os.path.basename(folder) in records())
+    if done and not force:
+        print("%s N=%g: already run (%s), skipped" % (case, n, folder))
         return
+    run_into(folder, case, n, mach, op, width, height, sim_time, explicit)
+    if not out:
+        distil([folder])
+
+
+def run_into(out, case, n, mach=MACH, op=OPERATOR, width=None, height=None, sim_time=None, explicit=False):
+    """Writes (case, n)'s scene into OUT, runs it there and keeps its summary.json, log.txt, load.txt and
+    the sphere's rows of particles.csv."""
     os.makedirs(out, exist_ok=True)
     scene = os.path.join(out, "scene.toml")
     ln = write_scene(case, n, scene, mach, op, width, height, sim_time, explicit)
@@ -287,8 +304,8 @@ def plateau(t, gap, speed, tol=0.005):
                 window_t=[t[lo], t[hi]], window_rows=len(w), window_spread_pct=100.0 * (max(w) - min(w)) / (sum(w) / len(w)))
 
 
-def analyse(case, n, mach=MACH, op=OPERATOR, width=None, height=None, explicit=False):
-    out = run_dir(case, n, mach, op, width, height, explicit)
+def analyse(out, case, n, mach=MACH, op=OPERATOR, width=None, height=None, explicit=False):
+    """The record of the run in folder OUT: what the report needs of it (None without a summary.json)."""
     sp = os.path.join(out, "summary.json")
     if not os.path.exists(sp):
         return None
@@ -299,7 +316,7 @@ def analyse(case, n, mach=MACH, op=OPERATOR, width=None, height=None, explicit=F
     dt = info.get("dt", ln["dt"])
     lp = os.path.join(out, "load.txt")
     res = dict(case=case, N=n, mach=mach, op=op, explicit_op=explicit, box=list(ln["box"]), release_gap=ln["gap0"],
-               dir=os.path.relpath(out, HERE), load=open(lp).read().strip() if os.path.exists(lp) else None,
+               dir=os.path.basename(out), load=open(lp).read().strip() if os.path.exists(lp) else None,
                dx=ln["dx"], cells=info.get("cells", ln["cells"]), dt=dt,
                tau=info.get("tau"), tau_predicted=ln["tau"], u_inf=c["u_inf"], Re_inf=c["Re"],
                steps=s.get("steps_completed"), steps_requested=s.get("steps_requested"),
@@ -346,17 +363,79 @@ def analyse(case, n, mach=MACH, op=OPERATOR, width=None, height=None, explicit=F
             res["rest_gap_range_um"] = [1e6 * (min(z[k] for k in ks) - R), 1e6 * (max(z[k] for k in ks) - R)]
         else:
             res["rest_speed_rms"] = None
-        res["series"] = dict(t=t, gap=[zz - R for zz in z], speed=speed)
+        res["series"] = dict(t=t, z=z, vz=vz)    # as particles.csv has them (7 digits): the charts' series
     return res
+
+
+def spec_of(name):
+    """The run folder NAME as dict(case, n, mach, op, explicit, width, height) (width, height in m; None:
+    the experiment's box), None if it is no run's name."""
+    m = DIR_RE.match(name)
+    if not m:
+        return None
+    num = lambda g: None if g is None else float(g.replace("p", "."))
+    return dict(case=m.group(1), n=num(m.group(2)), mach=num(m.group(3)) or MACH, op=m.group(6) or OPERATOR,
+                explicit=m.group(6) is not None,
+                width=None if m.group(4) is None else num(m.group(4)) * 1e-3,
+                height=None if m.group(5) is None else num(m.group(5)) * 1e-3)
+
+
+def charted(sp):
+    """Whether the charts draw the run's series: the TRT runs but the reruns in the experiment's box."""
+    return sp["op"] == OPERATOR and not (sp["explicit"] and sp["width"] is None)
+
+
+def distil(folders):
+    """The records of the run FOLDERS (named as run_dir names them) into the results; returns their names."""
+    out = {}
+    for folder in folders:
+        name = os.path.basename(os.path.normpath(folder))
+        sp = spec_of(name)
+        r = analyse(folder, sp["case"], sp["n"], sp["mach"], sp["op"], sp["width"], sp["height"], sp["explicit"]) \
+            if sp else None
+        if r is None:
+            print("%s: no run (no summary.json or not a run's name), not distilled" % folder)
+            continue
+        if not charted(sp):
+            r.pop("series", None)
+        out[name] = r
+    compact.merge(SCRIPT, out, about=ABOUT)
+    RECORDS.clear()
+    return sorted(out)
+
+
+ABOUT = ("Ten Cate et al. (2002) settling sphere: one record per run of validation/imb/ten_cate.py (what "
+         "analyse() takes from its folder: summary.json, log.txt, load.txt, particles.csv; the series t, z, vz "
+         "of the sphere for the runs the charts draw). The reference: /work/shared/reference/ten-cate-2002.md.")
+RECORDS = {}
+
+
+def records():
+    """The records of the results, by run name (read once)."""
+    if not RECORDS:
+        RECORDS.update(compact.runs(SCRIPT))
+    return RECORDS
+
+
+def record(case, n, mach=MACH, op=OPERATOR, width=None, height=None, explicit=False):
+    """The run's record as analyse() made it, its series as the charts read them (gap, speed); None if
+    the results have none."""
+    r = records().get(os.path.basename(run_dir(case, n, mach, op, width, height, explicit)))
+    if r is None:
+        return None
+    r = dict(r)
+    if "series" in r:
+        s = r["series"]
+        r["series"] = dict(t=s["t"], gap=[zz - R for zz in s["z"]], speed=[-v for v in s["vz"]])
+    return r
 
 
 def resolutions_present():
     ns = set()
-    if os.path.isdir(RUNS):
-        for name in os.listdir(RUNS):
-            m = re.match(r"E\d_N([0-9p]+)$", name)
-            if m:
-                ns.add(float(m.group(1).replace("p", ".")))
+    for name in records():
+        m = re.match(r"E\d_N([0-9p]+)$", name)
+        if m:
+            ns.add(float(m.group(1).replace("p", ".")))
     return sorted(ns)
 
 
@@ -658,7 +737,7 @@ def narrative(results, extra, wide, ops, opw=()):
         "run on 2 CPU cores shared with another session's builds and runs; the 1-minute load average before and "
         "after each run is listed (2 = both cores busy); runs of the same size can differ by 2x, so read the "
         "timing ratios between operators as +-50 %. For the timing TRT was rerun beside BGK and MRT "
-        "(`runs/E3_N<n>_trt`, N = 3, 6, 9; the chart's dashed TRT line); the earlier TRT runs of the main table were "
+        "(runs `E3_N<n>_trt`, N = 3, 6, 9; the chart's dashed TRT line); the earlier TRT runs of the main table were "
         "timed under another load (no load recorded).")
     op_bullets = []
     for op in ("bgk", "mrt"):
@@ -717,7 +796,7 @@ def narrative(results, extra, wide, ops, opw=()):
                      "wall times are %.2f-%.2f of the earlier runs', which shows how much the load on this shared machine "
                      "moves the timings." % ("identical to the 7 digits kept" if mx == 0 else "largest relative difference %.1e" % mx,
                                              min(b for _, b in same), max(b for _, b in same)))
-        op_bullets.append("- **Wall time of the whole run** (TRT: the reruns `runs/E3_N<n>_trt`, same steps and grid; "
+        op_bullets.append("- **Wall time of the whole run** (TRT: the reruns `E3_N<n>_trt`, same steps and grid; "
                           "1-minute load before / after): " + "; ".join(timing) + ". " + OP_TIME_END + rerun)
     est = []
     for n in sorted({r["N"] for r in ops}):
@@ -1086,6 +1165,45 @@ MEANING = (
     "experiment's box) / (terminal speed in the widest box run) is {effects}. MEANING_CONCLUSION")
 
 
+def run_command(r):
+    """The command that makes the run of record R."""
+    sp = spec_of(r["dir"])
+    cmd = "python3 validation/imb/ten_cate.py run %g --cases %s" % (sp["n"], sp["case"])
+    if sp["mach"] != MACH:
+        cmd += " --mach %g" % sp["mach"]
+    if sp["width"] is not None:
+        cmd += " --width %g --height %g" % (round(r["box"][0] * 1e3, 6), round(r["box"][2] * 1e3, 6))
+    if sp["op"] != OPERATOR:
+        cmd += " --op %s" % sp["op"]
+    elif sp["explicit"]:
+        cmd += " --op-suffix"
+    steps = lattice_numbers(sp["case"], sp["n"], sp["mach"], sp["width"], sp["height"])["steps"]
+    if r.get("steps_requested") not in (None, steps):
+        cmd += " --sim-time %g" % float("%.4g" % (r["steps_requested"] * r["dt"]))
+    return cmd
+
+
+def summary_rows(ok, wide):
+    """Per case: the peak speed at the finest N in the experiment's box, and the terminal speed in the
+    widest larger box at the finest N that completed there, against u_inf."""
+    rows = []
+    for case in CASES:
+        c = CASES[case]
+        ref = "u_inf %.3f m/s (unbounded)" % c["u_inf"]
+        rs = [r for r in ok if r["case"] == case]
+        if rs:
+            r = max(rs, key=lambda r: r["N"])
+            rows.append(("%s (Re %.1f), N = %g, the experiment's box: peak speed" % (case, c["Re"], r["N"]), ref,
+                         "%.4f m/s" % r["peak_speed"], "%+.1f %%" % r["peak_error_pct"], run_command(r)))
+        ns = [r["N"] for r in wide if r["case"] == case and "terminal_speed" in r and r.get("exit_code") == 0]
+        w = widest(wide, case, max(ns)) if ns else None
+        if w:
+            rows.append(("%s, N = %g, %g x %g x %g mm: terminal speed" % (
+                case, w["N"], *(round(L * 1e3, 3) for L in w["box"])), ref, "%.4f m/s" % w["terminal_speed"],
+                "%+.1f %%" % w["terminal_error_pct"], run_command(w)))
+    return rows
+
+
 def report(results, chart_paths, extra=(), wide=(), ops=(), opw=()):
     ok = [r for r in results if "peak_speed" in r]
     rows = []
@@ -1159,9 +1277,12 @@ def report(results, chart_paths, extra=(), wide=(), ops=(), opw=()):
     op_table = op_section(ops, results)
     wide_intro, wide_findings, op_intro, op_findings, headline, meaning = narrative(results, extra, wide_main, ops, opw)
     wide_findings += tau_check_in_larger_boxes(tau_wide, wide_main)
+    opening = compact.summary(summary_rows(ok, wide_main), "python3 validation/imb/ten_cate.py report")
     text = f"""# Ten Cate et al. (2002) settling sphere with the immersed moving boundary (issue 5)
 
-Generated by `python3 validation/imb/ten_cate.py` from the runs under `runs/`. **Device: a CPU**, except
+{opening}
+
+Generated by `python3 validation/imb/ten_cate.py report` from `results/ten_cate.json`. **Device: a CPU**, except
 the larger-box runs at N = 16 in 210 x 210 x 240 mm (E1 at Mach 0.0375 and E2 at 0.075, holding tau at its
 N = 12 value; E3 and E4 at 0.1), made on an NVIDIA H200 with the code of 2026-12-03 (validation/gpu/run.sh,
 2026-12-04; E1 stopped at step 3900 of 12810 by the batch's time limit): every other run used Mesa
@@ -1185,13 +1306,14 @@ at N = {fmt(nmax, "%g")} cells per diameter or less. {headline}
   side, gravity and contacts in `dem-client` (soft-sphere DEM, sub-cycled).
 - Simulated time 1.3 x 120 mm / u_inf (the same number of steps for every case at a given N:
   1.3 x 0.12 / (0.1/sqrt(3) x dx)); the sphere reaches the floor region in all cases.
-- Each run's `scene.toml`, `summary.json`, `log.txt` and a reduced `particles.csv`
-  (step,time,x,y,z,vx,vy,vz,fz of the sphere every ~1/300 of the run) are kept in `runs/<case>_N<n>/`
-  (`runs/<case>_N<n>_M<mach>/` for the tau check at another Mach number, `runs/<case>_N<n>[_M<mach>]_W<w>_H<h>/`
-  for a box of w x w x h mm, `runs/<case>_N<n>_<op>/` for the BGK and MRT operators and the TRT reruns,
-  `runs/<case>_N<n>_W<w>_H<h>_<op>/` for those in a larger box). The .vti snapshot of
-  the last step (`fields_interval = 0`) was deleted after each run. The runs made with the larger boxes and
-  the other operators also keep `load.txt`: `uptime` just before and just after the run.
+- Each run is named `<case>_N<n>` (`<case>_N<n>_M<mach>` for the tau check at another Mach number,
+  `<case>_N<n>[_M<mach>]_W<w>_H<h>` for a box of w x w x h mm, `<case>_N<n>_<op>` for the BGK and MRT
+  operators and the TRT reruns, `<case>_N<n>_W<w>_H<h>_<op>` for those in a larger box). What the report
+  needs of it (the numbers of its `summary.json` and log, and the sphere's time, height and vertical
+  velocity every ~1/300 of the run where a chart draws them) is its record in `results/ten_cate.json`; the
+  run itself (`scene.toml`, `summary.json`, `log.txt`, a reduced `particles.csv`) stays in the ignored work
+  folder `work/ten_cate/`. The runs made with the larger boxes and the other operators also record `uptime`
+  just before and just after the run.
 - Code: every run here except the larger-box runs of E1 at N = 12, E2 (N = 6, 9, 12), E3 at N = 12
   and E4 at N = 12 (200 and 150 mm wide) and N = 16 (made last, with the current fluid code; the E1
   and E2 N = 12 and E4 150 mm runs also with the squeeze films integrated in the DEM, which act only
@@ -1203,8 +1325,8 @@ at N = {fmt(nmax, "%g")} cells per diameter or less. {headline}
   Schiller-Naumann errors by at most 0.9 points (docs/imb.md), and the force within a fluid step
   following the velocity in the DEM (`coupling.substep_drag`), which removes the bouncing at rest
   (Findings). Rerun with the current code: peak +0.91 % (E1, N = 3), +0.08 % (E1, N = 6), +0.24 %
-  (E4, N = 6); time to 75 % of the peak unchanged. Rerunning a scene of runs/ with the current code
-  gives both.
+  (E4, N = 6); time to 75 % of the peak unchanged. Rerunning a run (`ten_cate.py run ... --force`)
+  with the current code gives both.
 
 ## How things were measured
 
@@ -1293,11 +1415,10 @@ would bring N = 15 to minutes per case.
 def mach_runs():
     """(case, N, mach) of the runs at a Mach number other than the default."""
     out = []
-    if os.path.isdir(RUNS):
-        for name in sorted(os.listdir(RUNS)):
-            m = re.match(r"(E\d)_N([0-9p]+)_M([0-9p]+)$", name)
-            if m:
-                out.append((m.group(1), float(m.group(2).replace("p", ".")), float(m.group(3).replace("p", "."))))
+    for name in sorted(records()):
+        m = re.match(r"(E\d)_N([0-9p]+)_M([0-9p]+)$", name)
+        if m:
+            out.append((m.group(1), float(m.group(2).replace("p", ".")), float(m.group(3).replace("p", "."))))
     return out
 
 
@@ -1305,38 +1426,27 @@ DIR_RE = re.compile(r"(E\d)_N([0-9p]+)(?:_M([0-9p]+))?(?:_W([0-9p]+)_H([0-9p]+))
 
 
 def run_specs():
-    """Every run folder as dict(case, n, mach, op, width, height) (width, height in m; None: the experiment's box)."""
-    out = []
-    if os.path.isdir(RUNS):
-        for name in sorted(os.listdir(RUNS)):
-            m = DIR_RE.match(name)
-            if not m:
-                continue
-            num = lambda g: None if g is None else float(g.replace("p", "."))
-            out.append(dict(case=m.group(1), n=num(m.group(2)), mach=num(m.group(3)) or MACH, op=m.group(6) or OPERATOR,
-                            explicit=m.group(6) is not None,
-                            width=None if m.group(4) is None else num(m.group(4)) * 1e-3,
-                            height=None if m.group(5) is None else num(m.group(5)) * 1e-3))
-    return out
+    """Every run of the results as spec_of gives it."""
+    return [sp for sp in (spec_of(name) for name in sorted(records())) if sp]
 
 
 def wide_results():
     """Runs in a box other than the experiment's (TRT)."""
-    rs = [analyse(sp["case"], sp["n"], sp["mach"], sp["op"], sp["width"], sp["height"], sp["explicit"])
+    rs = [record(sp["case"], sp["n"], sp["mach"], sp["op"], sp["width"], sp["height"], sp["explicit"])
           for sp in run_specs() if sp["width"] is not None and sp["op"] == OPERATOR]
     return sorted([r for r in rs if r is not None], key=lambda r: (r["case"], r["N"], r["mach"], r["box"][0], r["box"][2]))
 
 
 def op_wide_results():
     """Runs in a box other than the experiment's with an operator other than TRT."""
-    rs = [analyse(sp["case"], sp["n"], sp["mach"], sp["op"], sp["width"], sp["height"], sp["explicit"])
+    rs = [record(sp["case"], sp["n"], sp["mach"], sp["op"], sp["width"], sp["height"], sp["explicit"])
           for sp in run_specs() if sp["width"] is not None and sp["op"] != OPERATOR]
     return sorted([r for r in rs if r is not None], key=lambda r: (r["case"], r["N"], r["op"]))
 
 
 def op_results():
     """Runs with an operator other than TRT, in the experiment's box at Mach 0.1."""
-    rs = [analyse(sp["case"], sp["n"], sp["mach"], sp["op"], explicit=sp["explicit"])
+    rs = [record(sp["case"], sp["n"], sp["mach"], sp["op"], explicit=sp["explicit"])
           for sp in run_specs() if sp["width"] is None and sp["explicit"] and sp["mach"] == MACH]
     return sorted([r for r in rs if r is not None], key=lambda r: (r["case"], r["op"], r["N"]))
 
@@ -1417,7 +1527,7 @@ def op_chart(ops, results, case="E3"):
         x = [r["N"] for r in rs]
         ax.plot(x, [abs(r["peak_error_pct"]) for r in rs], "o-", color=OP_COLORS[op], label="%s |error| %%" % op_name(op))
         timed = rs
-        if op == OPERATOR:    # TRT reruns (runs/<case>_N<n>_trt) timed beside the BGK and MRT runs, where present
+        if op == OPERATOR:    # TRT reruns (<case>_N<n>_trt) timed beside the BGK and MRT runs, where present
             rr = sorted([r for r in ops if r["case"] == case and r["op"] == op and "peak_speed" in r], key=lambda r: r["N"])
             timed = rr or rs
         ax2.plot([r["N"] for r in timed], [r["wall_s_per_sim_s"] for r in timed], "s--", color=OP_COLORS[op], alpha=0.7,
@@ -1483,11 +1593,11 @@ def op_section(ops, results):
 
 
 def build_outputs():
-    extra = [r for r in (analyse(c, n, m) for c, n, m in mach_runs()) if r is not None]
+    extra = [r for r in (record(c, n, m) for c, n, m in mach_runs()) if r is not None]
     results = []
     for n in resolutions_present():
         for case in CASES:
-            r = analyse(case, n)
+            r = record(case, n)
             if r is not None:
                 results.append(r)
     wide = wide_results()
@@ -1495,14 +1605,6 @@ def build_outputs():
     opw = op_wide_results()
     paths = charts(results, extra) + wide_charts(wide, results, extra) + op_chart(ops, results)
     slim = [{k: v for k, v in r.items() if k != "series"} for r in results]
-    with open(os.path.join(HERE, "results.json"), "w") as f:
-        json.dump(dict(reference="Ten Cate et al. 2002, Phys. Fluids 14(11) 4012; /work/shared/reference/ten-cate-2002.md",
-                       device=DEVICE, sphere=dict(d=D, rho_p=RHO_P, release_centre_z=Z0, release_gap=GAP0),
-                       box=BOX, mach=MACH, operator="trt", time_factor=TIME_FACTOR, runs=slim,
-                       tau_check=[{k: v for k, v in r.items() if k != "series"} for r in extra],
-                       wide_boxes=[{k: v for k, v in r.items() if k != "series"} for r in wide],
-                       operators=[{k: v for k, v in r.items() if k != "series"} for r in ops],
-                       operators_larger_box=[{k: v for k, v in r.items() if k != "series"} for r in opw]), f, indent=1)
     report(results, paths, extra, wide, ops, opw)
     for r in slim:
         print("%s N=%-4g peak %s m/s  err %s %%  tau %s  wall/sim %s  (%s)" % (
@@ -1541,9 +1643,10 @@ def write_scenes(args):
 
 
 def import_runs(src, force=False, runs=RUNS, prefix=""):
-    """Each DIR/<prefix><name>/ that holds a summary.json goes to RUNS/<name>/ as `run_one` leaves its runs:
-    scene.toml, summary.json, log.txt and the sphere's rows of particles.csv. A run already there is kept unless
-    `force`."""
+    """Each DIR/<prefix><name>/ that holds a summary.json goes to RUNS/<name>/ (the work folder) as `run_one`
+    leaves its runs: scene.toml, summary.json, log.txt and the sphere's rows of particles.csv. A run already
+    there is kept unless `force`. Returns the folders imported."""
+    done = []
     for name in sorted(os.listdir(src)):
         d = os.path.join(src, name)
         if not name.startswith(prefix) or not os.path.exists(os.path.join(d, "summary.json")):
@@ -1560,6 +1663,14 @@ def import_runs(src, force=False, runs=RUNS, prefix=""):
         if os.path.exists(os.path.join(d, "particles.csv")):
             reduce_csv(os.path.join(d, "particles.csv"), os.path.join(out, "particles.csv"))
         print("%s: imported into %s" % (name, out))
+        done.append(out)
+    return done
+
+
+def run_folders(folder):
+    """The run folders in FOLDER (those with a summary.json), sorted."""
+    return [os.path.join(folder, name) for name in sorted(os.listdir(folder))
+            if os.path.exists(os.path.join(folder, name, "summary.json"))]
 
 
 def main():
@@ -1569,15 +1680,15 @@ def main():
     a.add_argument("N", type=float, nargs="+", help="cells per diameter")
     a.add_argument("--cases", nargs="+", default=list(CASES), choices=list(CASES))
     a.add_argument("--force", action="store_true", help="rerun pairs that already have a summary.json")
-    a.add_argument("--mach", type=float, default=MACH, help="Mach number of u_inf (default 0.1; others go to runs/<case>_N<n>_M<mach>)")
+    a.add_argument("--mach", type=float, default=MACH, help="Mach number of u_inf (default 0.1; others are runs <case>_N<n>_M<mach>)")
     a.add_argument("--op", default=OPERATOR, choices=OPERATORS,
-                   help="collision operator (default trt; bgk and mrt go to runs/<case>_N<n>_<op>, MRT with the scene's default rates)")
+                   help="collision operator (default trt; bgk and mrt are runs <case>_N<n>_<op>, MRT with the scene's default rates)")
     a.add_argument("--width", type=float, help="box width and depth in mm (default: the experiment's 100); with --height, "
-                   "runs go to runs/<case>_N<n>_W<w>_H<h>; the sphere stays centred in x, y, 32.5 mm below the lid")
+                   "the runs are <case>_N<n>_W<w>_H<h>; the sphere stays centred in x, y, 32.5 mm below the lid")
     a.add_argument("--height", type=float, help="box height in mm (default: the experiment's 160)")
     a.add_argument("--sim-time", type=float, help="simulated time in s (default 1.3 x release gap / u_inf)")
     a.add_argument("--op-suffix", action="store_true",
-                   help="put the operator in the folder name even for trt (runs/<case>_N<n>_trt: a TRT rerun timed beside BGK and MRT)")
+                   help="put the operator in the folder name even for trt (runs <case>_N<n>_trt: a TRT rerun timed beside BGK and MRT)")
     sub.add_parser("report")
     sc = sub.add_parser("scenes", help="only write the scenes, DIR/<run folder name>/scene.toml (for a batch on another "
                         "machine: validation/gpu/run.sh); same options as run")
@@ -1586,15 +1697,20 @@ def main():
         if action.dest not in ("help", "force", "dir"):
             sc._add_action(action)
     im = sub.add_parser("import", help="take the outputs of such a batch (DIR/<run folder name>/ with summary.json, "
-                        "particles.csv, log.txt) into runs/, then rebuild the report")
+                        "particles.csv, log.txt) into the work folder, distil them into the results, then rebuild the report")
     im.add_argument("dir")
     im.add_argument("--force", action="store_true", help="replace runs that already have a summary.json")
+    di = sub.add_parser("distil", help="distil the run folders in DIR (named as `run` names them, with summary.json, "
+                        "log.txt, particles.csv) into results/ten_cate.json, then rebuild the report")
+    di.add_argument("dir")
     args = ap.parse_args()
     if args.cmd == "scenes":
         write_scenes(args)
         return
     if args.cmd == "import":
-        import_runs(args.dir, args.force)
+        distil(import_runs(args.dir, args.force))
+    if args.cmd == "distil":
+        distil(run_folders(args.dir))
     if args.cmd == "run":
         if not os.path.exists(BINARY):
             raise SystemExit("%s missing: cargo build --release --bins" % BINARY)
