@@ -261,6 +261,54 @@ mod tests {
     use crate::dem::contact::{contact_force, Contact, PairMaterial};
     use scene::dem::Material;
 
+    /// The `k`th of the random contacts of the test (drawn by `unit`): its pair material, its
+    /// geometry and kinematics (every third fast), its history (every fourth fresh).
+    fn random_contact(unit: &mut dyn FnMut() -> f64, k: usize) -> (PairMaterial, Contact, V3) {
+        let material = |e: f64, mu: f64| Material {
+            name: "m".into(),
+            young_modulus: 5e7,
+            poisson_ratio: 0.3,
+            restitution: e,
+            friction: mu,
+            ..Default::default()
+        };
+        let pm = PairMaterial::mix(&material(0.3 + 0.6 * unit(), unit()), &material(0.5, 0.4));
+        let n = V3::new(unit() - 0.5, unit() - 0.5, unit() - 0.5).normalize();
+        let v = |s: f64, unit: &mut dyn FnMut() -> f64| V3::new(unit() - 0.5, unit() - 0.5, unit() - 0.5) * s;
+        let (r_i, r_j) = (0.0018 + 0.0004 * unit(), 0.0018 + 0.0004 * unit());
+        let c = Contact {
+            n,
+            overlap: 1e-5 * unit(),
+            r_i,
+            r_j,
+            r_eff: r_i * r_j / (r_i + r_j),
+            m_eff: 4e-5 * (0.5 + unit()),
+            dv: v(if k % 3 == 0 { 2.0 } else { 0.05 }, unit),
+            w_i: v(50.0, unit),
+            w_j: v(50.0, unit),
+        };
+        let history = if k % 4 == 0 { V3::zeros() } else { v(2e-5, unit) };
+        (pm, c, history)
+    }
+
+    /// Contact `c` (pair material `pm`, history `history`, law `law`) into lane `k` of `batch`.
+    fn load_lane(batch: &mut Batch, k: usize, pm: &PairMaterial, c: &Contact, history: V3, law: &ContactLaw) {
+        let n = c.n;
+        batch.slot[k] = k as u32;
+        (batch.nx[k], batch.ny[k], batch.nz[k]) = (n.x, n.y, n.z);
+        batch.overlap[k] = c.overlap;
+        (batch.r_i[k], batch.r_j[k], batch.r_eff[k], batch.m_eff[k]) = (c.r_i, c.r_j, c.r_eff, c.m_eff);
+        (batch.dvx[k], batch.dvy[k], batch.dvz[k]) = (c.dv.x, c.dv.y, c.dv.z);
+        (batch.wix[k], batch.wiy[k], batch.wiz[k]) = (c.w_i.x, c.w_i.y, c.w_i.z);
+        (batch.wjx[k], batch.wjy[k], batch.wjz[k]) = (c.w_j.x, c.w_j.y, c.w_j.z);
+        (batch.hx[k], batch.hy[k], batch.hz[k]) = (history.x, history.y, history.z);
+        batch.y_star[k] = pm.y_star;
+        batch.g_star[k] = pm.g_star;
+        batch.damping[k] = pm.damping_factor[law.switches.damping as usize];
+        batch.shear_to_normal[k] = pm.shear_to_normal_sqrt;
+        batch.friction[k] = pm.friction;
+    }
+
     /// Every lane, on every instruction set, gives the bits of `contact_force` (sticking and
     /// sliding contacts, fresh and loaded histories, both spheres spinning).
     #[test]
@@ -272,61 +320,21 @@ mod tests {
                 .wrapping_add(1442695040888963407);
             (seed >> 11) as f64 / (1u64 << 53) as f64
         };
-        let material = |e: f64, mu: f64| Material {
-            name: "m".into(),
-            young_modulus: 5e7,
-            poisson_ratio: 0.3,
-            restitution: e,
-            friction: mu,
-            ..Default::default()
-        };
         let law = ContactLaw::LIGGGHTS_HERTZ;
         let dt = 5e-6;
         let mut batch = Batch::default();
         let mut expected = Vec::new();
         let mut slips = 0;
         for k in 0..LANES {
-            let pm = PairMaterial::mix(&material(0.3 + 0.6 * unit(), unit()), &material(0.5, 0.4));
-            let n = V3::new(unit() - 0.5, unit() - 0.5, unit() - 0.5).normalize();
-            let v =
-                |s: f64, unit: &mut dyn FnMut() -> f64| V3::new(unit() - 0.5, unit() - 0.5, unit() - 0.5) * s;
-            let (r_i, r_j) = (0.0018 + 0.0004 * unit(), 0.0018 + 0.0004 * unit());
-            let c = Contact {
-                n,
-                overlap: 1e-5 * unit(),
-                r_i,
-                r_j,
-                r_eff: r_i * r_j / (r_i + r_j),
-                m_eff: 4e-5 * (0.5 + unit()),
-                dv: v(if k % 3 == 0 { 2.0 } else { 0.05 }, &mut unit),
-                w_i: v(50.0, &mut unit),
-                w_j: v(50.0, &mut unit),
-            };
-            let history = if k % 4 == 0 {
-                V3::zeros()
-            } else {
-                v(2e-5, &mut unit)
-            };
+            let (pm, c, history) = random_contact(&mut unit, k);
             let mut h = history;
             let out = contact_force(&law, &pm, &c, &mut h, dt);
             expected.push((out.force, out.torque_i, out.torque_j, h));
             // Sliding: the tangential force sits on the Coulomb limit mu |F_n|.
-            let f_n = out.force.dot(&n);
-            let f_t = (out.force - f_n * n).norm();
+            let f_n = out.force.dot(&c.n);
+            let f_t = (out.force - f_n * c.n).norm();
             slips += usize::from((f_t - pm.friction * f_n.abs()).abs() <= 1e-9 * f_t);
-            batch.slot[k] = k as u32;
-            (batch.nx[k], batch.ny[k], batch.nz[k]) = (n.x, n.y, n.z);
-            batch.overlap[k] = c.overlap;
-            (batch.r_i[k], batch.r_j[k], batch.r_eff[k], batch.m_eff[k]) = (r_i, r_j, c.r_eff, c.m_eff);
-            (batch.dvx[k], batch.dvy[k], batch.dvz[k]) = (c.dv.x, c.dv.y, c.dv.z);
-            (batch.wix[k], batch.wiy[k], batch.wiz[k]) = (c.w_i.x, c.w_i.y, c.w_i.z);
-            (batch.wjx[k], batch.wjy[k], batch.wjz[k]) = (c.w_j.x, c.w_j.y, c.w_j.z);
-            (batch.hx[k], batch.hy[k], batch.hz[k]) = (history.x, history.y, history.z);
-            batch.y_star[k] = pm.y_star;
-            batch.g_star[k] = pm.g_star;
-            batch.damping[k] = pm.damping_factor[law.switches.damping as usize];
-            batch.shear_to_normal[k] = pm.shear_to_normal_sqrt;
-            batch.friction[k] = pm.friction;
+            load_lane(&mut batch, k, &pm, &c, history, &law);
         }
         batch.len = LANES;
         assert!(slips > 0 && slips < LANES, "{slips} of {LANES} sliding");
