@@ -283,11 +283,15 @@ mod tests {
             r_j,
             r_eff: r_i * r_j / (r_i + r_j),
             m_eff: 4e-5 * (0.5 + unit()),
-            dv: v(if k % 3 == 0 { 2.0 } else { 0.05 }, unit),
+            dv: v(if k.is_multiple_of(3) { 2.0 } else { 0.05 }, unit),
             w_i: v(50.0, unit),
             w_j: v(50.0, unit),
         };
-        let history = if k % 4 == 0 { V3::zeros() } else { v(2e-5, unit) };
+        let history = if k.is_multiple_of(4) {
+            V3::zeros()
+        } else {
+            v(2e-5, unit)
+        };
         (pm, c, history)
     }
 

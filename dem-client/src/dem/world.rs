@@ -17,6 +17,7 @@
 //!      wall contacts (the wall pass, `walls.rs`) and integrates (`Body::integrate`: the closing
 //!      half kick, and until the last step the next step's opening kick and drift);
 //!   5. wrap: along periodic axes, the spheres that left the domain back into it.
+//!
 //! A fluid step (`World::advance_span`, `flight.rs`): the spheres that can touch nothing in free
 //! flight (`Body::fly`), the others (the island) in DEM steps among themselves, or every sphere
 //! in DEM steps; a fluid step whose island is every sphere goes the way timed quicker
@@ -334,15 +335,18 @@ impl World {
             return;
         }
         rayon::scope(|_| {
+            // 1. open: half kick and drift.
             self.open_step();
             for s in 0..steps {
                 let last = s + 1 == steps;
                 let finish = if last { Finish::HalfKick } else { Finish::KickDrift };
+                // 2-4. neighbour lists, pair pass, gather (walls, integration).
                 let moved = self.forces(self.dt, finish);
                 self.time += self.dt;
                 self.note_drift(moved);
             }
         });
+        // 5. wrap.
         self.wrap_into_domain();
     }
 
@@ -398,6 +402,7 @@ impl World {
     /// the gather with the wall pass and `finish` (`gather.rs`). Returns the largest squared
     /// displacement since the last neighbour-list build after a drift (else 0).
     fn forces(&mut self, dt: f64, finish: Finish) -> f64 {
+        // 2. neighbour lists.
         if self.needs_rebuild() {
             self.rebuild();
         }
@@ -414,7 +419,9 @@ impl World {
     /// The pair pass, then the gather (with the wall pass and `finish`), compiled for `law`;
     /// returns (pair contacts, (wall contacts, largest squared displacement)).
     fn contact_passes<L: LawRef>(&mut self, law: L, dt: f64, finish: Finish) -> (usize, (usize, f64)) {
+        // 3. pair pass.
         let pair_contacts = self.pair_forces(law, dt);
+        // 4. gather: pair sums, wall pass, integration.
         (pair_contacts, self.gather(law, dt, finish, pair_contacts))
     }
 
