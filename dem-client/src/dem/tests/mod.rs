@@ -136,7 +136,7 @@ fn floor() -> Wall {
     }
 }
 
-/// A sphere of the test sets of free flight: radius `R`, density `RHO`, not spinning.
+/// A sphere of radius `R` and density `RHO`, not spinning.
 fn ball(id: u64, x: [f64; 3], v: [f64; 3]) -> Body {
     Body::sphere(id, V3::from(x), V3::from(v), V3::zeros(), R, RHO, 0)
 }

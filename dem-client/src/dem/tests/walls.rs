@@ -7,22 +7,7 @@ use crate::dem::timestep::hertz_contact_time;
 
 /// A sphere dropped on a plane at speed v: (rebound speed, contact time).
 fn drop_on_wall(l: ContactLaw, m: Material, v: f64, steps_per_tc: f64) -> (f64, f64) {
-    let body = Body::sphere(
-        0,
-        V3::new(0.0, 0.0, R + 1e-6),
-        V3::new(0.0, 0.0, -v),
-        V3::zeros(),
-        R,
-        RHO,
-        0,
-    );
-    let wall = Wall {
-        shape: Shape::Plane {
-            point: V3::zeros(),
-            normal: V3::z(),
-        },
-        material: 0,
-    };
+    let (body, wall) = (ball(0, [0.0, 0.0, R + 1e-6], [0.0, 0.0, -v]), floor());
     let y = crate::dem::contact::PairMaterial::mix(&m, &m).y_star;
     let t_c = hertz_contact_time(mass(), l.switches.wall_radius_factor * R, y, v);
     let mut w = World::new(
@@ -126,22 +111,7 @@ fn sliding_sphere_rolls_at_five_sevenths() {
             Linear::default(),
         );
         let m = material(0.5, 0.4);
-        let body = Body::sphere(
-            0,
-            V3::new(0.0, 0.0, R * 0.9999),
-            V3::new(0.5, 0.0, 0.0),
-            V3::zeros(),
-            R,
-            RHO,
-            0,
-        );
-        let wall = Wall {
-            shape: Shape::Plane {
-                point: V3::zeros(),
-                normal: V3::z(),
-            },
-            material: 0,
-        };
+        let (body, wall) = (ball(0, [0.0, 0.0, R * 0.9999], [0.5, 0.0, 0.0]), floor());
         let mut w = World::new(
             vec![body],
             vec![wall],
