@@ -229,41 +229,85 @@ pub struct Coefficients {
     pub gamma_t: f64,
 }
 
-/// Normal elastic force, tangential stiffness and both dampings.
+/// The constants of a pair's Hertz-Mindlin law, from its `PairMaterial` and the law's damping.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HertzPair {
+    /// Y* [Pa].
+    pub y_star: f64,
+    /// G* [Pa].
+    pub g_star: f64,
+    /// Damping factor f of gamma = f sqrt(S m*) (`PairMaterial::damping_factor`).
+    pub damping_factor: f64,
+    /// sqrt(4 G* / Y*).
+    pub shear_to_normal_sqrt: f64,
+}
+
+impl HertzPair {
+    #[inline(always)]
+    pub fn of(m: &PairMaterial, damping: DampingLaw) -> HertzPair {
+        HertzPair {
+            y_star: m.y_star,
+            g_star: m.g_star,
+            damping_factor: m.damping_factor[damping as usize],
+            shear_to_normal_sqrt: m.shear_to_normal_sqrt,
+        }
+    }
+}
+
+/// The Hertz-Mindlin law: the springs and dashpots of the seed paper's contact model (section
+/// 2.3, the normal and tangential spring-dashpots of f_ij in eqs. 12-13) with the stiffness of two
+/// elastic spheres. With the contact radius a = sqrt(R* d): normal tangent stiffness S_n = 2 Y* a,
+/// elastic force F_el = 4/3 Y* a d, tangential stiffness k_t = 8 G* a, dampings gamma_n = f
+/// sqrt(S_n m*) and gamma_t = f sqrt(k_t m*) = gamma_n sqrt(4 G* / Y*). Called per pair by the
+/// scalar pair pass (`coefficients`) and per lane by the batched one (`batch.rs`).
+#[inline(always)]
+pub fn hertz(p: &HertzPair, r_eff: f64, m_eff: f64, overlap: f64) -> Coefficients {
+    let a = (r_eff * overlap).sqrt();
+    let s_n = 2.0 * p.y_star * a;
+    let k_t = 8.0 * p.g_star * a;
+    let gamma_n = p.damping_factor * (s_n * m_eff).sqrt();
+    Coefficients {
+        f_elastic: 4.0 / 3.0 * p.y_star * a * overlap,
+        gamma_n,
+        k_t,
+        // f sqrt(k_t m*) = gamma_n sqrt(k_t / S_n) = gamma_n sqrt(4 G* / Y*).
+        gamma_t: gamma_n * p.shear_to_normal_sqrt,
+    }
+}
+
+/// The linear spring-dashpot law (the seed paper's contact model, section 2.3, with constant
+/// springs): F_el = k_n d; k_n and gamma_n from the contact time and the restitution `e`, or k_n
+/// given and gamma_n given or from `e`; k_t and gamma_t given, else k_n and gamma_n.
+#[inline(always)]
+pub fn linear_spring_dashpot(l: &Linear, e: f64, m_eff: f64, overlap: f64) -> Coefficients {
+    let (k_n, gamma_n) = match (l.contact_time, l.normal_stiffness) {
+        (Some(t_c), _) => linear_from_contact_time(t_c, e, m_eff),
+        (None, Some(k)) => (
+            k,
+            l.normal_damping
+                .unwrap_or_else(|| linear_damping_from_restitution(k, e, m_eff)),
+        ),
+        (None, None) => (0.0, 0.0),
+    };
+    Coefficients {
+        f_elastic: k_n * overlap,
+        gamma_n,
+        k_t: l.tangential_stiffness.unwrap_or(k_n),
+        gamma_t: l.tangential_damping.unwrap_or(gamma_n),
+    }
+}
+
+/// Normal elastic force, tangential stiffness and both dampings of the law's normal model.
 #[inline(always)]
 pub fn coefficients(law: &ContactLaw, m: &PairMaterial, c: &Contact) -> Coefficients {
     match law.normal {
-        NormalLaw::Hertz => {
-            let a = (c.r_eff * c.overlap).sqrt();
-            let s_n = 2.0 * m.y_star * a;
-            let k_t = 8.0 * m.g_star * a;
-            let gamma_n = m.damping_factor[law.switches.damping as usize] * (s_n * c.m_eff).sqrt();
-            Coefficients {
-                f_elastic: 4.0 / 3.0 * m.y_star * a * c.overlap,
-                gamma_n,
-                k_t,
-                // f sqrt(k_t m*) = gamma_n sqrt(k_t / S_n) = gamma_n sqrt(4 G* / Y*).
-                gamma_t: gamma_n * m.shear_to_normal_sqrt,
-            }
-        }
-        NormalLaw::Linear => {
-            let l = &law.linear;
-            let (k_n, gamma_n) = match (l.contact_time, l.normal_stiffness) {
-                (Some(t_c), _) => linear_from_contact_time(t_c, m.restitution, c.m_eff),
-                (None, Some(k)) => (
-                    k,
-                    l.normal_damping
-                        .unwrap_or_else(|| linear_damping_from_restitution(k, m.restitution, c.m_eff)),
-                ),
-                (None, None) => (0.0, 0.0),
-            };
-            Coefficients {
-                f_elastic: k_n * c.overlap,
-                gamma_n,
-                k_t: l.tangential_stiffness.unwrap_or(k_n),
-                gamma_t: l.tangential_damping.unwrap_or(gamma_n),
-            }
-        }
+        NormalLaw::Hertz => hertz(
+            &HertzPair::of(m, law.switches.damping),
+            c.r_eff,
+            c.m_eff,
+            c.overlap,
+        ),
+        NormalLaw::Linear => linear_spring_dashpot(&law.linear, m.restitution, c.m_eff, c.overlap),
     }
 }
 
@@ -275,8 +319,10 @@ pub struct ContactForce {
     pub torque_j: V3,
 }
 
-/// Normal force magnitude F_n = F_el - gamma_n v_n (v_n = dv . n < 0 approaching), clamped to
-/// >= 0 when the switch says so. Returns (F_n, F_n for the Coulomb limit).
+/// The normal spring-dashpot (the seed paper's contact model, section 2.3; its force is part of
+/// f_ij in eqs. 12-13): normal force magnitude F_n = F_el - gamma_n v_n (v_n = dv . n < 0
+/// approaching), clamped to >= 0 when the switch says so. Returns (F_n, F_n for the Coulomb
+/// limit).
 #[inline(always)]
 pub fn normal_force(law: &ContactLaw, k: &Coefficients, v_n: f64) -> (f64, f64) {
     let f = k.f_elastic - k.gamma_n * v_n;
@@ -288,7 +334,9 @@ pub fn normal_force(law: &ContactLaw, k: &Coefficients, v_n: f64) -> (f64, f64) 
     (f, limit)
 }
 
-/// Tangential spring-dashpot with Coulomb slider; `history` is the total shear displacement xi [m]
+/// Tangential spring-dashpot with Coulomb slider (the seed paper's contact model, section 2.3: the
+/// friction slider caps the tangential force by Coulomb's law; part of f_ij in eqs. 12-13);
+/// `history` is the total shear displacement xi [m]
 /// (total spring) or the elastic shear force [N] (incremental spring), updated in place.
 /// Total: xi += v_t dt, projected on the tangent plane, F_t = -k_t xi - gamma_t v_t.
 /// Incremental: F_s rotated into the tangent plane, F_s -= k_t v_t dt, F_t = F_s - gamma_t v_t.
@@ -350,17 +398,19 @@ pub fn rolling_torque(mu_r: f64, r_eff: f64, f_n: f64, w_rel: V3) -> V3 {
     }
 }
 
-/// Lever arms (l_i, l_j): r - d/2 or r.
+/// Lever arms (l_i, l_j) of spheres of radii `r_i`, `r_j` overlapping by `overlap`: r - d/2 or r
+/// (|l_ij| of eq. 13).
 #[inline(always)]
-pub fn lever_arms(law: &ContactLaw, c: &Contact) -> (f64, f64) {
+pub fn lever_arms(law: &ContactLaw, r_i: f64, r_j: f64, overlap: f64) -> (f64, f64) {
     match law.switches.lever {
-        LeverArm::ContactPoint => (c.r_i - 0.5 * c.overlap, (c.r_j - 0.5 * c.overlap).max(0.0)),
-        LeverArm::Radius => (c.r_i, c.r_j),
+        LeverArm::ContactPoint => (r_i - 0.5 * overlap, (r_j - 0.5 * overlap).max(0.0)),
+        LeverArm::Radius => (r_i, r_j),
     }
 }
 
-/// Full contact: F_i = F_n n + F_t, torques -l_i n x F_t and -l_j n x F_t, plus rolling.
-/// The relative velocity at the contact point is v_rel = dv - (l_i w_i + l_j w_j) x n.
+/// Full contact: the force f_ij of eq. 12, F_i = F_n n + F_t, and the torques l_ij x f_ij of eq.
+/// 13, -l_i n x F_t on i and -l_j n x F_t on j (l_ij = -l_i n: n x n = 0 leaves F_t alone), plus
+/// rolling. The relative velocity at the contact point is v_rel = dv - (l_i w_i + l_j w_j) x n.
 #[inline(always)]
 pub fn contact_force(
     law: &ContactLaw,
@@ -369,7 +419,7 @@ pub fn contact_force(
     history: &mut V3,
     dt: f64,
 ) -> ContactForce {
-    let (l_i, l_j) = lever_arms(law, c);
+    let (l_i, l_j) = lever_arms(law, c.r_i, c.r_j, c.overlap);
     let v_rel = c.dv - (l_i * c.w_i + l_j * c.w_j).cross(&c.n);
     let v_n = v_rel.dot(&c.n);
     let k = coefficients(law, m, c);
@@ -382,6 +432,7 @@ pub fn contact_force(
         let v_t = v_rel - v_n * c.n;
         let f_t = tangential_force(law, &k, m.friction * limit, c.n, v_t, history, dt);
         out.force += f_t;
+        // eq. 13: l_ij x f_ij.
         let arm = c.n.cross(&f_t);
         out.torque_i = -l_i * arm;
         out.torque_j = -l_j * arm;

@@ -13,7 +13,7 @@ mod tests;
 #[cfg(test)]
 mod validation;
 
-use contact::{coefficients, Contact, ContactLaw};
+use contact::{linear_spring_dashpot, ContactLaw};
 use neighbor::Periodic;
 use scene::dem::NormalLaw;
 use scene::{Scene, SceneError};
@@ -173,18 +173,8 @@ pub fn pair_contact_time(law: &ContactLaw, m: &contact::PairMaterial, r_eff: f64
     match law.normal {
         NormalLaw::Hertz => timestep::hertz_contact_time(m_eff, r_eff, m.y_star, v),
         NormalLaw::Linear => {
-            let c = Contact {
-                n: V3::z(),
-                overlap: 1.0,
-                r_i: r_eff,
-                r_j: r_eff,
-                r_eff,
-                m_eff,
-                dv: V3::zeros(),
-                w_i: V3::zeros(),
-                w_j: V3::zeros(),
-            };
-            let k = coefficients(law, m, &c);
+            // k_n: the elastic force at a unit overlap.
+            let k = linear_spring_dashpot(&law.linear, m.restitution, m_eff, 1.0);
             timestep::linear_contact_time(k.f_elastic, k.gamma_n, m_eff)
         }
     }

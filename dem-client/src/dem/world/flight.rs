@@ -13,10 +13,13 @@
 //! undo).
 
 use super::everyone::Way;
-use super::{Body, World, CHUNK, FREE_FLIGHT_MARGIN, PAIR_CHUNK, V3};
+use super::{Body, World, CHUNK, PAIR_CHUNK, V3};
 use rayon::prelude::*;
 use std::time::Instant;
 
+/// Safety factor on a sphere's travel bound in free flight (the bound is exact for the motion it
+/// assumes; the margin covers the step's discretisation).
+const FREE_FLIGHT_MARGIN: f64 = 1.5;
 /// How far a sphere of the island may move within a fluid step, as a fraction of the skin (below
 /// half the skin, where the neighbour lists end).
 const ISLAND_REACH: f64 = 0.25;
@@ -176,7 +179,7 @@ impl World {
         let slot = &self.slots[s];
         let (a, b) = (&self.bodies[slot.i as usize], &self.bodies[slot.j as usize]);
         let shift = self.pair_shift.get(s).copied().unwrap_or_else(V3::zeros);
-        (a.x - b.x - shift).norm() - super::r_sum(a, b)
+        (a.x - b.x - shift).norm() - super::pairs::r_sum(a, b)
     }
 
     /// The spheres that could touch something, or come within the films' cut-off, if every sphere
