@@ -116,17 +116,18 @@ def _check_against_scene(ids: Dict[int, int], scene: lbmdem_scene.Scene) -> None
     if n == 0:
         return
     unknown = sorted(i for i in ids if i >= n)
+    if len(ids) != n:
+        missing = sorted(set(range(n)) - set(ids))
+        raise BadInput(f"YADE couples {len(ids)} spheres, the scene {scene.path} has {n} "
+                       f"particles (ids 0 .. {n - 1}; missing: {_few(missing) or 'none'}, "
+                       f"beyond: {_few(unknown) or 'none'}): build one YADE sphere per scene "
+                       f"particle (lbmdem_scene.Scene.load(PATH).particles) or map them with "
+                       f"ids={{scene_id: body_id}}")
     if unknown:
         body = ids[unknown[0]]
         raise BadInput(f"YADE body {body} is mapped to scene particle {unknown[0]}, which the "
                        f"scene {scene.path} does not have (its particles are 0 .. {n - 1}); "
                        f"{len(unknown)} such id(s)")
-    if len(ids) != n:
-        missing = sorted(set(range(n)) - set(ids))
-        raise BadInput(f"YADE couples {len(ids)} spheres, the scene {scene.path} has {n} "
-                       f"particles (missing ids: {_few(missing)}): build one YADE sphere per "
-                       f"scene particle (lbmdem_scene.Scene.load(PATH).particles) or map them "
-                       f"with ids={{scene_id: body_id}}")
 
 
 def _warn_if_unlike_scene(ids: Dict[int, int], scene: lbmdem_scene.Scene) -> None:
@@ -366,6 +367,12 @@ def couple(run: Optional[str] = None, scene: Optional[str] = None,
     except KeyboardInterrupt as e:
         _close(link)
         _say("interrupted twice: left at once")
+        return _fail(e, 1, exit_on_error)
+    except Exception as e:  # noqa: BLE001 - YADE or the script failed mid-run: report, leave
+        _close(link)
+        last = None if link is None else link.last_completed
+        _say(f"error: {type(e).__name__}: {e} (last completed step "
+             f"{'none' if last is None else last})")
         return _fail(e, 1, exit_on_error)
     finally:
         stop.restore()
