@@ -56,7 +56,12 @@ O = yade.Omega()
 
 
 class BadInput(Exception):
-    """The YADE script and the run do not fit together; ends the run with exit status 2."""
+    """The YADE script and the run do not fit together; ends the run with exit status 2.
+    ``run_over``: the fluid server has already ended the run (it refused the Hello)."""
+
+    def __init__(self, message: str, run_over: bool = False):
+        super().__init__(message)
+        self.run_over = run_over
 
 
 class Coupled(NamedTuple):
@@ -114,6 +119,9 @@ def _check_against_scene(ids: Dict[int, int], scene: lbmdem_scene.Scene) -> None
     without particles leaves them to the DEM (up to `coupling.capacity`)."""
     n = len(scene.particles)
     if n == 0:
+        if len(ids) > scene.capacity:
+            raise BadInput(f"YADE couples {len(ids)} spheres, more than the capacity "
+                           f"{scene.capacity} of the scene {scene.path} (coupling.capacity)")
         return
     unknown = sorted(i for i in ids if i >= n)
     if len(ids) != n:
@@ -358,7 +366,10 @@ def couple(run: Optional[str] = None, scene: Optional[str] = None,
         return _exchange(link, hello, spheres, max_dt, stop)
     except BadInput as e:
         _say(f"error: {e}")
-        _end_run(link, run, timeout_s)
+        if e.run_over:
+            _close(link)
+        else:
+            _end_run(link, run, timeout_s)
         return _fail(e, EXIT_BAD_INPUT, exit_on_error)
     except lbmdem.LinkError as e:
         _close(link)
@@ -414,6 +425,10 @@ def _exchange(link: lbmdem.DemLink, hello: lbmdem.Hello, spheres: _Spheres,
         welcome = link.connect(hello)
     except lbmdem.BadCount as e:
         raise BadInput(e.message) from None
+    except lbmdem.Refused as e:
+        if "CAPACITY_EXCEEDED" in e.message:  # the fluid refused, and ends the run itself
+            raise BadInput(e.message, run_over=True) from None
+        raise
     dt = welcome.dt
     k = _substeps(dt, max_dt)
     _set_gravity(welcome)
