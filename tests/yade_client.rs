@@ -104,16 +104,15 @@ fn text(bytes: &[u8]) -> String {
 
 /// The largest downward speed in a run's particles.csv [m/s].
 fn peak_settling_speed(out: &Path) -> f64 {
-    particle_rows(out)
-        .iter()
-        .map(|r| -r[8])
-        .fold(f64::MIN, f64::max)
+    particle_rows(out).iter().map(|r| -r[8]).fold(f64::MIN, f64::max)
 }
 
-/// Ten Cate E1 at 6 cells per diameter, 150 steps (0.57 s, near the terminal speed), once with the
-/// built-in DEM and once with YADE building the sphere from the scene (clients/yade/ten_cate_e1.py,
-/// ~70 YADE steps per fluid step): the same peak settling speed within 0.5%, every step
-/// exchanged, no shared-memory file left.
+/// Ten Cate E1 at 6 cells per diameter, 150 steps (0.57 s, near the terminal speed), the sphere
+/// released spinning at 5 rad/s about y (the torque path: the fluid's torque slows it), once with
+/// the built-in DEM and once with YADE building the sphere from the scene
+/// (clients/yade/ten_cate_e1.py, ~70 YADE steps per fluid step): the same peak settling speed
+/// within 0.5%, the same spin at every output step within 0.5% (1e-5 of the initial spin once it
+/// has decayed), every step exchanged, no shared-memory file left.
 #[test]
 fn yade_settles_the_ten_cate_sphere_as_the_builtin_dem_does() {
     let test = "yade_settles_the_ten_cate_sphere_as_the_builtin_dem_does";
@@ -122,6 +121,12 @@ fn yade_settles_the_ten_cate_sphere_as_the_builtin_dem_does() {
     };
     let _one_run_at_a_time = serial();
     let (dir, scene) = ten_cate_scene("yade-tencate", 150);
+    let spinning = std::fs::read_to_string(&scene).unwrap().replace(
+        "radius = 0.0075                      # m",
+        "radius = 0.0075                      # m\nangular_velocity = [0.0, 5.0, 0.0]",
+    );
+    assert!(spinning.contains("angular_velocity"));
+    std::fs::write(&scene, spinning).unwrap();
     let builtin = dir.join("builtin");
     let run = server(&scene, &builtin, &[]).output().expect("lbm-server runs");
     assert!(run.status.success(), "built-in DEM run: {}", text(&run.stderr));
@@ -130,7 +135,10 @@ fn yade_settles_the_ten_cate_sphere_as_the_builtin_dem_does() {
     let script = Path::new(CLIENT_DIR).join("ten_cate_e1.py");
     let (client, code, server_err, run) = coupled_with_yade(&yade, &scene, &out, &script, &[]);
     let (client_out, client_err) = (text(&client.stdout), text(&client.stderr));
-    assert!(client.status.success(), "yade failed:\n{client_out}\n{client_err}");
+    assert!(
+        client.status.success(),
+        "yade failed:\n{client_out}\n{client_err}"
+    );
     assert!(
         client_out.contains("yade-dem: completed 150 steps, 1 particles, last step 149"),
         "{client_out}\n{client_err}"
@@ -139,7 +147,10 @@ fn yade_settles_the_ten_cate_sphere_as_the_builtin_dem_does() {
     let s = summary(&out);
     assert_eq!(s["steps_completed"], 150);
     let software = s["peer"]["software"].as_str().unwrap();
-    assert!(software.contains("YADE") && software.contains("lbmdem_yade"), "{s}");
+    assert!(
+        software.contains("YADE") && software.contains("lbmdem_yade"),
+        "{s}"
+    );
 
     let (with_builtin, with_yade) = (peak_settling_speed(&builtin), peak_settling_speed(&out));
     eprintln!("peak settling speed: built-in DEM {with_builtin} m/s, YADE {with_yade} m/s");
@@ -148,6 +159,24 @@ fn yade_settles_the_ten_cate_sphere_as_the_builtin_dem_does() {
         (with_yade - with_builtin).abs() <= 0.005 * with_builtin,
         "peak settling speed with YADE {with_yade} m/s, with the built-in DEM {with_builtin} m/s"
     );
+    // particles.csv: step, time, id, x, y, z, vx, vy, vz, wx, wy, wz, ... Within 0.5%, and 1e-5
+    // of the initial spin where it has decayed to the flow's own (1e-3 rad/s at 0.5 s).
+    let (spin_builtin, spin_yade) = (particle_rows(&builtin), particle_rows(&out));
+    assert_eq!(spin_builtin.len(), spin_yade.len());
+    assert!(
+        spin_builtin[8][10] < 1.0,
+        "the fluid slows the spin: {:?}",
+        spin_builtin[8]
+    );
+    for (b, y) in spin_builtin.iter().zip(&spin_yade) {
+        assert!(
+            (y[10] - b[10]).abs() <= 0.005 * b[10].abs() + 1e-5 * 5.0,
+            "step {}: spin {} rad/s with YADE, {} rad/s with the built-in DEM",
+            b[0],
+            y[10],
+            b[10]
+        );
+    }
     assert!(leftover_files(&run).is_empty(), "{:?}", leftover_files(&run));
 }
 
@@ -198,7 +227,11 @@ fn a_yade_script_that_does_not_fit_the_scene_ends_the_run_with_exit_2() {
         assert!(client_err.contains("with STOP at step 0"), "{case}: {client_err}");
         assert_eq!(code, Some(0), "{case}: {server_err}");
         assert_eq!(summary(&out)["steps_completed"], 1, "{case}");
-        assert!(leftover_files(&run).is_empty(), "{case}: {:?}", leftover_files(&run));
+        assert!(
+            leftover_files(&run).is_empty(),
+            "{case}: {:?}",
+            leftover_files(&run)
+        );
     }
     let scene = scene.to_str().unwrap();
     let no_run = format!("lbmdem_{}_0", std::process::id());
@@ -206,9 +239,16 @@ fn a_yade_script_that_does_not_fit_the_scene_ends_the_run_with_exit_2() {
     let client_err = text(&client.stderr);
     assert_eq!(client.status.code(), Some(2), "{client_err}");
     let message = "YADE body 0 is mapped to scene particle 3, which the scene";
-    assert!(client_err.contains(message), "expected {message:?} in\n{client_err}");
+    assert!(
+        client_err.contains(message),
+        "expected {message:?} in\n{client_err}"
+    );
     assert!(client_err.contains("could not end the run"), "{client_err}");
-    assert!(leftover_files(&no_run).is_empty(), "{:?}", leftover_files(&no_run));
+    assert!(
+        leftover_files(&no_run).is_empty(),
+        "{:?}",
+        leftover_files(&no_run)
+    );
 }
 
 /// One coupled run of this file at a time: each starts lbm-server on the CPU's Vulkan driver.
@@ -273,7 +313,11 @@ for p in lbmdem_scene.Scene.load(sys.argv[2]).particles:
 /// of dem-client's step 0 (particles.csv and the step-0 VTK polydata).
 #[test]
 fn the_python_scene_reader_makes_the_scenes_particles() {
-    let python = if Path::new(SYSTEM_PYTHON).is_file() { SYSTEM_PYTHON } else { "python3" };
+    let python = if Path::new(SYSTEM_PYTHON).is_file() {
+        SYSTEM_PYTHON
+    } else {
+        "python3"
+    };
     let has_tomllib = Command::new(python)
         .args(["-c", "import tomllib"])
         .output()
@@ -283,7 +327,11 @@ fn the_python_scene_reader_makes_the_scenes_particles() {
         return;
     }
     let dir = temp_dir("scene-reader");
-    std::fs::write(dir.join("extra.csv"), "x,y,z,r,vx,wz\n0.03,0.03,0.03,0.001,0.1,2.0\n0.033,0.03,0.03,0.0012,0,0\n").unwrap();
+    std::fs::write(
+        dir.join("extra.csv"),
+        "x,y,z,r,vx,wz\n0.03,0.03,0.03,0.001,0.1,2.0\n0.033,0.03,0.03,0.0012,0,0\n",
+    )
+    .unwrap();
     let scene = write_scene(&dir, MIXED_SCENE);
     let out = dir.join("out");
     let run = Command::new(bin("dem-client"))
@@ -310,7 +358,8 @@ fn the_python_scene_reader_makes_the_scenes_particles() {
     assert_eq!(step0.len(), 29);
     assert_eq!(python_rows.len(), step0.len());
     for ((py, rust), r) in python_rows.iter().zip(&step0).zip(&radii) {
-        // particles.csv: step, time, id, x, y, z, vx, vy, vz, wx, wy, wz, ...
+        // particles.csv: step, time, id, x, y, z, vx, vy, vz, wx, wy, wz, ... Within 0.5%, and 1e-5
+        // of the initial spin where it has decayed to the flow's own (1e-3 rad/s at 0.5 s).
         let expected: Vec<f64> = rust[2..12].iter().copied().chain([*r]).collect();
         assert_eq!(py, &expected, "particle {}", rust[2]);
     }
