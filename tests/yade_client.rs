@@ -17,22 +17,25 @@ const CLIENT_DIR: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/clients/yade");
 const SYSTEM_PYTHON: &str = "/usr/bin/python3";
 
 /// YADE with iceoryx2 for its python: `yade` on PATH, and iceoryx2 in $LBMDEM_YADE_PYTHONPATH or
-/// target/yade-py (where .ci/run installs it).
+/// target/yade-py (where .ci/run installs it). One test of this file holds it at a time: each
+/// starts lbm-server on the CPU's Vulkan driver.
 struct Yade {
     pythonpath: String,
+    _one_run_at_a_time: std::sync::MutexGuard<'static, ()>,
 }
 
 impl Yade {
     /// None (and a line saying why the test is skipped) where YADE cannot run here.
     fn find(test: &str) -> Option<Yade> {
+        static SERIAL: std::sync::Mutex<()> = std::sync::Mutex::new(());
         let on_path = std::env::var_os("PATH")
             .map(|p| std::env::split_paths(&p).any(|d| d.join("yade").is_file()))
             .unwrap_or(false);
         if !on_path {
-            eprintln!(
+            skipped(&format!(
                 "{test}: skipped: yade is not installed (apt-get install yade python3-yade, or \
                  sh validation/dem/install.sh)"
-            );
+            ));
             return None;
         }
         let iox = std::env::var("LBMDEM_YADE_PYTHONPATH")
@@ -43,14 +46,15 @@ impl Yade {
             .output()
             .is_ok_and(|o| o.status.success());
         if !found {
-            eprintln!(
+            skipped(&format!(
                 "{test}: skipped: iceoryx2 for Debian's python is not in {iox} \
                  ({SYSTEM_PYTHON} -m pip install --target {iox} iceoryx2==0.10.0)"
-            );
+            ));
             return None;
         }
         Some(Yade {
             pythonpath: format!("{iox}:{CLIENT_DIR}"),
+            _one_run_at_a_time: SERIAL.lock().unwrap_or_else(|e| e.into_inner()),
         })
     }
 
@@ -65,6 +69,12 @@ impl Yade {
             .output()
             .expect("yade runs")
     }
+}
+
+/// Says why a test is skipped, on stderr itself: the test harness captures `eprintln!`.
+fn skipped(why: &str) {
+    use std::io::Write;
+    let _ = writeln!(std::io::stderr(), "{why}");
 }
 
 /// Ten Cate E1 cut to `steps` steps, written into a fresh folder.
@@ -115,11 +125,9 @@ fn peak_settling_speed(out: &Path) -> f64 {
 /// has decayed), every step exchanged, no shared-memory file left.
 #[test]
 fn yade_settles_the_ten_cate_sphere_as_the_builtin_dem_does() {
-    let test = "yade_settles_the_ten_cate_sphere_as_the_builtin_dem_does";
-    let Some(yade) = Yade::find(test) else {
+    let Some(yade) = Yade::find("yade_settles_the_ten_cate_sphere_as_the_builtin_dem_does") else {
         return;
     };
-    let _one_run_at_a_time = serial();
     let (dir, scene) = ten_cate_scene("yade-tencate", 150);
     let spinning = std::fs::read_to_string(&scene).unwrap().replace(
         "radius = 0.0075                      # m",
@@ -203,11 +211,9 @@ lbmdem_yade.couple(sys.argv[2], scene=sys.argv[4], ids={3: 0} if case == "ids" e
 /// have, with no server to tell: the message and exit 2 all the same.
 #[test]
 fn a_yade_script_that_does_not_fit_the_scene_ends_the_run_with_exit_2() {
-    let test = "a_yade_script_that_does_not_fit_the_scene_ends_the_run_with_exit_2";
-    let Some(yade) = Yade::find(test) else {
+    let Some(yade) = Yade::find("a_yade_script_that_does_not_fit_the_scene_ends_the_run_with_exit_2") else {
         return;
     };
-    let _one_run_at_a_time = serial();
     let (dir, scene) = ten_cate_scene("yade-misfit", 20);
     let script = dir.join("misfit.py");
     std::fs::write(&script, MISFIT).unwrap();
@@ -249,12 +255,6 @@ fn a_yade_script_that_does_not_fit_the_scene_ends_the_run_with_exit_2() {
         "{:?}",
         leftover_files(&no_run)
     );
-}
-
-/// One coupled run of this file at a time: each starts lbm-server on the CPU's Vulkan driver.
-fn serial() -> std::sync::MutexGuard<'static, ()> {
-    static SERIAL: std::sync::Mutex<()> = std::sync::Mutex::new(());
-    SERIAL.lock().unwrap_or_else(|e| e.into_inner())
 }
 
 /// A scene with every way of making particles: spheres (one spinning), a block, two jittered
@@ -323,7 +323,9 @@ fn the_python_scene_reader_makes_the_scenes_particles() {
         .output()
         .is_ok_and(|o| o.status.success());
     if !has_tomllib {
-        eprintln!("the_python_scene_reader_makes_the_scenes_particles: skipped: {python} has no tomllib (Python 3.11+)");
+        skipped(&format!(
+            "the_python_scene_reader_makes_the_scenes_particles: skipped: {python} has no tomllib (Python 3.11+)"
+        ));
         return;
     }
     let dir = temp_dir("scene-reader");
