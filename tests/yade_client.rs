@@ -97,15 +97,28 @@ fn coupled_with_yade(
 ) -> (Output, Option<i32>, String, String) {
     // As common::start_external, with more patience: the server compiles its kernels on the
     // CPU's Vulkan driver, which takes long on a loaded machine.
-    let mut fluid = start(server(scene, out, &["--dem", "external"]));
-    let line = Proc::wait_line(&fluid.stdout, "DEM service:", Duration::from_secs(90));
+    let mut fluid = Fluid(start(server(scene, out, &["--dem", "external"])));
+    let line = Proc::wait_line(&fluid.0.stdout, "DEM service:", Duration::from_secs(90));
     let run = line.split_whitespace().last().expect("a run name").to_string();
     let scene = scene.to_str().unwrap();
     let mut all = vec!["--service", &run, "--scene", scene];
     all.extend_from_slice(args);
     let client = yade.run(script, &all);
-    let (code, _) = fluid.wait_exit(Duration::from_secs(60));
-    (client, code, Proc::drain(&fluid.stderr), run)
+    let (code, _) = fluid.0.wait_exit(Duration::from_secs(60));
+    (client, code, Proc::drain(&fluid.0.stderr), run)
+}
+
+/// The fluid server of a test, killed when the test leaves early (a failed assertion): with
+/// `--dem external` it would otherwise wait for a DEM without end.
+struct Fluid(Proc);
+
+impl Drop for Fluid {
+    fn drop(&mut self) {
+        if matches!(self.0.child.try_wait(), Ok(None)) {
+            let _ = self.0.child.kill();
+            let _ = self.0.child.wait();
+        }
+    }
 }
 
 fn text(bytes: &[u8]) -> String {
