@@ -503,12 +503,12 @@ fn block_centres(b: &Block) -> impl Iterator<Item = [f64; 3]> + '_ {
     })
 }
 
+mod checks;
 pub mod dem;
 pub mod lattice;
 pub mod outputs;
 pub mod overlap;
 mod times;
-mod validate;
 pub mod vtp;
 
 #[cfg(test)]

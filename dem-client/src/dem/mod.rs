@@ -9,9 +9,9 @@ pub mod timestep;
 pub mod world;
 
 #[cfg(test)]
-mod tests;
+mod cross_code;
 #[cfg(test)]
-mod validation;
+mod tests;
 
 use contact::{linear_spring_dashpot, ContactLaw};
 use neighbor::Periodic;

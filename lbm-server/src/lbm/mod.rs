@@ -1,5 +1,6 @@
 //! The lattice-Boltzmann fluid: D3Q19 on the GPU (wgpu), with an f64 reference for the tests.
 
+pub mod cases;
 pub mod geometry;
 pub mod gpu;
 pub mod imb;
@@ -11,4 +12,3 @@ pub mod reference;
 #[cfg(test)]
 mod tests;
 pub mod unroll;
-pub mod validation;

@@ -296,7 +296,7 @@ fn the_health_check_finds_the_cell_the_full_readback_finds() {
 }
 
 mod validation_cases {
-    use super::super::validation::*;
+    use super::super::cases::*;
     use super::*;
 
     const MAGIC: f64 = 3.0 / 16.0;
@@ -1100,7 +1100,7 @@ mod immersed_boundary {
 }
 
 mod coupling_validation {
-    use super::super::validation::*;
+    use super::super::cases::*;
     use super::*;
 
     #[test]

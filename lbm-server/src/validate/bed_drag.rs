@@ -4,8 +4,8 @@
 //! `--only random-drag` (and `random-drag-fine`, a GPU's grids): the same with the spheres at
 //! random, against Tenneti et al.'s random arrays.
 
+use crate::lbm::cases::{self, schiller_naumann, Array, Spheres, WeightedArray};
 use crate::lbm::gpu::Gpu;
-use crate::lbm::validation::{self, schiller_naumann, Array, Spheres, WeightedArray};
 use std::f64::consts::PI;
 use std::fmt::Write as _;
 use std::sync::Arc;
@@ -100,7 +100,7 @@ fn at_weight(
     let nu = VELOCITY * array.diameter / expected;
     let weight = archimedes() * PI / 6.0;
     let mrt = super::operator_named("MRT", 0.5 + 3.0 * nu);
-    validation::array_at_weight(gpu, array, [nu, weight], (mrt, boundary), VELOCITY, max_steps)
+    cases::array_at_weight(gpu, array, [nu, weight], (mrt, boundary), VELOCITY, max_steps)
 }
 
 pub(super) fn section(gpu: &Arc<Gpu>) -> String {
@@ -122,9 +122,9 @@ pub(super) fn section(gpu: &Arc<Gpu>) -> String {
          the reference for the grid error.\n\n\
          | solid fraction | box n | d (cells) | tau | steps | outcome | Re mean | Re range | F / (3 pi mu d U) | grid error of Re vs finest | Richardson-Zaki Re |\n\
          |---:|---:|---:|---:|---:|---|---:|---:|---:|---:|---:|\n",
-        validation::WEIGHT_SAMPLES,
-        validation::WEIGHT_CHECK,
-        validation::WEIGHT_SAMPLES,
+        cases::WEIGHT_SAMPLES,
+        cases::WEIGHT_CHECK,
+        cases::WEIGHT_SAMPLES,
         settling_reynolds(ar),
     );
     for phi in SOLID_FRACTIONS {
@@ -207,7 +207,47 @@ fn random_arrays(gpu: &Arc<Gpu>, grids: &str, diameters: &[f64], boundary: Spher
     let ar = archimedes();
     let phi = SOLID_FRACTIONS[0];
     let bed = tenneti_reynolds(ar, phi);
-    let mut t = format!(
+    let mut t = random_heading(grids, boundary, phi, [ar, bed]);
+    let scale = (RANDOM_COUNT as f64 * PI / (6.0 * phi)).cbrt();
+    let arrays = |seed: u64| -> Vec<Array> {
+        diameters
+            .iter()
+            .map(|&d| Array::random((d * scale).round() as usize, RANDOM_COUNT, phi, seed))
+            .collect()
+    };
+    let stokes = |array: &Array| {
+        let nu = (STOKES_TAU - 0.5) / 3.0;
+        let u = STOKES_RE * nu / array.diameter;
+        let mrt = super::operator_named("MRT", STOKES_TAU);
+        let force = tenneti_force(phi, STOKES_RE);
+        cases::array_at_weight(gpu, array, [nu, force], (mrt, boundary), u, STOKES_MAX_STEPS)
+    };
+    let weight = |array: &Array| at_weight(gpu, array, (bed, boundary), RANDOM_MAX_STEPS);
+    type Flow<'a> = (&'a str, &'a dyn Fn(&Array) -> WeightedArray, f64, u64);
+    let flows: [Flow; 2] = [
+        ("Stokes", &stokes, STOKES_RE, STOKES_MAX_STEPS),
+        ("the bed's weight", &weight, bed, RANDOM_MAX_STEPS),
+    ];
+    for (flow, run, reference, max_steps) in flows {
+        for seed in RANDOM_SEEDS {
+            let runs: Vec<WeightedArray> = arrays(seed)
+                .iter()
+                .map(|array| {
+                    let r = run(array);
+                    protocol::say!("lbm-server: random-drag: {flow}, seed {seed} {r:?}");
+                    r
+                })
+                .collect();
+            random_rows(&mut t, [flow, &seed.to_string()], &runs, reference, max_steps);
+        }
+    }
+    t
+}
+
+/// The heading and the text of a random-array section: its grids, how the spheres meet the fluid
+/// (`boundary`), the bed's Archimedes number `ar` and Tenneti's Reynolds number `bed` there.
+fn random_heading(grids: &str, boundary: Spheres, phi: f64, [ar, bed]: [f64; 2]) -> String {
+    format!(
         "\n## Immersed moving boundary: a random array at the fluidized bed's voidage, {grids}\n\n\
          The simple cubic array of the section above carries the bed's weight at Re 476-491, where the \
          fluidized bed (validation/imb/FLUIDIZED_BED.md) stands at the same voidage at Re 200; but \
@@ -236,43 +276,9 @@ fn random_arrays(gpu: &Arc<Gpu>, grids: &str, diameters: &[f64], boundary: Spher
                 fluid cells, its total the same",
         },
         richardson_zaki(ar, 1.0 - phi),
-        validation::WEIGHT_SAMPLES,
-        validation::WEIGHT_CHECK,
-    );
-    let scale = (RANDOM_COUNT as f64 * PI / (6.0 * phi)).cbrt();
-    let arrays = |seed: u64| -> Vec<Array> {
-        diameters
-            .iter()
-            .map(|&d| Array::random((d * scale).round() as usize, RANDOM_COUNT, phi, seed))
-            .collect()
-    };
-    let stokes = |array: &Array| {
-        let nu = (STOKES_TAU - 0.5) / 3.0;
-        let u = STOKES_RE * nu / array.diameter;
-        let mrt = super::operator_named("MRT", STOKES_TAU);
-        let force = tenneti_force(phi, STOKES_RE);
-        validation::array_at_weight(gpu, array, [nu, force], (mrt, boundary), u, STOKES_MAX_STEPS)
-    };
-    let weight = |array: &Array| at_weight(gpu, array, (bed, boundary), RANDOM_MAX_STEPS);
-    type Flow<'a> = (&'a str, &'a dyn Fn(&Array) -> WeightedArray, f64, u64);
-    let flows: [Flow; 2] = [
-        ("Stokes", &stokes, STOKES_RE, STOKES_MAX_STEPS),
-        ("the bed's weight", &weight, bed, RANDOM_MAX_STEPS),
-    ];
-    for (flow, run, reference, max_steps) in flows {
-        for seed in RANDOM_SEEDS {
-            let runs: Vec<WeightedArray> = arrays(seed)
-                .iter()
-                .map(|array| {
-                    let r = run(array);
-                    protocol::say!("lbm-server: random-drag: {flow}, seed {seed} {r:?}");
-                    r
-                })
-                .collect();
-            random_rows(&mut t, [flow, &seed.to_string()], &runs, reference, max_steps);
-        }
-    }
-    t
+        cases::WEIGHT_SAMPLES,
+        cases::WEIGHT_CHECK,
+    )
 }
 
 /// How an array's run ended: blew up (where), steady, or stopped at `max_steps` unsteady.

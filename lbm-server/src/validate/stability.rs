@@ -2,9 +2,9 @@
 //! sphere's wake as tau nears 1/2 (the seed paper's fluidized bed diverged at Re 400 with BGK).
 
 use super::operator_named;
+use crate::lbm::cases::{self, schiller_naumann, Faces, HeldSphere, Stability};
 use crate::lbm::geometry::{tau_minus, Operator};
 use crate::lbm::gpu::Gpu;
-use crate::lbm::validation::{self, schiller_naumann, Faces, HeldSphere, Stability};
 use std::fmt::Write as _;
 use std::sync::Arc;
 
@@ -29,9 +29,9 @@ const PASSES: f64 = 3.0;
 /// the box with inlet and outlet (the boundaries of a fluidized bed too).
 pub(super) const FACES: [(Faces, &str); 2] = [(Faces::Periodic, "periodic"), (Faces::Open, "inlet-outlet")];
 
-/// The held sphere of one row: Re, operator (by name), at [`validation::STREAM_VELOCITY`].
+/// The held sphere of one row: Re, operator (by name), at [`cases::STREAM_VELOCITY`].
 fn case(reynolds: f64, operator: &str) -> HeldSphere {
-    let tau = 0.5 + 3.0 * validation::STREAM_VELOCITY * DIAMETER / reynolds;
+    let tau = 0.5 + 3.0 * cases::STREAM_VELOCITY * DIAMETER / reynolds;
     HeldSphere {
         reynolds,
         diameter: DIAMETER,
@@ -110,20 +110,15 @@ pub(super) fn section(gpu: &Arc<Gpu>) -> String {
          at Re 200, one cell from the outlet.\n\n\
          | faces | operator | Re | tau | tau- | steps | outcome | stream | C_d mean | C_d range | C_d Schiller-Naumann |\n\
          |---|---|---:|---:|---:|---:|---|---:|---:|---:|---:|\n",
-        validation::STREAM_VELOCITY,
-        validation::STABILITY_CHECK,
+        cases::STREAM_VELOCITY,
+        cases::STABILITY_CHECK,
     );
     let mut held = Vec::new();
     for (faces, name) in FACES {
         for operator in OPERATORS {
             for re in REYNOLDS {
-                let s = validation::sphere_stability(
-                    gpu,
-                    &case(re, operator),
-                    faces,
-                    PASSES,
-                    validation::STABILITY_CHECK,
-                );
+                let s =
+                    cases::sphere_stability(gpu, &case(re, operator), faces, PASSES, cases::STABILITY_CHECK);
                 protocol::say!("lbm-server: stability: {name} {operator} Re {re}: {s:?}");
                 let drag = s.cd.map_or(" | ".into(), |[mean, low, high]| {
                     format!("{mean:.3} | {low:.3}-{high:.3}")

@@ -4,9 +4,9 @@
 //! fall with the grid?
 
 use super::operator_named;
+use crate::lbm::cases::{self, schiller_naumann, Faces, HeldSphere};
 use crate::lbm::gpu::Gpu;
 use crate::lbm::imb::{ImbOptions, SolidCollision};
-use crate::lbm::validation::{self, schiller_naumann, Faces, HeldSphere};
 use std::fmt::Write as _;
 use std::sync::Arc;
 
@@ -17,7 +17,7 @@ const LENGTH: f64 = 10.0;
 const PASSES: f64 = 4.0;
 /// Steps between health checks (each reads every cell back): the stability section's on
 /// lavapipe's grids, fewer on a GPU's.
-const CHECK: u64 = validation::STABILITY_CHECK;
+const CHECK: u64 = cases::STABILITY_CHECK;
 const FINE_CHECK: u64 = 100;
 
 /// One held sphere: Reynolds number, diameter (cells), stream velocity, operator (by the names
@@ -37,7 +37,7 @@ const fn mrt(re: f64, d: f64) -> Wake {
     Wake {
         re,
         d,
-        u0: validation::STREAM_VELOCITY,
+        u0: cases::STREAM_VELOCITY,
         operator: "MRT",
         seed: false,
         superposition: false,
@@ -136,7 +136,7 @@ impl Wake {
     /// A row of the MRT series by resolution (the stream velocity, operator and weighting of the
     /// finest rows).
     fn is_series(&self) -> bool {
-        self.operator == "MRT" && !self.seed && self.u0 == validation::STREAM_VELOCITY
+        self.operator == "MRT" && !self.seed && self.u0 == cases::STREAM_VELOCITY
     }
 
     fn weighting(&self) -> &'static str {
@@ -192,7 +192,7 @@ fn wakes(gpu: &Arc<Gpu>, grids: &str, note: &str, runs: &[Wake], check: u64) -> 
     );
     let mut series = Vec::new();
     for w in runs {
-        let s = validation::sphere_stability(gpu, &w.held(), Faces::Open, PASSES, check);
+        let s = cases::sphere_stability(gpu, &w.held(), Faces::Open, PASSES, check);
         protocol::say!("lbm-server: wake-drag: {w:?}: {s:?}");
         let sn = schiller_naumann(w.re);
         let (outcome, drag) = match (s.unhealthy, s.cd) {
