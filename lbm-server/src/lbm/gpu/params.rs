@@ -48,6 +48,7 @@ pub(super) fn params(
         ],
         face_lo: [face(0), face(1), face(2), face(3)],
         face_hi: [face(4), face(5), 0, 0],
+        // omega = 1/tau of the collision (seed eq. 1; tau from the viscosity by eq. 4).
         relax: [
             (1.0 / setup.tau) as f32,
             setup.omega_minus() as f32,

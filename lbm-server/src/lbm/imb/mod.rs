@@ -5,7 +5,7 @@
 //!
 //! The step maps the particles' solid fractions onto the cells (`cover`), collides the fluid with
 //! the solid term where they cover it (in the fluid kernels or before them), and reduces each
-//! particle's force and torque from its cells ([`step`]'s table of passes).
+//! particle's force and torque from its cells (the table of passes at step.rs's `coupled_step`).
 
 mod chunks;
 mod coupling;
