@@ -19,6 +19,11 @@
 // - SKIP: as the redo, but `collide_covered` stores the covered cells in place, `cover` sets their
 //   bits of the cover mask, the fluid kernels leave those cells alone, and `uncover_listed` clears
 //   the bits after them.
+//
+// The seed's equations: the solid fraction that B weighs in `solid_fraction`, B in `weighting`,
+// the covered cell's collision (eq. 7) in `immersed_boundary`, the solid term Omega (eq. 8) at the
+// solid's velocity (eq. 9) in `solid_collision`, the force (eq. 10) and torque (eq. 11) summed over
+// the covered cells in `reduce` and `sum_loads`.
 
 // Particles a cell can hold (1-4).
 override SLOTS: u32 = 2u;
@@ -75,10 +80,11 @@ struct Particle {
 
 const NO_CELL: u32 = 0xffffffffu;
 
-// Fraction of the cell centred at `x` inside the sphere: the fraction of a unit cell below a plane
-// at the cell centre's distance from the surface (exact for a face-aligned plane), 0 or 1 beyond
-// half a cell, on a radius shortened by 1/(12 r) that cancels the volume the curvature adds
-// (docs/imb.md). Branch-free: one square root per cell.
+// Fraction of the cell centred at `x` inside the sphere (the solid fraction that eq. 7's B
+// weighs): the fraction of a unit cell below a plane at the cell centre's distance from the
+// surface (exact for a face-aligned plane), 0 or 1 beyond half a cell, on a radius shortened by
+// 1/(12 r) that cancels the volume the curvature adds (docs/imb.md). Branch-free: one square root
+// per cell.
 fn solid_fraction(x: vec3<f32>, centre: vec3<f32>, r: f32) -> f32 {
     return clamp(r - 1.0 / (12.0 * r) + 0.5 - length(x - centre), 0.0, 1.0);
 }
@@ -129,7 +135,8 @@ fn cell_at(q: vec3<i32>) -> u32 {
     return u32(q.x) + params.n.x * (u32(q.y) + params.n.y * u32(q.z));
 }
 
-// Weight of the solid collision for solid fraction eps.
+// Weight B of the solid collision for solid fraction eps (seed eq. 7's beta_n): the seed's B = eps,
+// or Noble & Torczynski's B = eps (tau - 1/2) / ((1 - eps) + (tau - 1/2)).
 fn weighting(eps: f32) -> f32 {
     if SEED_WEIGHTING { return eps; }
     let t = 1.0 / params.relax.x - 0.5;
@@ -418,46 +425,64 @@ fn solid_term(k: u32, f: array<f32, 19>, m: Moments, post: array<f32, 19>) -> ar
     return post;
 }
 
-// The collision of a cell covered by particles: the fluid part of `post` (the operator's
-// relaxation and source) is weighted by 1 - sum B, and each particle adds B_s Omega_s with
-// Omega_i = f_ibar - f_i + f_eq_i(rho, u_s) - f_eq_ibar(rho, u) (seed eq. 7-8), or with
-// SUPERPOSITION Omega_i = f_eq_i(rho, u_s) - f_eq_i(rho, u) + post_i - S_i - f_i (S: the body
-// force's part of post, `forcing`).
+// The collision of a cell covered by particles (seed eq. 7): the fluid part of `post` (the
+// operator's relaxation and source) is weighted by 1 - sum B, and each particle adds B_s Omega_s
+// (`solid_collision`).
 fn immersed_boundary(k: u32, f: array<f32, 19>, m: Moments, post: array<f32, 19>) -> array<f32, 19> {
     let count = min(atomicLoad(&covered[k]), SLOTS);
     if count == 0u { return post; }
-    // Particles in the order of their keys (`hold_slot`): the sums do not depend on the order of
-    // arrival.
-    var ids: array<u32, 4>;
+    var c = cell_covers(k, count);
+    var out: array<f32, 19>;
+    //#for i
+    out[{i}] = f[{i}] - (1.0 - c.b_total) * (f[{i}] - post[{i}]);
+    //#end
+    let own = own_collision(f, m, post);
     for (var s = 0u; s < count; s++) {
-        ids[s] = slot_particle(atomicLoad(&slots[k * SLOTS + s]));
+        out = solid_collision(c.ids[s], c.t[s], c.x[s], c.b[s], f, m, own, out);
     }
-    // The solid fractions as `cover` computed them (the same function of the same values: the
-    // cell centre in the particle's box, one period away where the box wraps).
-    var t: array<vec3<i32>, 4>;
-    var x: array<vec3<f32>, 4>;
+    return out;
+}
+
+// The particles covering a cell (at most 4), in the order of their keys, with the cell's offset
+// in each one's box, the cell's centre there, each one's weight B and their sum.
+struct Covers {
+    ids: array<u32, 4>,
+    t: array<vec3<i32>, 4>,
+    x: array<vec3<f32>, 4>,
+    b: array<f32, 4>,
+    b_total: f32,
+}
+
+// The `count` particles covering cell k (`hold_slot`'s order: the sums do not depend on the order
+// of arrival), and their weights B (eq. 7) from their solid fractions as `cover` computed them
+// (the same function of the same values: the cell centre in the particle's box, one period away
+// where the box wraps), the total solid fraction capped at 1.
+fn cell_covers(k: u32, count: u32) -> Covers {
+    var c: Covers;
+    for (var s = 0u; s < count; s++) {
+        c.ids[s] = slot_particle(atomicLoad(&slots[k * SLOTS + s]));
+    }
     var eps: array<f32, 4>;
     var eps_total = 0.0;
     for (var s = 0u; s < count; s++) {
-        let p = particles[ids[s]];
-        t[s] = box_offset(k, p);
-        x[s] = vec3<f32>(box_origin(p) + t[s]) + 0.5;
-        eps[s] = solid_fraction(x[s], p.pos_r.xyz, p.pos_r.w);
+        let p = particles[c.ids[s]];
+        c.t[s] = box_offset(k, p);
+        c.x[s] = vec3<f32>(box_origin(p) + c.t[s]) + 0.5;
+        eps[s] = solid_fraction(c.x[s], p.pos_r.xyz, p.pos_r.w);
         eps_total += eps[s];
     }
-    // Total solid fraction capped at 1.
     let scale = select(1.0, 1.0 / eps_total, eps_total > 1.0);
-    var b: array<f32, 4>;
-    var b_total = 0.0;
+    c.b_total = 0.0;
     for (var s = 0u; s < count; s++) {
-        b[s] = weighting(eps[s] * scale);
-        b_total += b[s];
+        c.b[s] = weighting(eps[s] * scale);
+        c.b_total += c.b[s];
     }
-    var out: array<f32, 19>;
-    //#for i
-    out[{i}] = f[{i}] - (1.0 - b_total) * (f[{i}] - post[{i}]);
-    //#end
-    // Superposition: what the solid term keeps of the fluid's own collision, post - S - f.
+    return c;
+}
+
+// With SUPERPOSITION, what the solid term keeps of the fluid's own collision, post - S - f (S: the
+// body force's part of post, `forcing`); zero otherwise.
+fn own_collision(f: array<f32, 19>, m: Moments, post: array<f32, 19>) -> array<f32, 19> {
     var own: array<f32, 19>;
     if SUPERPOSITION {
         var source: array<f32, 19>;
@@ -468,35 +493,53 @@ fn immersed_boundary(k: u32, f: array<f32, 19>, m: Moments, post: array<f32, 19>
         own[{i}] = post[{i}] - source[{i}] - f[{i}];
         //#end
     }
-    for (var s = 0u; s < count; s++) {
-        let p = particles[ids[s]];
-        let solid = p.vel.xyz + cross(p.omega.xyz, x[s] - p.pos_r.xyz);
-        // f_eq_i(rho, u_s) - f_eq_ibar(rho, u) = w_i rho (3 c.sum + 4.5 (c.sum)(c.diff) - 1.5 sum.diff)
-        // with sum = u_s + u, diff = u_s - u; f_eq_i(rho, u_s) - f_eq_i(rho, u) the same with
-        // 3 c.diff in place of 3 c.sum.
-        let sum = solid + m.u;
-        let diff = solid - m.u;
-        let scalar = -1.5 * dot(sum, diff);
-        var momentum = vec3<f32>(0.0);
-        //#for i
-        {
-            let c = vec3<f32>({i.cx}.0, {i.cy}.0, {i.cz}.0);
-            let cs = dot(c, sum);
-            let cd = dot(c, diff);
-            var omega: f32;
-            if SUPERPOSITION {
-                omega = b[s] * ({i.w} * m.rho * (3.0 * cd + 4.5 * cs * cd + scalar) + own[{i}]);
-            } else {
-                omega = b[s] * (f[{i.o}] - f[{i}] + {i.w} * m.rho * (3.0 * cs + 4.5 * cs * cd + scalar));
-            }
-            out[{i}] += omega;
-            momentum += omega * c;
+    return own;
+}
+
+// Particle j's solid term in a covered cell (its offset t in the particle's box, its centre x,
+// the particle's weight b), added to `out`: b Omega_i with Omega_i = f_ibar - f_i + f_eq_i(rho,
+// u_s) - f_eq_ibar(rho, u) (seed eq. 8), or with SUPERPOSITION Omega_i = f_eq_i(rho, u_s) -
+// f_eq_i(rho, u) + own_i, where u_s is the solid's velocity at the cell centre (eq. 9, at x
+// rather than half a link on). The momentum it takes from the fluid, -b sum_i Omega_i c_i (the
+// cell's term of eq. 10), goes to the particle's pair of this cell for `reduce`.
+fn solid_collision(
+    j: u32,
+    t: vec3<i32>,
+    x: vec3<f32>,
+    b: f32,
+    f: array<f32, 19>,
+    m: Moments,
+    own: array<f32, 19>,
+    fluid: array<f32, 19>,
+) -> array<f32, 19> {
+    var out = fluid;
+    let p = particles[j];
+    let solid = p.vel.xyz + cross(p.omega.xyz, x - p.pos_r.xyz);
+    // f_eq_i(rho, u_s) - f_eq_ibar(rho, u) = w_i rho (3 c.sum + 4.5 (c.sum)(c.diff) - 1.5 sum.diff)
+    // with sum = u_s + u, diff = u_s - u (eq. 3); f_eq_i(rho, u_s) - f_eq_i(rho, u) the same with
+    // 3 c.diff in place of 3 c.sum.
+    let sum = solid + m.u;
+    let diff = solid - m.u;
+    let scalar = -1.5 * dot(sum, diff);
+    var momentum = vec3<f32>(0.0);
+    //#for i
+    {
+        let c = vec3<f32>({i.cx}.0, {i.cy}.0, {i.cz}.0);
+        let cs = dot(c, sum);
+        let cd = dot(c, diff);
+        var omega: f32;
+        if SUPERPOSITION {
+            omega = b * ({i.w} * m.rho * (3.0 * cd + 4.5 * cs * cd + scalar) + own[{i}]);
+        } else {
+            omega = b * (f[{i.o}] - f[{i}] + {i.w} * m.rho * (3.0 * cs + 4.5 * cs * cd + scalar));
         }
-        //#end
-        let b_ = vec3<u32>(t[s]);
-        let m_ = p.edge;
-        pairs[p.first + b_.x + m_ * (b_.y + m_ * b_.z)] = vec4<f32>(-momentum, 1.0);
+        out[{i}] += omega;
+        momentum += omega * c;
     }
+    //#end
+    let b_ = vec3<u32>(t);
+    let m_ = p.edge;
+    pairs[p.first + b_.x + m_ * (b_.y + m_ * b_.z)] = vec4<f32>(-momentum, 1.0);
     return out;
 }
 
@@ -509,7 +552,8 @@ fn partial_load(j: u32, s: u32) -> u32 {
     return 6u * (imb_info.x + SLICES * j + s);
 }
 
-// SLICES invocations per particle: each sums the force and torque of its slice of the particle's
+// SLICES invocations per particle: each sums the force (seed eq. 10) and torque (eq. 11: the arm
+// from the particle's centre to the cell's, times the cell's force) of its slice of the particle's
 // bounding box (box cells s, s + SLICES, s + 2 SLICES, ...: neighbouring invocations read
 // neighbouring pairs) in a fixed order, and clears the cover counts, mask and slots of the covered
 // cells of its slice for the next step. `sum_loads` adds the slices. No floating-point atomics: the
@@ -547,7 +591,8 @@ fn reduce(
     }
 }
 
-// One invocation per particle: its load, the sum of its slices' in slice order.
+// One invocation per particle: its load, the sum of its slices' in slice order (the sums over the
+// covered cells of eq. 10-11 completed).
 @compute @workgroup_size(64)
 fn sum_loads(
     @builtin(workgroup_id) wg: vec3<u32>,

@@ -6,8 +6,13 @@
 // direction (structure of arrays, coalesced; no binding ever exceeds the per-binding size limit).
 // Lines between `//#for i` and `//#end` are repeated for the 19 directions before compilation
 // (lbm-server/src/lbm/unroll.rs), with {i} the direction, {i.o} its opposite, {i.cx} {i.cy} {i.cz}
-// its velocity and {i.w} its weight: every population is then a register and every buffer access
-// static, which CPU drivers such as lavapipe need to be fast.
+// its velocity c_i (seed eq. 2) and {i.w} its weight w_i (of eq. 3): every population is then a
+// register and every buffer access static, which CPU drivers such as lavapipe need to be fast.
+//
+// The seed's equations: the collision of eq. 1 in `collide` (BGK: omega = 1/tau, params.relax.x,
+// with tau from the viscosity by eq. 4 on the host) with its force term G_i in `guo_source` and
+// `forcing`, its streaming in `store_sent` and `read_populations`, the equilibrium (eq. 3) in
+// `collide` and `equilibrium`, density (eq. 5) and velocity (eq. 6) in `moments`.
 //
 // Boundaries are applied on the way out: a post-collision population that would leave through a
 // wall, moving wall, inlet or outlet, or into a solid cell, comes back as the reversed population
@@ -191,7 +196,8 @@ fn cell_index(wg: vec3<u32>, nwg: vec3<u32>, local: u32) -> u32 {
 }
 
 // Pre-collision populations of cell k (at p: its coordinates, found once per cell, since they
-// take three integer divisions) at the current time, whatever the step parity.
+// take three integer divisions) at the current time, whatever the step parity (the odd step
+// reads f_i streamed from x - c_i, seed eq. 1).
 fn read_populations(k: u32, p: vec3<i32>, flag: u32) -> array<f32, 19> {
     var f: array<f32, 19>;
     if params.n.w == 0u {
@@ -220,7 +226,7 @@ struct Moments {
     u: vec3<f32>,
 }
 
-// Density and velocity, with the half-force correction of Guo forcing.
+// Density (seed eq. 5) and velocity (eq. 6), with the half-force correction of Guo forcing.
 fn moments(f: array<f32, 19>) -> Moments {
     var drho = 0.0;
     var j = vec3<f32>(0.0);
@@ -232,19 +238,23 @@ fn moments(f: array<f32, 19>) -> Moments {
     return Moments(rho, (j + 0.5 * params.force.xyz) / rho);
 }
 
-// Shifted equilibrium f_eq_i - w_i of direction c with weight w.
+// Shifted equilibrium f_eq_i - w_i (seed eq. 3) of direction c with weight w.
 fn equilibrium(c: vec3<f32>, w: f32, m: Moments) -> f32 {
     let cu = dot(c, m.u);
     return w * ((m.rho - 1.0) + m.rho * (3.0 * cu + 4.5 * cu * cu - 1.5 * dot(m.u, m.u)));
 }
 
-// Guo forcing term of direction c with weight w (before its relaxation factor).
+// Guo forcing term of direction c with weight w (seed eq. 1's G_i, before its relaxation factor).
 fn guo_source(c: vec3<f32>, w: f32, m: Moments) -> f32 {
     return w * dot(3.0 * (c - m.u) + 9.0 * dot(c, m.u) * c, params.force.xyz);
 }
 
+// The collision of seed eq. 1, f_i - omega (f_i - f_eq_i) + G_i, by the operator: BGK (omega =
+// 1/tau), TRT (the symmetric and antisymmetric parts of f - f_eq relaxed apart) or MRT (in moment
+// space), with the body force's source when FORCE.
 fn collide(f: array<f32, 19>, m: Moments) -> array<f32, 19> {
-    // f_eq_i - w_i = w_i (a + cu (b + d cu)) with cu = c_i . u: per-cell factors computed once.
+    // f_eq_i - w_i = w_i (a + cu (b + d cu)) with cu = c_i . u (eq. 3): per-cell factors computed
+    // once.
     let a = (m.rho - 1.0) - 1.5 * m.rho * dot(m.u, m.u);
     let b = 3.0 * m.rho;
     let d = 4.5 * m.rho;
@@ -380,7 +390,8 @@ fn sent(p: vec3<i32>, flag: u32, post: array<f32, 19>, m: Moments) -> array<f32,
 }
 
 // Stores what cell k (at p) sends along each link (`sent`) where the next step reads it, either
-// parity: back into the cell where the link leaves the fluid.
+// parity: the streaming of seed eq. 1, to f_i(x + c_i, t + 1), or back into the cell where the
+// link leaves the fluid.
 fn store_sent(k: u32, p: vec3<i32>, flag: u32, out: array<f32, 19>) {
     let odd = params.n.w == 1u;
     //#for i
@@ -559,8 +570,9 @@ fn wrapped(q: vec3<i32>) -> u32 {
     return wrap(q.x, n.x) + params.n.x * (wrap(q.y, n.y) + params.n.y * wrap(q.z, n.z));
 }
 
-// Density and velocity of every cell, and the health check: the smallest index of a cell with a
-// non-finite value, a density deviation above relax.w or a speed above relax.z goes to status[0].
+// Density and velocity (seed eq. 5-6) of every cell, and the health check: the smallest index of
+// a cell with a non-finite value, a density deviation above relax.w or a speed above relax.z goes
+// to status[0].
 @compute @workgroup_size(64)
 fn macroscopic(
     @builtin(workgroup_id) wg: vec3<u32>,

@@ -189,7 +189,7 @@ impl Setup {
         }
     }
 
-    /// Kinematic viscosity nu = (tau - 1/2) / 3.
+    /// Kinematic viscosity nu = (tau - 1/2) / 3 (seed eq. 4 in lattice units, c = dt = 1).
     pub fn viscosity(&self) -> f64 {
         (self.tau - 0.5) / 3.0
     }

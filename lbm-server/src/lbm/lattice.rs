@@ -3,7 +3,7 @@
 //! Direction order (as in FluidX3D): 0 rest, 1-6 the faces (+x -x +y -y +z -z), 7-18 the edges in
 //! opposite pairs, so that `opposite(i)` is the neighbour index of the pair.
 
-/// Lattice velocities c_i.
+/// Lattice velocities c_i (seed eq. 2).
 pub const C: [[i32; 3]; 19] = [
     [0, 0, 0],
     [1, 0, 0],
@@ -26,7 +26,7 @@ pub const C: [[i32; 3]; 19] = [
     [0, -1, 1],
 ];
 
-/// Weights w_i.
+/// Weights w_i (of the equilibrium, seed eq. 3).
 pub const W: [f64; 19] = [
     1.0 / 3.0,
     1.0 / 18.0,
@@ -65,14 +65,15 @@ pub fn dot(i: usize, v: [f64; 3]) -> f64 {
     C[i][0] as f64 * v[0] + C[i][1] as f64 * v[1] + C[i][2] as f64 * v[2]
 }
 
-/// Shifted equilibrium f_eq_i - w_i for density rho and velocity u (second order in u).
+/// Shifted equilibrium f_eq_i - w_i (seed eq. 3) for density rho and velocity u (second order in u).
 pub fn equilibrium_shifted(i: usize, rho: f64, u: [f64; 3]) -> f64 {
     let cu = dot(i, u);
     let uu = u[0] * u[0] + u[1] * u[1] + u[2] * u[2];
     W[i] * ((rho - 1.0) + rho * (3.0 * cu + 4.5 * cu * cu - 1.5 * uu))
 }
 
-/// Guo forcing term S_i = w_i [3 (c_i - u) + 9 (c_i . u) c_i] . F (before the (1 - omega/2) factor).
+/// Guo forcing term S_i = w_i [3 (c_i - u) + 9 (c_i . u) c_i] . F (seed eq. 1's G_i, before the
+/// (1 - omega/2) factor).
 #[cfg(test)]
 pub fn guo_source(i: usize, u: [f64; 3], force: [f64; 3]) -> f64 {
     let cu = dot(i, u);

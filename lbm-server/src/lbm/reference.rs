@@ -27,7 +27,7 @@ pub fn step_with_particles(
     for cell in (0..setup.cells()).filter(|&c| !setup.solid[c]) {
         let (mut post, rho, u) = collide(setup, &f[cell]);
         if !covers[cell].is_empty() {
-            post = solid_collision(
+            post = immersed_boundary(
                 setup,
                 &f[cell],
                 &post,
@@ -39,6 +39,7 @@ pub fn step_with_particles(
                 &mut loads,
             );
         }
+        // Streaming (eq. 1): f_i(x + c_i, t + 1), or back into the cell through a boundary.
         for i in 0..19 {
             match setup.link(cell, C[i]) {
                 Link::Cell(t) => next[t][i] = post[i],
@@ -73,7 +74,7 @@ pub fn outflow(index: usize, u: [f64; 3]) -> [f64; 3] {
     out
 }
 
-/// Density and velocity (with the half-force correction of Guo forcing).
+/// Density (seed eq. 5) and velocity (eq. 6), with the half-force correction of Guo forcing.
 pub fn moments(f: &Cell, force: [f64; 3]) -> (f64, [f64; 3]) {
     let rho = 1.0 + f.iter().sum::<f64>();
     let u = std::array::from_fn(|a| {
@@ -83,7 +84,9 @@ pub fn moments(f: &Cell, force: [f64; 3]) -> (f64, [f64; 3]) {
     (rho, u)
 }
 
-/// Post-collision populations of one cell, with its density and velocity.
+/// Post-collision populations of one cell (seed eq. 1: f_i - omega (f_i - f_eq_i) + G_i, with the
+/// equilibrium of eq. 3; BGK's omega = 1/tau, tau from the viscosity by eq. 4), with its density
+/// and velocity.
 pub fn collide(setup: &Setup, f: &Cell) -> (Cell, f64, [f64; 3]) {
     let (rho, u) = moments(f, setup.force);
     let neq: Cell = std::array::from_fn(|i| f[i] - lattice::equilibrium_shifted(i, rho, u));
@@ -109,8 +112,8 @@ pub fn collide(setup: &Setup, f: &Cell) -> (Cell, f64, [f64; 3]) {
     (std::array::from_fn(|i| relaxed[i] + source[i]), rho, u)
 }
 
-/// The body force's part of the collision at velocity u: Guo's source through the operator's
-/// relaxation factors (lbm.wgsl `forcing`).
+/// The body force's part of the collision at velocity u (seed eq. 1's G_i): Guo's source through
+/// the operator's relaxation factors (lbm.wgsl `forcing`).
 pub fn forcing(setup: &Setup, u: [f64; 3]) -> Cell {
     let s: Cell = std::array::from_fn(|i| lattice::guo_source(i, u, setup.force));
     match setup.operator {
@@ -133,7 +136,8 @@ pub fn forcing(setup: &Setup, u: [f64; 3]) -> Cell {
     }
 }
 
-/// Fraction of the cell centred at `x` inside the sphere, as imb.wgsl: the fraction of a unit cell
+/// Fraction of the cell centred at `x` inside the sphere (the solid fraction that eq. 7's B
+/// weighs), as imb.wgsl: the fraction of a unit cell
 /// below a face-aligned plane at the centre's distance from the surface, on a radius shortened by
 /// 1/(12 r) (docs/imb.md).
 pub fn solid_fraction(x: [f64; 3], centre: [f64; 3], r: f64) -> f64 {
@@ -186,9 +190,11 @@ pub(super) fn box_cells<'a>(
     })
 }
 
-/// The collision of a covered cell (imb.wgsl `immersed_boundary`), adding each particle's load.
+/// The collision of a covered cell (seed eq. 7; imb.wgsl `immersed_boundary`): the fluid part of
+/// `post` weighted by 1 - sum B, and each particle's B Omega added (`solid_collision`), with its
+/// load.
 #[allow(clippy::too_many_arguments)]
-fn solid_collision(
+fn immersed_boundary(
     setup: &Setup,
     f: &Cell,
     post: &Cell,
@@ -199,6 +205,31 @@ fn solid_collision(
     options: ImbOptions,
     loads: &mut [Load],
 ) -> Cell {
+    let b = weights(setup, covers, options);
+    let b_total: f64 = b.iter().sum();
+    let mut out: Cell = std::array::from_fn(|i| f[i] - (1.0 - b_total) * (f[i] - post[i]));
+    let source = forcing(setup, u);
+    for (&(j, _, x), b) in covers.iter().zip(&b) {
+        let p = &particles[j];
+        let arm: [f64; 3] = std::array::from_fn(|a| x[a] - p.position[a]);
+        let us = solid_velocity(p, arm);
+        let mut momentum = [0.0; 3];
+        for i in 0..19 {
+            let omega = b * solid_collision(i, f, post, &source, rho, u, us, options.solid_collision);
+            out[i] += omega;
+            for a in 0..3 {
+                momentum[a] += omega * C[i][a] as f64;
+            }
+        }
+        add_load(&mut loads[j], arm, momentum);
+    }
+    out
+}
+
+/// Each covering particle's weight B (seed eq. 7's beta_n) from its solid fraction, the total
+/// fraction capped at 1: the seed's B = eps, or Noble & Torczynski's B(eps, tau) (imb.wgsl
+/// `weighting`).
+fn weights(setup: &Setup, covers: &[Cover], options: ImbOptions) -> Vec<f64> {
     let eps_total: f64 = covers.iter().map(|c| c.1).sum();
     let scale = if eps_total > 1.0 { 1.0 / eps_total } else { 1.0 };
     let t = setup.tau - 0.5;
@@ -209,50 +240,60 @@ fn solid_collision(
             eps * t / ((1.0 - eps) + t)
         }
     };
-    let b: Vec<f64> = covers.iter().map(|c| weight(c.1 * scale)).collect();
-    let b_total: f64 = b.iter().sum();
-    let mut out: Cell = std::array::from_fn(|i| f[i] - (1.0 - b_total) * (f[i] - post[i]));
-    let source = forcing(setup, u);
-    for (&(j, _, x), b) in covers.iter().zip(&b) {
-        let p = &particles[j];
-        let arm: [f64; 3] = std::array::from_fn(|a| x[a] - p.position[a]);
-        let w = p.angular_velocity;
-        let spin = [
-            w[1] * arm[2] - w[2] * arm[1],
-            w[2] * arm[0] - w[0] * arm[2],
-            w[0] * arm[1] - w[1] * arm[0],
-        ];
-        let us: [f64; 3] = std::array::from_fn(|a| p.velocity[a] + spin[a]);
-        let mut momentum = [0.0; 3];
-        for i in 0..19 {
-            let o = opposite(i);
-            let omega = b * match options.solid_collision {
-                SolidCollision::NobleTorczynski => {
-                    f[o] - f[i] + lattice::equilibrium_shifted(i, rho, us)
-                        - lattice::equilibrium_shifted(o, rho, u)
-                }
-                SolidCollision::Superposition => {
-                    lattice::equilibrium_shifted(i, rho, us) - lattice::equilibrium_shifted(i, rho, u)
-                        + post[i]
-                        - source[i]
-                        - f[i]
-                }
-            };
-            out[i] += omega;
-            for a in 0..3 {
-                momentum[a] += omega * C[i][a] as f64;
-            }
+    covers.iter().map(|c| weight(c.1 * scale)).collect()
+}
+
+/// The solid's velocity at `arm` from the particle's centre (seed eq. 9, at the cell centre rather
+/// than half a link on): v_p + omega_p x arm.
+fn solid_velocity(p: &SolidParticle, arm: [f64; 3]) -> [f64; 3] {
+    let w = p.angular_velocity;
+    let spin = [
+        w[1] * arm[2] - w[2] * arm[1],
+        w[2] * arm[0] - w[0] * arm[2],
+        w[0] * arm[1] - w[1] * arm[0],
+    ];
+    std::array::from_fn(|a| p.velocity[a] + spin[a])
+}
+
+/// The solid term Omega_i of direction i at the solid's velocity `us`: Noble & Torczynski's
+/// (seed eq. 8) f_ibar - f_i + f_eq_i(rho, u_s) - f_eq_ibar(rho, u), or superposition's
+/// f_eq_i(rho, u_s) - f_eq_i(rho, u) + post_i - S_i - f_i (S: `source`).
+#[allow(clippy::too_many_arguments)]
+fn solid_collision(
+    i: usize,
+    f: &Cell,
+    post: &Cell,
+    source: &Cell,
+    rho: f64,
+    u: [f64; 3],
+    us: [f64; 3],
+    collision: SolidCollision,
+) -> f64 {
+    let o = opposite(i);
+    match collision {
+        SolidCollision::NobleTorczynski => {
+            f[o] - f[i] + lattice::equilibrium_shifted(i, rho, us) - lattice::equilibrium_shifted(o, rho, u)
         }
-        let force = momentum.map(|m| -m);
-        let torque = [
-            arm[1] * force[2] - arm[2] * force[1],
-            arm[2] * force[0] - arm[0] * force[2],
-            arm[0] * force[1] - arm[1] * force[0],
-        ];
-        for a in 0..3 {
-            loads[j].force[a] += force[a];
-            loads[j].torque[a] += torque[a];
+        SolidCollision::Superposition => {
+            lattice::equilibrium_shifted(i, rho, us) - lattice::equilibrium_shifted(i, rho, u) + post[i]
+                - source[i]
+                - f[i]
         }
     }
-    out
+}
+
+/// Adds to a particle's load the cell's terms of the force (seed eq. 10) and torque (eq. 11) at
+/// `arm` from its centre: the momentum its solid term gave the fluid, `momentum` = B sum_i
+/// Omega_i c_i, taken from the particle (force -momentum, torque arm x force).
+fn add_load(load: &mut Load, arm: [f64; 3], momentum: [f64; 3]) {
+    let force = momentum.map(|m| -m);
+    let torque = [
+        arm[1] * force[2] - arm[2] * force[1],
+        arm[2] * force[0] - arm[0] * force[2],
+        arm[0] * force[1] - arm[1] * force[0],
+    ];
+    for a in 0..3 {
+        load.force[a] += force[a];
+        load.torque[a] += torque[a];
+    }
 }

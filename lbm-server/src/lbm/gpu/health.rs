@@ -1,0 +1,115 @@
+//! The health check (a cell's speed and density within limits) and the fields (density and
+//! velocity, seed eq. 5-6) read back, or kept on the device as the last good ones.
+
+use super::bindings::storage_buffer;
+use super::state::Lattice;
+
+/// Limits of the health check, in lattice units.
+#[derive(Debug, Clone, Copy)]
+pub struct Health {
+    /// Largest speed |u| allowed.
+    pub max_speed: f64,
+    /// Largest |rho - 1| allowed.
+    pub max_density_deviation: f64,
+}
+
+impl Default for Health {
+    fn default() -> Self {
+        Self {
+            max_speed: 0.4,
+            max_density_deviation: 0.5,
+        }
+    }
+}
+
+/// The first unhealthy cell found by a health check.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Unhealthy {
+    pub cell: usize,
+    pub coords: [usize; 3],
+    pub rho: f32,
+    pub u: [f32; 3],
+}
+
+impl Unhealthy {
+    /// "cell K at (i, j, k): QUANTITY", naming the quantity that failed the check.
+    pub fn describe(&self, health: &Health) -> String {
+        let quantity = if !(self.rho.is_finite() && self.u.iter().all(|v| v.is_finite())) {
+            format!("non-finite values (density {}, velocity {:?})", self.rho, self.u)
+        } else if f64::from((self.rho - 1.0).abs()) > health.max_density_deviation {
+            let (lo, hi) = (
+                1.0 - health.max_density_deviation,
+                1.0 + health.max_density_deviation,
+            );
+            format!("density {} x the reference, outside [{lo}, {hi}]", self.rho)
+        } else {
+            let speed = self.u.iter().map(|v| v * v).sum::<f32>().sqrt();
+            format!(
+                "lattice speed {speed:.3} (Mach {:.2}) above the limit",
+                speed * 3f32.sqrt()
+            )
+        };
+        let [x, y, z] = self.coords;
+        format!("cell {} at ({x}, {y}, {z}): {quantity}", self.cell)
+    }
+}
+
+impl Lattice {
+    /// The first unhealthy cell if any, as `fields` finds it, with only that cell read back (a
+    /// run's health check: on a GPU the whole field is 16 bytes per cell over the bus).
+    pub fn health(&self) -> Option<Unhealthy> {
+        self.first_unhealthy().map(|cell| {
+            let bytes = self.gpu.read_range(&self.fields, cell as u64 * 16, 16);
+            self.unhealthy(cell, bytemuck::cast_slice::<u8, [f32; 4]>(&bytes)[0])
+        })
+    }
+
+    /// Computes the fields (density, velocity) on the device and returns the lowest index of an
+    /// unhealthy cell, reading back only the status.
+    fn first_unhealthy(&self) -> Option<usize> {
+        let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
+        self.dispatch(&mut encoder, &self.way().macroscopic, self.time % 2);
+        self.gpu.queue.submit([encoder.finish()]);
+        let status: Vec<u32> = bytemuck::cast_slice(&self.gpu.read_buffer(&self.status, 16)).to_vec();
+        (status[0] != u32::MAX).then_some(status[0] as usize)
+    }
+
+    fn unhealthy(&self, cell: usize, v: [f32; 4]) -> Unhealthy {
+        Unhealthy {
+            cell,
+            coords: self.setup.coords(cell),
+            rho: v[0],
+            u: [v[1], v[2], v[3]],
+        }
+    }
+
+    /// Keeps the fields of the last `health` or `fields` on the device (a copy there, not over the
+    /// bus): what a run writes as its last good snapshot when a later check fails.
+    pub fn keep_fields(&mut self) {
+        let bytes = (self.setup.cells() * 16) as u64;
+        let kept = self
+            .kept
+            .get_or_insert_with(|| storage_buffer(&self.gpu.device, "kept fields", bytes));
+        let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
+        encoder.copy_buffer_to_buffer(&self.fields, 0, kept, 0, bytes);
+        self.gpu.queue.submit([encoder.finish()]);
+    }
+
+    /// The fields [`Lattice::keep_fields`] kept, if it was called.
+    pub fn kept_fields(&self) -> Option<Vec<[f32; 4]>> {
+        let kept = self.kept.as_ref()?;
+        let bytes = self.gpu.read_buffer(kept, (self.setup.cells() * 16) as u64);
+        Some(bytemuck::cast_slice(&bytes).to_vec())
+    }
+
+    /// Density and velocity of every cell, and the first unhealthy cell if any.
+    pub fn fields(&self) -> (Vec<[f32; 4]>, Option<Unhealthy>) {
+        let bad = self.first_unhealthy();
+        let bytes = self
+            .gpu
+            .read_buffer(&self.fields, (self.setup.cells() * 16) as u64);
+        let fields: Vec<[f32; 4]> = bytemuck::cast_slice(&bytes).to_vec();
+        let bad = bad.map(|cell| self.unhealthy(cell, fields[cell]));
+        (fields, bad)
+    }
+}

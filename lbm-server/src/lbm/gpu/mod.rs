@@ -1,0 +1,24 @@
+//! The lattice on the GPU (wgpu): the device, the lattice's state and its ways of stepping, the
+//! buffers and bindings its kernels share, its parameters, the cell list, the step loop (AA
+//! pattern) and the health check.
+
+mod bindings;
+mod cell_list;
+mod device;
+mod health;
+mod params;
+mod state;
+mod step;
+mod way;
+
+#[cfg(test)]
+pub(in crate::lbm) use bindings::fits_device;
+pub(in crate::lbm) use bindings::storage_buffer;
+#[cfg(test)]
+pub(in crate::lbm) use cell_list::CellList;
+pub use device::Gpu;
+#[cfg(test)]
+pub(in crate::lbm) use device::ListLayout;
+pub use health::{Health, Unhealthy};
+pub(in crate::lbm) use params::vec4;
+pub use state::{equilibrium_field, total_mass, Lattice};

@@ -1,0 +1,33 @@
+//! Host side of the immersed moving boundary (shaders/imb.wgsl; seed eq. 7-11): the coupling's
+//! settings, which cells a particle covers, the records that cross to the device and back, the
+//! coupling's buffers and kernels, the host's passes over the particles and their loads, and the
+//! coupled step that returns each particle's force and torque (with its timed variants).
+//!
+//! The step maps the particles' solid fractions onto the cells (`cover`), collides the fluid with
+//! the solid term where they cover it (in the fluid kernels or before them), and reduces each
+//! particle's force and torque from its cells (the table of passes at step.rs's `coupled_step`).
+
+mod chunks;
+mod coupling;
+mod cover;
+mod loads;
+mod options;
+mod passes;
+mod records;
+mod staging;
+mod step;
+mod timing;
+
+#[cfg(test)]
+pub(super) use chunks::CHUNK;
+pub(super) use coupling::Coupling;
+#[cfg(test)]
+pub(super) use cover::box_edge;
+pub use cover::{covered_fraction, solid_reach};
+pub use options::{CoveredCells, ImbOptions, SolidCollision};
+pub(super) use passes::Passes;
+#[cfg(test)]
+pub(super) use records::Load;
+pub use records::{Particles, SolidParticle};
+#[cfg(test)]
+pub(super) use staging::into_lattice;
