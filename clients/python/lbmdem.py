@@ -253,7 +253,7 @@ class Welcome(ctypes.Structure):
         ("kind", _u32),
         ("pid", _u64),
         ("status", _u32),
-        ("periodic", _u32),  # periodic axes: bit 0 x, 1 y, 2 z (0 none; reserved before 2026-12-01)
+        ("periodic", _u32),  # periodic axes: bit 0 x, 1 y, 2 z; 0 none (PROTOCOL.md 4.4)
         ("capacity", _u64),
         ("steps", _u64),
         ("dt", _f64),
@@ -714,7 +714,12 @@ class DemLink:
 
     def send_states(self, step: int, time: float, states, flags: int = 0) -> None:
         """Publishes the states of ``step`` (numpy array of STATE_DTYPE, ctypes array or list of
-        ParticleState, or list of (id, position, velocity, angular_velocity, radius) tuples)."""
+        ParticleState, or list of (id, position, velocity, angular_velocity, radius) tuples).
+
+        ``time`` is this DEM's clock at the start of the step (normally t0 + step * dt; the fluid
+        echoes it and writes it into its particle outputs, PROTOCOL.md 3.3); positions and
+        velocities are of that instant (3.1). Raises BadCount, without sending, for more
+        particles than the capacity."""
         self._require_connected()
         if step != self._next_step:
             raise self._fail(StepMismatch, f"this DEM tried to send step {step} where step "
@@ -735,7 +740,11 @@ class DemLink:
         self._sent_ids = arr["id"].copy()
 
     def receive_forces(self, step: int) -> Tuple[StepHeader, np.ndarray]:
-        """Waits for the fluid's reply to ``step``: (StepHeader, array of REPLY_DTYPE, a copy)."""
+        """Waits for the fluid's reply to ``step``: (StepHeader, array of REPLY_DTYPE, a copy).
+
+        A fluid that finds the states broken (wrong step or count) leaves without a reply: this
+        raises PeerDied, and the reason is in the fluid's stderr and summary.json
+        (PROTOCOL.md 7)."""
         self._require_connected()
         if self._sent_ids is None or step != self._next_step:
             raise self._fail(StepMismatch, f"this DEM waits for the reply to step {step} but "
