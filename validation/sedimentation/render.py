@@ -9,11 +9,12 @@ RUN is a run's output folder (lbm-server run SCENE --out RUN): its particles.csv
 step,time,id,x,y,z are read; the GPU batch's compact copy has only those) and scene.toml (the copy
 lbm-server leaves there; --scene names another). Writes a PNG: side views (x-z) of the slab one
 particle spacing thick through the box's centre plane (y = W/2) at --panels times from the first
-output to the last, each particle a disc of its diameter coloured by its initial height, and below
+output to the last, each particle a disc of its diameter coloured by its initial height, and beside
 them the fronts over time. Prints the fronts as a table (and writes them to --json):
 
 - centre: the particles whose initial (x, y) lie within W/6 of the box's axis on both axes (the
-  middle ninth of its cross-section); walls: those that start within W/10 of a side wall;
+  middle ninth of its cross-section); walls: those that start within W/10 of a side wall
+  (or one spacing, where that is more: the outer ring at least);
 - mean dz: their mean displacement since the first output, in particle diameters d;
 - lowest: the lowest particle centre of each group, in d above the floor;
 - risen: the share of the group above its initial height; rise max: the highest rise, in d;
@@ -31,7 +32,7 @@ import tomllib
 import numpy as np
 
 CENTRE = 1 / 6   # centre: |x - W/2| and |y - W/2| below this fraction of the width W
-WALLS = 1 / 10   # walls: within this fraction of W of a side wall
+WALLS = 1 / 10   # walls: within this fraction of W of a side wall (at least one spacing)
 
 
 def load_scene(path):
@@ -82,7 +83,9 @@ def groups(scene, xyz0):
     w = scene["size"][0]
     h = xyz0[:, :2] - np.array(scene["min"][:2])
     centre = np.all(np.abs(h - w / 2) < CENTRE * w, axis=1)
-    walls = np.min(np.minimum(h, w - h), axis=1) < WALLS * w
+    walls = np.min(np.minimum(h, w - h), axis=1) < max(WALLS * w, scene["spacing"])
+    if not (centre.any() and walls.any()):
+        raise SystemExit("render.py: no particle starts in the centre or near the walls")
     return centre, walls
 
 
