@@ -2,7 +2,8 @@
 # Takes a GPU batch back (validation/gpu/run.sh on the device machine): unpacks FILES_AT/gpu.tgz.*
 # into out/gpu_import/gpu/, imports its Ten Cate runs, its runs of E1 in the experiment's box and its
 # beds into the work folders validation/imb/work/{ten_cate,experiment,fluidized_bed}/ and their records
-# into validation/imb/results/*.json (the reports rebuilt), and lists what goes by hand into BENCHMARKS.md
+# into validation/imb/results/*.json (the reports rebuilt), renders the seed's sedimentation into
+# validation/sedimentation/sedimentation-41.{png,json} (with its summary.json), and lists what goes by hand into BENCHMARKS.md
 # (bench_*.txt, coupled_*.txt, suspension*/summary.json, dem_bench_*.txt) and into
 # validation/lbm/REPORT.md (the "finer grids" sections of validate/ and validate_wake/REPORT.md).
 #
@@ -30,6 +31,15 @@ if [ -d "$g/bed" ]; then
     echo "== fluidized bed"
     python3 validation/imb/fluidized_bed.py import "$g/bed" > /dev/null
     ls validation/imb/work/fluidized_bed
+fi
+if [ -d "$g/sedimentation" ]; then
+    # Named after the run's scene: sedimentation-41, or sedimentation-small from prepare.sh --small.
+    name=$(sed -n 's/^name = "\(.*\)"/\1/p' "$g/sedimentation/scene.toml")
+    echo "== the seed's sedimentation: $name (validation/sedimentation/README.md)"
+    cp "$g/sedimentation/summary.json" "validation/sedimentation/$name-summary.json"
+    python3 validation/sedimentation/render.py "$g/sedimentation" --png "validation/sedimentation/$name.png" \
+        --json "validation/sedimentation/$name.json" ||
+        echo "render.py failed (pip install -r validation/sedimentation/requirements.txt)" >&2
 fi
 echo "== by hand: BENCHMARKS.md and validation/lbm/REPORT.md from"
 find "$g" -maxdepth 2 \( -name 'bench_*.txt' -o -name 'coupled_*.txt' -o -name 'dem_bench_*.txt' \

@@ -40,6 +40,17 @@ sed 's/^free_flight = true/free_flight = false/' .gpu/suspension.toml > .gpu/sus
 for way in timed redo skip fused; do
     sed "s/^\[coupling\]/[coupling]\ncovered_cells = \"$way\"/" .gpu/suspension.toml > .gpu/suspension_$way.toml
 done
+# The seed's sedimentation (section 3.2: 41^3 spheres on 288 x 288 x 576 cells); for --small a
+# stand-in of 5^3 spheres 7 cells apart on 35 x 35 x 70 cells, 0.5 ms (218 steps).
+if $small; then
+    sed 's/^name = .*/name = "sedimentation-small"/; s/^count = .*/count = [5, 5, 5]/;
+         s/^max = .*/max = [0.0002905, 0.0002905, 0.000581]/; s/^spacing = .*/spacing = 5.81e-5/;
+         s/^origin = .*/origin = [2.905e-5, 2.905e-5, 3.1955e-4]/;
+         s/^duration = .*/duration = 0.0005/; s/^time_interval = .*/time_interval = 0.0001/' \
+        validation/scenes/sedimentation-41.toml > .gpu/sedimentation.toml
+else
+    cp validation/scenes/sedimentation-41.toml .gpu/sedimentation.toml
+fi
 # The DEM side alone (dem-client bench) on a bed of 32^3 beads in contact (4^3 for --small).
 if $small; then
     sed 's/count = \[32, 32, 32\]/count = [4, 4, 4]/' validation/scenes/bed.toml > .gpu/bed.toml

@@ -18,7 +18,8 @@
 # coupled_dense.txt (64^3 particles, a dense bed), coupled_dem.txt (1 and 32^3 particles, the
 # host idle 1.1 ms a step as for a DEM), default/ (the default scene), suspension/ and
 # suspension_substeps/ (32^3 beads settling, the whole program, free flight on and off:
-# summary.json), dem_bench_{suspension,bed,bed_skin}.txt (the DEM side alone on this machine's
+# summary.json), sedimentation/ (the seed's 41^3 spheres settling, bounded: summary.json and a compact
+# particles.csv), dem_bench_{suspension,bed,bed_skin}.txt (the DEM side alone on this machine's
 # cores, 32^3 beads dilute and in a bed, the bed also with a thinner skin), suspension_timed/ (the three ways of treating the covered cells timed
 # on the run's steps) and suspension_{redo,skip,fused}/ (each held throughout), tencate/<run>/ and
 # bed/<run>/ (the scenes of .gpu/plan.txt: Ten Cate and the fluidized bed, held and free),
@@ -64,6 +65,21 @@ step() {
     local code=$?
     log "end $name: exit $code"
     return $code
+}
+
+# compact DIR N: DIR/particles.csv cut to every Nth output step and the last (complete rows only),
+# the columns validation/sedimentation/render.py reads (step,time,id,x,y,z) and positions to 6
+# digits; DIR's .vtp series removed.
+compact() {
+    local f=$1/particles.csv
+    rm -f "$1"/particles_*.vtp "$1/particles.pvd"
+    [ -f "$f" ] || return 0
+    local last
+    last=$(awk -F, 'NF == 18 { s = $1 } END { print s }' "$f")
+    awk -F, -v n="$2" -v last="$last" 'NR == 1 { print "step,time,id,x,y,z"; next }
+        NF == 18 && (k == 0 || $1 != step) { step = $1; k++; keep = (k - 1) % n == 0 || step == last }
+        NF == 18 && keep { printf "%s,%s,%s,%.5e,%.5e,%.5e\n", $1, $2, $3, $4, $5, $6 }' "$f" > "$f.compact"
+    mv "$f.compact" "$f"
 }
 
 if ls .gl/*.deb >/dev/null 2>&1; then
@@ -128,6 +144,12 @@ for s in suspension suspension_substeps; do
     step $s/log 40 120 $bin/lbm-server run .gpu/$s.toml --out "$OUT/$s"
     rm -f "$OUT/$s/particles.csv" "$OUT/$s"/particles_*.vtp "$OUT/$s/particles.pvd"
 done
+# The seed's multi-particle sedimentation (section 3.2, Fig. 3: 41^3 spheres of 4 cells on 288 x
+# 288 x 576 cells, TRT at tau 0.6), the whole program for a bounded time: its step at the seed's
+# size (summary.json) and the first of its 0.2 s (validation/sedimentation/README.md). particles.csv
+# kept compact: every second output (5 ms apart) and the last, step,time,id,x,y,z.
+step sedimentation/log 60 120 $bin/lbm-server run .gpu/sedimentation.toml --out "$OUT/sedimentation"
+compact "$OUT/sedimentation" 2
 # The DEM side alone on this machine's cores, the fluid a stand-in (dem-client bench): 32^3 beads
 # dilute (flown) and in a bed (every bead in the DEM steps), free flight on and off. With the
 # fluid's step above, what a whole coupled step costs between these two extremes. The bed's 12
