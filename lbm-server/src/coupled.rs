@@ -1,5 +1,6 @@
 //! The fluid side of a run with particles: the GPU lattice coupled to them by the immersed moving
-//! boundary (a scene with particles must have a `[lattice]`; `run.rs` refuses one without).
+//! boundary (a scene with particles must have a `[lattice]`; `run/prepare.rs` refuses one
+//! without).
 //!
 //! - `fluid_side.rs`: [`FluidSide`], made for a scene, stepped with the DEM's states into their
 //!   loads; its health checks in `health.rs`, its field outputs in `field_outputs.rs`, the ways its

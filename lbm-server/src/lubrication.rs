@@ -19,7 +19,7 @@
 //! DEM's contact law resolves that collision in its sub-steps. Separating pairs get no force
 //! either (the film cavitates in tension; see `squeeze`). This is the correction for a DEM that
 //! does not integrate the films itself: a DEM that does (dem-client) declares LUBRICATION in its
-//! Hello and the fluid leaves this out (`run.rs`, PROTOCOL.md 4.5).
+//! Hello and the fluid leaves this out (`run/welcome.rs`, PROTOCOL.md 4.5).
 
 use protocol::{ParticleReply, ParticleState};
 use scene::lattice::{LatticeFace, LatticeUnits};

@@ -4,8 +4,9 @@
 //! - `prepare.rs`: the scene loaded and checked, its output folder made ([`prepare`]).
 //! - `session.rs`: the run in progress ([`Session`]): opened, connected to the DEM (the handshake,
 //!   with the fluid's answer to its Hello in `welcome.rs`), finished.
-//! - `lockstep.rs`: the coupled step, as a list of named passes (`Session::coupled_step`); the
-//!   fluid's answer to a step's states in `answer.rs`.
+//! - here: the lockstep loop (`Session::step_loop`), each coupled step a list of named passes
+//!   (`Session::coupled_step`): `exchange.rs` receives the DEM's states and sends the replies,
+//!   `answer.rs` is the fluid's answer to the states, `ending.rs` how a step ends the run.
 //! - `counters.rs`: what the run counts, and where its wall time goes (summary.json's `time_s`).
 //! - `summary.rs`: summary.json.
 //!
@@ -13,14 +14,18 @@
 
 mod answer;
 mod counters;
-mod lockstep;
+mod ending;
+mod exchange;
 mod prepare;
 mod session;
 mod summary;
 mod welcome;
 
+use crate::output::Progress;
+use exchange::SiStates;
 use prepare::prepare;
 use protocol::transport::new_run_name;
+use protocol::{ParticleReply, StepHeader};
 use session::Session;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -96,4 +101,58 @@ pub fn main(args: RunArgs) -> ExitCode {
     let code = Session::start(prepared, &run, args.dem, interrupted);
     protocol::cleanup::remove_run(&run);
     ExitCode::from(code)
+}
+
+impl Session {
+    /// The lockstep loop: states(n) in, forces(n) out, until the last step or a step that ends
+    /// the run.
+    fn step_loop(&mut self) -> Result<Ending, String> {
+        let mut si = SiStates::new(self.hello.expect("connected").units);
+        let mut replies = Vec::new();
+        let mut progress = Progress::new(self.p.steps);
+        self.counters.start();
+        for step in 0..self.p.steps {
+            if let Some(ending) = self.coupled_step(step, &mut si, &mut replies, &mut progress)? {
+                return Ok(ending);
+            }
+        }
+        progress.finish();
+        Ok(Ending::Completed)
+    }
+
+    /// One coupled step, pass by pass, each timed (`counters.rs`): the DEM's states received
+    /// (waiting for the DEM) and read in SI (exchange), the fluid's answer (fluid: the states
+    /// checked, the fluid's step, its health check), how the step ends, the reply sent (exchange),
+    /// the particles written (output); how the run ends where this step ends it.
+    fn coupled_step(
+        &mut self,
+        step: u64,
+        si: &mut SiStates,
+        replies: &mut Vec<ParticleReply>,
+        progress: &mut Progress,
+    ) -> Result<Option<Ending>, String> {
+        let last = step + 1 == self.p.steps;
+        let received = self.receive_states(step)?;
+        self.counters.lap_waiting_for_dem();
+        let states = si.read(&received);
+        self.counters.lap_exchange();
+        let failure = self.answer(states, step, last, replies);
+        self.counters.lap_fluid();
+        let count = states.len();
+        let header = received.header();
+        let end = self.step_end(step, last, header, failure);
+        si.keep_for_output(&received, end.output);
+        drop(received);
+        let reply = StepHeader::new(step, header.time, count, end.flags(last));
+        self.reply(reply, si.units, replies)?;
+        self.counters.completed(step, count);
+        self.counters.lap_exchange();
+        if end.output {
+            let time = header.time * si.units.time_s;
+            self.particles.write_step(step, time, &si.states, replies)?;
+        }
+        progress.update(step + 1);
+        self.counters.lap_output();
+        self.end_at(end, last, progress)
+    }
 }
