@@ -19,9 +19,11 @@
 //! DEM's contact law resolves that collision in its sub-steps. Separating pairs get no force
 //! either (the film cavitates in tension; see `squeeze`). This is the correction for a DEM that
 //! does not integrate the films itself: a DEM that does (dem-client) declares LUBRICATION in its
-//! Hello and the fluid leaves this out (`run.rs`, PROTOCOL.md 4.5).
+//! Hello and the fluid leaves this out (`run/welcome.rs`, PROTOCOL.md 4.5).
 
 use protocol::{ParticleReply, ParticleState};
+use scene::lattice::{LatticeFace, LatticeUnits};
+use scene::Scene;
 use std::collections::HashMap;
 
 /// Where the correction applies.
@@ -43,6 +45,38 @@ pub struct Lubrication {
 }
 
 impl Lubrication {
+    /// Lubrication with the lattice's cut-off (one cell) and the domain faces that are walls.
+    pub fn for_lattice(scene: &Scene, units: &LatticeUnits) -> Lubrication {
+        let walls = units
+            .faces
+            .iter()
+            .enumerate()
+            .filter(|(_, f)| matches!(f, LatticeFace::Wall | LatticeFace::MovingWall(_)))
+            .map(|(k, _)| {
+                let axis = k / 2;
+                if k % 2 == 0 {
+                    (axis, scene.domain.min[axis], 1.0)
+                } else {
+                    (axis, scene.domain.max[axis], -1.0)
+                }
+            })
+            .collect();
+        Lubrication {
+            viscosity: scene.fluid.dynamic_viscosity,
+            cutoff: units.dx,
+            walls,
+            periods: std::array::from_fn(|axis| {
+                if units.faces[2 * axis] == LatticeFace::Periodic {
+                    scene.domain.max[axis] - scene.domain.min[axis]
+                } else {
+                    0.0
+                }
+            }),
+            density: scene.particles.density,
+            dt: units.dt,
+        }
+    }
+
     /// Adds the correction to `replies` (same order as `states`).
     pub fn apply(&self, states: &[ParticleState], replies: &mut [ParticleReply]) {
         for (s, r) in states.iter().zip(replies.iter_mut()) {

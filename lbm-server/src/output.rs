@@ -1,4 +1,5 @@
-//! What a run leaves behind: OUT/particles.csv, OUT/summary.json, and progress on the terminal.
+//! What a run leaves behind: OUT/particles.csv (and the .vtp series), the lattice as the summaries
+//! report it, and progress on the terminal. A coupled run's summary.json is `run/summary.rs`'s.
 
 use protocol::{ParticleReply, ParticleState};
 use serde::Serialize;
@@ -85,83 +86,6 @@ impl ParticleOutput {
     }
 }
 
-/// The DEM side, as it introduced itself.
-#[derive(Debug, Clone, Serialize)]
-pub struct PeerInfo {
-    pub software: String,
-    pub pid: u64,
-    pub protocol_version: u32,
-    pub physics: Vec<&'static str>,
-}
-
-/// OUT/summary.json.
-#[derive(Debug, Clone, Serialize)]
-pub struct Summary {
-    /// The fluid program and its version.
-    pub software: String,
-    /// When the summary was written, seconds since 1970-01-01 UTC.
-    pub written_unix_s: u64,
-    pub scene: String,
-    pub scene_file: String,
-    pub run: String,
-    pub steps_requested: u64,
-    pub steps_completed: u64,
-    pub last_completed_step: Option<u64>,
-    pub particles_initial: u64,
-    pub wall_time_s: f64,
-    /// Where the wall time went.
-    pub time_s: TimeSplit,
-    /// Lattice cell updates per second of the fluid's own step, in millions (cells x steps / the
-    /// `fluid` part of `time_s`): the coupled fluid's speed inside the whole program.
-    pub fluid_mlups: f64,
-    pub steps_per_second: f64,
-    pub particle_steps_per_second: f64,
-    pub fluid_physics: Vec<&'static str>,
-    /// Where the covered cells took their solid term ("redo", "skip" or "fused"; in a run that
-    /// times them, `coupling.covered_cells = "timed"` or "auto" on a GPU, the way its last trial
-    /// kept).
-    pub covered_cells: &'static str,
-    /// The fluid's discretisation.
-    pub lattice: LatticeSummary,
-    pub peer: Option<PeerInfo>,
-    /// "completed", "interrupted", "stopped by the DEM client", or "error: ..."
-    pub exit_reason: String,
-    pub exit_code: u8,
-}
-
-/// Where a coupled run's wall time went, in seconds (summary.json `time_s`). The lockstep runs the
-/// two processes in turn, so these add up to the wall time less the start and the end (`other`).
-#[derive(Debug, Clone, Copy, Default, Serialize)]
-pub struct TimeSplit {
-    /// Waiting for the DEM's states of each step: the DEM's own step (its sub-steps, contacts and
-    /// output) and the states crossing over.
-    pub waiting_for_dem: f64,
-    /// The fluid's step with the particles: the host's passes over them, the GPU's kernels, the
-    /// loads read back, the health checks.
-    pub fluid: f64,
-    /// The states read, converted and checked, and the replies converted and sent.
-    pub exchange: f64,
-    /// particles.csv.
-    pub output: f64,
-    /// The rest of the wall time: the loop's start and end, the DEM process's exit.
-    pub other: f64,
-}
-
-impl TimeSplit {
-    /// The split line of a run's last message: each part's share of `wall` seconds.
-    pub fn describe(&self, wall: f64) -> String {
-        let share = |t: f64| 100.0 * t / wall.max(1e-9);
-        format!(
-            "fluid {:.0}%, waiting for the DEM {:.0}%, exchange {:.0}%, output {:.0}%, other {:.0}%",
-            share(self.fluid),
-            share(self.waiting_for_dem),
-            share(self.exchange),
-            share(self.output),
-            share(self.other)
-        )
-    }
-}
-
 /// The lattice of a coupled run, as summary.json reports it.
 #[derive(Debug, Clone, Serialize)]
 pub struct LatticeSummary {
@@ -195,13 +119,6 @@ impl LatticeSummary {
             tau_minus: trt.then(|| crate::lbm::geometry::tau_minus(u.magic, u.tau)),
             ramp_time_s: u.ramp_steps * u.dt,
         }
-    }
-}
-
-impl Summary {
-    pub fn write(&self, path: &Path) -> std::io::Result<()> {
-        let text = serde_json::to_string_pretty(self).map_err(std::io::Error::other)?;
-        std::fs::write(path, text + "\n")
     }
 }
 

@@ -1,0 +1,229 @@
+//! [`FluidSide`]: what computes the particles' hydrodynamic loads in a coupled run.
+//!
+//! Gravity and buoyancy are each applied once: the DEM applies gravity to the particles; the fluid
+//! has no gravity (so no hydrostatic pressure gradient) and this side adds the buoyancy
+//! -rho_f V g to the hydrodynamic force computed on the lattice.
+//!
+//! A `lattice.body_acceleration` a drives the fluid like a mean pressure gradient -grad p = rho_f a
+//! that the lattice does not carry either; the particles feel its share rho_f V a, added here too
+//! (without it a fixed bed's drag is short by that share: the Zick-Homsy check in docs/imb.md).
+
+use super::health::finite_load;
+use super::radius_correction::radius_deficit_product;
+use super::states::LatticeStates;
+use super::warnings::lattice_warnings;
+use super::ways::{covered_cells, way_trials};
+use crate::fields::FieldOutput;
+use crate::fluid::{health_of, setup_of};
+use crate::lbm::gpu::{Gpu, Lattice};
+use crate::lbm::imb::{ImbOptions, SolidCollision};
+use crate::lubrication::Lubrication;
+use crate::trials::WayTrials;
+use protocol::{ParticleReply, ParticleState, Physics};
+use scene::lattice::LatticeUnits;
+use scene::Scene;
+use std::path::Path;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+
+/// What computes the particles' hydrodynamic loads: the lattice with its units, the buoyancy it
+/// adds and the lubrication correction.
+pub struct FluidSide {
+    pub(super) lattice: Lattice,
+    pub(super) units: LatticeUnits,
+    origin: [f64; 3],
+    fluid_density: f64,
+    gravity: [f64; 3],
+    lubrication: Option<Lubrication>,
+    /// Each sphere of r cells is drawn r + this / max(r, 2) (`coupling.radius_correction`; 0
+    /// without it).
+    deficit_product: f64,
+    pub(super) steps: u64,
+    /// With `coupling.covered_cells = "timed"`, and "auto" on a GPU: the ways timed on the run's
+    /// steps (trials.rs).
+    pub(super) trials: Option<WayTrials>,
+    /// When the fluid side was made: the trials' clock.
+    pub(super) made: std::time::Instant,
+    /// The run's field outputs: those the scene asks for (`output.fields_interval` above 0,
+    /// `output.line`), and last_good.vti where the fluid blows up.
+    pub(super) fields: FieldOutput,
+    /// The step of the last health check that passed (its fields kept on the device).
+    pub(super) last_good: Option<u64>,
+    /// `output.fields_interval` and `output.interval` (the probe lines'), in steps.
+    pub(super) fields_every: u64,
+    pub(super) lines_every: u64,
+    /// Steps of the run (its last gets a snapshot and the lines).
+    pub(super) run_steps: u64,
+}
+
+impl FluidSide {
+    /// The fluid a scene asks for, for a run of `steps` steps writing its field outputs into `out`.
+    pub fn for_scene(scene: &Scene, steps: u64, out: &Path) -> Result<FluidSide, String> {
+        let Some(units) = scene.lattice_units.clone() else {
+            return Err(format!(
+                "scene '{}' has particles but no [lattice]: the fluid needs one",
+                scene.name
+            ));
+        };
+        // The scene's coupling settings are checked before the device is opened.
+        let deficit_product =
+            radius_deficit_product(&scene.coupling.radius_correction, &units.operator, units.tau)?;
+        let gpu = Arc::new(Gpu::new()?);
+        let radii: Vec<f64> = scene.initial_particles().iter().map(|p| p.radius).collect();
+        let options = imb_options(scene, &units, &radii)?;
+        let trials = way_trials(scene, &gpu).map(|least| WayTrials::new(options.covered_cells, steps, least));
+        let lattice = Lattice::new(gpu, setup_of(&units), health_of(&units), Some(options))?;
+        let lubrication = scene
+            .coupling
+            .lubrication
+            .then(|| Lubrication::for_lattice(scene, &units));
+        for warning in lattice_warnings(scene, &units, &radii) {
+            protocol::say!("lbm-server: warning: {warning}");
+        }
+        let fields = FieldOutput::new(scene, &units, out)?;
+        Ok(FluidSide {
+            lattice,
+            units,
+            origin: scene.domain.min,
+            fluid_density: scene.fluid.density,
+            gravity: scene.gravity,
+            lubrication,
+            deficit_product,
+            steps: 0,
+            trials,
+            made: std::time::Instant::now(),
+            fields,
+            last_good: None,
+            fields_every: scene.output.fields_interval,
+            lines_every: scene.output.interval,
+            run_steps: steps,
+        })
+    }
+
+    /// The Physics bits this side applies.
+    pub fn physics(&self) -> u64 {
+        let lubrication = if self.lubrication.is_some() {
+            Physics::LUBRICATION
+        } else {
+            0
+        };
+        Physics::LATTICE_BOLTZMANN | Physics::IMMERSED_BOUNDARY | Physics::BUOYANCY | lubrication
+    }
+
+    /// Leaves the lubrication correction to the DEM (which declared it in its Hello).
+    pub fn leave_lubrication(&mut self) {
+        self.lubrication = None;
+    }
+
+    /// How the fluid is described in logs.
+    pub fn describe(&self) -> String {
+        let u = &self.units;
+        format!(
+            "lattice {}x{}x{} ({}, tau {:.4}, dx {:e} m, dt {:e} s) on {}, immersed moving boundary \
+             ({}{}){}{}",
+            u.n[0],
+            u.n[1],
+            u.n[2],
+            u.operator,
+            u.tau,
+            u.dx,
+            u.dt,
+            self.lattice.adapter(),
+            self.lattice.covered_cells().describe(),
+            self.trials
+                .as_ref()
+                .map_or(String::new(), |t| format!("; {}", t.describe())),
+            if self.lubrication.is_some() {
+                ", lubrication"
+            } else {
+                ""
+            },
+            if self.deficit_product != 0.0 {
+                format!(
+                    ", spheres drawn larger by {:.3} cells^2 / radius (radius correction)",
+                    self.deficit_product
+                )
+            } else {
+                String::new()
+            }
+        )
+    }
+
+    /// The lattice, for summary.json.
+    pub fn units(&self) -> &LatticeUnits {
+        &self.units
+    }
+
+    /// Advances the fluid one step with the particles `states` (SI) and returns their loads (SI):
+    /// the lattice's, buoyancy added (`loads`), then the lubrication correction; then the health
+    /// check where one is due, and the field outputs.
+    pub fn step(&mut self, states: &[ParticleState], out: &mut Vec<ParticleReply>) -> Result<(), String> {
+        self.take_way();
+        let not_finite = self.loads(states, out)?;
+        if let Some(lubrication) = &self.lubrication {
+            lubrication.apply(states, out);
+        }
+        self.steps += 1;
+        if not_finite {
+            let reply = *out.iter().find(|r| !finite_load(r)).expect("a load not finite");
+            return Err(self.not_finite(&reply));
+        }
+        if self.steps.is_multiple_of(self.units.check_interval) {
+            self.check()?;
+        }
+        self.write_fields()
+    }
+
+    /// The lattice's step with the particles `states` (SI), their loads (SI) in `out`: the
+    /// lattice's hydrodynamic force and torque, and the share of the pressure gradients it does
+    /// not carry. Whether a load is not finite (found by the pass that converts the loads: no
+    /// pass of its own).
+    fn loads(&mut self, states: &[ParticleState], out: &mut Vec<ParticleReply>) -> Result<bool, String> {
+        let (dx, dt) = (self.units.dx, self.units.dt);
+        let lattice_states = LatticeStates {
+            states,
+            origin: self.origin,
+            dx,
+            dt,
+            deficit_product: self.deficit_product,
+        };
+        let force_unit = self.fluid_density * dx.powi(4) / (dt * dt);
+        let torque_unit = force_unit * dx;
+        // What the lattice does not carry: the hydrostatic gradient (buoyancy) and the mean
+        // pressure gradient that the body acceleration stands for, as -grad p / rho_f.
+        let pressure_acceleration: [f64; 3] =
+            std::array::from_fn(|a| self.units.force[a] * dx / (dt * dt) - self.gravity[a]);
+        let fluid_density = self.fluid_density;
+        let not_finite = AtomicBool::new(false);
+        self.lattice.step_coupled_with(&lattice_states, out, |j, l| {
+            let s = &states[j];
+            let volume = 4.0 / 3.0 * std::f64::consts::PI * s.radius.powi(3);
+            let reply = ParticleReply {
+                id: s.id,
+                force: std::array::from_fn(|a| {
+                    l.force[a] * force_unit + fluid_density * volume * pressure_acceleration[a]
+                }),
+                torque: l.torque.map(|t| t * torque_unit),
+            };
+            if !finite_load(&reply) {
+                not_finite.store(true, Ordering::Relaxed);
+            }
+            reply
+        })?;
+        Ok(not_finite.into_inner())
+    }
+}
+
+/// The immersed boundary's options of a scene (`coupling.*`; `radii` of its initial particles,
+/// m): its slots, its weighting, its solid collision and the way its covered cells start with.
+fn imb_options(scene: &Scene, units: &LatticeUnits, radii: &[f64]) -> Result<ImbOptions, String> {
+    let collision = &scene.coupling.solid_collision;
+    Ok(ImbOptions {
+        slots: scene.coupling.slots,
+        seed_weighting: scene.coupling.weighting == "seed",
+        solid_collision: SolidCollision::from_name(collision).ok_or_else(|| {
+            format!("coupling.solid_collision = {collision:?}: expected \"noble-torczynski\" or \"superposition\"")
+        })?,
+        covered_cells: covered_cells(scene, units, radii)?,
+    })
+}

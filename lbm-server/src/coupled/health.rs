@@ -1,0 +1,86 @@
+//! The health of a coupled run's fluid: the lattice's checks, the loads that are not finite, and
+//! the blow-up's error (with the fields of the last check that passed as last_good.vti).
+
+use super::FluidSide;
+use crate::fluid::health_of;
+use crate::lbm::gpu::Unhealthy;
+use protocol::ParticleReply;
+
+impl FluidSide {
+    /// After the run's last step: the health check and the covers' warning, unless the last step
+    /// was a check already (a run shorter than `lattice.check_interval`, or its tail beyond the
+    /// last multiple, went unchecked).
+    pub fn check_last_step(&mut self) -> Result<(), String> {
+        if self.steps.is_multiple_of(self.units.check_interval) {
+            return Ok(());
+        }
+        self.check()
+    }
+
+    /// The health check of the lattice (a pass keeps its fields on the device for
+    /// last_good.vti), and a warning when cells had more particles than slots.
+    pub(super) fn check(&mut self) -> Result<(), String> {
+        if let Some(bad) = self.lattice.health() {
+            return Err(self.unstable(bad));
+        }
+        self.lattice.keep_fields();
+        self.last_good = Some(self.steps);
+        let lost = self.lattice.lost_covers();
+        let (unlisted, dropped) = (lost.unlisted, lost.dropped);
+        if unlisted > 0 {
+            return Err(format!(
+                "by step {}, {unlisted} covered cells did not fit the list of covered cells (room for {} \
+                 on this device: its storage binding limit / 80 bytes), so their solid term was missing: \
+                 use fewer or smaller particles, or a device with a larger binding limit",
+                self.steps,
+                self.lattice.covered_cell_capacity()
+            ));
+        }
+        if dropped > 0 {
+            protocol::say!(
+                "lbm-server: warning: by step {}, {dropped} particle-cell covers did not fit coupling.slots = {}",
+                self.steps,
+                self.lattice.slots()
+            );
+        }
+        Ok(())
+    }
+
+    /// The error of a blow-up found at this step: the step, the cell and its quantities, and
+    /// the fields of the last check that passed written as last_good.vti.
+    pub(super) fn unstable(&mut self, bad: Unhealthy) -> String {
+        let what = bad.describe(&health_of(&self.units));
+        let mut msg = format!("the fluid became unstable by step {}: {what}", self.steps);
+        if let Some((good, fields)) = self.last_good.take().zip(self.lattice.kept_fields()) {
+            msg += &self.fields.write_last_good(good, &fields);
+        }
+        let _ = self.fields.flush();
+        msg
+    }
+
+    /// The fluid's blow-up, where the health check finds one now (run when the particles' states
+    /// went wrong: the fluid's forces may be why).
+    pub fn unstable_now(&mut self) -> Option<String> {
+        let bad = self.lattice.health()?;
+        Some(self.unstable(bad))
+    }
+
+    /// The error where a particle's load is not a finite number: the fluid's blow-up where the
+    /// health check finds one now (before a NaN reaches the DEM, which would otherwise be
+    /// blamed for the state it integrates from it), else the particle and its load.
+    pub(super) fn not_finite(&mut self, reply: &ParticleReply) -> String {
+        if let Some(cause) = self.unstable_now() {
+            return cause;
+        }
+        format!(
+            "the fluid's load on particle id {} at step {} is not finite (force {:?} N, torque {:?} N m), \
+             though the fluid passed its health check",
+            reply.id, self.steps, reply.force, reply.torque
+        )
+    }
+}
+
+/// Whether a particle's force and torque are finite numbers.
+pub(super) fn finite_load(reply: &ParticleReply) -> bool {
+    reply.force.iter().chain(&reply.torque).all(|v| v.is_finite())
+}

@@ -1,0 +1,101 @@
+//! A scene ready to run: loaded, checked (a `[lattice]` where it has particles, the steps, the
+//! connect timeout), its output folder made and cleared of an earlier run's outputs.
+
+use super::{DemMode, RunArgs};
+use scene::Scene;
+use std::path::PathBuf;
+use std::time::Duration;
+
+/// A scene ready to run: validated, with its output folder made.
+pub(super) struct Prepared {
+    pub(super) scene: Scene,
+    pub(super) scene_file: String,
+    pub(super) steps: u64,
+    pub(super) out: PathBuf,
+    pub(super) scene_copy: PathBuf,
+    pub(super) connect_timeout: Duration,
+}
+
+pub(super) fn prepare(args: &RunArgs) -> Result<Prepared, String> {
+    let (scene, scene_file, text) = match &args.scene {
+        Some(path) => {
+            let scene = Scene::load(path).map_err(|e| e.to_string())?;
+            let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
+            (scene, path.display().to_string(), text)
+        }
+        None => (
+            Scene::default_scene(),
+            scene::DEFAULT_SCENE_FILE.to_string(),
+            scene::DEFAULT_SCENE.to_string(),
+        ),
+    };
+    require_lattice(&scene, &scene_file)?;
+    let steps = match args.duration {
+        Some(duration) => scene.steps_covering(duration, "--duration")?,
+        None => args.steps.unwrap_or(scene.time.steps),
+    };
+    if steps == 0 {
+        return Err("--steps = 0: must be at least 1".into());
+    }
+    let default_timeout = if args.dem == DemMode::External {
+        f64::INFINITY
+    } else {
+        30.0
+    };
+    let connect_timeout = args.connect_timeout.unwrap_or(default_timeout);
+    if connect_timeout.is_nan() || connect_timeout <= 0.0 {
+        return Err(format!("--connect-timeout = {connect_timeout} s: must be > 0"));
+    }
+    let out = args
+        .out
+        .clone()
+        .unwrap_or_else(|| PathBuf::from("out").join(&scene.name));
+    std::fs::create_dir_all(&out)
+        .map_err(|e| format!("cannot create the output folder {}: {e}", out.display()))?;
+    clear_earlier_outputs(&out)?;
+    let scene_copy = out.join("scene.toml");
+    std::fs::write(&scene_copy, text).map_err(|e| format!("{}: {e}", scene_copy.display()))?;
+    Ok(Prepared {
+        scene,
+        scene_file,
+        steps,
+        out,
+        scene_copy,
+        connect_timeout: Duration::try_from_secs_f64(connect_timeout).unwrap_or(Duration::MAX),
+    })
+}
+
+/// Removes what an earlier run wrote into `out` under this run's output names, saying so.
+fn clear_earlier_outputs(out: &std::path::Path) -> Result<(), String> {
+    let removed = scene::outputs::clear_earlier(out, scene::outputs::LBM_SERVER).map_err(|e| {
+        format!(
+            "cannot remove an earlier run's outputs from {}: {e}",
+            out.display()
+        )
+    })?;
+    if removed > 0 {
+        protocol::say!(
+            "lbm-server: removed {removed} output files of an earlier run from {}",
+            out.display()
+        );
+    }
+    Ok(())
+}
+
+/// A scene with particles runs coupled to the lattice: without a `[lattice]` it is refused.
+fn require_lattice(scene: &Scene, file: &str) -> Result<(), String> {
+    if scene.lattice.is_some() || scene.particle_count() == 0 {
+        return Ok(());
+    }
+    let error = scene::SceneError {
+        file: file.to_string(),
+        field: "lattice".into(),
+        value: "missing".into(),
+        problem: format!(
+            "lbm-server couples particles to a lattice-Boltzmann fluid: add a [lattice] section (dx or \
+             resolution, velocity_scale, ...; see validation/scenes/default.toml) and remove time.dt, \
+             which the lattice derives; or run a granular scene alone with `dem-client run {file}`"
+        ),
+    };
+    Err(error.to_string())
+}

@@ -1,0 +1,204 @@
+//! One coupled run in progress ([`Session`]): opened (the link, particles.csv, the fluid),
+//! connected to the DEM side (started or announced, then the handshake), stepped in lockstep
+//! (`lockstep.rs`), finished (outputs flushed, the DEM ended, summary.json written).
+
+use super::counters::Counters;
+use super::prepare::Prepared;
+use super::summary::PeerInfo;
+use super::welcome::{welcome_for, yielded};
+use super::{DemMode, Ending, EXIT_FAILURE, EXIT_INTERRUPTED};
+use crate::coupled::FluidSide;
+use crate::launch;
+use crate::output::ParticleOutput;
+use protocol::transport::LinkOptions;
+use protocol::{FluidLink, Hello, LinkError, Physics};
+use std::process::Child;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::time::Duration;
+
+/// One run in progress.
+pub(super) struct Session {
+    pub(super) p: Prepared,
+    pub(super) link: FluidLink,
+    child: Option<Child>,
+    pub(super) particles: ParticleOutput,
+    pub(super) fluid: FluidSide,
+    pub(super) interrupted: Arc<AtomicBool>,
+    pub(super) peer: Option<PeerInfo>,
+    pub(super) hello: Option<Hello>,
+    /// Whether a reply carried FINAL or STOP: the DEM ends on its own and is given the time to.
+    pub(super) told_to_end: bool,
+    /// The steps completed and where the wall time went.
+    pub(super) counters: Counters,
+}
+
+impl Session {
+    /// Runs the whole session and returns the process exit code.
+    pub(super) fn start(p: Prepared, run: &str, mode: DemMode, interrupted: Arc<AtomicBool>) -> u8 {
+        let mut session = match Session::open(p, run, interrupted) {
+            Ok(session) => session,
+            Err(e) => {
+                protocol::say!("lbm-server: error: {e}");
+                return EXIT_FAILURE;
+            }
+        };
+        let result = session.connect(mode).and_then(|()| session.step_loop());
+        session.finish(result)
+    }
+
+    /// The run's link (its services, before any DEM connects), particles.csv and the fluid.
+    fn open(p: Prepared, run: &str, interrupted: Arc<AtomicBool>) -> Result<Session, String> {
+        let options = LinkOptions {
+            run: run.to_string(),
+            timeout: Duration::from_secs_f64(p.scene.coupling.timeout),
+        };
+        let link = FluidLink::create(options, p.scene.capacity() as usize).map_err(|e| e.to_string())?;
+        let particles = ParticleOutput::create(&p.out, p.scene.dem.output.vtk)
+            .map_err(|e| format!("{}: {e}", p.out.join("particles.csv").display()))?;
+        let fluid = FluidSide::for_scene(&p.scene, p.steps, &p.out)?;
+        Ok(Session {
+            p,
+            link,
+            child: None,
+            particles,
+            fluid,
+            interrupted,
+            peer: None,
+            hello: None,
+            told_to_end: false,
+            counters: Counters::new(),
+        })
+    }
+
+    /// Starts or announces the DEM side and performs the handshake.
+    fn connect(&mut self, mode: DemMode) -> Result<(), String> {
+        let spawned = self.start_dem(mode)?;
+        let (scene, steps) = (&self.p.scene, self.p.steps);
+        let physics = self.fluid.physics();
+        let interrupted = self.interrupted.clone();
+        let hello = self
+            .link
+            .accept(
+                spawned,
+                self.p.connect_timeout,
+                &|| interrupted.load(Ordering::SeqCst),
+                |hello| welcome_for(scene, steps, hello, physics & !yielded(hello)),
+            )
+            .map_err(|e| e.to_string())?;
+        if yielded(&hello) != 0 {
+            self.fluid.leave_lubrication();
+        }
+        let fluid = self.fluid.describe();
+        self.peer = Some(PeerInfo {
+            software: protocol::handshake::field_text(&hello.software),
+            pid: hello.pid,
+            protocol_version: hello.version,
+            physics: Physics::names(hello.physics),
+        });
+        protocol::say!(
+            "lbm-server: scene '{}', {} steps ({:.4e} s), DEM: {} (pid {}); {fluid}",
+            scene.name,
+            steps,
+            steps as f64 * scene.time.dt,
+            protocol::handshake::field_text(&hello.software),
+            hello.pid
+        );
+        self.hello = Some(hello);
+        Ok(())
+    }
+
+    /// Starts dem-client (`spawn`: its pid) or prints the service name for an external DEM.
+    fn start_dem(&mut self, mode: DemMode) -> Result<Option<u32>, String> {
+        let run = self.link.run().to_string();
+        match mode {
+            DemMode::Spawn => {
+                let exe = launch::find_dem_client()
+                    .ok_or("cannot find dem-client next to lbm-server or on PATH (build it: cargo build)")?;
+                let child =
+                    launch::spawn_dem_client(&exe, &run, &self.p.scene_copy, self.p.scene.coupling.timeout)
+                        .map_err(|e| format!("cannot start {}: {e}", exe.display()))?;
+                let pid = child.id();
+                self.child = Some(child);
+                Ok(Some(pid))
+            }
+            DemMode::External => {
+                println!("DEM service: {run}");
+                println!(
+                    "join with: dem-client connect --service {run} --scene {}",
+                    self.p.scene_copy.display()
+                );
+                use std::io::Write;
+                let _ = std::io::stdout().flush();
+                Ok(None)
+            }
+        }
+    }
+
+    /// A failure of the fluid, with the last completed step.
+    pub(super) fn describe_fluid(&self, e: String) -> String {
+        format!(
+            "{e}; last completed step: {}",
+            self.counters.last_completed_text()
+        )
+    }
+
+    /// A failure of the link, with its hint and the last completed step.
+    pub(super) fn describe(&self, e: LinkError) -> String {
+        let last = self.counters.last_completed_text();
+        format!("{e}{}; last completed step: {last}", e.hint())
+    }
+
+    /// Flushes output, ends the DEM process, writes summary.json; returns the exit code.
+    fn finish(mut self, result: Result<Ending, String>) -> u8 {
+        let (reason, code) = match &result {
+            Ok(Ending::Completed) => ("completed".to_string(), 0),
+            Ok(Ending::Interrupted) => ("interrupted".to_string(), EXIT_INTERRUPTED),
+            Ok(Ending::StoppedByPeer) => ("stopped by the DEM client".to_string(), 0),
+            Err(_) if self.interrupted.load(Ordering::SeqCst) => {
+                ("interrupted".to_string(), EXIT_INTERRUPTED)
+            }
+            Err(e) => (format!("error: {e}"), EXIT_FAILURE),
+        };
+        if let (Err(msg), false) = (&result, code == EXIT_INTERRUPTED) {
+            protocol::say!("lbm-server: error: {msg}");
+        }
+        if let Err(e) = self.particles.flush() {
+            protocol::say!("lbm-server: error: particles.csv: {e}");
+        }
+        self.end_dem(result.is_ok() || self.told_to_end);
+        let summary = self.summary(reason, code);
+        if let Err(e) = summary.write(&self.p.out.join("summary.json")) {
+            protocol::say!("lbm-server: error: summary.json: {e}");
+        }
+        if code == 0 {
+            protocol::say!(
+                "lbm-server: {} steps in {:.2} s ({:.0} steps/s; {}; the fluid's step at {:.1} \
+                 MLUPS); output in {}",
+                summary.steps_completed,
+                summary.wall_time_s,
+                summary.steps_per_second,
+                summary.time_s.describe(summary.wall_time_s),
+                summary.fluid_mlups,
+                self.p.out.display()
+            );
+        }
+        code
+    }
+
+    /// Ends the DEM side: a DEM `told` to end (its last reply said FINAL or STOP) ends on its own
+    /// and is given the time to; a spawned one is then ended, an external one is left the time to
+    /// read the last reply before our ports close.
+    fn end_dem(&mut self, told: bool) {
+        let grace = if told {
+            Duration::from_secs(2)
+        } else {
+            Duration::ZERO
+        };
+        if let Some(child) = self.child.as_mut() {
+            launch::end_child(child, grace);
+        } else if told {
+            self.link.linger(protocol::transport::LINGER);
+        }
+    }
+}
