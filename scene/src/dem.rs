@@ -30,7 +30,7 @@
 //! jitter = 0.0004             # m
 //! ```
 
-use crate::numbers::{fail, finite3, positive, vec3};
+use crate::numbers::{fail, finite3, non_negative, positive, vec3};
 use crate::{InitialParticle, Scene, SceneError};
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
@@ -450,9 +450,7 @@ impl Dem {
             ));
         }
         for (name, v) in [("friction", m.friction), ("rolling_friction", m.rolling_friction)] {
-            if !(v.is_finite() && v >= 0.0) {
-                return Err(fail(file, field(name), v, "must be a finite number >= 0"));
-            }
+            non_negative(file, &field(name), v, "")?;
         }
         if let Some(rho) = m.density {
             positive(file, &field("density"), rho, "kg/m^3")?;
@@ -602,14 +600,7 @@ fn validate_insert(file: &str, i: usize, ins: &Insert) -> Result<(), SceneError>
             "min must not exceed max",
         ));
     }
-    if !(ins.jitter.is_finite() && ins.jitter >= 0.0) {
-        return Err(fail(
-            file,
-            field("jitter"),
-            format!("{} m", ins.jitter),
-            "must be a finite number >= 0",
-        ));
-    }
+    non_negative(file, &field("jitter"), ins.jitter, "m")?;
     let gap = ins.spacing - 2.0 * hi;
     if ins.count.iter().any(|n| *n > 1) && 2.0 * ins.jitter > gap.max(0.0) + 1e-15 {
         return Err(fail(

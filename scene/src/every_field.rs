@@ -224,26 +224,30 @@ fn field_of(path: &[Step]) -> String {
     }
 }
 
-/// Every number under `value`, with its path and whether it is an integer.
-fn numbers(value: &Value, path: &mut Vec<Step>, out: &mut Vec<(Vec<Step>, bool)>) {
-    match value {
-        Value::Integer(_) | Value::Float(_) => out.push((path.clone(), value.is_integer())),
-        Value::Table(t) => {
-            for (k, v) in t {
-                path.push(Step::Key(k.clone()));
-                numbers(v, path, out);
-                path.pop();
-            }
-        }
-        Value::Array(a) => {
-            for (i, v) in a.iter().enumerate() {
-                path.push(Step::Index(i));
-                numbers(v, path, out);
-                path.pop();
-            }
-        }
-        _ => {}
+/// Calls `visit` with every value under `value` (itself first) and its path.
+fn walk(value: &Value, path: &mut Vec<Step>, visit: &mut impl FnMut(&[Step], &Value)) {
+    visit(path, value);
+    let children: Vec<(Step, &Value)> = match value {
+        Value::Table(t) => t.iter().map(|(k, v)| (Step::Key(k.clone()), v)).collect(),
+        Value::Array(a) => a.iter().enumerate().map(|(i, v)| (Step::Index(i), v)).collect(),
+        _ => Vec::new(),
+    };
+    for (step, child) in children {
+        path.push(step);
+        walk(child, path, visit);
+        path.pop();
     }
+}
+
+/// Every number of `scene`, with its path and whether it is an integer.
+fn numbers(scene: &Value) -> Vec<(Vec<Step>, bool)> {
+    let mut out = Vec::new();
+    walk(scene, &mut Vec::new(), &mut |path, value| {
+        if value.is_integer() || value.is_float() {
+            out.push((path.to_vec(), value.is_integer()));
+        }
+    });
+    out
 }
 
 fn at<'a>(value: &'a mut Value, path: &[Step]) -> &'a mut Value {
@@ -276,9 +280,7 @@ fn parse_with(scene: &Value, path: &[Step], number: Value) -> Result<Scene, crat
 fn a_number_that_is_not_finite_is_refused_naming_its_field() {
     let mut failures = Vec::new();
     for scene in full_scenes() {
-        let mut leaves = Vec::new();
-        numbers(&scene, &mut Vec::new(), &mut leaves);
-        for (path, integer) in leaves {
+        for (path, integer) in numbers(&scene) {
             for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
                 let (field, shown) = (field_of(&path), show(&path));
                 match parse_with(&scene, &path, Value::Float(bad)) {
@@ -316,9 +318,7 @@ const ANY_INTEGER: &[(&str, i64)] = &[
 fn an_integer_out_of_range_is_refused_naming_its_field() {
     let mut failures = Vec::new();
     for scene in full_scenes() {
-        let mut leaves = Vec::new();
-        numbers(&scene, &mut Vec::new(), &mut leaves);
-        for (path, _) in leaves.into_iter().filter(|(_, integer)| *integer) {
+        for (path, _) in numbers(&scene).into_iter().filter(|(_, integer)| *integer) {
             for bad in [0, i64::MAX] {
                 let (field, shown) = (field_of(&path), show(&path));
                 match parse_with(&scene, &path, Value::Integer(bad)) {
@@ -350,26 +350,15 @@ fn table_kind(path: &[Step]) -> String {
     }
 }
 
-/// Every table of `value`: (kind, a path to one, its keys).
-fn tables(value: &Value, path: &mut Vec<Step>, out: &mut Vec<(String, Vec<Step>, Vec<String>)>) {
-    match value {
-        Value::Table(t) => {
-            out.push((table_kind(path), path.clone(), t.keys().cloned().collect()));
-            for (k, v) in t {
-                path.push(Step::Key(k.clone()));
-                tables(v, path, out);
-                path.pop();
-            }
+/// Every table of `scene`: (kind, a path to one, its keys).
+fn tables(scene: &Value) -> Vec<(String, Vec<Step>, Vec<String>)> {
+    let mut out = Vec::new();
+    walk(scene, &mut Vec::new(), &mut |path, value| {
+        if let Value::Table(t) = value {
+            out.push((table_kind(path), path.to_vec(), t.keys().cloned().collect()));
         }
-        Value::Array(a) => {
-            for (i, v) in a.iter().enumerate() {
-                path.push(Step::Index(i));
-                tables(v, path, out);
-                path.pop();
-            }
-        }
-        _ => {}
-    }
+    });
+    out
 }
 
 /// The fields an unknown-field error lists (`expected one of `a`, `b``).
@@ -405,9 +394,7 @@ fn the_full_scenes_give_every_field() {
     let mut given: BTreeMap<String, BTreeSet<String>> = BTreeMap::new();
     let mut one: BTreeMap<String, (usize, Vec<Step>)> = BTreeMap::new();
     for (s, scene) in scenes.iter().enumerate() {
-        let mut found = Vec::new();
-        tables(scene, &mut Vec::new(), &mut found);
-        for (kind, path, keys) in found {
+        for (kind, path, keys) in tables(scene) {
             given.entry(kind.clone()).or_default().extend(keys);
             one.entry(kind).or_insert((s, path));
         }

@@ -1,7 +1,7 @@
 //! The `[lattice]` section: how the fluid is discretised, and the one place where SI units become
 //! lattice units (dx, dt, tau, lattice velocities and forces).
 
-use crate::numbers::{fail, finite3, positive, vec3};
+use crate::numbers::{fail, finite3, non_negative, positive, vec3};
 use crate::{Scene, SceneError};
 use serde::Deserialize;
 
@@ -369,14 +369,7 @@ fn check_steps_rates_and_forces(lattice: &Lattice, file: &str) -> Result<(), Sce
     if lattice.check_interval == 0 {
         return Err(fail(file, "lattice.check_interval", 0, "must be at least 1 step"));
     }
-    if !(lattice.ramp_time.is_finite() && lattice.ramp_time >= 0.0) {
-        return Err(fail(
-            file,
-            "lattice.ramp_time",
-            format!("{} s", lattice.ramp_time),
-            "must be a finite number >= 0",
-        ));
-    }
+    non_negative(file, "lattice.ramp_time", lattice.ramp_time, "s")?;
     let m = &lattice.mrt;
     let rates = [
         ("e", m.e),

@@ -27,16 +27,22 @@ pub(crate) fn vec3(v: [f64; 3]) -> String {
 
 /// `v` [`unit`] must be finite and above 0.
 pub(crate) fn positive(file: &str, field: &str, v: f64, unit: &str) -> Result<(), SceneError> {
-    if v.is_finite() && v > 0.0 {
-        Ok(())
-    } else {
-        Err(fail(
-            file,
-            field,
-            format!("{v} {unit}").trim_end(),
-            "must be a finite number > 0",
-        ))
+    let ok = v.is_finite() && v > 0.0;
+    number(file, field, v, unit, ok, "must be a finite number > 0")
+}
+
+/// `v` [`unit`] must be finite and at least 0.
+pub(crate) fn non_negative(file: &str, field: &str, v: f64, unit: &str) -> Result<(), SceneError> {
+    let ok = v.is_finite() && v >= 0.0;
+    number(file, field, v, unit, ok, "must be a finite number >= 0")
+}
+
+/// Refuses `v` [`unit`] with `problem` unless it is `ok`.
+fn number(file: &str, field: &str, v: f64, unit: &str, ok: bool, problem: &str) -> Result<(), SceneError> {
+    if ok {
+        return Ok(());
     }
+    Err(fail(file, field, format!("{v} {unit}").trim_end(), problem))
 }
 
 /// Every component of `v` [`unit`] must be finite.
