@@ -54,6 +54,31 @@ const MISTAKES: &[(&str, &str, &str, &[&str])] = &[
     ("zero output interval", "interval = 10", "interval = 0", &["output.interval = 0"]),
     ("negative timeout", "timeout = 10", "timeout = -1", &["coupling.timeout = -1 s"]),
     ("bad name", "name = \"bad\"", "name = \"my scene/1\"", &["name = \"my scene/1\""]),
+    ("name of the parent folder", "name = \"bad\"", "name = \"..\"", &["name = \"..\"", "names output folders"]),
+    (
+        "non-finite body acceleration",
+        "tau = 0.8",
+        "tau = 0.8\nbody_acceleration = [nan, 0.0, 0.0]",
+        &["lattice.body_acceleration = [NaN, 0, 0] m/s^2", "finite"],
+    ),
+    (
+        "non-finite moving wall",
+        "tau = 0.8",
+        "tau = 0.8\nfaces.z_max = { type = \"moving_wall\", velocity = [nan, 0.0, 0.0] }",
+        &["lattice.faces.z_max.velocity = [NaN, 0, 0] m/s", "finite"],
+    ),
+    (
+        "non-finite MRT rate",
+        "tau = 0.8",
+        "tau = 0.8\noperator = \"mrt\"\nmrt = { e = 1.19, epsilon = 1.4, q = nan, pi = 1.4, m = 1.98 }",
+        &["lattice.mrt.q = NaN", "(0, 2)"],
+    ),
+    (
+        "solid box with a NaN corner",
+        "tau = 0.8",
+        "tau = 0.8\nsolid_box = [{ min = [nan, 0.0, 0.0], max = [0.004, 0.004, 0.004] }]",
+        &["lattice.solid_box[0].min = [NaN, 0, 0] m", "finite"],
+    ),
     ("non-finite gravity", "[domain]", "gravity = [0.0, 0.0, nan]\n[domain]", &["gravity = [0, 0, NaN] m/s^2"]),
     ("zero particle density", "density = 2500.0", "density = 0.0", &["particles.density = 0 kg/m^3"]),
     (
@@ -139,6 +164,29 @@ fn the_base_scene_itself_is_valid() {
         result.status.success(),
         "{}",
         String::from_utf8_lossy(&result.stderr)
+    );
+}
+
+/// A solid box wholly outside the domain makes no cell solid: the run goes on and warns, naming it.
+#[test]
+fn a_solid_box_outside_the_domain_warns() {
+    let dir = temp_dir("box-outside");
+    let text = scene_text("box", [2, 2, 2], 1, 1, 10.0).replacen(
+        "tau = 0.8",
+        "tau = 0.8\nsolid_box = [{ min = [0.1, 0.0, 0.0], max = [0.2, 0.016, 0.016] }]",
+        1,
+    );
+    let scene = write_scene(&dir, &text);
+    let result = server(&scene, &dir.join("out"), &[]).output().unwrap();
+    let err = String::from_utf8_lossy(&result.stderr);
+    assert!(result.status.success(), "{err}");
+    let named = format!(
+        "{}: lattice.solid_box[0] = min [0.1, 0, 0] m, max [0.2, 0.016, 0.016] m",
+        scene.display()
+    );
+    assert!(
+        err.contains(&named) && err.contains("wholly outside the domain"),
+        "{err}"
     );
 }
 

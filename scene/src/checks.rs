@@ -1,5 +1,6 @@
 //! The checks a scene must pass before a run starts.
 
+use crate::numbers::{self, vec3};
 use crate::{Scene, SceneError, MAX_INITIAL_OVERLAP, MAX_PARTICLES};
 
 /// Collects the first failure with its file, field and value.
@@ -9,12 +10,7 @@ struct Checker<'a> {
 
 impl Checker<'_> {
     fn fail(&self, field: impl Into<String>, value: impl ToString, problem: impl Into<String>) -> SceneError {
-        SceneError {
-            file: self.file.to_string(),
-            field: field.into(),
-            value: value.to_string(),
-            problem: problem.into(),
-        }
+        numbers::fail(self.file, field, value, problem)
     }
 
     /// `value` must be one of `choices` ("expected \"a\", \"b\" or \"c\"").
@@ -33,28 +29,12 @@ impl Checker<'_> {
     }
 
     fn positive(&self, field: &str, value: f64, unit: &str) -> Result<(), SceneError> {
-        if value.is_finite() && value > 0.0 {
-            Ok(())
-        } else {
-            Err(self.fail(field, format!("{value} {unit}"), "must be a finite number > 0"))
-        }
+        numbers::positive(self.file, field, value, unit)
     }
 
     fn finite3(&self, field: &str, v: [f64; 3], unit: &str) -> Result<(), SceneError> {
-        if v.iter().all(|x| x.is_finite()) {
-            Ok(())
-        } else {
-            Err(self.fail(
-                field,
-                format!("{} {unit}", vec3(v)),
-                "every component must be finite",
-            ))
-        }
+        numbers::finite3(self.file, field, v, unit)
     }
-}
-
-fn vec3(v: [f64; 3]) -> String {
-    format!("[{}, {}, {}]", v[0], v[1], v[2])
 }
 
 impl Scene {
@@ -76,17 +56,21 @@ impl Scene {
     }
 
     fn validate_header(&self, c: &Checker) -> Result<(), SceneError> {
+        // A plain file name: `out/..` would be the parent of out/.
         let name_ok = !self.name.is_empty()
             && self.name.len() <= 64
             && self
                 .name
                 .chars()
-                .all(|ch| ch.is_ascii_alphanumeric() || "-_.".contains(ch));
+                .all(|ch| ch.is_ascii_alphanumeric() || "-_.".contains(ch))
+            && self.name != "."
+            && self.name != "..";
         if !name_ok {
             return Err(c.fail(
                 "name",
                 format!("{:?}", self.name),
-                "must be 1-64 letters, digits, '-', '_' or '.' (it names output folders)",
+                "must be 1-64 letters, digits, '-', '_' or '.', other than \".\" and \"..\" (it names \
+                 output folders)",
             ));
         }
         c.finite3("domain.min", self.domain.min, "m")?;
@@ -150,6 +134,13 @@ impl Scene {
         if self.time.steps == 0 {
             return Err(c.fail("time.steps", 0, "must be at least 1"));
         }
+        if self.time.steps as f64 > crate::times::MOST_STEPS {
+            return Err(c.fail(
+                "time.steps",
+                self.time.steps,
+                format!("is more than {:e} steps: too many", crate::times::MOST_STEPS),
+            ));
+        }
         if self.output.interval == 0 {
             return Err(c.fail("output.interval", 0, "must be at least 1 step"));
         }
@@ -159,6 +150,7 @@ impl Scene {
     /// Each `output.line`: an axis, through a point within the domain.
     fn validate_output_lines(&self, c: &Checker) -> Result<(), SceneError> {
         for (i, line) in self.output.line.iter().enumerate() {
+            c.finite3(&format!("output.line[{i}].through"), line.through, "m")?;
             if !["x", "y", "z"].contains(&line.axis.as_str()) {
                 let field = format!("output.line[{i}].axis");
                 return Err(c.fail(
@@ -267,7 +259,7 @@ impl Scene {
     }
 
     fn validate_particles(&self, c: &Checker) -> Result<(), SceneError> {
-        if self.particle_count() > 0 {
+        if self.particle_count() > 0 || self.particles.given {
             c.positive("particles.density", self.particles.density, "kg/m^3")?;
         }
         for (i, s) in self.particles.sphere.iter().enumerate() {
@@ -301,6 +293,13 @@ impl Scene {
             ));
         }
         if let Some(cap) = self.coupling.capacity {
+            if cap > MAX_PARTICLES {
+                return Err(c.fail(
+                    "coupling.capacity",
+                    cap,
+                    format!("is more than {MAX_PARTICLES} particles"),
+                ));
+            }
             if cap < count {
                 return Err(c.fail(
                     "coupling.capacity",
@@ -384,3 +383,6 @@ impl Scene {
         }
     }
 }
+
+#[cfg(test)]
+mod tests;

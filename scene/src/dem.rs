@@ -30,6 +30,7 @@
 //! jitter = 0.0004             # m
 //! ```
 
+use crate::numbers::{fail, finite3, non_negative, positive, vec3};
 use crate::{InitialParticle, Scene, SceneError};
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
@@ -334,50 +335,6 @@ fn yes() -> bool {
     true
 }
 
-fn fail(
-    file: &str,
-    field: impl Into<String>,
-    value: impl ToString,
-    problem: impl Into<String>,
-) -> SceneError {
-    SceneError {
-        file: file.to_string(),
-        field: field.into(),
-        value: value.to_string(),
-        problem: problem.into(),
-    }
-}
-
-fn vec3(v: [f64; 3]) -> String {
-    format!("[{}, {}, {}]", v[0], v[1], v[2])
-}
-
-fn positive(file: &str, field: &str, v: f64, unit: &str) -> Result<(), SceneError> {
-    if v.is_finite() && v > 0.0 {
-        Ok(())
-    } else {
-        Err(fail(
-            file,
-            field,
-            format!("{v} {unit}"),
-            "must be a finite number > 0",
-        ))
-    }
-}
-
-fn finite3(file: &str, field: &str, v: [f64; 3], unit: &str) -> Result<(), SceneError> {
-    if v.iter().all(|x| x.is_finite()) {
-        Ok(())
-    } else {
-        Err(fail(
-            file,
-            field,
-            format!("{} {unit}", vec3(v)),
-            "every component must be finite",
-        ))
-    }
-}
-
 impl Dem {
     /// The materials, with the built-in default when the scene names none.
     pub fn materials(&self) -> Vec<Material> {
@@ -493,9 +450,7 @@ impl Dem {
             ));
         }
         for (name, v) in [("friction", m.friction), ("rolling_friction", m.rolling_friction)] {
-            if !(v.is_finite() && v >= 0.0) {
-                return Err(fail(file, field(name), v, "must be a finite number >= 0"));
-            }
+            non_negative(file, &field(name), v, "")?;
         }
         if let Some(rho) = m.density {
             positive(file, &field("density"), rho, "kg/m^3")?;
@@ -620,7 +575,8 @@ fn validate_insert(file: &str, i: usize, ins: &Insert) -> Result<(), SceneError>
     let field = |f: &str| format!("dem.insert[{i}].{f}");
     finite3(file, &field("origin"), ins.origin, "m")?;
     finite3(file, &field("velocity"), ins.velocity, "m/s")?;
-    if ins.count.contains(&0) || ins.count.iter().product::<u64>() > crate::MAX_PARTICLES {
+    let product = ins.count.iter().try_fold(1u64, |acc, n| acc.checked_mul(*n));
+    if ins.count.contains(&0) || product.is_none_or(|n| n > crate::MAX_PARTICLES) {
         let value = format!("[{}, {}, {}]", ins.count[0], ins.count[1], ins.count[2]);
         return Err(fail(
             file,
@@ -644,14 +600,7 @@ fn validate_insert(file: &str, i: usize, ins: &Insert) -> Result<(), SceneError>
             "min must not exceed max",
         ));
     }
-    if !(ins.jitter.is_finite() && ins.jitter >= 0.0) {
-        return Err(fail(
-            file,
-            field("jitter"),
-            format!("{} m", ins.jitter),
-            "must be a finite number >= 0",
-        ));
-    }
+    non_negative(file, &field("jitter"), ins.jitter, "m")?;
     let gap = ins.spacing - 2.0 * hi;
     if ins.count.iter().any(|n| *n > 1) && 2.0 * ins.jitter > gap.max(0.0) + 1e-15 {
         return Err(fail(
@@ -831,6 +780,24 @@ pub fn validate_placement(scene: &Scene, file: &str) -> Result<(), SceneError> {
         }
     }
     Ok(())
+}
+
+/// A warning for each `dem.box` wholly outside the domain, which no particle can reach.
+pub(crate) fn idle_boxes(scene: &Scene, file: &str) -> Vec<String> {
+    let (lo, hi) = (scene.domain.min, scene.domain.max);
+    let outside = |b: &BoxWall| (0..3).any(|a| b.max[a] <= lo[a] || b.min[a] >= hi[a]);
+    let boxes = scene.dem.boxes.iter().enumerate().filter(|(_, b)| outside(b));
+    boxes
+        .map(|(i, b)| {
+            let problem = format!(
+                "lies wholly outside the domain (min {} m, max {} m): no particle can touch it",
+                vec3(lo),
+                vec3(hi)
+            );
+            let value = format!("min {} m, max {} m", vec3(b.min), vec3(b.max));
+            fail(file, format!("dem.box[{i}]"), value, problem).to_string()
+        })
+        .collect()
 }
 
 /// (wall field, overlap depth [m]) of one sphere with each wall of the scene.

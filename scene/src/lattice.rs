@@ -1,8 +1,11 @@
 //! The `[lattice]` section: how the fluid is discretised, and the one place where SI units become
 //! lattice units (dx, dt, tau, lattice velocities and forces).
 
+use crate::numbers::{fail, finite3, non_negative, positive, vec3};
 use crate::{Scene, SceneError};
 use serde::Deserialize;
+
+mod faces;
 
 /// `[lattice]` (SI units).
 #[derive(Debug, Clone, Deserialize)]
@@ -15,7 +18,8 @@ pub struct Lattice {
     /// Collision operator: "bgk", "trt" (default) or "mrt".
     #[serde(default = "default_operator")]
     pub operator: String,
-    /// Relaxation time; when given, it sets dt. Otherwise dt follows from `mach`.
+    /// Relaxation time (above 1/2 + [`TAU_MARGIN`]); when given, it sets dt. Otherwise dt
+    /// follows from `mach`.
     pub tau: Option<f64>,
     /// Characteristic (largest expected) fluid speed [m/s].
     pub velocity_scale: f64,
@@ -30,16 +34,18 @@ pub struct Lattice {
     /// (validation/lbm/REPORT.md, "Stability near tau = 1/2"); with this set the magic becomes
     /// min(magic, (tau - 1/2)(max_tau_minus - 1/2)). 1 held where BGK held.
     pub max_tau_minus: Option<f64>,
-    /// MRT relaxation rates of the non-hydrodynamic moments (d'Humieres 2002 defaults).
+    /// MRT relaxation rates of the non-hydrodynamic moments (d'Humieres 2002 defaults), each in
+    /// (0, 2).
     #[serde(default)]
     pub mrt: MrtRates,
-    /// Acceleration driving the fluid, e.g. a pressure gradient / density [m/s^2].
+    /// Acceleration driving the fluid, e.g. a pressure gradient / density [m/s^2] (finite).
     #[serde(default)]
     pub body_acceleration: [f64; 3],
     /// Boundary type of each domain face.
     #[serde(default)]
     pub faces: Faces,
-    /// Solid boxes (no-slip obstacles) [m].
+    /// Solid boxes (no-slip obstacles) [m]; one that makes no cell solid (outside the domain, or
+    /// between the cell centres) is accepted with a warning.
     #[serde(default)]
     pub solid_box: Vec<SolidBox>,
     /// Steps between two health checks (non-finite values, density, speed).
@@ -134,9 +140,10 @@ pub enum FaceSpec {
 pub struct FaceTable {
     #[serde(rename = "type")]
     pub kind: String,
-    /// [m/s] for moving walls and velocity inlets.
+    /// [m/s] for moving walls and velocity inlets (finite, below the operator's Mach limit).
     pub velocity: Option<[f64; 3]>,
-    /// Gauge pressure [Pa] for pressure outlets.
+    /// Gauge pressure [Pa] for pressure outlets (finite, above -rho c_s^2, where the outlet's
+    /// density would reach 0).
     pub pressure: Option<f64>,
 }
 
@@ -216,26 +223,23 @@ pub fn mach_limit(operator: &str) -> f64 {
     }
 }
 
-fn fail(file: &str, field: &str, value: impl ToString, problem: impl Into<String>) -> SceneError {
-    SceneError {
-        file: file.into(),
-        field: field.into(),
-        value: value.to_string(),
-        problem: problem.into(),
-    }
-}
-
 /// The time step [s] and tau of the lattice of cell size `dx`: from `lattice.tau` where given,
 /// else from the Mach number of `lattice.velocity_scale`; refused where tau lies too near 1/2.
 fn time_step(scene: &Scene, lattice: &Lattice, dx: f64, file: &str) -> Result<(f64, f64), SceneError> {
     let nu_si = scene.fluid.dynamic_viscosity / scene.fluid.density;
     positive(file, "lattice.velocity_scale", lattice.velocity_scale, "m/s")?;
+    positive(file, "lattice.mach", lattice.mach, "")?;
     let dt = match lattice.tau {
-        Some(tau) => (tau - 0.5) * dx * dx / (3.0 * nu_si),
-        None => {
-            positive(file, "lattice.mach", lattice.mach, "")?;
-            lattice.mach / 3f64.sqrt() * dx / lattice.velocity_scale
+        Some(tau) if !tau.is_finite() => {
+            return Err(fail(
+                file,
+                "lattice.tau",
+                tau,
+                "must be a finite number above 1/2",
+            ))
         }
+        Some(tau) => (tau - 0.5) * dx * dx / (3.0 * nu_si),
+        None => lattice.mach / 3f64.sqrt() * dx / lattice.velocity_scale,
     };
     let tau = 0.5 + 3.0 * nu_si * dt / (dx * dx);
     let field = if lattice.tau.is_some() {
@@ -310,10 +314,15 @@ pub fn bounded_magic(magic: f64, tau: f64, max_tau_minus: f64) -> f64 {
 }
 
 impl LatticeUnits {
-    /// Derives and checks the lattice of `scene` (which has a `[lattice]` section).
-    pub fn derive(scene: &Scene, lattice: &Lattice, file: &str) -> Result<LatticeUnits, SceneError> {
+    /// Derives and checks the lattice of `scene` (which has a `[lattice]` section); with it the
+    /// warnings of what the lattice holds that does nothing (a solid box that makes no cell solid).
+    pub fn derive(
+        scene: &Scene,
+        lattice: &Lattice,
+        file: &str,
+    ) -> Result<(LatticeUnits, Vec<String>), SceneError> {
         let dx = cell_size(scene, lattice, file)?;
-        let n = cell_counts(scene, dx, file)?;
+        let n = cell_counts(scene, lattice, dx, file)?;
         let op = lattice.operator.as_str();
         if !["bgk", "trt", "mrt"].contains(&op) {
             return Err(fail(
@@ -325,21 +334,11 @@ impl LatticeUnits {
         }
         let (dt, tau) = time_step(scene, lattice, dx, file)?;
         let mach = lattice_mach(lattice, op, dx, dt, file)?;
-        let faces = lattice_faces(scene, lattice, dx, dt, file)?;
-        let solid = solid_cells(scene, lattice, n, dx, file)?;
-        if lattice.check_interval == 0 {
-            return Err(fail(file, "lattice.check_interval", 0, "must be at least 1 step"));
-        }
+        let faces = faces::lattice_faces(scene, lattice, dx, dt, file)?;
+        let (solid, warnings) = solid_cells(scene, lattice, n, dx, file)?;
+        check_steps_rates_and_forces(lattice, file)?;
         let force = lattice.body_acceleration.map(|a| a * dt * dt / dx);
-        if !(lattice.ramp_time.is_finite() && lattice.ramp_time >= 0.0) {
-            return Err(fail(
-                file,
-                "lattice.ramp_time",
-                format!("{} s", lattice.ramp_time),
-                "must be a finite number >= 0",
-            ));
-        }
-        Ok(LatticeUnits {
+        let units = LatticeUnits {
             n,
             dx,
             dt,
@@ -354,7 +353,8 @@ impl LatticeUnits {
             solid,
             check_interval: lattice.check_interval,
             ramp_steps: lattice.ramp_time / dt,
-        })
+        };
+        Ok((units, warnings))
     }
 
     /// Lattice velocity of an SI velocity.
@@ -363,17 +363,35 @@ impl LatticeUnits {
     }
 }
 
-fn positive(file: &str, field: &str, v: f64, unit: &str) -> Result<(), SceneError> {
-    if v.is_finite() && v > 0.0 {
-        Ok(())
-    } else {
-        Err(fail(
-            file,
-            field,
-            format!("{v} {unit}").trim_end(),
-            "must be a finite number > 0",
-        ))
+/// `lattice.check_interval`, `lattice.ramp_time`, the MRT rates (in (0, 2): 2 would leave a
+/// moment unrelaxed, beyond it grow) and `lattice.body_acceleration`.
+fn check_steps_rates_and_forces(lattice: &Lattice, file: &str) -> Result<(), SceneError> {
+    if lattice.check_interval == 0 {
+        return Err(fail(file, "lattice.check_interval", 0, "must be at least 1 step"));
     }
+    non_negative(file, "lattice.ramp_time", lattice.ramp_time, "s")?;
+    let m = &lattice.mrt;
+    let rates = [
+        ("e", m.e),
+        ("epsilon", m.epsilon),
+        ("q", m.q),
+        ("pi", m.pi),
+        ("m", m.m),
+    ];
+    if let Some((name, rate)) = rates.iter().find(|(_, rate)| !(*rate > 0.0 && *rate < 2.0)) {
+        return Err(fail(
+            file,
+            format!("lattice.mrt.{name}"),
+            rate,
+            "must lie in (0, 2) (a relaxation rate)",
+        ));
+    }
+    finite3(
+        file,
+        "lattice.body_acceleration",
+        lattice.body_acceleration,
+        "m/s^2",
+    )
 }
 
 fn cell_size(scene: &Scene, lattice: &Lattice, file: &str) -> Result<f64, SceneError> {
@@ -391,165 +409,89 @@ fn cell_size(scene: &Scene, lattice: &Lattice, file: &str) -> Result<f64, SceneE
     }
 }
 
+/// The cells along each axis of cell size `dx`, refused (naming `lattice.dx` or
+/// `lattice.resolution`, whichever gave it) where one is not a whole number or all are 2^31 or more.
 #[allow(clippy::needless_range_loop)]
-fn cell_counts(scene: &Scene, dx: f64, file: &str) -> Result<[usize; 3], SceneError> {
+fn cell_counts(scene: &Scene, lattice: &Lattice, dx: f64, file: &str) -> Result<[usize; 3], SceneError> {
+    let (field, value) = match lattice.resolution {
+        Some(r) => ("lattice.resolution", r.to_string()),
+        None => ("lattice.dx", format!("{dx} m")),
+    };
     let mut n = [0usize; 3];
     for a in 0..3 {
         let cells = (scene.domain.max[a] - scene.domain.min[a]) / dx;
         if (cells - cells.round()).abs() > 1e-6 * cells.max(1.0) || cells.round() < 1.0 {
             return Err(fail(
                 file,
-                "lattice.dx",
-                format!("{dx} m"),
+                field,
+                &value,
                 format!("the domain's extent along axis {a} is {cells:.4} cells: it must be a whole number"),
             ));
         }
         n[a] = cells.round() as usize;
     }
-    let total = n.iter().map(|&v| v as u128).product::<u128>();
-    if total >= 1 << 31 {
+    let total = n
+        .iter()
+        .try_fold(1u128, |product, &v| product.checked_mul(v as u128));
+    if total.is_none_or(|total| total >= 1 << 31) {
         return Err(fail(
             file,
-            "lattice.dx",
-            format!("{dx} m"),
-            format!("gives {total} cells, above 2^31"),
+            field,
+            &value,
+            format!("gives {} x {} x {} cells, above 2^31", n[0], n[1], n[2]),
         ));
     }
     Ok(n)
 }
 
-fn lattice_faces(
-    scene: &Scene,
-    lattice: &Lattice,
-    dx: f64,
-    dt: f64,
-    file: &str,
-) -> Result<[LatticeFace; 6], SceneError> {
-    let mut out = [LatticeFace::Wall; 6];
-    for (k, (name, spec)) in lattice.faces.all().into_iter().enumerate() {
-        out[k] = lattice_face(scene, spec, [dx, dt], &format!("lattice.faces.{name}"), file)?;
-    }
-    check_face_speeds(lattice, &out, [dx, dt], file)?;
-    check_periodic_pairs(&out, file)?;
-    Ok(out)
-}
-
-/// The face that `spec` (the scene's field `field`) describes, in lattice units of cell size and
-/// time step `[dx, dt]`.
-fn lattice_face(
-    scene: &Scene,
-    spec: &FaceSpec,
-    [dx, dt]: [f64; 2],
-    field: &str,
-    file: &str,
-) -> Result<LatticeFace, SceneError> {
-    let to_lattice = |u: [f64; 3]| u.map(|v| v * dt / dx);
-    Ok(match spec {
-        FaceSpec::Name(s) if s == "periodic" => LatticeFace::Periodic,
-        FaceSpec::Name(s) if s == "wall" => LatticeFace::Wall,
-        FaceSpec::Table(t) => match (t.kind.as_str(), t.velocity, t.pressure) {
-            ("moving_wall", Some(u), None) => LatticeFace::MovingWall(to_lattice(u)),
-            ("velocity_inlet", Some(u), None) => LatticeFace::VelocityInlet(to_lattice(u)),
-            ("pressure_outlet", None, Some(p)) => {
-                // rho_lattice = 1 + p / (rho c_s^2), c_s^2 = dx^2 / (3 dt^2)
-                LatticeFace::PressureOutlet(1.0 + 3.0 * p * dt * dt / (scene.fluid.density * dx * dx))
-            }
-            (kind, ..) => {
-                return Err(fail(
-                    file,
-                    field,
-                    format!("{t:?}"),
-                    format!(
-                        "type {kind:?} needs: moving_wall or velocity_inlet with velocity, \
-                         pressure_outlet with pressure"
-                    ),
-                ))
-            }
-        },
-        FaceSpec::Name(s) => {
-            return Err(fail(
-                file,
-                field,
-                format!("{s:?}"),
-                "expected \"periodic\", \"wall\" or a table",
-            ))
-        }
-    })
-}
-
-/// Refuses a moving wall or inlet faster than the operator's lattice Mach limit.
-fn check_face_speeds(
-    lattice: &Lattice,
-    faces: &[LatticeFace; 6],
-    [dx, dt]: [f64; 2],
-    file: &str,
-) -> Result<(), SceneError> {
-    let limit = mach_limit(&lattice.operator);
-    for (k, (name, _)) in lattice.faces.all().into_iter().enumerate() {
-        if let LatticeFace::MovingWall(u) | LatticeFace::VelocityInlet(u) = faces[k] {
-            let mach = u.iter().map(|v| v * v).sum::<f64>().sqrt() * 3f64.sqrt();
-            if mach > limit {
-                let si = u.map(|v| v * dx / dt);
-                return Err(fail(
-                    file,
-                    &format!("lattice.faces.{name}.velocity"),
-                    format!("[{}, {}, {}] m/s", si[0], si[1], si[2]),
-                    format!(
-                        "is lattice Mach {mach:.3}, above {limit} for {}",
-                        lattice.operator
-                    ),
-                ));
-            }
-        }
-    }
-    Ok(())
-}
-
-/// Refuses an axis with one periodic face: periodic faces come in pairs.
-fn check_periodic_pairs(faces: &[LatticeFace; 6], file: &str) -> Result<(), SceneError> {
-    for (a, axis) in ["x", "y", "z"].iter().enumerate() {
-        let (lo, hi) = (
-            faces[2 * a] == LatticeFace::Periodic,
-            faces[2 * a + 1] == LatticeFace::Periodic,
-        );
-        if lo != hi {
-            return Err(fail(
-                file,
-                &format!("lattice.faces.{axis}_min / {axis}_max"),
-                "one periodic",
-                "periodic faces come in pairs",
-            ));
-        }
-    }
-    Ok(())
-}
-
+/// The solid cells of the solid boxes (those whose centre lies in one), and a warning for each
+/// box that makes no cell solid.
 fn solid_cells(
     scene: &Scene,
     lattice: &Lattice,
     n: [usize; 3],
     dx: f64,
     file: &str,
-) -> Result<Vec<bool>, SceneError> {
+) -> Result<(Vec<bool>, Vec<String>), SceneError> {
     let mut solid = vec![false; n[0] * n[1] * n[2]];
+    let mut warnings = Vec::new();
     for (b, boxed) in lattice.solid_box.iter().enumerate() {
-        if (0..3).any(|a| boxed.max[a].is_nan() || boxed.max[a] <= boxed.min[a]) {
+        let field = format!("lattice.solid_box[{b}]");
+        finite3(file, &format!("{field}.min"), boxed.min, "m")?;
+        finite3(file, &format!("{field}.max"), boxed.max, "m")?;
+        let value = format!("min {} m, max {} m", vec3(boxed.min), vec3(boxed.max));
+        if let Some(a) = (0..3).find(|&a| boxed.max[a] <= boxed.min[a]) {
             return Err(fail(
                 file,
-                &format!("lattice.solid_box[{b}]"),
-                format!("min {:?} max {:?}", boxed.min, boxed.max),
-                "max must exceed min on every axis",
+                &field,
+                value,
+                format!("max must exceed min along axis {a}"),
             ));
         }
+        let mut covered = 0usize;
         for (k, cell) in solid.iter_mut().enumerate() {
             let idx = [k % n[0], (k / n[0]) % n[1], k / (n[0] * n[1])];
             let centre: [f64; 3] = std::array::from_fn(|a| scene.domain.min[a] + (idx[a] as f64 + 0.5) * dx);
             if (0..3).all(|a| centre[a] >= boxed.min[a] && centre[a] <= boxed.max[a]) {
                 *cell = true;
+                covered += 1;
             }
         }
+        if covered == 0 {
+            let (lo, hi) = (scene.domain.min, scene.domain.max);
+            let problem = if (0..3).any(|a| boxed.max[a] <= lo[a] || boxed.min[a] >= hi[a]) {
+                format!(
+                    "lies wholly outside the domain (min {} m, max {} m): it makes no cell solid",
+                    vec3(lo),
+                    vec3(hi)
+                )
+            } else {
+                format!("holds no cell centre (cells of {dx} m): it makes no cell solid")
+            };
+            warnings.push(fail(file, &field, value, problem).to_string());
+        }
     }
-    Ok(solid)
+    Ok((solid, warnings))
 }
 
 #[cfg(test)]

@@ -39,6 +39,10 @@ pub struct Scene {
     /// The DEM: materials, contact model, walls, insertion, DEM output (every field has a default).
     #[serde(default)]
     pub dem: dem::Dem,
+    /// What the checks found odd but harmless (a box that does nothing), each as
+    /// `FILE: FIELD = VALUE: PROBLEM`; [`Scene::load`] writes them to stderr.
+    #[serde(skip)]
+    pub warnings: Vec<String>,
 }
 
 /// The fluid box [m].
@@ -75,9 +79,12 @@ pub struct Fluid {
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Time {
-    /// Fluid (coupling) time step [s]. With a `[lattice]` it is derived and must not be given.
-    #[serde(default = "unset")]
+    /// Fluid (coupling) time step [s]: `time.dt`, or with a `[lattice]` derived from it.
+    #[serde(skip, default = "unset")]
     pub dt: f64,
+    /// `time.dt` as given; with a `[lattice]` it must not be.
+    #[serde(rename = "dt", default)]
+    pub(crate) given_dt: Option<f64>,
     /// Number of coupled steps, as given (`time.steps`).
     #[serde(rename = "steps", default)]
     pub(crate) given_steps: Option<u64>,
@@ -255,6 +262,10 @@ impl Default for Coupling {
 pub struct Particles {
     /// Solid density [kg/m^3].
     pub density: f64,
+    /// Whether the scene has a `[particles]` section (whose density is checked even where it
+    /// creates no particle).
+    #[serde(skip, default = "given")]
+    pub(crate) given: bool,
     #[serde(default)]
     pub sphere: Vec<Sphere>,
     #[serde(default)]
@@ -266,6 +277,7 @@ impl Default for Particles {
     fn default() -> Self {
         Self {
             density: unset(),
+            given: false,
             sphere: Vec::new(),
             block: Vec::new(),
         }
@@ -300,6 +312,10 @@ pub struct Block {
 /// Marks a number the file did not give.
 fn unset() -> f64 {
     f64::NAN
+}
+
+fn given() -> bool {
+    true
 }
 
 fn default_gravity() -> [f64; 3] {
@@ -354,7 +370,8 @@ pub const MAX_PARTICLES: u64 = 50_000_000;
 pub const MAX_INITIAL_OVERLAP: f64 = 0.01;
 
 impl Scene {
-    /// Reads and validates a scene file.
+    /// Reads and validates a scene file, and writes its warnings to stderr, each a line
+    /// `PROGRAM: warning: FILE: FIELD = VALUE: PROBLEM`.
     pub fn load(path: &Path) -> Result<Scene, SceneError> {
         let file = path.display().to_string();
         let text = std::fs::read_to_string(path).map_err(|e| SceneError {
@@ -363,7 +380,21 @@ impl Scene {
             value: String::new(),
             problem: format!("cannot read the scene file: {e}"),
         })?;
-        Scene::parse(&text, &file)
+        let scene = Scene::parse(&text, &file)?;
+        let program = std::env::args_os()
+            .next()
+            .and_then(|p| {
+                Path::new(&p)
+                    .file_name()
+                    .map(|n| n.to_string_lossy().into_owned())
+            })
+            .unwrap_or_default();
+        for warning in &scene.warnings {
+            use std::io::Write;
+            // One write per line, as `protocol::say!` writes.
+            let _ = std::io::stderr().write_all(format!("{program}: warning: {warning}\n").as_bytes());
+        }
+        Ok(scene)
     }
 
     /// The built-in default scene.
@@ -371,7 +402,8 @@ impl Scene {
         Scene::parse(DEFAULT_SCENE, DEFAULT_SCENE_FILE).expect("the default scene is valid")
     }
 
-    /// Parses and validates scene text; `file` names it in errors.
+    /// Parses and validates scene text; `file` names it in errors and warnings (kept in
+    /// [`Scene::warnings`]).
     pub fn parse(text: &str, file: &str) -> Result<Scene, SceneError> {
         let mut scene: Scene = toml::from_str(text).map_err(|e| SceneError {
             file: file.to_string(),
@@ -384,13 +416,14 @@ impl Scene {
         scene.dem.load(file)?;
         scene.validate(file)?;
         dem::validate_placement(&scene, file)?;
+        scene.warnings.extend(dem::idle_boxes(&scene, file));
         Ok(scene)
     }
 
     /// Derives the lattice (and with it the time step) when the scene has a `[lattice]`.
     fn resolve_lattice(&mut self, file: &str) -> Result<(), SceneError> {
         let Some(lattice) = &self.lattice else {
-            if self.time.dt.is_nan() {
+            let Some(dt) = self.time.given_dt else {
                 return Err(SceneError {
                     file: file.into(),
                     field: "time.dt".into(),
@@ -400,21 +433,23 @@ impl Scene {
                               (dem-client run)"
                         .into(),
                 });
-            }
+            };
+            self.time.dt = dt;
             return Ok(());
         };
-        if !self.time.dt.is_nan() {
+        if let Some(dt) = self.time.given_dt {
             return Err(SceneError {
                 file: file.into(),
                 field: "time.dt".into(),
-                value: format!("{} s", self.time.dt),
+                value: format!("{dt} s"),
                 problem: "the [lattice] section derives the time step: remove time.dt".into(),
             });
         }
         self.validate_domain(file)?;
-        let units = lattice::LatticeUnits::derive(self, lattice, file)?;
+        let (units, warnings) = lattice::LatticeUnits::derive(self, lattice, file)?;
         self.time.dt = units.dt;
         self.lattice_units = Some(units);
+        self.warnings.extend(warnings);
         Ok(())
     }
 
@@ -471,15 +506,16 @@ impl Scene {
             .collect()
     }
 
-    /// Number of particles the scene creates.
+    /// Number of particles the scene creates (at most u64::MAX, where the counts a scene gives,
+    /// before its checks refuse them, would overflow).
     pub fn particle_count(&self) -> u64 {
-        let blocks: u64 = self
-            .particles
-            .block
-            .iter()
-            .map(|b| b.count.iter().product::<u64>())
-            .sum();
-        self.particles.sphere.len() as u64 + blocks + self.dem.generated.len() as u64
+        let blocks = self.particles.block.iter().fold(0u64, |sum, b| {
+            let count = b.count.iter().fold(1u64, |n, c| n.saturating_mul(*c));
+            sum.saturating_add(count)
+        });
+        (self.particles.sphere.len() as u64)
+            .saturating_add(blocks)
+            .saturating_add(self.dem.generated.len() as u64)
     }
 
     /// Most particles a step may carry.
@@ -505,7 +541,10 @@ fn block_centres(b: &Block) -> impl Iterator<Item = [f64; 3]> + '_ {
 
 mod checks;
 pub mod dem;
+#[cfg(test)]
+mod every_field;
 pub mod lattice;
+mod numbers;
 pub mod outputs;
 pub mod overlap;
 mod times;

@@ -7,7 +7,7 @@
 use crate::{default_interval, Scene, SceneError};
 
 /// Most steps a time may stand for (a typo of a few orders of magnitude, not a run).
-const MOST_STEPS: f64 = 1e12;
+pub(crate) const MOST_STEPS: f64 = 1e12;
 
 /// How a time becomes steps.
 #[derive(Clone, Copy)]
