@@ -60,6 +60,7 @@ impl Storage {
 
     /// Bound on the rounding error of one stored value x: relative 2^-(p+1) for p mantissa bits,
     /// and half the subnormal step near zero (round to nearest).
+    #[cfg(test)]
     pub fn rounding_bound(self, x: f64) -> f64 {
         match self {
             Storage::Fp32 => 0.0,
@@ -91,6 +92,7 @@ impl Storage {
     }
 
     /// The value as stored, in f32: what a store followed by a load gives.
+    #[cfg(test)]
     pub fn round(self, x: f32) -> f32 {
         match self {
             Storage::Fp32 => x,
