@@ -4,14 +4,14 @@
 //! plus the format's rounding of the value stored (`Storage::rounding_bound`: half a step, 2^-11
 //! relative for FP16S, 2^-12 for FP16C, half the subnormal step near zero).
 
-use super::geometry::{Cell, Face, Operator, Setup};
+use super::geometry::{Cell, Setup};
 use super::gpu::{Health, Lattice};
-use super::imb::{CoveredCells, ImbOptions, SolidParticle};
-use super::mrt::Rates;
-use super::random::{random_populations, Random};
+use super::imb::{CoveredCells, ImbOptions};
+use super::random::random_populations;
 use super::reference;
 use super::storage::Storage;
-use super::tests::gpu;
+use super::tests::immersed_boundary::{trt_under_a_moving_lid, two_particles};
+use super::tests::{bgk_periodic_with_force, gpu, mrt_inlet_outlet_and_solids, trt_walls_and_solids};
 
 /// FP32 kernels' bound for one step (lbm/tests.rs's TOLERANCE).
 const TOLERANCE: f64 = 64.0 * f32::EPSILON as f64 * 0.35;
@@ -59,51 +59,20 @@ fn check(setup: Setup, seed: u64) {
     }
 }
 
-fn sprinkle_solids(setup: &mut Setup, seed: u64) {
-    let mut r = Random::new(seed);
-    for s in setup.solid.iter_mut() {
-        *s = r.next() > 0.8;
-    }
-}
-
 #[test]
 fn sixteen_bit_bgk_periodic_with_body_force_matches_reference() {
     // An odd number of cells: the last word holds one cell.
-    let mut setup = Setup::new([7, 5, 5], [Face::Periodic; 6], 0.8, Operator::Bgk);
-    setup.force = [1e-4, -2e-4, 3e-5];
-    check(setup, 1);
+    check(bgk_periodic_with_force([7, 5, 5]), 1);
 }
 
 #[test]
 fn sixteen_bit_trt_walls_moving_wall_and_solids_match_reference() {
-    let faces = [
-        Face::Periodic,
-        Face::Periodic,
-        Face::Wall,
-        Face::MovingWall([0.02, 0.0, 0.01]),
-        Face::Wall,
-        Face::Wall,
-    ];
-    let mut setup = Setup::new([8, 7, 6], faces, 0.62, Operator::Trt { magic: 3.0 / 16.0 });
-    setup.force = [2e-5, 0.0, -1e-5];
-    sprinkle_solids(&mut setup, 2);
-    check(setup, 3);
+    check(trt_walls_and_solids([8, 7, 6]), 3);
 }
 
 #[test]
 fn sixteen_bit_mrt_inlet_outlet_and_solids_match_reference() {
-    let faces = [
-        Face::VelocityInlet([0.03, 0.0, 0.0]),
-        Face::PressureOutlet(1.01),
-        Face::Wall,
-        Face::Wall,
-        Face::Periodic,
-        Face::Periodic,
-    ];
-    let rates = Rates::dhumieres(1.0 / 0.7);
-    let mut setup = Setup::new([6, 4, 5], faces, 0.7, Operator::Mrt { rates });
-    sprinkle_solids(&mut setup, 4);
-    check(setup, 5);
+    check(mrt_inlet_outlet_and_solids(), 5);
 }
 
 /// The coupling's passes (the covered cells' own kernels, each way) read and write the
@@ -111,31 +80,8 @@ fn sixteen_bit_mrt_inlet_outlet_and_solids_match_reference() {
 /// populations and loads against the reference step from what the GPU holds.
 #[test]
 fn sixteen_bit_coupled_steps_match_reference() {
-    let faces = [
-        Face::Periodic,
-        Face::Periodic,
-        Face::Wall,
-        Face::Wall,
-        Face::Wall,
-        Face::MovingWall([0.01, 0.0, 0.0]),
-    ];
-    let base = Setup::new([11, 10, 9], faces, 0.7, Operator::Trt { magic: 3.0 / 16.0 });
-    let particles = |shift: f64| {
-        vec![
-            SolidParticle {
-                position: [4.3 + shift, 4.6, 3.9],
-                radius: 2.4,
-                velocity: [0.02, -0.01, 0.005],
-                angular_velocity: [0.001, 0.002, -0.003],
-            },
-            SolidParticle {
-                position: [7.4, 5.1 - shift, 4.4],
-                radius: 1.7,
-                velocity: [-0.01, 0.015, 0.0],
-                angular_velocity: [0.0, -0.002, 0.004],
-            },
-        ]
-    };
+    let base = trt_under_a_moving_lid();
+    let particles = two_particles;
     for storage in SIXTEEN {
         for covered_cells in CoveredCells::DEFINITE {
             let setup = Setup {
