@@ -315,18 +315,18 @@ fn collide_covered(at: Invocation) {
     // leaves the fluid, both candidate slots are read and the right one kept.
     if KIND == 0u || KIND == 2u {
         //#for i
-        f[{i}] = f{i}[k];
+        f[{i}] = load{i}(k);
         //#end
     } else if KIND == 1u {
         //#for i
-        f[{i}] = f{i.o}[u32(i32(k) - offset(vec3<i32>({i.cx}, {i.cy}, {i.cz})))];
+        f[{i}] = load{i.o}(u32(i32(k) - offset(vec3<i32>({i.cx}, {i.cy}, {i.cz}))));
         //#end
     } else {
         let flag = flags[k];
         //#for i
         {
             let c = vec3<i32>({i.cx}, {i.cy}, {i.cz});
-            f[{i}] = select(f{i.o}[wrapped(p - c)], f{i}[k], leaves(flag, {i.o}u));
+            f[{i}] = select(load{i.o}(wrapped(p - c)), load{i}(k), leaves(flag, {i.o}u));
         }
         //#end
     }
@@ -369,11 +369,11 @@ fn skipped(k: u32) -> bool {
 fn store_populations(k: u32, out: array<f32, 19>) {
     if KIND == 0u || KIND == 2u {
         //#for i
-        f{i.o}[k] = out[{i}];
+        store{i.o}(k, out[{i}]);
         //#end
     } else if KIND == 1u {
         //#for i
-        f{i}[u32(i32(k) + offset(vec3<i32>({i.cx}, {i.cy}, {i.cz})))] = out[{i}];
+        store{i}(u32(i32(k) + offset(vec3<i32>({i.cx}, {i.cy}, {i.cz}))), out[{i}]);
         //#end
     } else {
         store_sent(k, coords(k), flags[k], out);

@@ -3,7 +3,9 @@
 // reversed) and an odd step (read from the neighbours, write to the neighbours).
 //
 // Populations are stored shifted (f_i - w_i) for single-precision accuracy, one storage buffer per
-// direction (structure of arrays, coalesced; no binding ever exceeds the per-binding size limit).
+// direction (structure of arrays, coalesced; no binding ever exceeds the per-binding size limit),
+// declared with their `load{i}` and `store{i}` by the storage (storage_fp32.wgsl, or
+// storage_fp16.wgsl with fp16s.wgsl or fp16c.wgsl: `lattice.storage`).
 // Lines between `//#for i` and `//#end` are repeated for the 19 directions before compilation
 // (lbm-server/src/lbm/unroll.rs), with {i} the direction, {i.o} its opposite, {i.cx} {i.cy} {i.cz}
 // its velocity c_i (seed eq. 2) and {i.w} its weight w_i (of eq. 3): every population is then a
@@ -61,50 +63,11 @@ override FORCE: bool = true;
 @group(0) @binding(3) var<storage, read_write> fields: array<vec4<f32>>;
 // [0]: smallest index of a cell failing the health check (0xffffffff when none).
 @group(0) @binding(4) var<storage, read_write> status: array<atomic<u32>>;
-@group(0) @binding(5) var<storage, read_write> f0: array<f32>;
-@group(0) @binding(6) var<storage, read_write> f1: array<f32>;
-@group(0) @binding(7) var<storage, read_write> f2: array<f32>;
-@group(0) @binding(8) var<storage, read_write> f3: array<f32>;
-@group(0) @binding(9) var<storage, read_write> f4: array<f32>;
-@group(0) @binding(10) var<storage, read_write> f5: array<f32>;
-@group(0) @binding(11) var<storage, read_write> f6: array<f32>;
-@group(0) @binding(12) var<storage, read_write> f7: array<f32>;
-@group(0) @binding(13) var<storage, read_write> f8: array<f32>;
-@group(0) @binding(14) var<storage, read_write> f9: array<f32>;
-@group(0) @binding(15) var<storage, read_write> f10: array<f32>;
-@group(0) @binding(16) var<storage, read_write> f11: array<f32>;
-@group(0) @binding(17) var<storage, read_write> f12: array<f32>;
-@group(0) @binding(18) var<storage, read_write> f13: array<f32>;
-@group(0) @binding(19) var<storage, read_write> f14: array<f32>;
-@group(0) @binding(20) var<storage, read_write> f15: array<f32>;
-@group(0) @binding(21) var<storage, read_write> f16: array<f32>;
-@group(0) @binding(22) var<storage, read_write> f17: array<f32>;
-@group(0) @binding(23) var<storage, read_write> f18: array<f32>;
 // (24-28: imb.wgsl.) The fluid cells by class, each class in increasing order: interior (no link
 // leaves the fluid or wraps), wrapping (no link leaves the fluid, some wrap), boundary (the rest);
 // then the quads: q such that cells 4q to 4q + 3 are interior or wrapping (without particles);
 // then the interior quads, whose four cells are interior (when nx is a multiple of 4).
 @group(0) @binding(29) var<storage, read> cell_list: array<u32>;
-// The population buffers seen four cells at a time, for `stream_collide_quads`.
-@group(0) @binding(5) var<storage, read_write> q0: array<vec4<f32>>;
-@group(0) @binding(6) var<storage, read_write> q1: array<vec4<f32>>;
-@group(0) @binding(7) var<storage, read_write> q2: array<vec4<f32>>;
-@group(0) @binding(8) var<storage, read_write> q3: array<vec4<f32>>;
-@group(0) @binding(9) var<storage, read_write> q4: array<vec4<f32>>;
-@group(0) @binding(10) var<storage, read_write> q5: array<vec4<f32>>;
-@group(0) @binding(11) var<storage, read_write> q6: array<vec4<f32>>;
-@group(0) @binding(12) var<storage, read_write> q7: array<vec4<f32>>;
-@group(0) @binding(13) var<storage, read_write> q8: array<vec4<f32>>;
-@group(0) @binding(14) var<storage, read_write> q9: array<vec4<f32>>;
-@group(0) @binding(15) var<storage, read_write> q10: array<vec4<f32>>;
-@group(0) @binding(16) var<storage, read_write> q11: array<vec4<f32>>;
-@group(0) @binding(17) var<storage, read_write> q12: array<vec4<f32>>;
-@group(0) @binding(18) var<storage, read_write> q13: array<vec4<f32>>;
-@group(0) @binding(19) var<storage, read_write> q14: array<vec4<f32>>;
-@group(0) @binding(20) var<storage, read_write> q15: array<vec4<f32>>;
-@group(0) @binding(21) var<storage, read_write> q16: array<vec4<f32>>;
-@group(0) @binding(22) var<storage, read_write> q17: array<vec4<f32>>;
-@group(0) @binding(23) var<storage, read_write> q18: array<vec4<f32>>;
 
 // A link that leaves the fluid: BOUNDARY | face (0-5), or BOUNDARY | 6 for a solid cell.
 const BOUNDARY: u32 = 0x80000000u;
@@ -202,14 +165,14 @@ fn read_populations(k: u32, p: vec3<i32>, flag: u32) -> array<f32, 19> {
     var f: array<f32, 19>;
     if params.n.w == 0u {
         //#for i
-        f[{i}] = f{i}[k];
+        f[{i}] = load{i}(k);
         //#end
     } else {
         //#for i
         if leaves(flag, {i.o}u) {
-            f[{i}] = f{i}[k];
+            f[{i}] = load{i}(k);
         } else {
-            f[{i}] = f{i.o}[next_cell(k, p, -vec3<i32>({i.cx}, {i.cy}, {i.cz}), flag)];
+            f[{i}] = load{i.o}(next_cell(k, p, -vec3<i32>({i.cx}, {i.cy}, {i.cz}), flag));
         }
         //#end
     }
@@ -396,9 +359,9 @@ fn store_sent(k: u32, p: vec3<i32>, flag: u32, out: array<f32, 19>) {
     let odd = params.n.w == 1u;
     //#for i
     if leaves(flag, {i}u) || !odd {
-        f{i.o}[k] = out[{i}];
+        store{i.o}(k, out[{i}]);
     } else {
-        f{i}[next_cell(k, p, vec3<i32>({i.cx}, {i.cy}, {i.cz}), flag)] = out[{i}];
+        store{i}(next_cell(k, p, vec3<i32>({i.cx}, {i.cy}, {i.cz}), flag), out[{i}]);
     }
     //#end
 }
@@ -429,139 +392,32 @@ fn stream_collide_fluid(
     var f: array<f32, 19>;
     if KIND == 0u {
         //#for i
-        f[{i}] = f{i}[k];
+        f[{i}] = load{i}(k);
         //#end
     } else if KIND == 1u {
         //#for i
-        f[{i}] = f{i.o}[u32(i32(k) - offset(vec3<i32>({i.cx}, {i.cy}, {i.cz})))];
+        f[{i}] = load{i.o}(u32(i32(k) - offset(vec3<i32>({i.cx}, {i.cy}, {i.cz}))));
         //#end
     } else {
         //#for i
-        f[{i}] = f{i.o}[wrapped(p - vec3<i32>({i.cx}, {i.cy}, {i.cz}))];
+        f[{i}] = load{i.o}(wrapped(p - vec3<i32>({i.cx}, {i.cy}, {i.cz})));
         //#end
     }
     let m = moments(f);
     let post = solid_term(k, f, m, collide(f, m));
     if KIND == 0u {
         //#for i
-        f{i.o}[k] = post[{i}];
+        store{i.o}(k, post[{i}]);
         //#end
     } else if KIND == 1u {
         //#for i
-        f{i}[u32(i32(k) + offset(vec3<i32>({i.cx}, {i.cy}, {i.cz})))] = post[{i}];
+        store{i}(u32(i32(k) + offset(vec3<i32>({i.cx}, {i.cy}, {i.cz}))), post[{i}]);
         //#end
     } else {
         //#for i
-        f{i}[wrapped(p + vec3<i32>({i.cx}, {i.cy}, {i.cz}))] = post[{i}];
+        store{i}(wrapped(p + vec3<i32>({i.cx}, {i.cy}, {i.cz})), post[{i}]);
         //#end
     }
-}
-
-// The even step of four consecutive fluid cells none of whose links leaves the fluid: each vector
-// load or store moves four populations, where llvmpipe loops over the SIMD lanes per access.
-@compute @workgroup_size(64)
-fn stream_collide_quads(
-    @builtin(workgroup_id) wg: vec3<u32>,
-    @builtin(num_workgroups) nwg: vec3<u32>,
-    @builtin(local_invocation_index) local: u32,
-) {
-    let j = cell_index(wg, nwg, local);
-    if j >= params.ranges.w { return; }
-    let q = cell_list[params.ranges.x + params.ranges.y + params.ranges.z + j];
-    var a: array<f32, 19>;
-    var b: array<f32, 19>;
-    var c: array<f32, 19>;
-    var d: array<f32, 19>;
-    //#for i
-    {
-        let v = q{i}[q];
-        a[{i}] = v.x;
-        b[{i}] = v.y;
-        c[{i}] = v.z;
-        d[{i}] = v.w;
-    }
-    //#end
-    let pa = collide(a, moments(a));
-    let pb = collide(b, moments(b));
-    let pc = collide(c, moments(c));
-    let pd = collide(d, moments(d));
-    // A skipped cell (SKIP: covered, updated in place before) sends along each link what it read
-    // as the opposite link's population, from that very slot: each slot keeps what it holds.
-    let skip = skipped_lanes(q);
-    //#for i
-    q{i.o}[q] = select(vec4<f32>(pa[{i}], pb[{i}], pc[{i}], pd[{i}]), vec4<f32>(a[{i.o}], b[{i.o}], c[{i.o}], d[{i.o}]), skip);
-    //#end
-}
-
-// The odd step of four consecutive interior cells (nx a multiple of 4, so that a row offset is a
-// whole number of vectors): populations along y and z move as vectors; those along x as one vector
-// and one scalar load, and four scalar stores (a vector store would overwrite slots of the
-// neighbouring quads).
-@compute @workgroup_size(64)
-fn stream_collide_quads_odd(
-    @builtin(workgroup_id) wg: vec3<u32>,
-    @builtin(num_workgroups) nwg: vec3<u32>,
-    @builtin(local_invocation_index) local: u32,
-) {
-    let j = cell_index(wg, nwg, local);
-    if j >= params.quads.w { return; }
-    let q = i32(cell_list[params.ranges.x + params.ranges.y + params.ranges.z + params.ranges.w + j]);
-    let row = i32(params.n.x / 4u);
-    let ny = i32(params.n.y);
-    var a: array<f32, 19>;
-    var b: array<f32, 19>;
-    var c: array<f32, 19>;
-    var d: array<f32, 19>;
-    //#for i
-    {
-        // f_i of cell 4q + t comes from slot i.o of cell 4q + t - c_i.
-        let e = q - row * ({i.cy} + ny * {i.cz});
-        let v = q{i.o}[u32(e)];
-        if {i.cx} == 0 {
-            a[{i}] = v.x;
-            b[{i}] = v.y;
-            c[{i}] = v.z;
-            d[{i}] = v.w;
-        } else if {i.cx} == 1 {
-            a[{i}] = q{i.o}[u32(e - 1)].w;
-            b[{i}] = v.x;
-            c[{i}] = v.y;
-            d[{i}] = v.z;
-        } else {
-            a[{i}] = v.y;
-            b[{i}] = v.z;
-            c[{i}] = v.w;
-            d[{i}] = q{i.o}[u32(e + 1)].x;
-        }
-    }
-    //#end
-    let pa = collide(a, moments(a));
-    let pb = collide(b, moments(b));
-    let pc = collide(c, moments(c));
-    let pd = collide(d, moments(d));
-    // A skipped cell (SKIP) sends along link i what it read as the opposite link's population:
-    // slot i of cell 4q + t + c_i, which it was read from, keeps what it holds.
-    let skip = skipped_lanes(u32(q));
-    //#for i
-    {
-        // post_i of cell 4q + t goes to slot i of cell 4q + t + c_i.
-        let e = q + row * ({i.cy} + ny * {i.cz});
-        let v = select(vec4<f32>(pa[{i}], pb[{i}], pc[{i}], pd[{i}]), vec4<f32>(a[{i.o}], b[{i.o}], c[{i.o}], d[{i.o}]), skip);
-        if {i.cx} == 0 {
-            q{i}[u32(e)] = v;
-        } else if {i.cx} == 1 {
-            q{i}[u32(e)].y = v.x;
-            q{i}[u32(e)].z = v.y;
-            q{i}[u32(e)].w = v.z;
-            q{i}[u32(e + 1)].x = v.w;
-        } else {
-            q{i}[u32(e - 1)].w = v.x;
-            q{i}[u32(e)].x = v.y;
-            q{i}[u32(e)].y = v.z;
-            q{i}[u32(e)].z = v.w;
-        }
-    }
-    //#end
 }
 
 // The cell at q, at most one cell outside the grid along each axis, wrapped periodically.

@@ -2,6 +2,7 @@
 
 mod coupled;
 mod naive;
+mod storage;
 
 use crate::lbm::geometry::{Face, Operator, Setup};
 use crate::lbm::gpu::{Gpu, Health, Lattice};
@@ -53,6 +54,10 @@ pub struct BenchArgs {
     /// thread per cell, as the naive kernel: what the quads gain or cost on this device).
     #[arg(long)]
     per_cell: bool,
+    /// Also time the same grid with each of these storages of the populations (fp32, fp16s,
+    /// fp16c: `lattice.storage`), in rounds alternating between them, with the bytes per cell.
+    #[arg(long, value_delimiter = ',')]
+    storage: Vec<String>,
     /// Timed rounds, ours and the naive kernel alternating (best round reported).
     #[arg(long, default_value_t = 3)]
     rounds: u32,
@@ -108,6 +113,7 @@ fn run(args: &BenchArgs) -> Result<(), String> {
         return Err("--steps = 0: must be at least 1".into());
     }
     let kernels = Kernels::parse(&args.kernel)?;
+    let storages = storage::parse_storages(&args.storage)?;
     let faces = parse_faces(&args.faces)?;
     let gpu = Arc::new(Gpu::new()?);
     let bandwidth = copy_bandwidth(&gpu);
@@ -126,6 +132,9 @@ fn run(args: &BenchArgs) -> Result<(), String> {
         print_health_check(&gpu, &lattice);
         if args.per_cell {
             print_per_cell(&gpu, &setup, args)?;
+        }
+        if !storages.is_empty() {
+            storage::print_storages(&gpu, &setup, &storages, args, bandwidth)?;
         }
     }
     if let Some(sweep) = sweep {

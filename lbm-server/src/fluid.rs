@@ -5,6 +5,7 @@ use crate::fields::FieldOutput;
 use crate::lbm::geometry::{tau_minus, Face, Operator, Setup};
 use crate::lbm::gpu::{Gpu, Health, Lattice, Unhealthy};
 use crate::lbm::mrt::Rates;
+use crate::lbm::storage::Storage;
 use crate::output::{LatticeSummary, Progress};
 use scene::lattice::{mach_limit, LatticeFace, LatticeUnits};
 use scene::Scene;
@@ -44,6 +45,7 @@ pub fn setup_of(units: &LatticeUnits) -> Setup {
     setup.solid = units.solid.clone();
     setup.force = units.force;
     setup.ramp_steps = units.ramp_steps;
+    setup.storage = Storage::named(&units.storage).expect("a storage the scene accepted");
     setup
 }
 

@@ -57,6 +57,11 @@ pub struct Lattice {
     /// pressure outlet sends back; near tau = 1/2 it hardly decays (docs/lbm.md).
     #[serde(default)]
     pub ramp_time: f64,
+    /// How the populations are stored on the device: "fp32" (default), "fp16s" (IEEE half) or
+    /// "fp16c" (16 bits with one more mantissa bit for the small deviations); the arithmetic is
+    /// f32 either way (docs/lbm.md, "Storage").
+    #[serde(default = "default_storage")]
+    pub storage: String,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
@@ -162,6 +167,9 @@ pub struct SolidBox {
 fn default_operator() -> String {
     "trt".into()
 }
+fn default_storage() -> String {
+    "fp32".into()
+}
 fn default_mach() -> f64 {
     0.1
 }
@@ -207,7 +215,12 @@ pub struct LatticeUnits {
     pub check_interval: u64,
     /// Steps over which the face velocities rise from rest (`lattice.ramp_time` / dt).
     pub ramp_steps: f64,
+    /// The populations' storage: "fp32", "fp16s" or "fp16c".
+    pub storage: String,
 }
+
+/// The populations' storages `lattice.storage` accepts.
+pub const STORAGES: [&str; 3] = ["fp32", "fp16s", "fp16c"];
 
 /// Smallest tau - 1/2 accepted, for every operator. BGK was refused below 0.51 until BGK held a
 /// sphere's wake to tau 0.5024 (validation/lbm/REPORT.md, "Stability near tau = 1/2"); near
@@ -332,6 +345,15 @@ impl LatticeUnits {
                 "expected \"bgk\", \"trt\" or \"mrt\"",
             ));
         }
+        let storage = lattice.storage.as_str();
+        if !STORAGES.contains(&storage) {
+            return Err(fail(
+                file,
+                "lattice.storage",
+                format!("{storage:?}"),
+                "expected \"fp32\", \"fp16s\" or \"fp16c\"",
+            ));
+        }
         let (dt, tau) = time_step(scene, lattice, dx, file)?;
         let mach = lattice_mach(lattice, op, dx, dt, file)?;
         let faces = faces::lattice_faces(scene, lattice, dx, dt, file)?;
@@ -353,6 +375,7 @@ impl LatticeUnits {
             solid,
             check_interval: lattice.check_interval,
             ramp_steps: lattice.ramp_time / dt,
+            storage: storage.to_string(),
         };
         Ok((units, warnings))
     }
@@ -524,6 +547,19 @@ mod tests {
         let text =
             crate::DEFAULT_SCENE.replace("check_interval = 100", &format!("check_interval = 100\n{lines}"));
         Scene::parse(&text, "tau_minus.toml").map(|s| s.lattice_units.expect("lattice"))
+    }
+
+    /// lattice.storage takes the three storages (fp32 by default) and refuses another, naming
+    /// the field.
+    #[test]
+    fn the_storage_is_one_of_three() {
+        assert_eq!(with_lattice("").expect("scene").storage, "fp32");
+        for name in super::STORAGES {
+            let units = with_lattice(&format!("storage = {name:?}")).expect("scene");
+            assert_eq!(units.storage, name);
+        }
+        let err = with_lattice("storage = \"fp8\"").expect_err("fp8").to_string();
+        assert!(err.contains("lattice.storage") && err.contains("fp8"), "{err}");
     }
 
     /// lattice.max_tau_minus lowers TRT's magic where tau- = 1/2 + magic / (tau - 1/2) would

@@ -10,7 +10,8 @@
 # MiB, none deeper than two folders) beside $OUT/batch.log; back here,
 # `bash validation/gpu/import.sh FILES_AT` unpacks them and imports the runs. Inside: batch.log,
 # system.txt, bench_<op>.txt (LBM-only, 256^3, with the copy bandwidth and the naive kernel; TRT
-# also per cell, without the four-cell quads), bench_walls.txt and bench_periodic.txt (the Ten Cate
+# also per cell, without the four-cell quads), bench_storage.txt (256^3, BGK, the populations in
+# fp32, fp16s and fp16c: MLUPS and bytes per cell), bench_walls.txt and bench_periodic.txt (the Ten Cate
 # grid at 16 cells, 224 x 224 x 256, closed and periodic, one sphere, both ways of treating the
 # covered cells, each pass timed: what a closed box costs), coupled_trt.txt (256 x 256 x 512, 1 to
 # 32^3 particles, ratio to LBM-only, time per pass, the covered cells fused, redone and skipped),
@@ -109,6 +110,10 @@ fi
 # the four-cell quads, never run on a GPU).
 step coupled_trt 90 200 $bin/lbm-server bench --grid $coupled --operator trt --particles $counts \
     --steps $((steps / 3)) --rounds 1 --kernel ours --passes --covered-cells all
+# The populations' storages (issue 40: FP16S >= 1.5x FP32 on a GPU), same grid, alternating rounds,
+# with the bytes per cell.
+step bench_storage 30 60 $bin/lbm-server bench --grid $cube --operator bgk --steps $steps --rounds 2 \
+    --kernel ours --storage fp32,fp16s,fp16c
 # LBM-only against the copy bandwidth and the naive kernel (issue 3's target: 85% of the copy
 # bandwidth); TRT also per cell (2026-12-04 on an H200: ours 0.79x the naive kernel).
 for op in bgk trt mrt; do

@@ -2,6 +2,7 @@
 //! collision operator. Everything in lattice units.
 
 use super::mrt;
+use super::storage::Storage;
 
 /// Boundary type of a domain face (the wall lies half-way between the last cell and the outside).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -85,6 +86,8 @@ pub struct Setup {
     /// Steps over which the velocity inlets and moving walls rise from rest
     /// (`lattice.ramp_time` / dt; 0: at full velocity from the first step).
     pub ramp_steps: f64,
+    /// How the populations are stored on the device (`lattice.storage`).
+    pub storage: Storage,
 }
 
 /// TRT's antisymmetric relaxation time tau- = 1/2 + Lambda / (tau - 1/2) of magic parameter
@@ -115,6 +118,7 @@ impl Setup {
             operator,
             force: [0.0; 3],
             ramp_steps: 0.0,
+            storage: Storage::Fp32,
         }
     }
 

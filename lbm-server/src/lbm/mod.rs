@@ -9,6 +9,9 @@ pub mod mrt;
 pub mod random;
 #[cfg(test)]
 pub mod reference;
+pub mod storage;
+#[cfg(test)]
+mod storage_tests;
 #[cfg(test)]
 mod tests;
 pub mod unroll;

@@ -78,15 +78,15 @@ fn a_grid_beyond_the_binding_limit_is_refused_clearly() {
     assert!(fits_device(&lavapipe, [224, 224, 256]).is_err());
 }
 
-#[test]
-fn bgk_periodic_with_body_force_matches_reference() {
-    let mut setup = Setup::new([6, 5, 4], [Face::Periodic; 6], 0.8, Operator::Bgk);
+/// BGK, periodic, with a body force, on `n` cells.
+pub(super) fn bgk_periodic_with_force(n: [usize; 3]) -> Setup {
+    let mut setup = Setup::new(n, [Face::Periodic; 6], 0.8, Operator::Bgk);
     setup.force = [1e-4, -2e-4, 3e-5];
-    check_against_reference(setup, 1);
+    setup
 }
 
-#[test]
-fn trt_walls_moving_wall_and_solids_match_reference() {
+/// TRT between walls in y and z (one moving), periodic in x, a body force, solid cells.
+pub(super) fn trt_walls_and_solids(n: [usize; 3]) -> Setup {
     let faces = [
         Face::Periodic,
         Face::Periodic,
@@ -95,14 +95,14 @@ fn trt_walls_moving_wall_and_solids_match_reference() {
         Face::Wall,
         Face::Wall,
     ];
-    let mut setup = Setup::new([7, 5, 4], faces, 0.62, Operator::Trt { magic: 3.0 / 16.0 });
+    let mut setup = Setup::new(n, faces, 0.62, Operator::Trt { magic: 3.0 / 16.0 });
     setup.force = [2e-5, 0.0, -1e-5];
     sprinkle_solids(&mut setup, 2);
-    check_against_reference(setup, 3);
+    setup
 }
 
-#[test]
-fn mrt_inlet_outlet_and_solids_match_reference() {
+/// MRT from a velocity inlet to a pressure outlet along x, walls in y, solid cells.
+pub(super) fn mrt_inlet_outlet_and_solids() -> Setup {
     let faces = [
         Face::VelocityInlet([0.03, 0.0, 0.0]),
         Face::PressureOutlet(1.01),
@@ -120,7 +120,22 @@ fn mrt_inlet_outlet_and_solids_match_reference() {
         },
     );
     sprinkle_solids(&mut setup, 4);
-    check_against_reference(setup, 5);
+    setup
+}
+
+#[test]
+fn bgk_periodic_with_body_force_matches_reference() {
+    check_against_reference(bgk_periodic_with_force([6, 5, 4]), 1);
+}
+
+#[test]
+fn trt_walls_moving_wall_and_solids_match_reference() {
+    check_against_reference(trt_walls_and_solids([7, 5, 4]), 3);
+}
+
+#[test]
+fn mrt_inlet_outlet_and_solids_match_reference() {
+    check_against_reference(mrt_inlet_outlet_and_solids(), 5);
 }
 
 #[test]
@@ -382,12 +397,12 @@ mod validation_cases {
     }
 }
 
-mod immersed_boundary {
+pub(in crate::lbm) mod immersed_boundary {
     use super::super::imb::{CoveredCells, ImbOptions, Load, SolidCollision, SolidParticle, CHUNK};
     use super::*;
 
     /// Two overlapping moving, spinning spheres, moved by `shift` cells between steps.
-    fn two_particles(shift: f64) -> Vec<SolidParticle> {
+    pub(in crate::lbm) fn two_particles(shift: f64) -> Vec<SolidParticle> {
         vec![
             SolidParticle {
                 position: [4.3 + shift, 4.6, 3.9],
@@ -684,7 +699,7 @@ mod immersed_boundary {
     }
 
     /// TRT between walls in y and z, under a lid moving along x, periodic in x.
-    fn trt_under_a_moving_lid() -> Setup {
+    pub(in crate::lbm) fn trt_under_a_moving_lid() -> Setup {
         let faces = [
             Face::Periodic,
             Face::Periodic,

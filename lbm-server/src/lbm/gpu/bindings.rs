@@ -47,7 +47,7 @@ impl LatticeBuffers {
             // wgpu zero-initialises every buffer: the shifted populations start at rest (f = w,
             // rho = 1) without an upload (which took a 5 GB host array at 256 x 256 x 512).
             populations: (0..19)
-                .map(|i| storage_buffer(d, &format!("f{i}"), bytes.div_ceil(16) * 16))
+                .map(|i| storage_buffer(d, &format!("f{i}"), setup.storage.buffer_bytes(setup.cells())))
                 .collect(),
             flags: init(
                 "flags",

@@ -8,6 +8,7 @@ use super::way::{shader_module, Way};
 use crate::lbm::geometry::{Cell, Link, Setup};
 use crate::lbm::imb::{Coupling, CoveredCells, ImbOptions};
 use crate::lbm::lattice::{opposite, C, W};
+use crate::lbm::storage::Storage;
 
 /// A lattice living on the GPU.
 pub struct Lattice {
@@ -73,7 +74,8 @@ impl Lattice {
         let d = &gpu.device;
         let buffers = LatticeBuffers::new(d, &setup);
         let coupling = Coupling::new(d, imb, setup.cells());
-        let module = shader_module(&gpu);
+        let storage = setup.storage;
+        let module = shader_module(&gpu, storage);
         let layout = bind_group_layout(d);
         let pipeline_layout = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("lattice"),
@@ -100,7 +102,8 @@ impl Lattice {
             pipeline_layout,
             health,
             options: imb,
-            quads,
+            // The quads' vector accesses move four f32 populations: FP32 only.
+            quads: quads && storage == Storage::Fp32,
             imb: Some(coupling),
             ways: Vec::new(),
             active: 0,
@@ -122,11 +125,12 @@ impl Lattice {
 
     /// Replaces the populations (shifted, natural layout) and restarts the AA phase at even.
     pub fn upload(&self, f: &[Cell]) {
+        let storage = self.setup.storage;
         for (i, buffer) in self.populations.iter().enumerate() {
             let column: Vec<f32> = f.iter().map(|c| c[i] as f32).collect();
-            self.gpu
-                .queue
-                .write_buffer(buffer, 0, bytemuck::cast_slice(&column));
+            let mut bytes = storage.encode(&column);
+            bytes.resize(bytes.len().next_multiple_of(4), 0);
+            self.gpu.queue.write_buffer(buffer, 0, &bytes);
         }
     }
 
@@ -142,7 +146,12 @@ impl Lattice {
         let columns: Vec<Vec<f32>> = self
             .populations
             .iter()
-            .map(|b| bytemuck::cast_slice(&self.gpu.read_buffer(b, (self.setup.cells() * 4) as u64)).to_vec())
+            .map(|b| {
+                let storage = self.setup.storage;
+                let cells = self.setup.cells();
+                let bytes = (cells * storage.bytes()).next_multiple_of(4) as u64;
+                storage.decode(&self.gpu.read_buffer(b, bytes), cells)
+            })
             .collect();
         (0..self.setup.cells())
             .map(|k| {

@@ -8,6 +8,7 @@ use super::device::Gpu;
 use super::params::{params, Params};
 use super::state::Lattice;
 use crate::lbm::imb::{Coupling, CoveredCells, Passes, SolidCollision};
+use crate::lbm::storage::Storage;
 use wgpu::util::DeviceExt;
 
 /// The kernels' source, kept in their own files: the lattice and the immersed moving boundary.
@@ -224,15 +225,17 @@ impl Lattice {
     }
 }
 
-/// lbm.wgsl and imb.wgsl with the list's join for this device (subgroups or one atomic per cell),
-/// unrolled and compiled once.
-pub(super) fn shader_module(gpu: &Gpu) -> wgpu::ShaderModule {
+/// lbm.wgsl and imb.wgsl with the list's join for this device (subgroups or one atomic per cell)
+/// and the populations' `storage` (its buffers and load/store pair; the quads with FP32), unrolled
+/// and compiled once.
+pub(super) fn shader_module(gpu: &Gpu, storage: Storage) -> wgpu::ShaderModule {
     let list = if gpu.list.subgroups {
         LIST_SUBGROUP
     } else {
         LIST_ATOMIC
     };
-    let source = format!("{SHADER}\n{IMB_SHADER}\n{list}");
+    let storage = storage.shader();
+    let source = format!("{SHADER}\n{IMB_SHADER}\n{list}\n{storage}");
     gpu.device.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some("lbm.wgsl + imb.wgsl"),
         source: wgpu::ShaderSource::Wgsl(crate::lbm::unroll::unroll(&source).into()),
