@@ -54,6 +54,7 @@ velocity = [0.0, 0.0, 0.0]
 [lattice]
 dx = 0.001
 operator = "trt"
+storage = "fp32"
 tau = 0.8
 velocity_scale = 0.01
 mach = 0.1
