@@ -7,7 +7,7 @@ use serde::Deserialize;
 /// `[lattice]` (SI units).
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
-pub struct Lattice {
+pub struct LatticeSection {
     /// Cell size [m]; give this or `resolution`.
     pub dx: Option<f64>,
     /// Cells along x; give this or `dx`.
@@ -227,7 +227,7 @@ fn fail(file: &str, field: &str, value: impl ToString, problem: impl Into<String
 
 /// The time step [s] and tau of the lattice of cell size `dx`: from `lattice.tau` where given,
 /// else from the Mach number of `lattice.velocity_scale`; refused where tau lies too near 1/2.
-fn time_step(scene: &Scene, lattice: &Lattice, dx: f64, file: &str) -> Result<(f64, f64), SceneError> {
+fn time_step(scene: &Scene, lattice: &LatticeSection, dx: f64, file: &str) -> Result<(f64, f64), SceneError> {
     let nu_si = scene.fluid.dynamic_viscosity / scene.fluid.density;
     positive(file, "lattice.velocity_scale", lattice.velocity_scale, "m/s")?;
     let dt = match lattice.tau {
@@ -260,7 +260,7 @@ fn time_step(scene: &Scene, lattice: &Lattice, dx: f64, file: &str) -> Result<(f
 }
 
 /// The lattice Mach number of `lattice.velocity_scale`, refused above operator `op`'s limit.
-fn lattice_mach(lattice: &Lattice, op: &str, dx: f64, dt: f64, file: &str) -> Result<f64, SceneError> {
+fn lattice_mach(lattice: &LatticeSection, op: &str, dx: f64, dt: f64, file: &str) -> Result<f64, SceneError> {
     let mach = lattice.velocity_scale * dt / dx * 3f64.sqrt();
     if mach > mach_limit(op) {
         return Err(fail(
@@ -278,7 +278,7 @@ fn lattice_mach(lattice: &Lattice, op: &str, dx: f64, dt: f64, file: &str) -> Re
 
 /// TRT's magic parameter at `tau`: `lattice.magic`, or less where `lattice.max_tau_minus` bounds
 /// tau- = 1/2 + magic / (tau - 1/2).
-fn trt_magic(lattice: &Lattice, tau: f64, file: &str) -> Result<f64, SceneError> {
+fn trt_magic(lattice: &LatticeSection, tau: f64, file: &str) -> Result<f64, SceneError> {
     positive(file, "lattice.magic", lattice.magic, "")?;
     let Some(max) = lattice.max_tau_minus else {
         return Ok(lattice.magic);
@@ -311,7 +311,7 @@ pub fn bounded_magic(magic: f64, tau: f64, max_tau_minus: f64) -> f64 {
 
 impl LatticeUnits {
     /// Derives and checks the lattice of `scene` (which has a `[lattice]` section).
-    pub fn derive(scene: &Scene, lattice: &Lattice, file: &str) -> Result<LatticeUnits, SceneError> {
+    pub fn derive(scene: &Scene, lattice: &LatticeSection, file: &str) -> Result<LatticeUnits, SceneError> {
         let dx = cell_size(scene, lattice, file)?;
         let n = cell_counts(scene, dx, file)?;
         let op = lattice.operator.as_str();
@@ -376,7 +376,7 @@ fn positive(file: &str, field: &str, v: f64, unit: &str) -> Result<(), SceneErro
     }
 }
 
-fn cell_size(scene: &Scene, lattice: &Lattice, file: &str) -> Result<f64, SceneError> {
+fn cell_size(scene: &Scene, lattice: &LatticeSection, file: &str) -> Result<f64, SceneError> {
     let lx = scene.domain.max[0] - scene.domain.min[0];
     match (lattice.dx, lattice.resolution) {
         (Some(dx), None) => positive(file, "lattice.dx", dx, "m").map(|()| dx),
@@ -420,7 +420,7 @@ fn cell_counts(scene: &Scene, dx: f64, file: &str) -> Result<[usize; 3], SceneEr
 
 fn lattice_faces(
     scene: &Scene,
-    lattice: &Lattice,
+    lattice: &LatticeSection,
     dx: f64,
     dt: f64,
     file: &str,
@@ -479,7 +479,7 @@ fn lattice_face(
 
 /// Refuses a moving wall or inlet faster than the operator's lattice Mach limit.
 fn check_face_speeds(
-    lattice: &Lattice,
+    lattice: &LatticeSection,
     faces: &[LatticeFace; 6],
     [dx, dt]: [f64; 2],
     file: &str,
@@ -526,7 +526,7 @@ fn check_periodic_pairs(faces: &[LatticeFace; 6], file: &str) -> Result<(), Scen
 
 fn solid_cells(
     scene: &Scene,
-    lattice: &Lattice,
+    lattice: &LatticeSection,
     n: [usize; 3],
     dx: f64,
     file: &str,
