@@ -15,7 +15,7 @@ use super::warnings::lattice_warnings;
 use super::ways::{covered_cells, way_trials};
 use crate::fields::FieldOutput;
 use crate::fluid::{health_of, setup_of};
-use crate::lbm::gpu::{Gpu, Lattice};
+use crate::lbm::gpu::{Gpu, GpuLattice};
 use crate::lbm::imb::{ImbOptions, SolidCollision};
 use crate::lubrication::Lubrication;
 use crate::trials::WayTrials;
@@ -29,7 +29,7 @@ use std::sync::Arc;
 /// What computes the particles' hydrodynamic loads: the lattice with its units, the buoyancy it
 /// adds and the lubrication correction.
 pub struct FluidSide {
-    pub(super) lattice: Lattice,
+    pub(super) lattice: GpuLattice,
     pub(super) units: LatticeUnits,
     origin: [f64; 3],
     fluid_density: f64,
@@ -72,7 +72,7 @@ impl FluidSide {
         let radii: Vec<f64> = scene.initial_particles().iter().map(|p| p.radius).collect();
         let options = imb_options(scene, &units, &radii)?;
         let trials = way_trials(scene, &gpu).map(|least| WayTrials::new(options.covered_cells, steps, least));
-        let lattice = Lattice::new(gpu, setup_of(&units), health_of(&units), Some(options))?;
+        let lattice = GpuLattice::new(gpu, setup_of(&units), health_of(&units), Some(options))?;
         let lubrication = scene
             .coupling
             .lubrication

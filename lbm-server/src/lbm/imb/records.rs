@@ -11,7 +11,7 @@ pub struct SolidParticle {
     pub angular_velocity: [f64; 3],
 }
 
-/// Covers lost since the start of a coupled run ([`Lattice::lost_covers`]).
+/// Covers lost since the start of a coupled run ([`GpuLattice::lost_covers`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct LostCovers {
     /// Particle-cell covers beyond a cell's slots (dropped; the run warns).

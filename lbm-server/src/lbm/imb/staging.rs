@@ -6,9 +6,9 @@ use super::chunks::{chunk_sizes, for_each_chunk, ChunkSize, CHUNK};
 use super::cover::{box_edge, MAX_BOX_EDGE};
 use super::records::{GpuParticle, Particles, SolidParticle, MAX_PARTICLES, PARTICLE_BYTES};
 use crate::lbm::geometry::Setup;
-use crate::lbm::gpu::{vec4, Lattice};
+use crate::lbm::gpu::{vec4, GpuLattice};
 
-impl Lattice {
+impl GpuLattice {
     /// The host's part before the device's: the particles sized, checked and written into staging
     /// memory (the buffers grown to hold them); their pairs.
     pub(super) fn stage_particles<P: Particles + ?Sized>(&mut self, particles: &P) -> Result<u64, String> {

@@ -1,17 +1,17 @@
-//! The coupled step ([`Lattice::step_coupled`]): the particles cover the cells, the fluid
+//! The coupled step ([`GpuLattice::step_coupled`]): the particles cover the cells, the fluid
 //! collides with the solid term and streams, and each particle's force and torque come back. Its
 //! passes in order are listed at `coupled_step`.
 
 use super::loads::convert_loads;
 use super::passes::{CoveredPasses, StepPasses};
 use super::records::{GpuLoad, Load, Particles, SolidParticle, LOAD_BYTES, REDUCE_SLICES};
-use crate::lbm::gpu::Lattice;
+use crate::lbm::gpu::GpuLattice;
 
 /// Receives the encoder after each pass of a coupled step (named) and returns the one to go on
 /// with: the identity, a submit and wait for timing each pass, or a timestamp.
 pub(super) type Split<'a> = &'a mut dyn FnMut(&'static str, wgpu::CommandEncoder) -> wgpu::CommandEncoder;
 
-impl Lattice {
+impl GpuLattice {
     /// One coupled step: the particles cover the cells, the fluid streams and collides with the
     /// solid term, and the force and torque on each particle over the step come back.
     pub fn step_coupled(&mut self, particles: &[SolidParticle]) -> Result<Vec<Load>, String> {
