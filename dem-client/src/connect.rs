@@ -160,7 +160,7 @@ pub fn main(args: ConnectArgs) -> ExitCode {
 }
 
 /// The scene (or the default one) and its DEM set up, with the arguments checked.
-fn load(args: &ConnectArgs) -> Result<(scene::Scene, crate::dem::Setup), String> {
+fn load(args: &ConnectArgs) -> Result<(scene::Scene, crate::dem::SceneWorld), String> {
     let scene = crate::scene_or_default(args.scene.as_ref()).map_err(|e| e.to_string())?;
     if !(args.timeout.is_finite() && args.timeout > 0.0) {
         return Err(format!(
