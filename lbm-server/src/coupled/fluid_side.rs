@@ -17,7 +17,7 @@ use crate::fields::FieldOutput;
 use crate::fluid::{health_of, setup_of};
 use crate::lbm::gpu::{Gpu, GpuLattice};
 use crate::lbm::imb::{ImbOptions, SolidCollision};
-use crate::lubrication::Lubrication;
+use crate::lubrication::HeldLubrication;
 use crate::trials::WayTrials;
 use protocol::{ParticleReply, ParticleState, Physics};
 use scene::lattice::LatticeUnits;
@@ -34,7 +34,7 @@ pub struct FluidSide {
     origin: [f64; 3],
     fluid_density: f64,
     gravity: [f64; 3],
-    lubrication: Option<Lubrication>,
+    lubrication: Option<HeldLubrication>,
     /// Each sphere of r cells is drawn r + this / max(r, 2) (`coupling.radius_correction`; 0
     /// without it).
     deficit_product: f64,
@@ -76,7 +76,7 @@ impl FluidSide {
         let lubrication = scene
             .coupling
             .lubrication
-            .then(|| Lubrication::for_lattice(scene, &units));
+            .then(|| HeldLubrication::for_lattice(scene, &units));
         for warning in lattice_warnings(scene, &units, &radii) {
             protocol::say!("lbm-server: warning: {warning}");
         }
