@@ -1,6 +1,6 @@
 //! `dem-client connect`: the DEM side of the lockstep loop.
 
-use crate::dem::lubrication::Lubrication;
+use crate::dem::lubrication::SqueezeFilm;
 use crate::dem::timestep::substeps;
 use crate::dem::world::{Body, World, CHUNK};
 use crate::dem::V3;
@@ -88,9 +88,9 @@ fn wet_films(scene: &scene::Scene) -> bool {
 
 /// The squeeze films integrated in the DEM steps: the fluid's viscosity (Welcome), the cut-off one
 /// lattice cell of the scene.
-fn lubrication(scene: &scene::Scene, welcome: &Welcome) -> Option<Lubrication> {
+fn lubrication(scene: &scene::Scene, welcome: &Welcome) -> Option<SqueezeFilm> {
     let units = scene.lattice_units.as_ref().filter(|_| wet_films(scene))?;
-    Some(Lubrication {
+    Some(SqueezeFilm {
         viscosity: welcome.fluid_viscosity,
         cutoff: units.dx,
     })

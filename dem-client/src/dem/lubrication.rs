@@ -28,14 +28,14 @@ pub const MAX_FILM_LAMBDA: f64 = 1.0 / 6.0;
 
 /// The squeeze-film law of a fluid.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Lubrication {
+pub struct SqueezeFilm {
     /// Dynamic viscosity [Pa s].
     pub viscosity: f64,
     /// Cut-off gap h_c [m]: one lattice cell.
     pub cutoff: f64,
 }
 
-impl Lubrication {
+impl SqueezeFilm {
     /// Film damping 6 pi mu R*^2 (1/h - 1/h_c) [N s/m] of a gap below the cut-off (0 beyond it
     /// and in contact).
     pub fn damping(&self, r_eff: f64, gap: f64) -> f64 {
@@ -76,7 +76,7 @@ mod tests {
     use super::*;
     use std::f64::consts::PI;
 
-    const LUB: Lubrication = Lubrication {
+    const LUB: SqueezeFilm = SqueezeFilm {
         viscosity: 0.1,
         cutoff: 0.002,
     };
