@@ -118,7 +118,7 @@ impl HeldLubrication {
             // scene: beads at rest kicked to 0.1-0.23 m/s with the pull, none without).
             return 0.0;
         }
-        let damping = protocol::lubrication::film_damping(self.viscosity, reduced, gap, self.cutoff);
+        let damping = protocol::squeeze_film::film_damping(self.viscosity, reduced, gap, self.cutoff);
         let lambda = damping * self.dt / mass;
         -mass * approach * (-lambda).exp_m1() / self.dt
     }
