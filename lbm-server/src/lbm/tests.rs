@@ -265,7 +265,7 @@ fn kept_fields_are_those_of_the_last_good_check() {
     assert!(bad.is_none());
     assert!(lattice.health().is_none());
     lattice.keep_fields();
-    f[100] = std::array::from_fn(|i| super::lattice::equilibrium_shifted(i, 1.0, [0.6, 0.0, 0.0]));
+    f[100] = std::array::from_fn(|i| super::d3q19::equilibrium_shifted(i, 1.0, [0.6, 0.0, 0.0]));
     lattice.set_populations(&f);
     assert!(lattice.health().is_some());
     assert_eq!(lattice.kept_fields().expect("kept"), good);
@@ -284,7 +284,7 @@ fn the_health_check_finds_the_cell_the_full_readback_finds() {
     assert!(lattice.fields().1.is_none());
     // Two cells too fast (|u| 0.5 > 0.4); the lower index is the one reported.
     for k in [141, 77] {
-        f[k] = std::array::from_fn(|i| super::lattice::equilibrium_shifted(i, 1.02, [0.3, -0.4, 0.0]));
+        f[k] = std::array::from_fn(|i| super::d3q19::equilibrium_shifted(i, 1.02, [0.3, -0.4, 0.0]));
     }
     lattice.set_populations(&f);
     let (fields, full) = lattice.fields();
@@ -771,13 +771,13 @@ mod immersed_boundary {
             // Cell (6, 6, 6) lies wholly inside; streaming moved its post-collision populations
             // one link on: gather them back.
             let post: Cell = std::array::from_fn(|i| {
-                let c = super::super::lattice::C[i];
+                let c = super::super::d3q19::C[i];
                 next[setup.index(std::array::from_fn(|a| (6 + c[a] as i64) as usize))][i]
             });
             let (rho, _) = reference::moments(&f0[setup.index([6, 6, 6])], force);
             for a in 0..3 {
                 let j: f64 = (0..19)
-                    .map(|i| post[i] * super::super::lattice::C[i][a] as f64)
+                    .map(|i| post[i] * super::super::d3q19::C[i][a] as f64)
                     .sum();
                 let want = rho * sphere.velocity[a] - (1.0 - 1.0 / setup.tau) * force[a] / 2.0;
                 assert!(

@@ -65,7 +65,7 @@ pub fn momentum_exchange(gpu: &Arc<Gpu>, n: usize, steps: u64) -> Momentum {
         let mut j = [0.0; 3];
         for cell in &f {
             for (i, fi) in cell.iter().enumerate() {
-                for (ja, c) in j.iter_mut().zip(crate::lbm::lattice::C[i]) {
+                for (ja, c) in j.iter_mut().zip(crate::lbm::d3q19::C[i]) {
                     *ja += fi * c as f64;
                 }
             }

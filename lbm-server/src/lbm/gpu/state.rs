@@ -5,9 +5,9 @@ use super::bindings::{bind_group_layout, fits_device, LatticeBuffers};
 use super::device::Gpu;
 use super::health::Health;
 use super::way::{shader_module, Way};
+use crate::lbm::d3q19::{opposite, C, W};
 use crate::lbm::geometry::{Cell, Link, Setup};
 use crate::lbm::imb::{Coupling, CoveredCells, ImbOptions};
-use crate::lbm::lattice::{opposite, C, W};
 
 /// A lattice living on the GPU.
 pub struct GpuLattice {
@@ -167,7 +167,7 @@ pub fn equilibrium_field(setup: &Setup, state: impl Fn([usize; 3]) -> (f64, [f64
     (0..setup.cells())
         .map(|k| {
             let (rho, u) = state(setup.coords(k));
-            std::array::from_fn(|i| crate::lbm::lattice::equilibrium_shifted(i, rho, u))
+            std::array::from_fn(|i| crate::lbm::d3q19::equilibrium_shifted(i, rho, u))
         })
         .collect()
 }
