@@ -7,7 +7,7 @@
 //! stays stable at any step). The figure is the DEM's share of a coupled step: the fluid's step
 //! and the exchange come on top (`lbm-server run` splits a whole run's time in summary.json).
 
-use crate::connect::{Particles, Substeps};
+use crate::connect::{CoupledParticles, Substeps};
 use crate::dem::V3;
 use protocol::{ParticleReply, ParticleState, Welcome};
 use std::path::PathBuf;
@@ -82,7 +82,7 @@ fn bench(args: &BenchArgs) -> Result<(), String> {
     for &free_flight in modes {
         let file = args.scene.display().to_string();
         let setup = crate::dem::setup(&scene, &file).map_err(|e| e.to_string())?;
-        let mut particles = Particles::new(setup.world, &scene);
+        let mut particles = CoupledParticles::new(setup.world, &scene);
         let (mut sub, _) = particles.couple(&scene, &welcome, setup.dt_max);
         sub.free_flight = free_flight;
         let timing = pool.install(|| time_steps(&mut particles, sub, &welcome, args.steps));
@@ -111,7 +111,7 @@ fn stand_in_welcome(scene: &scene::Scene) -> Welcome {
 }
 
 /// `steps` fluid steps of the coupled DEM with the stand-in fluid reply, each timed.
-fn time_steps(particles: &mut Particles, sub: Substeps, welcome: &Welcome, steps: u64) -> Timing {
+fn time_steps(particles: &mut CoupledParticles, sub: Substeps, welcome: &Welcome, steps: u64) -> Timing {
     let mut states: Vec<ParticleState> = Vec::new();
     let mut replies: Vec<ParticleReply> = Vec::new();
     let contacts_before = particles.world.contact_count();
@@ -135,7 +135,7 @@ fn time_steps(particles: &mut Particles, sub: Substeps, welcome: &Welcome, steps
 /// The stand-in fluid's force and torque on every sphere: buoyancy, and the drag of a fluid at
 /// rest that relaxes the sphere's velocity as Stokes' law would over the fluid step, exactly
 /// (-m v (1 - exp(-dt / t_r)) / dt, t_r = m / (3 pi mu d); the spin with I / (8 pi mu r^3)).
-fn stand_in_replies(particles: &Particles, welcome: &Welcome, out: &mut Vec<ParticleReply>) {
+fn stand_in_replies(particles: &CoupledParticles, welcome: &Welcome, out: &mut Vec<ParticleReply>) {
     let (rho, mu, dt) = (welcome.fluid_density, welcome.fluid_viscosity, welcome.dt);
     let g = V3::from(welcome.gravity);
     let relax = |inertia: f64, resistance: f64| inertia * -(-dt * resistance / inertia).exp_m1() / dt;
@@ -153,7 +153,7 @@ fn stand_in_replies(particles: &Particles, welcome: &Welcome, out: &mut Vec<Part
     }));
 }
 
-fn report(scene: &scene::Scene, p: &Particles, sub: Substeps, t: &Timing, threads: usize, dt: f64) {
+fn report(scene: &scene::Scene, p: &CoupledParticles, sub: Substeps, t: &Timing, threads: usize, dt: f64) {
     let n = p.world.bodies.len();
     let steps = t.steps.len();
     let total: f64 = t.steps.iter().sum();

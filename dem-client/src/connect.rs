@@ -1,6 +1,6 @@
 //! `dem-client connect`: the DEM side of the lockstep loop.
 
-use crate::dem::lubrication::Lubrication;
+use crate::dem::lubrication::SqueezeFilm;
 use crate::dem::timestep::substeps;
 use crate::dem::world::{Body, World, CHUNK};
 use crate::dem::V3;
@@ -88,9 +88,9 @@ fn wet_films(scene: &scene::Scene) -> bool {
 
 /// The squeeze films integrated in the DEM steps: the fluid's viscosity (Welcome), the cut-off one
 /// lattice cell of the scene.
-fn lubrication(scene: &scene::Scene, welcome: &Welcome) -> Option<Lubrication> {
+fn lubrication(scene: &scene::Scene, welcome: &Welcome) -> Option<SqueezeFilm> {
     let units = scene.lattice_units.as_ref().filter(|_| wet_films(scene))?;
-    Some(Lubrication {
+    Some(SqueezeFilm {
         viscosity: welcome.fluid_viscosity,
         cutoff: units.dx,
     })
@@ -109,7 +109,7 @@ pub fn main(args: ConnectArgs) -> ExitCode {
     if let Err(e) = ctrlc::set_handler(move || flag.store(true, Ordering::SeqCst)) {
         protocol::say!("dem-client: warning: cannot install the Ctrl-C handler: {e}");
     }
-    let mut particles = Particles::new(setup.world, &scene);
+    let mut particles = CoupledParticles::new(setup.world, &scene);
     let (link, welcome) = match join(&args, &scene, &particles) {
         Ok(ok) => ok,
         Err(e) => {
@@ -160,7 +160,7 @@ pub fn main(args: ConnectArgs) -> ExitCode {
 }
 
 /// The scene (or the default one) and its DEM set up, with the arguments checked.
-fn load(args: &ConnectArgs) -> Result<(scene::Scene, crate::dem::Setup), String> {
+fn load(args: &ConnectArgs) -> Result<(scene::Scene, crate::dem::SceneWorld), String> {
     let scene = crate::scene_or_default(args.scene.as_ref()).map_err(|e| e.to_string())?;
     if !(args.timeout.is_finite() && args.timeout > 0.0) {
         return Err(format!(
@@ -181,7 +181,7 @@ fn load(args: &ConnectArgs) -> Result<(scene::Scene, crate::dem::Setup), String>
 fn join(
     args: &ConnectArgs,
     scene: &scene::Scene,
-    particles: &Particles,
+    particles: &CoupledParticles,
 ) -> Result<(DemLink, Welcome), String> {
     let mut hello = Hello::new(
         Units::SI,
@@ -211,7 +211,7 @@ fn join(
 }
 
 /// The DEM step against the fluid's and what limits it, the walls, free flight and lubrication.
-fn coupling_line(particles: &Particles, sub: Substeps, contact_time: f64, limits: [f64; 3]) -> String {
+fn coupling_line(particles: &CoupledParticles, sub: Substeps, contact_time: f64, limits: [f64; 3]) -> String {
     format!(
         "DEM step {:.3e} s = fluid step / {} (shortest contact time {contact_time:.3e} s, step limits: \
          contacts {:.3e} s, sub-step drag {:.3e} s, squeeze films {:.3e} s){}, {} walls{}",
@@ -234,7 +234,7 @@ fn coupling_line(particles: &Particles, sub: Substeps, contact_time: f64, limits
 }
 
 /// What the DEM did over the run's `steps` fluid steps.
-fn finish_line(particles: &Particles, steps: u64) -> String {
+fn finish_line(particles: &CoupledParticles, steps: u64) -> String {
     format!(
         "finished after {steps} steps ({} DEM steps, {} neighbour-list builds, {} steps in free \
          flight, {} with an island ({} dropped for a sphere beyond its reach); {:.1}% of the \
@@ -288,7 +288,7 @@ mod tests {
 fn step_loop(
     link: &DemLink,
     welcome: &Welcome,
-    particles: &mut Particles,
+    particles: &mut CoupledParticles,
     substeps: Substeps,
     interrupted: &AtomicBool,
     faults: Faults,
@@ -372,7 +372,7 @@ pub(crate) struct Substeps {
 }
 
 /// The DEM side's particles in a coupled run.
-pub(crate) struct Particles {
+pub(crate) struct CoupledParticles {
     pub world: World,
     density: f64,
     next_id: u64,
@@ -387,9 +387,9 @@ pub(crate) struct Particles {
     pub sphere_steps: u64,
 }
 
-impl Particles {
-    pub fn new(world: World, scene: &scene::Scene) -> Particles {
-        Particles {
+impl CoupledParticles {
+    pub fn new(world: World, scene: &scene::Scene) -> CoupledParticles {
+        CoupledParticles {
             world,
             density: scene.particles.density,
             next_id: scene.particle_count(),

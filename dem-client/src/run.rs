@@ -64,7 +64,7 @@ pub fn main(args: RunArgs) -> ExitCode {
 /// Runs `steps` output steps; Ok(false) when interrupted.
 fn simulate(
     scene: &scene::Scene,
-    setup: crate::dem::Setup,
+    setup: crate::dem::SceneWorld,
     steps: u64,
     out: &std::path::Path,
     interrupted: &AtomicBool,

@@ -5,7 +5,7 @@ mod naive;
 mod storage;
 
 use crate::lbm::geometry::{Face, Operator, Setup};
-use crate::lbm::gpu::{Gpu, Health, Lattice};
+use crate::lbm::gpu::{Gpu, GpuLattice, Health};
 use crate::lbm::mrt::Rates;
 use coupled::Sweep;
 use naive::Naive;
@@ -122,7 +122,7 @@ fn run(args: &BenchArgs) -> Result<(), String> {
         true => None,
         false => Some(Sweep::new(&gpu, &setup, args)?),
     };
-    let mut lattice = Lattice::new(gpu.clone(), setup.clone(), Health::default(), None)?;
+    let mut lattice = GpuLattice::new(gpu.clone(), setup.clone(), Health::default(), None)?;
     let naive = if kernels.naive { Naive::new(&gpu, n) } else { None };
     let rounds = Rounds::time(&gpu, &mut lattice, naive.as_ref(), args, kernels.ours);
     print_grid(&gpu, args, &setup);
@@ -172,7 +172,13 @@ struct Rounds {
 
 impl Rounds {
     /// Warm-up, then rounds alternating ours and the naive kernel, so that both see the same load.
-    fn time(gpu: &Gpu, lattice: &mut Lattice, naive: Option<&Naive>, args: &BenchArgs, ours: bool) -> Rounds {
+    fn time(
+        gpu: &Gpu,
+        lattice: &mut GpuLattice,
+        naive: Option<&Naive>,
+        args: &BenchArgs,
+        ours: bool,
+    ) -> Rounds {
         lattice.step(20);
         gpu.wait();
         if let Some(naive) = naive {
@@ -253,7 +259,7 @@ fn print_roofline(ours: &[f64], bandwidth: f64) {
     );
 }
 
-fn print_health_check(gpu: &Gpu, lattice: &Lattice) {
+fn print_health_check(gpu: &Gpu, lattice: &GpuLattice) {
     let [full, one] = health_check_times(gpu, lattice);
     println!(
         "health check:   {full:.1} ms reading every cell back, {one:.2} ms reading the status and one cell (best of 3; a run checks every lattice.check_interval steps)"
@@ -262,7 +268,7 @@ fn print_health_check(gpu: &Gpu, lattice: &Lattice) {
 
 /// `--per-cell`: our kernels without the four-cell quads, a thread per cell.
 fn print_per_cell(gpu: &Arc<Gpu>, setup: &Setup, args: &BenchArgs) -> Result<(), String> {
-    let mut per_cell = Lattice::per_cell(gpu.clone(), setup.clone(), Health::default())?;
+    let mut per_cell = GpuLattice::per_cell(gpu.clone(), setup.clone(), Health::default())?;
     per_cell.step(20);
     gpu.wait();
     let cells = setup.cells() as f64;
@@ -344,8 +350,8 @@ pub fn copy_bandwidth(gpu: &Gpu) -> f64 {
 }
 
 /// Milliseconds (best of 3) of the health check as runs made it until 2026-12-04, the whole field
-/// read back (`Lattice::fields`), and as they make it now (`Lattice::health`).
-fn health_check_times(gpu: &Gpu, lattice: &Lattice) -> [f64; 2] {
+/// read back (`GpuLattice::fields`), and as they make it now (`GpuLattice::health`).
+fn health_check_times(gpu: &Gpu, lattice: &GpuLattice) -> [f64; 2] {
     let best = |check: &dyn Fn()| {
         (0..3)
             .map(|_| {

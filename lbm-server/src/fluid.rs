@@ -3,7 +3,7 @@
 
 use crate::fields::FieldOutput;
 use crate::lbm::geometry::{tau_minus, Face, Operator, Setup};
-use crate::lbm::gpu::{Gpu, Health, Lattice, Unhealthy};
+use crate::lbm::gpu::{Gpu, GpuLattice, Health, Unhealthy};
 use crate::lbm::mrt::Rates;
 use crate::lbm::storage::Storage;
 use crate::output::{LatticeSummary, Progress};
@@ -198,7 +198,7 @@ pub fn run(scene: &Scene, scene_file: &str, steps: u64, out: &Path, interrupted:
 
 /// The device and the scene's lattice on it, the run's first line said (and a warning where its
 /// tau is near 1/2).
-fn start_lattice(scene: &Scene, units: &LatticeUnits) -> Result<(Arc<Gpu>, Lattice), String> {
+fn start_lattice(scene: &Scene, units: &LatticeUnits) -> Result<(Arc<Gpu>, GpuLattice), String> {
     let gpu = Arc::new(Gpu::new()?);
     protocol::say!(
         "lbm-server: scene '{}': {}x{}x{} cells, dx {:e} m, dt {:e} s, tau {:.4}, Mach {:.3}, {} on {}",
@@ -216,7 +216,7 @@ fn start_lattice(scene: &Scene, units: &LatticeUnits) -> Result<(Arc<Gpu>, Latti
     if let Some(warning) = stability_warning(units, false) {
         protocol::say!("lbm-server: warning: {warning}");
     }
-    let lattice = Lattice::new(gpu.clone(), setup_of(units), health_of(units), None)?;
+    let lattice = GpuLattice::new(gpu.clone(), setup_of(units), health_of(units), None)?;
     Ok((gpu, lattice))
 }
 
@@ -247,7 +247,7 @@ impl<'a> FluidRun<'a> {
         })
     }
 
-    fn steps(&mut self, lattice: &mut Lattice, steps: u64, interrupted: &AtomicBool) -> Result<(), Stop> {
+    fn steps(&mut self, lattice: &mut GpuLattice, steps: u64, interrupted: &AtomicBool) -> Result<(), Stop> {
         let check = self.units.check_interval;
         let lines_every = self.scene.output.interval;
         let fields_every = self.scene.output.fields_interval;
@@ -296,7 +296,7 @@ impl<'a> FluidRun<'a> {
     }
 
     /// Describes an unhealthy cell and writes the last good snapshot.
-    fn blow_up(&mut self, lattice: &Lattice, step: u64, check: u64, bad: Unhealthy) -> Stop {
+    fn blow_up(&mut self, lattice: &GpuLattice, step: u64, check: u64, bad: Unhealthy) -> Stop {
         let mut msg = format!(
             "the fluid became unstable between steps {} and {step}: {}",
             step.saturating_sub(check),

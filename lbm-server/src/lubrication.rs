@@ -28,7 +28,7 @@ use std::collections::HashMap;
 
 /// Where the correction applies.
 #[derive(Debug, Clone)]
-pub struct Lubrication {
+pub struct HeldLubrication {
     /// Dynamic viscosity [Pa s].
     pub viscosity: f64,
     /// Cut-off gap h_c [m]: one lattice cell.
@@ -44,9 +44,9 @@ pub struct Lubrication {
     pub dt: f64,
 }
 
-impl Lubrication {
+impl HeldLubrication {
     /// Lubrication with the lattice's cut-off (one cell) and the domain faces that are walls.
-    pub fn for_lattice(scene: &Scene, units: &LatticeUnits) -> Lubrication {
+    pub fn for_lattice(scene: &Scene, units: &LatticeUnits) -> HeldLubrication {
         let walls = units
             .faces
             .iter()
@@ -61,7 +61,7 @@ impl Lubrication {
                 }
             })
             .collect();
-        Lubrication {
+        HeldLubrication {
             viscosity: scene.fluid.dynamic_viscosity,
             cutoff: units.dx,
             walls,
@@ -118,7 +118,7 @@ impl Lubrication {
             // scene: beads at rest kicked to 0.1-0.23 m/s with the pull, none without).
             return 0.0;
         }
-        let damping = protocol::lubrication::film_damping(self.viscosity, reduced, gap, self.cutoff);
+        let damping = protocol::squeeze_film::film_damping(self.viscosity, reduced, gap, self.cutoff);
         let lambda = damping * self.dt / mass;
         -mass * approach * (-lambda).exp_m1() / self.dt
     }
@@ -212,7 +212,7 @@ mod tests {
 
     #[test]
     fn approaching_spheres_are_pushed_apart_as_one_over_the_gap() {
-        let lub = Lubrication {
+        let lub = HeldLubrication {
             viscosity: 0.1,
             cutoff: 0.002,
             walls: Vec::new(),
@@ -244,7 +244,7 @@ mod tests {
     /// pair inside the domain; without the period they are not a pair.
     #[test]
     fn spheres_across_periodic_faces_feel_the_film() {
-        let lub = |periods: [f64; 3]| Lubrication {
+        let lub = |periods: [f64; 3]| HeldLubrication {
             viscosity: 0.1,
             cutoff: 0.002,
             walls: Vec::new(),
@@ -253,7 +253,7 @@ mod tests {
             dt: 1e-13,
         };
         let gap = 0.0005;
-        let force = |lub: &Lubrication, a: f64, b: f64| {
+        let force = |lub: &HeldLubrication, a: f64, b: f64| {
             let states = [sphere(0, a, 0.01), sphere(1, b, -0.01)];
             let mut replies = [ParticleReply::default(); 2];
             lub.apply(&states, &mut replies);
@@ -277,7 +277,7 @@ mod tests {
 
     #[test]
     fn a_sphere_approaching_a_wall_is_slowed_until_the_contact_takes_over() {
-        let lub = Lubrication {
+        let lub = HeldLubrication {
             viscosity: 0.1,
             cutoff: 0.002,
             walls: vec![(0, 0.0, 1.0)],
@@ -306,7 +306,7 @@ mod tests {
         // At a gap of 0.2 mm the film's damping time m / (6 pi mu R^2 (1/h - 1/h_c)) is 1.2 ms,
         // against dt = 10 ms: an explicit force held over the step (lambda = 8) would reverse the
         // approach 7-fold and grow each step.
-        let lub = Lubrication {
+        let lub = HeldLubrication {
             viscosity: 1.0,
             cutoff: 0.002,
             walls: vec![(0, 0.0, 1.0)],

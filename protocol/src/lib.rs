@@ -8,7 +8,7 @@
 pub mod cleanup;
 pub mod handshake;
 pub mod liveness;
-pub mod lubrication;
+pub mod squeeze_film;
 pub mod transport;
 pub mod wire;
 

@@ -10,7 +10,7 @@ mod faces;
 /// `[lattice]` (SI units).
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
-pub struct Lattice {
+pub struct LatticeSection {
     /// Cell size [m]; give this or `resolution`.
     pub dx: Option<f64>,
     /// Cells along x; give this or `dx`.
@@ -238,7 +238,7 @@ pub fn mach_limit(operator: &str) -> f64 {
 
 /// The time step [s] and tau of the lattice of cell size `dx`: from `lattice.tau` where given,
 /// else from the Mach number of `lattice.velocity_scale`; refused where tau lies too near 1/2.
-fn time_step(scene: &Scene, lattice: &Lattice, dx: f64, file: &str) -> Result<(f64, f64), SceneError> {
+fn time_step(scene: &Scene, lattice: &LatticeSection, dx: f64, file: &str) -> Result<(f64, f64), SceneError> {
     let nu_si = scene.fluid.dynamic_viscosity / scene.fluid.density;
     positive(file, "lattice.velocity_scale", lattice.velocity_scale, "m/s")?;
     positive(file, "lattice.mach", lattice.mach, "")?;
@@ -277,7 +277,7 @@ fn time_step(scene: &Scene, lattice: &Lattice, dx: f64, file: &str) -> Result<(f
 }
 
 /// The lattice Mach number of `lattice.velocity_scale`, refused above operator `op`'s limit.
-fn lattice_mach(lattice: &Lattice, op: &str, dx: f64, dt: f64, file: &str) -> Result<f64, SceneError> {
+fn lattice_mach(lattice: &LatticeSection, op: &str, dx: f64, dt: f64, file: &str) -> Result<f64, SceneError> {
     let mach = lattice.velocity_scale * dt / dx * 3f64.sqrt();
     if mach > mach_limit(op) {
         return Err(fail(
@@ -295,7 +295,7 @@ fn lattice_mach(lattice: &Lattice, op: &str, dx: f64, dt: f64, file: &str) -> Re
 
 /// TRT's magic parameter at `tau`: `lattice.magic`, or less where `lattice.max_tau_minus` bounds
 /// tau- = 1/2 + magic / (tau - 1/2).
-fn trt_magic(lattice: &Lattice, tau: f64, file: &str) -> Result<f64, SceneError> {
+fn trt_magic(lattice: &LatticeSection, tau: f64, file: &str) -> Result<f64, SceneError> {
     positive(file, "lattice.magic", lattice.magic, "")?;
     let Some(max) = lattice.max_tau_minus else {
         return Ok(lattice.magic);
@@ -331,7 +331,7 @@ impl LatticeUnits {
     /// warnings of what the lattice holds that does nothing (a solid box that makes no cell solid).
     pub fn derive(
         scene: &Scene,
-        lattice: &Lattice,
+        lattice: &LatticeSection,
         file: &str,
     ) -> Result<(LatticeUnits, Vec<String>), SceneError> {
         let dx = cell_size(scene, lattice, file)?;
@@ -388,7 +388,7 @@ impl LatticeUnits {
 
 /// `lattice.check_interval`, `lattice.ramp_time`, the MRT rates (in (0, 2): 2 would leave a
 /// moment unrelaxed, beyond it grow) and `lattice.body_acceleration`.
-fn check_steps_rates_and_forces(lattice: &Lattice, file: &str) -> Result<(), SceneError> {
+fn check_steps_rates_and_forces(lattice: &LatticeSection, file: &str) -> Result<(), SceneError> {
     if lattice.check_interval == 0 {
         return Err(fail(file, "lattice.check_interval", 0, "must be at least 1 step"));
     }
@@ -417,7 +417,7 @@ fn check_steps_rates_and_forces(lattice: &Lattice, file: &str) -> Result<(), Sce
     )
 }
 
-fn cell_size(scene: &Scene, lattice: &Lattice, file: &str) -> Result<f64, SceneError> {
+fn cell_size(scene: &Scene, lattice: &LatticeSection, file: &str) -> Result<f64, SceneError> {
     let lx = scene.domain.max[0] - scene.domain.min[0];
     match (lattice.dx, lattice.resolution) {
         (Some(dx), None) => positive(file, "lattice.dx", dx, "m").map(|()| dx),
@@ -435,7 +435,7 @@ fn cell_size(scene: &Scene, lattice: &Lattice, file: &str) -> Result<f64, SceneE
 /// The cells along each axis of cell size `dx`, refused (naming `lattice.dx` or
 /// `lattice.resolution`, whichever gave it) where one is not a whole number or all are 2^31 or more.
 #[allow(clippy::needless_range_loop)]
-fn cell_counts(scene: &Scene, lattice: &Lattice, dx: f64, file: &str) -> Result<[usize; 3], SceneError> {
+fn cell_counts(scene: &Scene, lattice: &LatticeSection, dx: f64, file: &str) -> Result<[usize; 3], SceneError> {
     let (field, value) = match lattice.resolution {
         Some(r) => ("lattice.resolution", r.to_string()),
         None => ("lattice.dx", format!("{dx} m")),
@@ -471,7 +471,7 @@ fn cell_counts(scene: &Scene, lattice: &Lattice, dx: f64, file: &str) -> Result<
 /// box that makes no cell solid.
 fn solid_cells(
     scene: &Scene,
-    lattice: &Lattice,
+    lattice: &LatticeSection,
     n: [usize; 3],
     dx: f64,
     file: &str,

@@ -32,7 +32,7 @@ pub struct Scene {
     pub particles: Particles,
     /// The lattice-Boltzmann discretisation of the fluid (`[lattice]`, optional).
     #[serde(default)]
-    pub lattice: Option<lattice::Lattice>,
+    pub lattice: Option<lattice::LatticeSection>,
     /// The lattice in lattice units, derived from `lattice` when the scene is loaded.
     #[serde(skip)]
     pub lattice_units: Option<lattice::LatticeUnits>,

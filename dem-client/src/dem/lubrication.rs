@@ -20,7 +20,7 @@
 //! of the steady load by lambda / (1 - exp(-lambda)): closing times 3-8% short at lambda 0.1-0.4.
 
 use super::V3;
-pub use protocol::lubrication::MIN_GAP_FRACTION;
+pub use protocol::squeeze_film::MIN_GAP_FRACTION;
 
 /// Largest lambda = c dt / m of a sphere's wall film at the roughness floor that `step_limit`
 /// allows.
@@ -28,18 +28,18 @@ pub const MAX_FILM_LAMBDA: f64 = 1.0 / 6.0;
 
 /// The squeeze-film law of a fluid.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Lubrication {
+pub struct SqueezeFilm {
     /// Dynamic viscosity [Pa s].
     pub viscosity: f64,
     /// Cut-off gap h_c [m]: one lattice cell.
     pub cutoff: f64,
 }
 
-impl Lubrication {
+impl SqueezeFilm {
     /// Film damping 6 pi mu R*^2 (1/h - 1/h_c) [N s/m] of a gap below the cut-off (0 beyond it
     /// and in contact).
     pub fn damping(&self, r_eff: f64, gap: f64) -> f64 {
-        protocol::lubrication::film_damping(self.viscosity, r_eff, gap, self.cutoff)
+        protocol::squeeze_film::film_damping(self.viscosity, r_eff, gap, self.cutoff)
     }
 
     /// Film force along the separation direction (positive pushes apart) for an approach speed
@@ -76,7 +76,7 @@ mod tests {
     use super::*;
     use std::f64::consts::PI;
 
-    const LUB: Lubrication = Lubrication {
+    const LUB: SqueezeFilm = SqueezeFilm {
         viscosity: 0.1,
         cutoff: 0.002,
     };

@@ -23,7 +23,7 @@ use world::{Body, Shape, Wall, World};
 pub type V3 = nalgebra::Vector3<f64>;
 
 /// A world built from a scene, with how its time step came about.
-pub struct Setup {
+pub struct SceneWorld {
     pub world: World,
     /// Shortest contact time of the scene [s].
     pub contact_time: f64,
@@ -192,7 +192,7 @@ fn periodic(scene: &Scene) -> Option<Periodic> {
 }
 
 /// Builds the world of a scene and its time step; refuses a `dem.dt` above t_c / 10.
-pub fn setup(scene: &Scene, file: &str) -> Result<Setup, SceneError> {
+pub fn setup(scene: &Scene, file: &str) -> Result<SceneWorld, SceneError> {
     let bodies = bodies(scene);
     let r_min = bodies.iter().map(|b| b.r).fold(f64::INFINITY, f64::min);
     let skin = scene.dem.skin.unwrap_or(0.5 * r_min);
@@ -246,7 +246,7 @@ pub fn setup(scene: &Scene, file: &str) -> Result<Setup, SceneError> {
         None => contact_time / scene.dem.dt_divisor,
     };
     world.dt = dt_max;
-    Ok(Setup {
+    Ok(SceneWorld {
         world,
         contact_time,
         dt_max,

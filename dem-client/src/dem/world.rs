@@ -24,7 +24,7 @@
 //! (`everyone.rs`).
 
 use super::contact::{ContactForce, ContactLaw, PairMaterial};
-use super::lubrication::Lubrication;
+use super::lubrication::SqueezeFilm;
 use super::neighbor::Periodic;
 use super::V3;
 use rayon::prelude::*;
@@ -103,7 +103,7 @@ pub struct World {
     pub skin: f64,
     pub time: f64,
     /// Squeeze films of a coupled fluid (None: dry, the pure DEM). Set by `set_lubrication`.
-    lubrication: Option<Lubrication>,
+    lubrication: Option<SqueezeFilm>,
     /// The axes along which the domain is periodic (none by default). Set by `set_periodic`.
     periodic: Option<Periodic>,
     /// Film force on i of each pair at the last evaluation (empty without lubrication).
@@ -239,7 +239,7 @@ impl World {
 
     /// Adds (or removes) the squeeze-film force of a fluid to every pair and wall gap below its
     /// cut-off; the neighbour lists then reach the cut-off further.
-    pub fn set_lubrication(&mut self, lubrication: Option<Lubrication>) {
+    pub fn set_lubrication(&mut self, lubrication: Option<SqueezeFilm>) {
         self.lubrication = lubrication;
         self.stale = true;
         self.forces(0.0, Finish::Nothing);
@@ -269,7 +269,7 @@ impl World {
         Ok(())
     }
 
-    pub fn lubrication(&self) -> Option<&Lubrication> {
+    pub fn lubrication(&self) -> Option<&SqueezeFilm> {
         self.lubrication.as_ref()
     }
 

@@ -3,7 +3,7 @@
 
 use super::BenchArgs;
 use crate::lbm::geometry::Setup;
-use crate::lbm::gpu::{Gpu, Health, Lattice};
+use crate::lbm::gpu::{Gpu, GpuLattice, Health};
 use crate::lbm::imb::{CoveredCells, ImbOptions, SolidParticle};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -57,7 +57,7 @@ impl Sweep {
 
     /// Prints the sweep's table over `counts` particles, against `lbm_only` MLUPS; first the
     /// LBM-only `lattice` of that figure stepped as the lockstep steps (then freed).
-    pub fn run(&self, lattice: Lattice, counts: &[usize], lbm_only: f64) -> Result<(), String> {
+    pub fn run(&self, lattice: GpuLattice, counts: &[usize], lbm_only: f64) -> Result<(), String> {
         self.print_head(lbm_only);
         let row = |particles: &str, covered_cells: &str, mlups: f64| {
             println!(
@@ -97,7 +97,7 @@ impl Sweep {
 
     /// The lockstep's own cost: LBM-only steps, each submitted and waited for as a coupled step
     /// is; then the fluid kernels that test the cover mask (one bit per cell), no particle.
-    fn lockstep_rows(&self, mut lattice: Lattice, row: &dyn Fn(&str, &str, f64)) -> Result<(), String> {
+    fn lockstep_rows(&self, mut lattice: GpuLattice, row: &dyn Fn(&str, &str, f64)) -> Result<(), String> {
         let mlups = lockstep_mlups(&self.gpu, &mut lattice, self.steps, self.dem());
         row("0 (no coupling: one submit and wait per step)", "-", mlups);
         drop(lattice);
@@ -114,12 +114,12 @@ impl Sweep {
         Ok(())
     }
 
-    fn lattice(&self, mode: CoveredCells) -> Result<Lattice, String> {
+    fn lattice(&self, mode: CoveredCells) -> Result<GpuLattice, String> {
         let options = ImbOptions {
             covered_cells: mode,
             ..Default::default()
         };
-        Lattice::new(
+        GpuLattice::new(
             self.gpu.clone(),
             self.setup.clone(),
             Health::default(),
@@ -129,7 +129,7 @@ impl Sweep {
 
     /// MLUPS of the sweep's coupled steps with `particles` (after 5 untimed), the host idle
     /// `dem` after each.
-    fn coupled_mlups(&self, lattice: &mut Lattice, particles: &[SolidParticle]) -> Result<f64, String> {
+    fn coupled_mlups(&self, lattice: &mut GpuLattice, particles: &[SolidParticle]) -> Result<f64, String> {
         for _ in 0..5 {
             lattice.step_coupled(particles)?;
         }
@@ -178,7 +178,7 @@ impl PassTables {
         &mut self,
         count: usize,
         name: &'static str,
-        lattice: &mut Lattice,
+        lattice: &mut GpuLattice,
         particles: &[SolidParticle],
         steps: u64,
     ) -> Result<(), String> {
@@ -202,7 +202,7 @@ impl PassTables {
     }
 }
 
-/// The host's passes per particle count (`Lattice::host_pass_times`).
+/// The host's passes per particle count (`GpuLattice::host_pass_times`).
 fn print_host_passes(host: &[(usize, [f64; 2])]) {
     println!(
         "host passes of a coupled step ({} threads, no device; median of 21):",
@@ -216,7 +216,7 @@ fn print_host_passes(host: &[(usize, [f64; 2])]) {
 }
 
 /// MLUPS of `steps` fluid steps, each submitted and waited for on its own, then `dem` idle.
-fn lockstep_mlups(gpu: &Gpu, lattice: &mut Lattice, steps: u64, dem: Duration) -> f64 {
+fn lockstep_mlups(gpu: &Gpu, lattice: &mut GpuLattice, steps: u64, dem: Duration) -> f64 {
     gpu.wait();
     let start = Instant::now();
     for _ in 0..steps {
@@ -245,7 +245,7 @@ fn sphere_lattice(side: usize, spacing: [f64; 3]) -> Vec<SolidParticle> {
 /// its own: wall time and this process's CPU time (all threads: lavapipe's workers do the work, and
 /// the CPU time moves less than the wall time when other jobs share the cores).
 fn time_passes(
-    lattice: &mut Lattice,
+    lattice: &mut GpuLattice,
     particles: &[SolidParticle],
     steps: u64,
 ) -> Result<PassTimes<2>, String> {
@@ -262,7 +262,7 @@ fn time_passes(
 /// Milliseconds of each pass by the device's clock over `steps` steps not split into submissions
 /// (mean), where the device has timestamps.
 fn clock_passes(
-    lattice: &mut Lattice,
+    lattice: &mut GpuLattice,
     particles: &[SolidParticle],
     steps: u64,
 ) -> Result<Option<PassTimes<1>>, String> {

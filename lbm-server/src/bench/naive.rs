@@ -49,7 +49,7 @@ impl Layout {
             } else {
                 self.hi_offset as usize / 4 + (i - 10) * self.cells
             };
-            lattice[start..start + self.cells].fill(crate::lbm::lattice::W[i] as f32);
+            lattice[start..start + self.cells].fill(crate::lbm::d3q19::W[i] as f32);
         }
         lattice
     }

@@ -4,7 +4,7 @@
 
 use super::{best, list, BenchArgs};
 use crate::lbm::geometry::Setup;
-use crate::lbm::gpu::{Gpu, Health, Lattice};
+use crate::lbm::gpu::{Gpu, Health, GpuLattice};
 use crate::lbm::storage::Storage;
 use std::sync::Arc;
 use std::time::Instant;
@@ -45,7 +45,7 @@ pub fn print_storages(
     let mut lattices = storages
         .iter()
         .map(|&storage| {
-            Lattice::new(
+            GpuLattice::new(
                 gpu.clone(),
                 Setup {
                     storage,

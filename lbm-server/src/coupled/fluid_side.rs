@@ -15,9 +15,9 @@ use super::warnings::lattice_warnings;
 use super::ways::{covered_cells, way_trials};
 use crate::fields::FieldOutput;
 use crate::fluid::{health_of, setup_of};
-use crate::lbm::gpu::{Gpu, Lattice};
+use crate::lbm::gpu::{Gpu, GpuLattice};
 use crate::lbm::imb::{ImbOptions, SolidCollision};
-use crate::lubrication::Lubrication;
+use crate::lubrication::HeldLubrication;
 use crate::trials::WayTrials;
 use protocol::{ParticleReply, ParticleState, Physics};
 use scene::lattice::LatticeUnits;
@@ -29,12 +29,12 @@ use std::sync::Arc;
 /// What computes the particles' hydrodynamic loads: the lattice with its units, the buoyancy it
 /// adds and the lubrication correction.
 pub struct FluidSide {
-    pub(super) lattice: Lattice,
+    pub(super) lattice: GpuLattice,
     pub(super) units: LatticeUnits,
     origin: [f64; 3],
     fluid_density: f64,
     gravity: [f64; 3],
-    lubrication: Option<Lubrication>,
+    lubrication: Option<HeldLubrication>,
     /// Each sphere of r cells is drawn r + this / max(r, 2) (`coupling.radius_correction`; 0
     /// without it).
     deficit_product: f64,
@@ -72,11 +72,11 @@ impl FluidSide {
         let radii: Vec<f64> = scene.initial_particles().iter().map(|p| p.radius).collect();
         let options = imb_options(scene, &units, &radii)?;
         let trials = way_trials(scene, &gpu).map(|least| WayTrials::new(options.covered_cells, steps, least));
-        let lattice = Lattice::new(gpu, setup_of(&units), health_of(&units), Some(options))?;
+        let lattice = GpuLattice::new(gpu, setup_of(&units), health_of(&units), Some(options))?;
         let lubrication = scene
             .coupling
             .lubrication
-            .then(|| Lubrication::for_lattice(scene, &units));
+            .then(|| HeldLubrication::for_lattice(scene, &units));
         for warning in lattice_warnings(scene, &units, &radii) {
             protocol::say!("lbm-server: warning: {warning}");
         }

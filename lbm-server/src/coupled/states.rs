@@ -2,7 +2,7 @@
 //! step reads them, each sphere drawn larger by the radius correction.
 
 use super::radius_correction::drawn_larger_by;
-use crate::lbm::imb::{Particles, SolidParticle};
+use crate::lbm::imb::{SolidParticle, SolidParticles};
 use protocol::ParticleState;
 
 /// The DEM's states (SI) as the lattice reads them: each converted to lattice units where the
@@ -25,7 +25,7 @@ impl LatticeStates<'_> {
     }
 }
 
-impl Particles for LatticeStates<'_> {
+impl SolidParticles for LatticeStates<'_> {
     fn count(&self) -> usize {
         self.states.len()
     }

@@ -2,7 +2,7 @@
 //! and, for given relaxation rates S, the matrices the kernels apply in population space:
 //! f* = f - A (f - f_eq) + B S_guo with A = M^-1 S M and B = M^-1 (I - S/2) M.
 
-use super::lattice::C;
+use super::d3q19::C;
 
 /// Rows of M as polynomials of c (Gram-Schmidt order of d'Humieres 2002).
 fn moment_row(k: usize, c: [f64; 3]) -> f64 {

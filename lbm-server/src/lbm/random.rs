@@ -1,7 +1,7 @@
 //! Reproducible random populations for the kernel tests and the mass-conservation check.
 
+use super::d3q19::equilibrium_shifted;
 use super::geometry::{Cell, Setup};
-use super::lattice::equilibrium_shifted;
 
 /// xorshift64*: reproducible random numbers without a dependency.
 pub struct Random(u64);

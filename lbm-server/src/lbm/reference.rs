@@ -1,9 +1,9 @@
 //! A plain f64 reference of one full lattice-Boltzmann step (collision, streaming, boundaries),
 //! used by the tests to check every GPU kernel.
 
+use super::d3q19::{self, opposite, C, W};
 use super::geometry::{Cell, Face, Link, Operator, Setup};
 use super::imb::{box_edge, into_lattice, ImbOptions, Load, SolidCollision, SolidParticle};
-use super::lattice::{self, opposite, C, W};
 use super::mrt;
 
 /// One step: populations (shifted, natural layout) at t -> at t + 1.
@@ -57,8 +57,8 @@ pub fn step_with_particles(
 pub fn bounce(face: Face, index: usize, i: usize, f_star: f64, rho: f64, u: [f64; 3]) -> f64 {
     match face {
         Face::Wall | Face::Periodic => f_star,
-        Face::MovingWall(uw) | Face::VelocityInlet(uw) => f_star - 6.0 * W[i] * rho * lattice::dot(i, uw),
-        Face::PressureOutlet(rho_w) => lattice::equilibrium_shifted(opposite(i), rho_w, outflow(index, u)),
+        Face::MovingWall(uw) | Face::VelocityInlet(uw) => f_star - 6.0 * W[i] * rho * d3q19::dot(i, uw),
+        Face::PressureOutlet(rho_w) => d3q19::equilibrium_shifted(opposite(i), rho_w, outflow(index, u)),
     }
 }
 
@@ -89,7 +89,7 @@ pub fn moments(f: &Cell, force: [f64; 3]) -> (f64, [f64; 3]) {
 /// and velocity.
 pub fn collide(setup: &Setup, f: &Cell) -> (Cell, f64, [f64; 3]) {
     let (rho, u) = moments(f, setup.force);
-    let neq: Cell = std::array::from_fn(|i| f[i] - lattice::equilibrium_shifted(i, rho, u));
+    let neq: Cell = std::array::from_fn(|i| f[i] - d3q19::equilibrium_shifted(i, rho, u));
     let source = forcing(setup, u);
     let relaxed: Cell = match setup.operator {
         Operator::Bgk => {
@@ -115,7 +115,7 @@ pub fn collide(setup: &Setup, f: &Cell) -> (Cell, f64, [f64; 3]) {
 /// The body force's part of the collision at velocity u (seed eq. 1's G_i): Guo's source through
 /// the operator's relaxation factors (lbm.wgsl `forcing`).
 pub fn forcing(setup: &Setup, u: [f64; 3]) -> Cell {
-    let s: Cell = std::array::from_fn(|i| lattice::guo_source(i, u, setup.force));
+    let s: Cell = std::array::from_fn(|i| d3q19::guo_source(i, u, setup.force));
     match setup.operator {
         Operator::Bgk => {
             let w = 1.0 / setup.tau;
@@ -272,10 +272,10 @@ fn solid_collision(
     let o = opposite(i);
     match collision {
         SolidCollision::NobleTorczynski => {
-            f[o] - f[i] + lattice::equilibrium_shifted(i, rho, us) - lattice::equilibrium_shifted(o, rho, u)
+            f[o] - f[i] + d3q19::equilibrium_shifted(i, rho, us) - d3q19::equilibrium_shifted(o, rho, u)
         }
         SolidCollision::Superposition => {
-            lattice::equilibrium_shifted(i, rho, us) - lattice::equilibrium_shifted(i, rho, u) + post[i]
+            d3q19::equilibrium_shifted(i, rho, us) - d3q19::equilibrium_shifted(i, rho, u) + post[i]
                 - source[i]
                 - f[i]
         }

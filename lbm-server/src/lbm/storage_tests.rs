@@ -5,7 +5,7 @@
 //! relative for FP16S, 2^-12 for FP16C, half the subnormal step near zero).
 
 use super::geometry::{Cell, Setup};
-use super::gpu::{Health, Lattice};
+use super::gpu::{Health, GpuLattice};
 use super::imb::{CoveredCells, ImbOptions};
 use super::random::random_populations;
 use super::reference;
@@ -37,7 +37,7 @@ fn check(setup: Setup, seed: u64) {
             ..setup.clone()
         };
         let f0 = random_populations(&setup, seed);
-        let mut lattice = Lattice::new(gpu(), setup.clone(), Health::default(), None).unwrap();
+        let mut lattice = GpuLattice::new(gpu(), setup.clone(), Health::default(), None).unwrap();
         lattice.set_populations(&f0);
         let mut f = lattice.populations();
         let upload = excess(&f, &f0, storage);
@@ -92,7 +92,7 @@ fn sixteen_bit_coupled_steps_match_reference() {
                 covered_cells,
                 ..ImbOptions::default()
             };
-            let mut lattice = Lattice::new(gpu(), setup.clone(), Health::default(), Some(options)).unwrap();
+            let mut lattice = GpuLattice::new(gpu(), setup.clone(), Health::default(), Some(options)).unwrap();
             lattice.set_populations(&random_populations(&setup, 11));
             for (step, shift) in [0.0, 0.37, 0.81].into_iter().enumerate() {
                 let f = lattice.populations();

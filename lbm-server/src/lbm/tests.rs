@@ -1,7 +1,7 @@
 //! Every GPU kernel against the f64 reference step, on random populations.
 
 use super::geometry::{Cell, Face, Operator, Setup};
-use super::gpu::{fits_device, Gpu, Health, Lattice, ListLayout};
+use super::gpu::{fits_device, Gpu, GpuLattice, Health, ListLayout};
 use super::mrt::Rates;
 use super::random::{random_populations, Random};
 use super::reference;
@@ -25,7 +25,7 @@ const TOLERANCE: f64 = 64.0 * f32::EPSILON as f64 * 0.35;
 /// Runs 1 and 2 steps on the GPU and in f64 and compares (odd and even AA phases).
 fn check_against_reference(setup: Setup, seed: u64) {
     let f0 = random_populations(&setup, seed);
-    let mut lattice = Lattice::new(gpu(), setup.clone(), Health::default(), None).unwrap();
+    let mut lattice = GpuLattice::new(gpu(), setup.clone(), Health::default(), None).unwrap();
     lattice.set_populations(&f0);
     let f1 = reference::step(&setup, &f0);
     let f2 = reference::step(&setup, &f1);
@@ -169,7 +169,7 @@ fn scaled_face_velocities_are_the_faces_with_those_velocities() {
     let setup = |s: f64| Setup::new([6, 5, 4], faces(s), 0.7, Operator::Trt { magic: 3.0 / 16.0 });
     let f0 = random_populations(&setup(1.0), 7);
     let run = |setup: Setup, scales: &[f64]| {
-        let mut lattice = Lattice::new(gpu(), setup, Health::default(), None).unwrap();
+        let mut lattice = GpuLattice::new(gpu(), setup, Health::default(), None).unwrap();
         lattice.set_populations(&f0);
         for &scale in scales {
             lattice.set_face_scale(scale);
@@ -179,11 +179,11 @@ fn scaled_face_velocities_are_the_faces_with_those_velocities() {
     };
     let scaled = run(setup(1.0), &[0.25, 0.25, 1.0]);
     let given = {
-        let mut lattice = Lattice::new(gpu(), setup(0.25), Health::default(), None).unwrap();
+        let mut lattice = GpuLattice::new(gpu(), setup(0.25), Health::default(), None).unwrap();
         lattice.set_populations(&f0);
         lattice.step(2);
         let mid = lattice.populations();
-        let mut full = Lattice::new(gpu(), setup(1.0), Health::default(), None).unwrap();
+        let mut full = GpuLattice::new(gpu(), setup(1.0), Health::default(), None).unwrap();
         full.set_populations(&mid);
         full.time = 2;
         full.step(1);
@@ -241,7 +241,7 @@ fn a_ramped_inlet_sends_a_weaker_pressure_wave_than_a_sudden_one() {
             ramp_steps,
             ..setup.clone()
         };
-        let mut lattice = Lattice::new(gpu(), setup, Health::default(), None).unwrap();
+        let mut lattice = GpuLattice::new(gpu(), setup, Health::default(), None).unwrap();
         lattice.step(1000);
         let mut largest: f64 = 0.0;
         for _ in 0..100 {
@@ -272,7 +272,7 @@ fn kept_fields_are_those_of_the_last_good_check() {
         Operator::Trt { magic: 3.0 / 16.0 },
     );
     let mut f = random_populations(&setup, 12);
-    let mut lattice = Lattice::new(gpu(), setup.clone(), Health::default(), None).unwrap();
+    let mut lattice = GpuLattice::new(gpu(), setup.clone(), Health::default(), None).unwrap();
     assert!(lattice.kept_fields().is_none());
     lattice.set_populations(&f);
     lattice.step(3);
@@ -280,7 +280,7 @@ fn kept_fields_are_those_of_the_last_good_check() {
     assert!(bad.is_none());
     assert!(lattice.health().is_none());
     lattice.keep_fields();
-    f[100] = std::array::from_fn(|i| super::lattice::equilibrium_shifted(i, 1.0, [0.6, 0.0, 0.0]));
+    f[100] = std::array::from_fn(|i| super::d3q19::equilibrium_shifted(i, 1.0, [0.6, 0.0, 0.0]));
     lattice.set_populations(&f);
     assert!(lattice.health().is_some());
     assert_eq!(lattice.kept_fields().expect("kept"), good);
@@ -293,13 +293,13 @@ fn kept_fields_are_those_of_the_last_good_check() {
 fn the_health_check_finds_the_cell_the_full_readback_finds() {
     let setup = Setup::new([8, 6, 5], [Face::Wall; 6], 0.7, Operator::Bgk);
     let mut f = random_populations(&setup, 11);
-    let mut lattice = Lattice::new(gpu(), setup.clone(), Health::default(), None).unwrap();
+    let mut lattice = GpuLattice::new(gpu(), setup.clone(), Health::default(), None).unwrap();
     lattice.set_populations(&f);
     assert!(lattice.health().is_none());
     assert!(lattice.fields().1.is_none());
     // Two cells too fast (|u| 0.5 > 0.4); the lower index is the one reported.
     for k in [141, 77] {
-        f[k] = std::array::from_fn(|i| super::lattice::equilibrium_shifted(i, 1.02, [0.3, -0.4, 0.0]));
+        f[k] = std::array::from_fn(|i| super::d3q19::equilibrium_shifted(i, 1.02, [0.3, -0.4, 0.0]));
     }
     lattice.set_populations(&f);
     let (fields, full) = lattice.fields();
@@ -420,8 +420,8 @@ pub(in crate::lbm) mod immersed_boundary {
     }
 
     /// A lattice coupled with the default settings.
-    fn coupled(setup: &Setup) -> Lattice {
-        Lattice::new(
+    fn coupled(setup: &Setup) -> GpuLattice {
+        GpuLattice::new(
             gpu(),
             setup.clone(),
             Health::default(),
@@ -491,7 +491,7 @@ pub(in crate::lbm) mod immersed_boundary {
         particles_at: &impl Fn(f64) -> Vec<SolidParticle>,
     ) -> (Vec<Vec<Load>>, Vec<Cell>, u32) {
         let f0 = random_populations(&setup, seed);
-        let mut lattice = Lattice::new(gpu, setup.clone(), Health::default(), Some(options)).unwrap();
+        let mut lattice = GpuLattice::new(gpu, setup.clone(), Health::default(), Some(options)).unwrap();
         assert_eq!(lattice.covered_cells(), options.covered_cells);
         lattice.set_populations(&f0);
         let mut f = f0;
@@ -625,7 +625,8 @@ pub(in crate::lbm) mod immersed_boundary {
                 covered_cells: mode,
                 ..Default::default()
             };
-            let mut lattice = Lattice::new(gpu(), setup.clone(), Health::default(), Some(options)).unwrap();
+            let mut lattice =
+                GpuLattice::new(gpu(), setup.clone(), Health::default(), Some(options)).unwrap();
             lattice.set_populations(f);
             let loads: Vec<Vec<Load>> = (0..2)
                 .map(|s| lattice.step_coupled(&sphere(at(s))).unwrap())
@@ -785,13 +786,13 @@ pub(in crate::lbm) mod immersed_boundary {
             // Cell (6, 6, 6) lies wholly inside; streaming moved its post-collision populations
             // one link on: gather them back.
             let post: Cell = std::array::from_fn(|i| {
-                let c = super::super::lattice::C[i];
+                let c = super::super::d3q19::C[i];
                 next[setup.index(std::array::from_fn(|a| (6 + c[a] as i64) as usize))][i]
             });
             let (rho, _) = reference::moments(&f0[setup.index([6, 6, 6])], force);
             for a in 0..3 {
                 let j: f64 = (0..19)
-                    .map(|i| post[i] * super::super::lattice::C[i][a] as f64)
+                    .map(|i| post[i] * super::super::d3q19::C[i][a] as f64)
                     .sum();
                 let want = rho * sphere.velocity[a] - (1.0 - 1.0 / setup.tau) * force[a] / 2.0;
                 assert!(
@@ -817,7 +818,7 @@ pub(in crate::lbm) mod immersed_boundary {
             ..Default::default()
         };
         let f0 = random_populations(&setup, 13);
-        let mut lattice = Lattice::new(gpu(), setup.clone(), Health::default(), Some(options)).unwrap();
+        let mut lattice = GpuLattice::new(gpu(), setup.clone(), Health::default(), Some(options)).unwrap();
         lattice.set_populations(&f0);
         // Particles apart: one slot suffices, nothing is dropped.
         let particles = vec![
@@ -944,7 +945,8 @@ pub(in crate::lbm) mod immersed_boundary {
                 covered_cells: ways[0],
                 ..ImbOptions::default()
             };
-            let mut lattice = Lattice::new(gpu(), setup.clone(), Health::default(), Some(options)).unwrap();
+            let mut lattice =
+                GpuLattice::new(gpu(), setup.clone(), Health::default(), Some(options)).unwrap();
             lattice.set_populations(&f0);
             let loads: Vec<Vec<Load>> = shifts
                 .iter()
@@ -976,7 +978,7 @@ pub(in crate::lbm) mod immersed_boundary {
         let setup = many_particles_setup();
         let f0 = random_populations(&setup, 25);
         let run = |spoil: bool| {
-            let mut lattice = Lattice::new(
+            let mut lattice = GpuLattice::new(
                 gpu(),
                 setup.clone(),
                 Health::default(),
@@ -1049,7 +1051,7 @@ pub(in crate::lbm) mod immersed_boundary {
                     ..ImbOptions::default()
                 };
                 let mut lattice =
-                    Lattice::new(gpu(), setup.clone(), Health::default(), Some(options)).unwrap();
+                    GpuLattice::new(gpu(), setup.clone(), Health::default(), Some(options)).unwrap();
                 if let Some(cells) = cap {
                     lattice.cap_covered_cells(cells);
                 }

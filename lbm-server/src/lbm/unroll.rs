@@ -2,7 +2,7 @@
 //! replacing {v} with the direction, {v.o} with its opposite, {v.cx} {v.cy} {v.cz} with its
 //! velocity and {v.w} with its weight. Blocks may nest (with different variable names).
 
-use super::lattice::{opposite, C, W};
+use super::d3q19::{opposite, C, W};
 
 /// Expands every loop block of `source`.
 pub fn unroll(source: &str) -> String {

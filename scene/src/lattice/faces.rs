@@ -2,13 +2,13 @@
 //! numbers (a finite velocity below the operator's Mach limit, a finite pressure above -rho c_s^2)
 //! and of the periodic pairs.
 
-use super::{mach_limit, FaceSpec, FaceTable, Lattice, LatticeFace};
+use super::{mach_limit, FaceSpec, FaceTable, LatticeSection, LatticeFace};
 use crate::numbers::{fail, finite3};
 use crate::{Scene, SceneError};
 
 pub(super) fn lattice_faces(
     scene: &Scene,
-    lattice: &Lattice,
+    lattice: &LatticeSection,
     dx: f64,
     dt: f64,
     file: &str,
@@ -105,7 +105,7 @@ fn check_face_numbers(
 
 /// Refuses a moving wall or inlet faster than the operator's lattice Mach limit.
 fn check_face_speeds(
-    lattice: &Lattice,
+    lattice: &LatticeSection,
     faces: &[LatticeFace; 6],
     [dx, dt]: [f64; 2],
     file: &str,

@@ -107,7 +107,7 @@ fn two_spheres_pushed_together_close_their_film_as_reynolds_law_says() {
 /// limit the speed decays every step and never changes sign.
 #[test]
 fn two_stiff_films_on_one_sphere_damp_it_without_overshoot() {
-    let lub = Lubrication {
+    let lub = SqueezeFilm {
         viscosity: FILM_MU,
         cutoff: FILM_CUTOFF,
     };

@@ -6,7 +6,7 @@
 //! worlds they share.
 
 use crate::dem::contact::{ContactLaw, Linear, Switches};
-use crate::dem::lubrication::Lubrication;
+use crate::dem::lubrication::SqueezeFilm;
 use crate::dem::world::{Body, Shape, Wall, World};
 use crate::dem::V3;
 use scene::dem::{Material, NormalLaw, RollingLaw, TangentialLaw};
@@ -113,7 +113,7 @@ fn film_world(bodies: Vec<Body>, walls: Vec<Wall>, gravity: V3, dt: f64) -> Worl
         Linear::default(),
     );
     let mut w = World::new(bodies, walls, l, &[material(0.9, 0.0)], gravity, dt, 0.5 * R);
-    w.set_lubrication(Some(Lubrication {
+    w.set_lubrication(Some(SqueezeFilm {
         viscosity: FILM_MU,
         cutoff: FILM_CUTOFF,
     }));

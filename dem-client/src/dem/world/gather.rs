@@ -6,7 +6,7 @@ use super::bodies::{Body, Finish};
 use super::walls::WallPass;
 use super::{LawRef, World, CHUNK, V3};
 use crate::dem::contact::ContactForce;
-use crate::dem::lubrication::Lubrication;
+use crate::dem::lubrication::SqueezeFilm;
 use rayon::prelude::*;
 
 impl World {
@@ -70,7 +70,7 @@ struct Gather<'a, L> {
     /// Which pairs touch, where few do (below half the listed pairs): the others are skipped.
     touch: Option<&'a [bool]>,
     films: &'a [V3],
-    lubrication: Option<Lubrication>,
+    lubrication: Option<SqueezeFilm>,
     first_i: &'a [u32],
     as_j: &'a [u32],
     as_j_start: &'a [u32],

@@ -6,7 +6,7 @@ use super::bodies::Body;
 use super::{LawRef, World, CHUNK, PAIR_CHUNK, V3};
 use crate::dem::batch::{Batch, LANES};
 use crate::dem::contact::{contact_force, Contact, ContactForce, ContactLaw, PairMaterial};
-use crate::dem::lubrication::Lubrication;
+use crate::dem::lubrication::SqueezeFilm;
 use rayon::iter::Either;
 use rayon::prelude::*;
 
@@ -172,7 +172,7 @@ struct PairPass<'a, L, K> {
     motion: &'a [K],
     law: L,
     pm: &'a [PairMaterial],
-    lubrication: Option<Lubrication>,
+    lubrication: Option<SqueezeFilm>,
     dt: f64,
 }
 

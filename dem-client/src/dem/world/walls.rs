@@ -4,7 +4,7 @@
 use super::bodies::Body;
 use super::{LawRef, World, CHUNK, V3};
 use crate::dem::contact::{contact_force, Contact, ContactForce, PairMaterial};
-use crate::dem::lubrication::Lubrication;
+use crate::dem::lubrication::SqueezeFilm;
 use rayon::prelude::*;
 
 /// A fixed wall.
@@ -93,7 +93,7 @@ pub(super) struct WallPass<'a, L> {
     /// Pair materials, `nm x nm`.
     pub pm: &'a [PairMaterial],
     pub nm: usize,
-    pub lubrication: Option<Lubrication>,
+    pub lubrication: Option<SqueezeFilm>,
     pub dt: f64,
 }
 

@@ -3,7 +3,7 @@
 
 use super::relaxation_steps;
 use crate::lbm::geometry::{Face, Operator, Setup};
-use crate::lbm::gpu::{equilibrium_field, Gpu, Health, Lattice};
+use crate::lbm::gpu::{equilibrium_field, Gpu, GpuLattice, Health};
 use std::sync::Arc;
 
 /// Result of a steady channel flow: L2 error of u_x against the analytic profile, relative to max.
@@ -93,7 +93,7 @@ fn run_steady(
     initial: impl Fn([usize; 3]) -> (f64, [f64; 3]),
     steps: u64,
 ) -> (Vec<[f32; 4]>, u64) {
-    let mut lattice = Lattice::new(gpu.clone(), setup.clone(), Health::default(), None).expect("lattice");
+    let mut lattice = GpuLattice::new(gpu.clone(), setup.clone(), Health::default(), None).expect("lattice");
     lattice.set_populations(&equilibrium_field(setup, initial));
     lattice.step(steps);
     let (fields, bad) = lattice.fields();

@@ -3,7 +3,7 @@
 
 use super::coupled_lattice;
 use crate::lbm::geometry::{Face, Operator, Setup};
-use crate::lbm::gpu::{equilibrium_field, total_mass, Gpu, Health, Lattice};
+use crate::lbm::gpu::{equilibrium_field, total_mass, Gpu, GpuLattice, Health};
 use crate::lbm::imb::{ImbOptions, SolidParticle};
 use std::sync::Arc;
 
@@ -19,7 +19,7 @@ pub fn closed_box_mass(gpu: &Arc<Gpu>, n: usize, steps: u64, operator: Operator)
     let mut faces = [Face::Wall; 6];
     faces[5] = Face::MovingWall([0.05, 0.0, 0.0]);
     let setup = Setup::new([n, n, n], faces, 0.6, operator);
-    let mut lattice = Lattice::new(gpu.clone(), setup.clone(), Health::default(), None).expect("lattice");
+    let mut lattice = GpuLattice::new(gpu.clone(), setup.clone(), Health::default(), None).expect("lattice");
     let start = crate::lbm::random::random_populations(&setup, 7);
     lattice.set_populations(&start);
     let before = total_mass(&setup, &lattice.populations());
@@ -60,19 +60,19 @@ pub fn momentum_exchange(gpu: &Arc<Gpu>, n: usize, steps: u64) -> Momentum {
         radius,
         ..Default::default()
     };
-    let fluid_momentum = |lattice: &Lattice| -> [f64; 3] {
+    let fluid_momentum = |lattice: &GpuLattice| -> [f64; 3] {
         let f = lattice.populations();
         let mut j = [0.0; 3];
         for cell in &f {
             for (i, fi) in cell.iter().enumerate() {
-                for (ja, c) in j.iter_mut().zip(crate::lbm::lattice::C[i]) {
+                for (ja, c) in j.iter_mut().zip(crate::lbm::d3q19::C[i]) {
                     *ja += fi * c as f64;
                 }
             }
         }
         j
     };
-    let total = |lattice: &Lattice, p: &SolidParticle| -> [f64; 3] {
+    let total = |lattice: &GpuLattice, p: &SolidParticle| -> [f64; 3] {
         let j = fluid_momentum(lattice);
         std::array::from_fn(|a| j[a] + mass * p.velocity[a])
     };

@@ -1,7 +1,7 @@
 //! Taylor-Green vortex decay: the viscosity the lattice shows against the one tau sets.
 
 use crate::lbm::geometry::{Face, Operator, Setup};
-use crate::lbm::gpu::{equilibrium_field, Gpu, Health, Lattice};
+use crate::lbm::gpu::{equilibrium_field, Gpu, GpuLattice, Health};
 use std::sync::Arc;
 
 /// Taylor-Green vortex decay: the measured viscosity against the one set by tau.
@@ -26,10 +26,10 @@ pub fn taylor_green(gpu: &Arc<Gpu>, n: usize, tau: f64, operator: Operator, u0: 
         let pressure = -u0 * u0 / 4.0 * ((2.0 * k * x).cos() + (2.0 * k * y).cos());
         (1.0 + 3.0 * pressure, u)
     };
-    let mut lattice = Lattice::new(gpu.clone(), setup.clone(), Health::default(), None).expect("lattice");
+    let mut lattice = GpuLattice::new(gpu.clone(), setup.clone(), Health::default(), None).expect("lattice");
     lattice.set_populations(&equilibrium_field(&setup, state));
     // Skip the first steps (initial pressure transients), then fit between two times.
-    let energy = |lattice: &Lattice| -> f64 {
+    let energy = |lattice: &GpuLattice| -> f64 {
         let (fields, _) = lattice.fields();
         fields.iter().map(|f| (f[1] * f[1] + f[2] * f[2]) as f64).sum()
     };

@@ -18,7 +18,7 @@ pub use stability::*;
 pub use weighted_array::*;
 
 use crate::lbm::geometry::Setup;
-use crate::lbm::gpu::{Gpu, Health, Lattice};
+use crate::lbm::gpu::{Gpu, GpuLattice, Health};
 use crate::lbm::imb::ImbOptions;
 use std::sync::Arc;
 
@@ -35,6 +35,6 @@ fn plane_flux(fields: &[[f32; 4]], n: usize, x: usize) -> f64 {
 }
 
 /// A lattice coupled to particles, with the default health limits.
-fn coupled_lattice(gpu: &Arc<Gpu>, setup: &Setup, options: ImbOptions) -> Lattice {
-    Lattice::new(gpu.clone(), setup.clone(), Health::default(), Some(options)).expect("lattice")
+fn coupled_lattice(gpu: &Arc<Gpu>, setup: &Setup, options: ImbOptions) -> GpuLattice {
+    GpuLattice::new(gpu.clone(), setup.clone(), Health::default(), Some(options)).expect("lattice")
 }

@@ -3,7 +3,7 @@
 
 use super::coupled_lattice;
 use crate::lbm::geometry::{Face, Operator, Setup};
-use crate::lbm::gpu::{equilibrium_field, Gpu, Lattice};
+use crate::lbm::gpu::{equilibrium_field, Gpu, GpuLattice};
 use crate::lbm::imb::{ImbOptions, SolidParticle};
 use std::sync::Arc;
 
@@ -145,7 +145,7 @@ pub(super) fn stream_box(
     operator: Operator,
     imb: ImbOptions,
     stream: [f64; 3],
-) -> Lattice {
+) -> GpuLattice {
     let faces = [
         Face::VelocityInlet(stream),
         Face::PressureOutlet(1.0),

@@ -3,7 +3,7 @@
 
 use super::{coupled_lattice, plane_flux};
 use crate::lbm::geometry::{Face, Operator, Setup};
-use crate::lbm::gpu::{equilibrium_field, Gpu, Health, Lattice, Unhealthy};
+use crate::lbm::gpu::{equilibrium_field, Gpu, GpuLattice, Health, Unhealthy};
 use crate::lbm::imb::SolidParticle;
 use std::sync::Arc;
 
@@ -128,7 +128,7 @@ pub fn array_at_weight(
     let mut lattice = match boundary {
         Spheres::Immersed => coupled_lattice(gpu, &setup, Default::default()),
         Spheres::Staircase => {
-            Lattice::new(gpu.clone(), setup.clone(), Health::default(), None).expect("lattice")
+            GpuLattice::new(gpu.clone(), setup.clone(), Health::default(), None).expect("lattice")
         }
     };
     lattice.set_populations(&equilibrium_field(&setup, |_| (1.0, [u_start, 0.0, 0.0])));

@@ -3,7 +3,7 @@
 
 use super::cell_list::cell_flags;
 use super::params::mrt_matrices;
-use super::state::Lattice;
+use super::state::GpuLattice;
 use crate::lbm::geometry::Setup;
 use crate::lbm::imb::Coupling;
 use wgpu::util::DeviceExt;
@@ -177,7 +177,7 @@ fn entry(binding: u32, buffer: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
     }
 }
 
-impl Lattice {
+impl GpuLattice {
     /// Rebuilds every way's bind groups (after the coupling's buffers grew).
     pub(in crate::lbm) fn rebind(&mut self) {
         let bound: Vec<[wgpu::BindGroup; 2]> = self

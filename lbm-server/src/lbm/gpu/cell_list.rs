@@ -1,8 +1,8 @@
 //! The cells by class: the flags of each cell's links, and the list of cells the fluid kernels
 //! take, by class and in four-cell quads.
 
+use crate::lbm::d3q19::C;
 use crate::lbm::geometry::{Face, Link, Setup};
-use crate::lbm::lattice::C;
 
 /// Bit i set when link i of the cell leaves the fluid.
 const SOLID_FLAG: u32 = 1 << 19;

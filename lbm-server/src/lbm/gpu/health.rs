@@ -2,7 +2,7 @@
 //! velocity, seed eq. 5-6) read back, or kept on the device as the last good ones.
 
 use super::bindings::storage_buffer;
-use super::state::Lattice;
+use super::state::GpuLattice;
 
 /// Limits of the health check, in lattice units.
 #[derive(Debug, Clone, Copy)]
@@ -54,7 +54,7 @@ impl Unhealthy {
     }
 }
 
-impl Lattice {
+impl GpuLattice {
     /// The first unhealthy cell if any, as `fields` finds it, with only that cell read back (a
     /// run's health check: on a GPU the whole field is 16 bytes per cell over the bus).
     pub fn health(&self) -> Option<Unhealthy> {
@@ -95,7 +95,7 @@ impl Lattice {
         self.gpu.queue.submit([encoder.finish()]);
     }
 
-    /// The fields [`Lattice::keep_fields`] kept, if it was called.
+    /// The fields [`GpuLattice::keep_fields`] kept, if it was called.
     pub fn kept_fields(&self) -> Option<Vec<[f32; 4]>> {
         let kept = self.kept.as_ref()?;
         let bytes = self.gpu.read_buffer(kept, (self.setup.cells() * 16) as u64);

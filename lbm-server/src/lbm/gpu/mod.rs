@@ -21,4 +21,4 @@ pub use device::Gpu;
 pub(in crate::lbm) use device::ListLayout;
 pub use health::{Health, Unhealthy};
 pub(in crate::lbm) use params::vec4;
-pub use state::{equilibrium_field, total_mass, Lattice};
+pub use state::{equilibrium_field, total_mass, GpuLattice};

@@ -4,7 +4,7 @@
 
 use super::cell_list::CellList;
 use super::health::Health;
-use super::state::Lattice;
+use super::state::GpuLattice;
 use crate::lbm::geometry::{Face, Operator, Setup};
 use crate::lbm::mrt;
 
@@ -94,7 +94,7 @@ pub(crate) fn vec4(v: [f64; 3], w: f64) -> [f32; 4] {
     [v[0] as f32, v[1] as f32, v[2] as f32, w as f32]
 }
 
-impl Lattice {
+impl GpuLattice {
     /// the next step on (the setup's ramp calls it; the density of an outlet is kept).
     pub fn set_face_scale(&mut self, scale: f64) {
         if scale == self.face_scale {

@@ -7,11 +7,11 @@ use super::health::Health;
 use super::way::{shader_module, Way};
 use crate::lbm::geometry::{Cell, Link, Setup};
 use crate::lbm::imb::{Coupling, CoveredCells, ImbOptions};
-use crate::lbm::lattice::{opposite, C, W};
+use crate::lbm::d3q19::{opposite, C, W};
 use crate::lbm::storage::Storage;
 
 /// A lattice living on the GPU.
-pub struct Lattice {
+pub struct GpuLattice {
     pub setup: Setup,
     pub(in crate::lbm) gpu: std::sync::Arc<Gpu>,
     pub(super) populations: Vec<wgpu::Buffer>,
@@ -26,19 +26,19 @@ pub struct Lattice {
     pub(super) health: Health,
     /// The coupling's settings (None: a lattice without particles).
     pub(super) options: Option<ImbOptions>,
-    /// Whether the fluid kernels may take four-cell quads (not with `Lattice::per_cell`).
+    /// Whether the fluid kernels may take four-cell quads (not with `GpuLattice::per_cell`).
     pub(super) quads: bool,
     /// Particle coupling (immersed moving boundary), when the scene has particles.
     pub(in crate::lbm) imb: Option<Coupling>,
-    /// The ways built so far ([`Lattice::set_covered_cells`]), and the one the steps take.
+    /// The ways built so far ([`GpuLattice::set_covered_cells`]), and the one the steps take.
     pub(super) ways: Vec<Way>,
     pub(super) active: usize,
     /// Completed steps; its parity selects the AA phase.
     pub time: u64,
     /// The share of their velocity the velocity inlets and moving walls have now
-    /// ([`Lattice::set_face_scale`]).
+    /// ([`GpuLattice::set_face_scale`]).
     pub(super) face_scale: f64,
-    /// The fields of the last check that passed, kept on the device ([`Lattice::keep_fields`]).
+    /// The fields of the last check that passed, kept on the device ([`GpuLattice::keep_fields`]).
     pub(super) kept: Option<wgpu::Buffer>,
     /// Test aid: the next way built gets a constant its kernels do not declare (a validation
     /// error, as a driver refusing a kernel would give).
@@ -46,20 +46,20 @@ pub struct Lattice {
     pub(in crate::lbm) spoil_next_way: bool,
 }
 
-impl Lattice {
+impl GpuLattice {
     /// Allocates the lattice, at rest (rho = 1, u = 0), with particle coupling when `imb` is given.
     pub fn new(
         gpu: std::sync::Arc<Gpu>,
         setup: Setup,
         health: Health,
         imb: Option<ImbOptions>,
-    ) -> Result<Lattice, String> {
+    ) -> Result<GpuLattice, String> {
         Self::build(gpu, setup, health, imb, true)
     }
 
     /// A lattice without coupling whose fluid kernels take every cell on its own, without the
     /// four-cell quads (`lbm-server bench --per-cell`: what the quads gain on this device).
-    pub fn per_cell(gpu: std::sync::Arc<Gpu>, setup: Setup, health: Health) -> Result<Lattice, String> {
+    pub fn per_cell(gpu: std::sync::Arc<Gpu>, setup: Setup, health: Health) -> Result<GpuLattice, String> {
         Self::build(gpu, setup, health, None, false)
     }
 
@@ -69,7 +69,7 @@ impl Lattice {
         health: Health,
         imb: Option<ImbOptions>,
         quads: bool,
-    ) -> Result<Lattice, String> {
+    ) -> Result<GpuLattice, String> {
         fits_device(&gpu.limits, setup.n)?;
         let d = &gpu.device;
         let buffers = LatticeBuffers::new(d, &setup);
@@ -89,7 +89,7 @@ impl Lattice {
             fields,
             status,
         } = buffers;
-        let mut lattice = Lattice {
+        let mut lattice = GpuLattice {
             setup,
             gpu,
             populations,
@@ -176,7 +176,7 @@ pub fn equilibrium_field(setup: &Setup, state: impl Fn([usize; 3]) -> (f64, [f64
     (0..setup.cells())
         .map(|k| {
             let (rho, u) = state(setup.coords(k));
-            std::array::from_fn(|i| crate::lbm::lattice::equilibrium_shifted(i, rho, u))
+            std::array::from_fn(|i| crate::lbm::d3q19::equilibrium_shifted(i, rho, u))
         })
         .collect()
 }

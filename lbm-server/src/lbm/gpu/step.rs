@@ -1,14 +1,14 @@
 //! The fluid's step: stream and collide (seed eq. 1) over the cells by class, batched into
 //! submissions, in the AA pattern's alternating phases.
 
-use super::state::Lattice;
+use super::state::GpuLattice;
 
 /// Invocations per workgroup (must match `@workgroup_size` in the shader).
 const WORKGROUP: u32 = 64;
 /// Most workgroups along one dispatch dimension.
 const MAX_GROUPS: u32 = 65_535;
 
-impl Lattice {
+impl GpuLattice {
     /// Advances `steps` steps (submitted in batches; returns once submitted, not completed).
     /// During the setup's ramp each step is submitted alone, after its face velocities.
     pub fn step(&mut self, steps: u64) {
@@ -98,7 +98,7 @@ impl Lattice {
 /// grids have no interior quads (nx not a multiple of 4).
 #[cfg(test)]
 mod quad_tests {
-    use super::super::{CellList, Gpu, Health, Lattice};
+    use super::super::{CellList, Gpu, GpuLattice, Health};
     use crate::lbm::geometry::{Face, Operator, Setup};
     use crate::lbm::mrt::Rates;
     use crate::lbm::random::{random_populations, Random};
@@ -112,7 +112,7 @@ mod quad_tests {
         );
         let mut f = random_populations(&setup, seed);
         let gpu = std::sync::Arc::new(Gpu::new().expect("a wgpu adapter (lavapipe in CI)"));
-        let mut lattice = Lattice::new(gpu, setup.clone(), Health::default(), None).unwrap();
+        let mut lattice = GpuLattice::new(gpu, setup.clone(), Health::default(), None).unwrap();
         lattice.set_populations(&f);
         let tolerance = 64.0 * f32::EPSILON as f64 * 0.35;
         for step in 1..=4 {

@@ -6,7 +6,7 @@ use super::bindings::{make_bind_group, storage_buffer};
 use super::cell_list::CellList;
 use super::device::Gpu;
 use super::params::{params, Params};
-use super::state::Lattice;
+use super::state::GpuLattice;
 use crate::lbm::imb::{Coupling, CoveredCells, Passes, SolidCollision};
 use crate::lbm::storage::Storage;
 use wgpu::util::DeviceExt;
@@ -43,7 +43,7 @@ pub(in crate::lbm) struct Way {
     pub(in crate::lbm) passes: Option<Passes>,
 }
 
-impl Lattice {
+impl GpuLattice {
     /// Makes the steps from the next on give the covered cells their solid term the way `mode`
     /// says (`Auto` taken as the redo), building that way's kernels the first time it is asked
     /// for. Every way leaves the same populations bit for bit (the reference tests run each), so

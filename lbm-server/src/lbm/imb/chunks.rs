@@ -2,7 +2,7 @@
 //! the radii (their pairs and largest box), and a pass over each.
 
 use super::cover::box_edge;
-use super::records::Particles;
+use super::records::SolidParticles;
 
 /// Particles per chunk of the host's passes over a step's particles: the chunks run in parallel
 /// (rayon); a step with fewer particles stays on the calling thread.
@@ -18,7 +18,7 @@ pub(super) struct ChunkSize {
 }
 
 /// The chunks of a step's particles, sized from the radii (in parallel), with their first pairs.
-pub(super) fn chunk_sizes<P: Particles + ?Sized>(particles: &P) -> Vec<ChunkSize> {
+pub(super) fn chunk_sizes<P: SolidParticles + ?Sized>(particles: &P) -> Vec<ChunkSize> {
     let n = particles.count();
     let mut chunks = vec![ChunkSize::default(); n.div_ceil(CHUNK)];
     for_each_chunk(chunks.iter_mut().collect(), |c, chunk: &mut ChunkSize| {

@@ -3,7 +3,7 @@
 
 use super::options::{CoveredCells, ImbOptions};
 use super::records::{LostCovers, LOADS_BUFFER_BYTES, LOAD_BYTES, PAIR_BYTES, PARTICLE_BYTES, SAVED_BYTES};
-use crate::lbm::gpu::{storage_buffer, Lattice};
+use crate::lbm::gpu::{storage_buffer, GpuLattice};
 
 /// Buffers of the coupling (tiny placeholders when the scene has no particles).
 pub struct Coupling {
@@ -87,7 +87,7 @@ fn readback_buffer(d: &wgpu::Device, bytes: u64) -> wgpu::Buffer {
     })
 }
 
-impl Lattice {
+impl GpuLattice {
     /// Where the covered cells take their solid term now (definite; the redo without coupling).
     pub fn covered_cells(&self) -> CoveredCells {
         self.way().mode

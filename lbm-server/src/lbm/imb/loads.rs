@@ -3,9 +3,9 @@
 
 use super::chunks::{for_each_chunk, CHUNK};
 use super::records::{GpuLoad, Load};
-use crate::lbm::gpu::Lattice;
+use crate::lbm::gpu::GpuLattice;
 
-impl Lattice {
+impl GpuLattice {
     /// The `bytes` of loads, once the submission `with_loads` is done, handed to `read`.
     pub(super) fn read_loads(
         &self,

@@ -28,6 +28,6 @@ pub use options::{CoveredCells, ImbOptions, SolidCollision};
 pub(super) use passes::Passes;
 #[cfg(test)]
 pub(super) use records::Load;
-pub use records::{Particles, SolidParticle};
+pub use records::{SolidParticle, SolidParticles};
 #[cfg(test)]
 pub(super) use staging::into_lattice;

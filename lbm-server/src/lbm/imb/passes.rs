@@ -2,7 +2,7 @@
 //! ([`StepPasses`]: the covered cells' passes of its parity).
 
 use super::options::CoveredCells;
-use crate::lbm::gpu::Lattice;
+use crate::lbm::gpu::GpuLattice;
 
 /// The coupling's kernels: `cover` and `reduce`, and with the redo the passes around the fluid step.
 pub(in crate::lbm) struct Passes {
@@ -76,7 +76,7 @@ pub(super) struct CoveredPasses {
     pub(super) after_pipelines: [wgpu::ComputePipeline; 2],
 }
 
-impl Lattice {
+impl GpuLattice {
     /// The pipelines of this step's passes, those over the covered cells of this parity.
     pub(super) fn step_passes(&self) -> Result<StepPasses, String> {
         let passes = self

@@ -1,5 +1,5 @@
 //! What crosses between host and device each coupled step: the particles in lattice units
-//! ([`SolidParticle`], or any [`Particles`]) and their GPU records, the loads that come back, the
+//! ([`SolidParticle`], or any [`SolidParticles`]) and their GPU records, the loads that come back, the
 //! covers lost, and the sizes of the coupling's buffers per record.
 
 /// A particle in lattice units (cell i spans [i, i + 1] along each axis).
@@ -11,7 +11,7 @@ pub struct SolidParticle {
     pub angular_velocity: [f64; 3],
 }
 
-/// Covers lost since the start of a coupled run ([`Lattice::lost_covers`]).
+/// Covers lost since the start of a coupled run ([`GpuLattice::lost_covers`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct LostCovers {
     /// Particle-cell covers beyond a cell's slots (dropped; the run warns).
@@ -30,7 +30,7 @@ pub struct Load {
 /// The particles of a coupled step in lattice units, by index: a slice of [`SolidParticle`]s, or
 /// a DEM's states converted as the step reads them (no copy in between: the host's passes over
 /// the particles are part of every coupled step, docs/imb.md "Speed").
-pub trait Particles: Sync {
+pub trait SolidParticles: Sync {
     fn count(&self) -> usize;
     fn particle(&self, j: usize) -> SolidParticle;
     /// Particle j's radius (the step sizes the pair ranges from the radii first).
@@ -39,7 +39,7 @@ pub trait Particles: Sync {
     }
 }
 
-impl Particles for [SolidParticle] {
+impl SolidParticles for [SolidParticle] {
     fn count(&self) -> usize {
         self.len()
     }

@@ -4,14 +4,17 @@
 
 use super::chunks::{chunk_sizes, for_each_chunk, ChunkSize, CHUNK};
 use super::cover::{box_edge, MAX_BOX_EDGE};
-use super::records::{GpuParticle, Particles, SolidParticle, MAX_PARTICLES, PARTICLE_BYTES};
+use super::records::{GpuParticle, SolidParticle, SolidParticles, MAX_PARTICLES, PARTICLE_BYTES};
 use crate::lbm::geometry::Setup;
-use crate::lbm::gpu::{vec4, Lattice};
+use crate::lbm::gpu::{vec4, GpuLattice};
 
-impl Lattice {
+impl GpuLattice {
     /// The host's part before the device's: the particles sized, checked and written into staging
     /// memory (the buffers grown to hold them); their pairs.
-    pub(super) fn stage_particles<P: Particles + ?Sized>(&mut self, particles: &P) -> Result<u64, String> {
+    pub(super) fn stage_particles<P: SolidParticles + ?Sized>(
+        &mut self,
+        particles: &P,
+    ) -> Result<u64, String> {
         let chunks = chunk_sizes(particles);
         self.refuse_unfit(particles, &chunks)?;
         let pairs: u64 = chunks.iter().map(|c| c.pairs).sum();
@@ -22,7 +25,7 @@ impl Lattice {
 
     /// Writes the particles' GPU records (centres wrapped into the lattice, pair ranges from
     /// `chunks`) straight into the upload's staging memory, chunk by chunk in parallel.
-    fn upload_particles<P: Particles + ?Sized>(
+    fn upload_particles<P: SolidParticles + ?Sized>(
         &self,
         particles: &P,
         chunks: &[ChunkSize],
@@ -66,7 +69,11 @@ impl Lattice {
     /// a radius beyond its box index, a box longer than a periodic axis. `chunks` holds the
     /// largest box edge of each chunk: the particles are looked at one by one only when one is
     /// refused.
-    fn refuse_unfit<P: Particles + ?Sized>(&self, particles: &P, chunks: &[ChunkSize]) -> Result<(), String> {
+    fn refuse_unfit<P: SolidParticles + ?Sized>(
+        &self,
+        particles: &P,
+        chunks: &[ChunkSize],
+    ) -> Result<(), String> {
         let n = particles.count();
         if n > MAX_PARTICLES {
             return Err(format!(

@@ -1,17 +1,17 @@
-//! The coupled step ([`Lattice::step_coupled`]): the particles cover the cells, the fluid
+//! The coupled step ([`GpuLattice::step_coupled`]): the particles cover the cells, the fluid
 //! collides with the solid term and streams, and each particle's force and torque come back. Its
 //! passes in order are listed at `coupled_step`.
 
 use super::loads::convert_loads;
 use super::passes::{CoveredPasses, StepPasses};
-use super::records::{GpuLoad, Load, Particles, SolidParticle, LOAD_BYTES, REDUCE_SLICES};
-use crate::lbm::gpu::Lattice;
+use super::records::{GpuLoad, Load, SolidParticle, SolidParticles, LOAD_BYTES, REDUCE_SLICES};
+use crate::lbm::gpu::GpuLattice;
 
 /// Receives the encoder after each pass of a coupled step (named) and returns the one to go on
 /// with: the identity, a submit and wait for timing each pass, or a timestamp.
 pub(super) type Split<'a> = &'a mut dyn FnMut(&'static str, wgpu::CommandEncoder) -> wgpu::CommandEncoder;
 
-impl Lattice {
+impl GpuLattice {
     /// One coupled step: the particles cover the cells, the fluid streams and collides with the
     /// solid term, and the force and torque on each particle over the step come back.
     pub fn step_coupled(&mut self, particles: &[SolidParticle]) -> Result<Vec<Load>, String> {
@@ -23,7 +23,7 @@ impl Lattice {
     /// A coupled step that reads the particles where they are and writes `load(j, load of j)` for
     /// each particle j to `out` (replaced): the caller's unit conversions ride on the step's own
     /// passes over the particles, which run in parallel chunks.
-    pub fn step_coupled_with<P: Particles + ?Sized, T: Send>(
+    pub fn step_coupled_with<P: SolidParticles + ?Sized, T: Send>(
         &mut self,
         particles: &P,
         out: &mut Vec<T>,
@@ -47,7 +47,7 @@ impl Lattice {
     /// 6. `submit_fluid_after_loads`: with the redo and skip, the fluid kernels and the store (or
     ///    uncover) over the covered cells, which run while the host reads the loads;
     /// 7. `read_loads`: the loads, once on the host, handed to `read`.
-    pub(super) fn coupled_step<P: Particles + ?Sized>(
+    pub(super) fn coupled_step<P: SolidParticles + ?Sized>(
         &mut self,
         particles: &P,
         split: Split,
@@ -69,7 +69,7 @@ impl Lattice {
     /// Before the device's passes: the faces' share of velocity (during the ramp), the particles
     /// staged, and this step's pipelines and counts (particles, pairs, room in the list of
     /// covered cells) for the kernels; the count of particles and the pipelines.
-    fn stage<P: Particles + ?Sized>(&mut self, particles: &P) -> Result<(u32, StepPasses), String> {
+    fn stage<P: SolidParticles + ?Sized>(&mut self, particles: &P) -> Result<(u32, StepPasses), String> {
         self.ramp_faces();
         let pairs = self.stage_particles(particles)?;
         let passes = self.step_passes()?;

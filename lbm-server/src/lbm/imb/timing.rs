@@ -3,9 +3,9 @@
 
 use super::loads::convert_loads;
 use super::records::{GpuLoad, Load, SolidParticle};
-use crate::lbm::gpu::Lattice;
+use crate::lbm::gpu::GpuLattice;
 
-/// The device's timestamps between the passes of a coupled step ([`Lattice::pass_clock`]).
+/// The device's timestamps between the passes of a coupled step ([`GpuLattice::pass_clock`]).
 pub struct PassClock {
     set: wgpu::QuerySet,
     resolved: wgpu::Buffer,
@@ -14,7 +14,7 @@ pub struct PassClock {
 /// Timestamps a coupled step can write (it writes at most 8).
 const PASS_STAMPS: u32 = 16;
 
-impl Lattice {
+impl GpuLattice {
     /// A coupled step with each pass submitted and waited for on its own: what `clock` advanced
     /// by over each pass (the submit round trip included), in the order of the step
     /// (`lbm-server bench --passes`). "upload" is the host's pass that writes the particles for
@@ -47,7 +47,7 @@ impl Lattice {
         Ok(times)
     }
 
-    /// Timestamps for [`Lattice::step_coupled_clocked`], where the device writes them inside
+    /// Timestamps for [`GpuLattice::step_coupled_clocked`], where the device writes them inside
     /// command encoders (None elsewhere).
     pub fn pass_clock(&self) -> Option<PassClock> {
         let need = wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS;
