@@ -506,6 +506,7 @@ fn block_centres(b: &Block) -> impl Iterator<Item = [f64; 3]> + '_ {
 mod checks;
 pub mod dem;
 pub mod lattice;
+pub mod output_lock;
 pub mod outputs;
 pub mod overlap;
 mod times;

@@ -1,12 +1,14 @@
 //! A scene ready to run: loaded, checked (a `[lattice]` where it has particles, the steps, the
-//! connect timeout), its output folder made and cleared of an earlier run's outputs.
+//! connect timeout), its output folder made, locked for this run and cleared of an earlier run's
+//! outputs.
 
 use super::{DemMode, RunArgs};
+use scene::output_lock::OutputLock;
 use scene::Scene;
 use std::path::PathBuf;
 use std::time::Duration;
 
-/// A scene ready to run: validated, with its output folder made.
+/// A scene ready to run: validated, with its output folder made and locked.
 pub(super) struct Prepared {
     pub(super) scene: Scene,
     pub(super) scene_file: String,
@@ -14,6 +16,8 @@ pub(super) struct Prepared {
     pub(super) out: PathBuf,
     pub(super) scene_copy: PathBuf,
     pub(super) connect_timeout: Duration,
+    /// The output folder's lock, held for the whole run.
+    pub(super) _lock: OutputLock,
 }
 
 pub(super) fn prepare(args: &RunArgs) -> Result<Prepared, String> {
@@ -52,6 +56,7 @@ pub(super) fn prepare(args: &RunArgs) -> Result<Prepared, String> {
         .unwrap_or_else(|| PathBuf::from("out").join(&scene.name));
     std::fs::create_dir_all(&out)
         .map_err(|e| format!("cannot create the output folder {}: {e}", out.display()))?;
+    let lock = OutputLock::take(&out)?;
     clear_earlier_outputs(&out)?;
     let scene_copy = out.join("scene.toml");
     std::fs::write(&scene_copy, text).map_err(|e| format!("{}: {e}", scene_copy.display()))?;
@@ -62,6 +67,7 @@ pub(super) fn prepare(args: &RunArgs) -> Result<Prepared, String> {
         out,
         scene_copy,
         connect_timeout: Duration::try_from_secs_f64(connect_timeout).unwrap_or(Duration::MAX),
+        _lock: lock,
     })
 }
 
