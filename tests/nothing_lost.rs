@@ -114,3 +114,73 @@ fn a_second_granular_run_into_the_same_folder_is_refused_naming_the_first() {
     let (code, _) = third.wait_exit(Duration::from_secs(60));
     assert_eq!(code, Some(0), "{}", Proc::drain(&third.stderr));
 }
+
+/// The rows of the CSV file `path` after its header, each asserted whole: `columns` numbers and
+/// a line end.
+fn whole_rows(path: &Path, columns: usize) -> Vec<Vec<f64>> {
+    let text = std::fs::read_to_string(path).unwrap();
+    assert!(text.ends_with('\n'), "{}: a torn last row", path.display());
+    let parse = |line: &str| -> Vec<f64> {
+        let row: Vec<f64> = line.split(',').filter_map(|v| v.parse().ok()).collect();
+        assert_eq!(row.len(), columns, "{}: row {line:?}", path.display());
+        row
+    };
+    text.lines().skip(1).map(parse).collect()
+}
+
+/// The steps done as the latest progress line (`lbm-server: step N/M ...`) says, waiting for the
+/// `count`-th such line.
+fn steps_done_after(server: &Proc, count: usize) -> u64 {
+    let mut done = 0;
+    for _ in 0..count {
+        let line = Proc::wait_line(&server.stderr, "lbm-server: step ", Duration::from_secs(60));
+        let n = line.split("step ").nth(1).and_then(|r| r.split('/').next());
+        done = n.and_then(|n| n.parse().ok()).unwrap_or_else(|| panic!("{line}"));
+    }
+    done
+}
+
+/// kill -9 of a coupled run leaves particles.csv with whole rows only, up to the last output
+/// step before the last progress line it printed.
+#[test]
+fn a_killed_coupled_run_leaves_whole_rows_up_to_a_recent_output_step() {
+    let interval = 10;
+    let (mut server, out) = long_coupled_run("kill-rows", interval);
+    let _server = KillOnDrop(server.child.id());
+    let done = steps_done_after(&server, 2);
+    signal(server.child.id(), libc::SIGKILL);
+    server.wait_exit(Duration::from_secs(10));
+    let rows = whole_rows(&out.join("particles.csv"), 18);
+    let last = rows.last().map_or(0, |r| r[0] as u64);
+    let due = (done - 1) / interval * interval;
+    assert!(
+        last >= due,
+        "{done} steps done: rows up to step {last}, not {due}"
+    );
+    let at_last = rows.iter().filter(|r| r[0] as u64 == last).count();
+    assert_eq!(at_last, 64, "every particle of step {last}");
+}
+
+/// kill -9 of a granular run leaves particles.csv and energy.csv with whole rows only.
+#[test]
+fn a_killed_granular_run_leaves_whole_rows() {
+    let dir = temp_dir("kill-granular");
+    let scene = write_scene(&dir, &granular(100_000_000, 1));
+    let out = dir.join("out");
+    let mut run = start_dem_run(&scene, &out);
+    let _run = KillOnDrop(run.child.id());
+    Proc::wait_line(&run.stderr, "dem-client: scene", Duration::from_secs(30));
+    std::thread::sleep(Duration::from_millis(1500));
+    signal(run.child.id(), libc::SIGKILL);
+    run.wait_exit(Duration::from_secs(10));
+    let rows = whole_rows(&out.join("particles.csv"), 18);
+    assert!(rows.len() > 8, "{} rows", rows.len());
+    let last = rows.last().unwrap()[0];
+    assert_eq!(
+        rows.iter().filter(|r| r[0] == last).count(),
+        8,
+        "every sphere of step {last}"
+    );
+    let energy = whole_rows(&out.join("energy.csv"), 4);
+    assert!(energy.last().unwrap()[0] >= last, "energy.csv up to step {last}");
+}

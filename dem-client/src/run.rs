@@ -108,6 +108,7 @@ fn simulate(
         energy.write(step, &world)?;
         if step % interval == 0 || step == steps {
             csv.write(step, &world)?;
+            energy.commit()?;
             if let Some(v) = vtk.as_mut() {
                 v.write(step, &world)?;
             }
@@ -118,8 +119,7 @@ fn simulate(
         world.advance(k);
         done += 1;
     }
-    csv.flush()?;
-    energy.flush()?;
+    energy.commit()?;
     let wall = started.elapsed().as_secs_f64();
     let particle_steps = (done * k) as f64 * world.bodies.len() as f64;
     protocol::say!(

@@ -509,6 +509,7 @@ pub mod lattice;
 pub mod output_lock;
 pub mod outputs;
 pub mod overlap;
+pub mod row_file;
 mod times;
 pub mod vtp;
 

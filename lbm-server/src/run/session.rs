@@ -1,6 +1,6 @@
 //! One coupled run in progress ([`Session`]): opened (the link, particles.csv, the fluid),
 //! connected to the DEM side (started or announced, then the handshake), stepped in lockstep
-//! (`lockstep.rs`), finished (outputs flushed, the DEM ended, summary.json written).
+//! (`lockstep.rs`), finished (the DEM ended, summary.json written).
 
 use super::counters::Counters;
 use super::prepare::Prepared;
@@ -55,7 +55,7 @@ impl Session {
         };
         let link = FluidLink::create(options, p.scene.capacity() as usize).map_err(|e| e.to_string())?;
         let particles = ParticleOutput::create(&p.out, p.scene.dem.output.vtk)
-            .map_err(|e| format!("{}: {e}", p.out.join("particles.csv").display()))?;
+            .map_err(|e| format!("{}: {e}", p.out.display()))?;
         let fluid = FluidSide::for_scene(&p.scene, p.steps, &p.out)?;
         Ok(Session {
             p,
@@ -149,7 +149,7 @@ impl Session {
         format!("{e}{}; last completed step: {last}", e.hint())
     }
 
-    /// Flushes output, ends the DEM process, writes summary.json; returns the exit code.
+    /// Ends the DEM process, writes summary.json; returns the exit code.
     fn finish(mut self, result: Result<Ending, String>) -> u8 {
         let (reason, code) = match &result {
             Ok(Ending::Completed) => ("completed".to_string(), 0),
@@ -162,9 +162,6 @@ impl Session {
         };
         if let (Err(msg), false) = (&result, code == EXIT_INTERRUPTED) {
             protocol::say!("lbm-server: error: {msg}");
-        }
-        if let Err(e) = self.particles.flush() {
-            protocol::say!("lbm-server: error: particles.csv: {e}");
         }
         self.end_dem(result.is_ok() || self.told_to_end);
         let summary = self.summary(reason, code);
