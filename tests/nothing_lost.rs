@@ -184,3 +184,31 @@ fn a_killed_granular_run_leaves_whole_rows() {
     let energy = whole_rows(&out.join("energy.csv"), 4);
     assert!(energy.last().unwrap()[0] >= last, "energy.csv up to step {last}");
 }
+
+/// SIGTERM or SIGINT to the DEM process stops a coupled run before its last step: the run does
+/// not pass for a completed one (exit 130, summary.json says the DEM client stopped it).
+#[test]
+fn a_signal_to_the_dem_ends_the_run_as_stopped_not_completed() {
+    for (name, sig) in [("term", libc::SIGTERM), ("int", libc::SIGINT)] {
+        let (mut server, out) = long_coupled_run(&format!("dem-{name}"), 1000);
+        let _server = KillOnDrop(server.child.id());
+        steps_done_after(&server, 1);
+        signal(child_pid(server.child.id()), sig);
+        let (code, _) = server.wait_exit(Duration::from_secs(20));
+        let stderr = Proc::drain(&server.stderr);
+        assert_eq!(code, Some(130), "{name}: {stderr}");
+        assert!(!stderr.contains(" steps/s;"), "{name}: a success line:\n{stderr}");
+        assert!(
+            stderr.contains("lbm-server: stopped by the DEM client after "),
+            "{name}: {stderr}"
+        );
+        assert!(
+            stderr.contains("dem-client: interrupted after "),
+            "{name}: {stderr}"
+        );
+        let s = summary(&out);
+        assert_eq!(s["exit_reason"], "stopped by the DEM client", "{name}");
+        assert_eq!(s["exit_code"], 130, "{name}");
+        assert!(s["steps_completed"].as_u64().unwrap() < 10_000_000, "{name}");
+    }
+}

@@ -66,7 +66,8 @@ const EXIT_FAILURE: u8 = 1;
 const EXIT_BAD_INPUT: u8 = 2;
 const EXIT_INTERRUPTED: u8 = 130;
 
-/// How a run ended without failure.
+/// How a run ended without failure: only a completed run exits 0; one stopped before its last
+/// step, by Ctrl-C or the DEM's STOP, exits 130.
 enum Ending {
     Completed,
     Interrupted,

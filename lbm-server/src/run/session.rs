@@ -154,7 +154,7 @@ impl Session {
         let (reason, code) = match &result {
             Ok(Ending::Completed) => ("completed".to_string(), 0),
             Ok(Ending::Interrupted) => ("interrupted".to_string(), EXIT_INTERRUPTED),
-            Ok(Ending::StoppedByPeer) => ("stopped by the DEM client".to_string(), 0),
+            Ok(Ending::StoppedByPeer) => ("stopped by the DEM client".to_string(), EXIT_INTERRUPTED),
             Err(_) if self.interrupted.load(Ordering::SeqCst) => {
                 ("interrupted".to_string(), EXIT_INTERRUPTED)
             }
@@ -167,6 +167,15 @@ impl Session {
         let summary = self.summary(reason, code);
         if let Err(e) = summary.write(&self.p.out.join("summary.json")) {
             protocol::say!("lbm-server: error: summary.json: {e}");
+        }
+        if code == EXIT_INTERRUPTED {
+            protocol::say!(
+                "lbm-server: {} after {} of {} steps; output in {}",
+                summary.exit_reason,
+                summary.steps_completed,
+                summary.steps_requested,
+                self.p.out.display()
+            );
         }
         if code == 0 {
             protocol::say!(
