@@ -212,3 +212,37 @@ fn a_signal_to_the_dem_ends_the_run_as_stopped_not_completed() {
         assert!(s["steps_completed"].as_u64().unwrap() < 10_000_000, "{name}");
     }
 }
+
+/// A lattice far too large for any device (1.07e9 cells: 17 GB of fields in one buffer) is
+/// refused with exit 2, naming the need and the device's limit, before the output folder is
+/// touched: an earlier run's outputs stay.
+#[test]
+fn a_lattice_too_large_for_the_device_is_refused_before_anything_is_removed() {
+    let dir = temp_dir("too-large");
+    let text = include_str!("../validation/scenes/poiseuille.toml")
+        .replace("max = [0.002, 0.016, 0.002]", "max = [1.024, 1.024, 1.024]")
+        .replace("through = [0.001, 0.008, 0.001]", "through = [0.5, 0.5, 0.5]");
+    let scene = write_scene(&dir, &text);
+    let out = dir.join("out");
+    std::fs::create_dir_all(&out).unwrap();
+    for earlier in ["summary.json", "line0.csv", "particles.csv"] {
+        std::fs::write(out.join(earlier), "an earlier run's\n").unwrap();
+    }
+    let mut run = start(server(&scene, &out, &[]));
+    let _run = KillOnDrop(run.child.id());
+    let (code, _) = run.wait_exit(Duration::from_secs(120));
+    let stderr = Proc::drain(&run.stderr);
+    assert_eq!(code, Some(2), "{stderr}");
+    assert!(
+        stderr.contains("1024x1024x1024 (1073741824 cells) needs 17179869184 bytes"),
+        "the need: {stderr}"
+    );
+    assert!(
+        stderr.contains("storage binding limit of "),
+        "the limit: {stderr}"
+    );
+    for earlier in ["summary.json", "line0.csv", "particles.csv"] {
+        let text = std::fs::read_to_string(out.join(earlier)).unwrap();
+        assert_eq!(text, "an earlier run's\n", "{earlier} kept");
+    }
+}

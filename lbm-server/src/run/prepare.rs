@@ -1,6 +1,6 @@
-//! A scene ready to run: loaded, checked (a `[lattice]` where it has particles, the steps, the
-//! connect timeout), its output folder made, locked for this run and cleared of an earlier run's
-//! outputs.
+//! A scene ready to run: loaded, checked (a `[lattice]` where it has particles, one this device
+//! can hold, the steps, the connect timeout), its output folder made, locked for this run and
+//! cleared of an earlier run's outputs.
 
 use super::{DemMode, RunArgs};
 use scene::output_lock::OutputLock;
@@ -50,6 +50,9 @@ pub(super) fn prepare(args: &RunArgs) -> Result<Prepared, String> {
     if connect_timeout.is_nan() || connect_timeout <= 0.0 {
         return Err(format!("--connect-timeout = {connect_timeout} s: must be > 0"));
     }
+    if let Some(units) = &scene.lattice_units {
+        fits_the_device(units.n)?;
+    }
     let out = args
         .out
         .clone()
@@ -69,6 +72,16 @@ pub(super) fn prepare(args: &RunArgs) -> Result<Prepared, String> {
         connect_timeout: Duration::try_from_secs_f64(connect_timeout).unwrap_or(Duration::MAX),
         _lock: lock,
     })
+}
+
+/// A lattice the device cannot hold is refused before the output folder is touched or the
+/// lattice allocated: the limits of the adapter the run opens (where none is found, the run's
+/// start says why).
+fn fits_the_device(n: [usize; 3]) -> Result<(), String> {
+    match crate::lbm::gpu::Gpu::adapter_limits() {
+        Ok(limits) => crate::lbm::gpu::fits_device(&limits, n),
+        Err(_) => Ok(()),
+    }
 }
 
 /// Removes what an earlier run wrote into `out` under this run's output names, saying so.

@@ -11,8 +11,7 @@ mod state;
 mod step;
 mod way;
 
-#[cfg(test)]
-pub(in crate::lbm) use bindings::fits_device;
+pub use bindings::fits_device;
 pub(in crate::lbm) use bindings::storage_buffer;
 #[cfg(test)]
 pub(in crate::lbm) use cell_list::CellList;
