@@ -246,3 +246,68 @@ fn a_lattice_too_large_for_the_device_is_refused_before_anything_is_removed() {
         assert_eq!(text, "an earlier run's\n", "{earlier} kept");
     }
 }
+
+/// A summary.json that cannot be written (a full disk: here a link to /dev/full) fails the run
+/// (exit 1), naming the file; particles.csv is kept whole.
+#[test]
+fn a_summary_that_cannot_be_written_fails_the_run_by_name() {
+    let dir = temp_dir("full-summary");
+    let scene = write_scene(&dir, &scene_text("full-summary", [2, 2, 2], 20, 5, 30.0));
+    let out = dir.join("out");
+    std::fs::create_dir_all(&out).unwrap();
+    std::os::unix::fs::symlink("/dev/full", out.join("summary.json")).unwrap();
+    let mut run = start(server(&scene, &out, &[]));
+    let _run = KillOnDrop(run.child.id());
+    let (code, _) = run.wait_exit(Duration::from_secs(120));
+    let stderr = Proc::drain(&run.stderr);
+    assert_eq!(code, Some(1), "{stderr}");
+    assert!(
+        stderr.contains("lbm-server: error: summary.json: No space left on device"),
+        "{stderr}"
+    );
+    let rows = whole_rows(&out.join("particles.csv"), 18);
+    assert_eq!(rows.len(), 8 * 5, "steps 0, 5, 10, 15 and 19");
+}
+
+/// A particles.csv that stops growing mid-run (its size limited, as on a full disk) fails the run
+/// (exit 1) naming it; the rows written before are kept, whole, and summary.json says why.
+#[test]
+fn a_write_error_mid_run_keeps_the_rows_written_and_names_the_file() {
+    use std::os::unix::process::CommandExt;
+    let dir = temp_dir("full-rows");
+    let scene = write_scene(&dir, &scene_text("full-rows", [4, 4, 4], 10_000_000, 1, 30.0));
+    let out = dir.join("out");
+    let mut cmd = server(&scene, &out, &[]);
+    const LIMIT: u64 = 1 << 20;
+    unsafe {
+        cmd.pre_exec(|| {
+            let limit = libc::rlimit {
+                rlim_cur: LIMIT,
+                rlim_max: LIMIT,
+            };
+            libc::signal(libc::SIGXFSZ, libc::SIG_IGN);
+            match libc::setrlimit(libc::RLIMIT_FSIZE, &limit) {
+                0 => Ok(()),
+                _ => Err(std::io::Error::last_os_error()),
+            }
+        });
+    }
+    let mut run = start(cmd);
+    let _run = KillOnDrop(run.child.id());
+    let (code, _) = run.wait_exit(Duration::from_secs(300));
+    let stderr = Proc::drain(&run.stderr);
+    assert_eq!(code, Some(1), "{stderr}");
+    assert!(
+        stderr.contains("lbm-server: error: particles.csv: File too large"),
+        "{stderr}"
+    );
+    let rows = whole_rows(&out.join("particles.csv"), 18);
+    assert!(rows.len() > 64, "{} rows kept", rows.len());
+    assert_eq!(rows.len() % 64, 0, "whole steps");
+    let s = summary(&out);
+    let reason = s["exit_reason"].as_str().unwrap();
+    assert!(
+        reason.starts_with("error: particles.csv: File too large"),
+        "{reason}"
+    );
+}

@@ -182,7 +182,10 @@ pub fn run(scene: &Scene, scene_file: &str, steps: u64, out: &Path, interrupted:
         exit_reason: reason,
         exit_code: code,
     };
-    write_summary(&summary, out);
+    if let Err(e) = write_summary(&summary, out) {
+        protocol::say!("lbm-server: error: summary.json: {e}");
+        return 1;
+    }
     if code == 0 {
         protocol::say!(
             "lbm-server: {} steps in {wall:.2} s ({:.2} MLUPS); output in {}",
@@ -218,12 +221,10 @@ fn start_lattice(scene: &Scene, units: &LatticeUnits) -> Result<(Arc<Gpu>, Latti
     Ok((gpu, lattice))
 }
 
-/// summary.json in `out` (an error said, not fatal: the run's other outputs are written).
-fn write_summary(summary: &FluidSummary, out: &Path) {
+/// summary.json in `out` (the run's other outputs are written before it).
+fn write_summary(summary: &FluidSummary, out: &Path) -> std::io::Result<()> {
     let text = serde_json::to_string_pretty(summary).unwrap_or_default();
-    if let Err(e) = std::fs::write(out.join("summary.json"), text + "\n") {
-        protocol::say!("lbm-server: error: summary.json: {e}");
-    }
+    std::fs::write(out.join("summary.json"), text + "\n")
 }
 
 /// The outputs of one fluid run.

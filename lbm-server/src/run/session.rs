@@ -149,7 +149,8 @@ impl Session {
         format!("{e}{}; last completed step: {last}", e.hint())
     }
 
-    /// Ends the DEM process, writes summary.json; returns the exit code.
+    /// Ends the DEM process, writes summary.json; returns the exit code (1 where summary.json
+    /// cannot be written).
     fn finish(mut self, result: Result<Ending, String>) -> u8 {
         let (reason, code) = match &result {
             Ok(Ending::Completed) => ("completed".to_string(), 0),
@@ -166,7 +167,9 @@ impl Session {
         self.end_dem(result.is_ok() || self.told_to_end);
         let summary = self.summary(reason, code);
         if let Err(e) = summary.write(&self.p.out.join("summary.json")) {
+            // The run's record lost: whatever the run did, it did not end well.
             protocol::say!("lbm-server: error: summary.json: {e}");
+            return EXIT_FAILURE;
         }
         if code == EXIT_INTERRUPTED {
             protocol::say!(
