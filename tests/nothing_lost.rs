@@ -311,3 +311,31 @@ fn a_write_error_mid_run_keeps_the_rows_written_and_names_the_file() {
         "{reason}"
     );
 }
+
+/// A blow-up caught at a check (the unstable lid-driven cavity, checked every 50 steps, by when
+/// it has spread) is named where it is furthest out of bounds, near the moving lid at z_max (16
+/// cells high), with its centre in SI; not at cell (0, 0, 0), the first in memory order.
+#[test]
+fn a_blow_up_is_named_where_it_is_furthest_out_of_bounds() {
+    let dir = temp_dir("blow-up-cell");
+    let scene = write_scene(&dir, include_str!("../validation/scenes/cavity-unstable.toml"));
+    let out = dir.join("out");
+    let mut run = start(server(&scene, &out, &[]));
+    let _run = KillOnDrop(run.child.id());
+    let (code, _) = run.wait_exit(Duration::from_secs(120));
+    let stderr = Proc::drain(&run.stderr);
+    assert_eq!(code, Some(1), "{stderr}");
+    let named = stderr
+        .split("furthest out of bounds, cell ")
+        .nth(1)
+        .unwrap_or_else(|| panic!("no cell named furthest out:\n{stderr}"));
+    let coords: Vec<usize> = named
+        .split(['(', ')'])
+        .nth(1)
+        .unwrap()
+        .split(", ")
+        .map(|c| c.parse().unwrap())
+        .collect();
+    assert!(coords[2] >= 12, "{coords:?}: not near the lid:\n{stderr}");
+    assert!(named.contains(") m: "), "its centre in SI: {named}");
+}

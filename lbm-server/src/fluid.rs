@@ -294,12 +294,15 @@ impl<'a> FluidRun<'a> {
         self.fields.flush().map_err(Stop::Failed)
     }
 
-    /// Describes an unhealthy cell and writes the last good snapshot.
+    /// Describes the cell furthest out of bounds (`bad`, the first found, where none is further)
+    /// and writes the last good snapshot.
     fn blow_up(&mut self, lattice: &Lattice, step: u64, check: u64, bad: Unhealthy) -> Stop {
+        let bad = lattice.furthest_unhealthy().unwrap_or(bad);
+        let (origin, dx) = (self.scene.domain.min, self.units.dx);
         let mut msg = format!(
-            "the fluid became unstable between steps {} and {step}: {}",
+            "the fluid became unstable between steps {} and {step}: furthest out of bounds, {}",
             step.saturating_sub(check),
-            bad.describe(&health_of(self.units))
+            bad.describe(&health_of(self.units), origin, dx)
         );
         if let Some((good, fields)) = self.last_good.take().zip(lattice.kept_fields()) {
             msg += &self.fields.write_last_good(good, &fields);
