@@ -339,3 +339,35 @@ fn a_blow_up_is_named_where_it_is_furthest_out_of_bounds() {
     assert!(coords[2] >= 12, "{coords:?}: not near the lid:\n{stderr}");
     assert!(named.contains(") m: "), "its centre in SI: {named}");
 }
+
+/// Ctrl-C while a run starts (its device opened, its kernels compiled: seconds on a CPU driver)
+/// ends it at once, saying so, with exit 130: a coupled run and a fluid-only one.
+#[test]
+fn ctrl_c_during_start_up_acts_at_once() {
+    let coupled = scene_text("start-up", [2, 2, 2], 100, 10, 30.0);
+    let fluid = include_str!("../validation/scenes/poiseuille.toml").to_string();
+    for (tag, text) in [("coupled", coupled), ("fluid", fluid)] {
+        let dir = temp_dir(&format!("start-up-{tag}"));
+        let scene = write_scene(&dir, &text);
+        let out = dir.join("out");
+        std::fs::create_dir_all(&out).unwrap();
+        // An earlier run's summary: its removal is said once the Ctrl-C handler is in place.
+        std::fs::write(out.join("summary.json"), "{}\n").unwrap();
+        let mut run = start(server(&scene, &out, &[]));
+        let _run = KillOnDrop(run.child.id());
+        Proc::wait_line(
+            &run.stderr,
+            "output files of an earlier run",
+            Duration::from_secs(30),
+        );
+        signal(run.child.id(), libc::SIGINT);
+        let (code, waited) = run.wait_exit(Duration::from_secs(60));
+        let stderr = Proc::drain(&run.stderr);
+        assert_eq!(code, Some(130), "{tag}: {stderr}");
+        assert!(waited < 0.5, "{tag}: took {waited:.2} s:\n{stderr}");
+        assert!(
+            stderr.contains("lbm-server: interrupted during start-up"),
+            "{tag}: {stderr}"
+        );
+    }
+}

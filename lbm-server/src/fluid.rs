@@ -164,8 +164,12 @@ pub fn run(scene: &Scene, scene_file: &str, steps: u64, out: &Path, interrupted:
         Err(Stop::Interrupted) => ("interrupted".to_string(), 130),
         Err(Stop::Failed(e)) => (format!("error: {e}"), 1),
     };
-    if let Err(Stop::Failed(e)) = &result {
-        protocol::say!("lbm-server: error: {e}");
+    match &result {
+        Err(Stop::Failed(e)) => protocol::say!("lbm-server: error: {e}"),
+        Err(Stop::Interrupted) => {
+            protocol::say!("lbm-server: interrupted after {} of {steps} steps", lattice.time)
+        }
+        Ok(()) => {}
     }
     let cells = units.n.iter().product::<usize>() as f64;
     let summary = FluidSummary {
@@ -197,10 +201,12 @@ pub fn run(scene: &Scene, scene_file: &str, steps: u64, out: &Path, interrupted:
     code
 }
 
-/// The device and the scene's lattice on it, the run's first line said (and a warning where its
-/// tau is near 1/2).
+/// The device and the scene's lattice on it, the run's first line said once it is ready to step
+/// (and a warning where its tau is near 1/2).
 fn start_lattice(scene: &Scene, units: &LatticeUnits) -> Result<(Arc<Gpu>, Lattice), String> {
     let gpu = Arc::new(Gpu::new()?);
+    let lattice = Lattice::new(gpu.clone(), setup_of(units), health_of(units), None)?;
+    crate::run::started();
     protocol::say!(
         "lbm-server: scene '{}': {}x{}x{} cells, dx {:e} m, dt {:e} s, tau {:.4}, Mach {:.3}, {} on {}",
         scene.name,
@@ -217,7 +223,6 @@ fn start_lattice(scene: &Scene, units: &LatticeUnits) -> Result<(Arc<Gpu>, Latti
     if let Some(warning) = stability_warning(units, false) {
         protocol::say!("lbm-server: warning: {warning}");
     }
-    let lattice = Lattice::new(gpu.clone(), setup_of(units), health_of(units), None)?;
     Ok((gpu, lattice))
 }
 
@@ -286,6 +291,7 @@ impl<'a> FluidRun<'a> {
             self.last_good = Some(next);
             progress.update(next);
             if stopping {
+                progress.abandon();
                 self.fields.flush().map_err(Stop::Failed)?;
                 return Err(Stop::Interrupted);
             }

@@ -170,6 +170,13 @@ impl Progress {
             bar.finish();
         }
     }
+
+    /// Leaves the bar at the step where a run stopped early (`finish`, or dropping it, fills it).
+    pub fn abandon(&self) {
+        if let Some(bar) = &self.bar {
+            bar.abandon();
+        }
+    }
 }
 
 /// The fluid program and its version, for the summaries.

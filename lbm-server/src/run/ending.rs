@@ -42,7 +42,11 @@ impl Session {
         if !end.stop {
             return Ok(None);
         }
-        progress.finish();
+        if last {
+            progress.finish();
+        } else {
+            progress.abandon();
+        }
         self.end_early(last).map(Some)
     }
 

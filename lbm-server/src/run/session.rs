@@ -73,6 +73,7 @@ impl Session {
 
     /// Starts or announces the DEM side and performs the handshake.
     fn connect(&mut self, mode: DemMode) -> Result<(), String> {
+        super::started();
         let spawned = self.start_dem(mode)?;
         let (scene, steps) = (&self.p.scene, self.p.steps);
         let physics = self.fluid.physics();
