@@ -18,6 +18,14 @@ impl Drop for KillOnDrop {
     }
 }
 
+/// Runs `cmd` to its end (killed after `timeout_s`): its exit code and stderr.
+fn run_to_end(cmd: Command, timeout_s: u64) -> (Option<i32>, String) {
+    let mut run = start(cmd);
+    let _run = KillOnDrop(run.child.id());
+    let (code, _) = run.wait_exit(Duration::from_secs(timeout_s));
+    (code, Proc::drain(&run.stderr))
+}
+
 /// A granular scene alone that runs for ever: eight spheres dropped in a box, `interval` steps
 /// between output rows.
 fn granular(steps: u64, interval: u64) -> String {
@@ -45,11 +53,11 @@ radius = 0.002
     )
 }
 
-/// `dem-client run SCENE --out OUT`, started.
-fn start_dem_run(scene: &Path, out: &Path) -> Proc {
+/// `dem-client run SCENE --out OUT`.
+fn dem_run(scene: &Path, out: &Path) -> Command {
     let mut cmd = Command::new(bin("dem-client"));
     cmd.arg("run").arg(scene).arg("--out").arg(out);
-    start(cmd)
+    cmd
 }
 
 /// A coupled run of 64 spheres for ever into DIR/out, stepping: (server, out).
@@ -69,9 +77,7 @@ fn a_second_coupled_run_into_the_same_folder_is_refused_naming_the_first() {
     let (mut first, out) = long_coupled_run("lock-coupled", 1000);
     let _first = KillOnDrop(first.child.id());
     let scene = out.parent().unwrap().join("scene.toml");
-    let mut second = start(server(&scene, &out, &["--steps", "5"]));
-    let (code, _) = second.wait_exit(Duration::from_secs(60));
-    let stderr = Proc::drain(&second.stderr);
+    let (code, stderr) = run_to_end(server(&scene, &out, &["--steps", "5"]), 60);
     assert_eq!(code, Some(2), "{stderr}");
     let pid = first.child.id();
     assert!(
@@ -82,9 +88,8 @@ fn a_second_coupled_run_into_the_same_folder_is_refused_naming_the_first() {
     assert!(out.join("particles.csv").is_file(), "the first run's output kept");
     signal(pid, libc::SIGKILL);
     first.wait_exit(Duration::from_secs(10));
-    let mut third = start(server(&scene, &out, &["--steps", "5"]));
-    let (code, _) = third.wait_exit(Duration::from_secs(60));
-    assert_eq!(code, Some(0), "{}", Proc::drain(&third.stderr));
+    let (code, stderr) = run_to_end(server(&scene, &out, &["--steps", "5"]), 60);
+    assert_eq!(code, Some(0), "{stderr}");
 }
 
 /// The same for `dem-client run`, which shares the lock with `lbm-server run`.
@@ -93,14 +98,12 @@ fn a_second_granular_run_into_the_same_folder_is_refused_naming_the_first() {
     let dir = temp_dir("lock-granular");
     let scene = write_scene(&dir, &granular(100_000_000, 1000));
     let out = dir.join("out");
-    let mut first = start_dem_run(&scene, &out);
+    let mut first = start(dem_run(&scene, &out));
     Proc::wait_line(&first.stderr, "dem-client: scene", Duration::from_secs(30));
     let pid = first.child.id();
     let _first = KillOnDrop(pid);
     let short = write_scene(&out, &granular(5, 1));
-    let mut second = start_dem_run(&short, &out);
-    let (code, _) = second.wait_exit(Duration::from_secs(60));
-    let stderr = Proc::drain(&second.stderr);
+    let (code, stderr) = run_to_end(dem_run(&short, &out), 60);
     assert_eq!(code, Some(2), "{stderr}");
     assert!(
         stderr.contains(&format!("is in use by another run (pid {pid})")),
@@ -110,9 +113,8 @@ fn a_second_granular_run_into_the_same_folder_is_refused_naming_the_first() {
     signal(pid, libc::SIGINT);
     let (code, _) = first.wait_exit(Duration::from_secs(30));
     assert_eq!(code, Some(130), "{}", Proc::drain(&first.stderr));
-    let mut third = start_dem_run(&short, &out);
-    let (code, _) = third.wait_exit(Duration::from_secs(60));
-    assert_eq!(code, Some(0), "{}", Proc::drain(&third.stderr));
+    let (code, stderr) = run_to_end(dem_run(&short, &out), 60);
+    assert_eq!(code, Some(0), "{stderr}");
 }
 
 /// The rows of the CSV file `path` after its header, each asserted whole: `columns` numbers and
@@ -167,7 +169,7 @@ fn a_killed_granular_run_leaves_whole_rows() {
     let dir = temp_dir("kill-granular");
     let scene = write_scene(&dir, &granular(100_000_000, 1));
     let out = dir.join("out");
-    let mut run = start_dem_run(&scene, &out);
+    let mut run = start(dem_run(&scene, &out));
     let _run = KillOnDrop(run.child.id());
     Proc::wait_line(&run.stderr, "dem-client: scene", Duration::from_secs(30));
     std::thread::sleep(Duration::from_millis(1500));
@@ -228,10 +230,7 @@ fn a_lattice_too_large_for_the_device_is_refused_before_anything_is_removed() {
     for earlier in ["summary.json", "line0.csv", "particles.csv"] {
         std::fs::write(out.join(earlier), "an earlier run's\n").unwrap();
     }
-    let mut run = start(server(&scene, &out, &[]));
-    let _run = KillOnDrop(run.child.id());
-    let (code, _) = run.wait_exit(Duration::from_secs(120));
-    let stderr = Proc::drain(&run.stderr);
+    let (code, stderr) = run_to_end(server(&scene, &out, &[]), 120);
     assert_eq!(code, Some(2), "{stderr}");
     assert!(
         stderr.contains("1024x1024x1024 (1073741824 cells) needs 17179869184 bytes"),
@@ -256,10 +255,7 @@ fn a_summary_that_cannot_be_written_fails_the_run_by_name() {
     let out = dir.join("out");
     std::fs::create_dir_all(&out).unwrap();
     std::os::unix::fs::symlink("/dev/full", out.join("summary.json")).unwrap();
-    let mut run = start(server(&scene, &out, &[]));
-    let _run = KillOnDrop(run.child.id());
-    let (code, _) = run.wait_exit(Duration::from_secs(120));
-    let stderr = Proc::drain(&run.stderr);
+    let (code, stderr) = run_to_end(server(&scene, &out, &[]), 120);
     assert_eq!(code, Some(1), "{stderr}");
     assert!(
         stderr.contains("lbm-server: error: summary.json: No space left on device"),
@@ -292,10 +288,7 @@ fn a_write_error_mid_run_keeps_the_rows_written_and_names_the_file() {
             }
         });
     }
-    let mut run = start(cmd);
-    let _run = KillOnDrop(run.child.id());
-    let (code, _) = run.wait_exit(Duration::from_secs(300));
-    let stderr = Proc::drain(&run.stderr);
+    let (code, stderr) = run_to_end(cmd, 300);
     assert_eq!(code, Some(1), "{stderr}");
     assert!(
         stderr.contains("lbm-server: error: particles.csv: File too large"),
@@ -320,10 +313,7 @@ fn a_blow_up_is_named_where_it_is_furthest_out_of_bounds() {
     let dir = temp_dir("blow-up-cell");
     let scene = write_scene(&dir, include_str!("../validation/scenes/cavity-unstable.toml"));
     let out = dir.join("out");
-    let mut run = start(server(&scene, &out, &[]));
-    let _run = KillOnDrop(run.child.id());
-    let (code, _) = run.wait_exit(Duration::from_secs(120));
-    let stderr = Proc::drain(&run.stderr);
+    let (code, stderr) = run_to_end(server(&scene, &out, &[]), 120);
     assert_eq!(code, Some(1), "{stderr}");
     let named = stderr
         .split("furthest out of bounds, cell ")
