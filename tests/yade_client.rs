@@ -219,8 +219,8 @@ lbmdem_yade.couple(sys.argv[2], scene=sys.argv[4], ids={3: 0} if case == "ids" e
 
 /// Bad input (issue 39, item 7): a YADE sphere count that differs from the scene's particle
 /// count (found before joining), an O.dt that does not divide the fluid step (found from the
-/// Welcome): a message naming it, exit 2, the run ended with STOP at step 0 (the server exits 0
-/// after one step), no process waiting and no shared-memory file left. An id the scene does not
+/// Welcome): a message naming it, exit 2, the run ended with STOP at step 0 (the server exits 130
+/// after one step: stopped before its last step, it did not complete), no process waiting and no shared-memory file left. An id the scene does not
 /// have, with no server to tell: the message and exit 2 all the same.
 #[test]
 fn a_yade_script_that_does_not_fit_the_scene_ends_the_run_with_exit_2() {
@@ -244,8 +244,13 @@ fn a_yade_script_that_does_not_fit_the_scene_ends_the_run_with_exit_2() {
             "{case}: expected {message:?} in\n{client_err}"
         );
         assert!(client_err.contains("with STOP at step 0"), "{case}: {client_err}");
-        assert_eq!(code, Some(0), "{case}: {server_err}");
+        assert_eq!(code, Some(130), "{case}: {server_err}");
         assert_eq!(summary(&out)["steps_completed"], 1, "{case}");
+        assert_eq!(
+            summary(&out)["exit_reason"],
+            "stopped by the DEM client",
+            "{case}"
+        );
         assert!(
             leftover_files(&run).is_empty(),
             "{case}: {:?}",

@@ -150,6 +150,10 @@ pub fn main(args: ConnectArgs) -> ExitCode {
             if let Some(line) = particles.world.everyone.summary() {
                 protocol::say!("dem-client: {line}");
             }
+            if steps < welcome.steps && interrupted.load(Ordering::SeqCst) {
+                protocol::say!("dem-client: interrupted after {steps} of {} steps", welcome.steps);
+                return ExitCode::from(130);
+            }
             ExitCode::SUCCESS
         }
         Err(e) => {

@@ -1,49 +1,43 @@
 //! Outputs of `dem-client run`: particles.csv, energy.csv, VTK polydata (.vtp + .pvd).
 
 use crate::dem::world::World;
-use std::fs::File;
-use std::io::{BufWriter, Write};
+use scene::row_file::RowFile;
+use std::io::Write;
 use std::path::Path;
 
-/// Same columns as lbm-server's particles.csv; f and t are the contact force and torque.
-pub struct ParticleCsv(BufWriter<File>);
+/// Same columns as lbm-server's particles.csv; f and t are the contact force and torque. Each
+/// step's rows reach the file whole, at once (a crash leaves whole rows).
+pub struct ParticleCsv(RowFile);
 
 impl ParticleCsv {
     pub fn create(path: &Path) -> std::io::Result<Self> {
-        let mut w = BufWriter::new(File::create(path)?);
-        writeln!(w, "step,time,id,x,y,z,vx,vy,vz,wx,wy,wz,fx,fy,fz,tx,ty,tz")?;
-        Ok(Self(w))
+        RowFile::create(path, "step,time,id,x,y,z,vx,vy,vz,wx,wy,wz,fx,fy,fz,tx,ty,tz").map(Self)
     }
 
     pub fn write(&mut self, step: u64, world: &World) -> std::io::Result<()> {
+        let w = self.0.staged();
         for b in &world.bodies {
-            write!(self.0, "{step},{:e},{}", world.time, b.id)?;
+            write!(w, "{step},{:e},{}", world.time, b.id)?;
             for v in [b.x, b.v, b.w, b.f, b.t] {
-                write!(self.0, ",{:e},{:e},{:e}", v.x, v.y, v.z)?;
+                write!(w, ",{:e},{:e},{:e}", v.x, v.y, v.z)?;
             }
-            writeln!(self.0)?;
+            writeln!(w)?;
         }
-        Ok(())
-    }
-
-    pub fn flush(&mut self) -> std::io::Result<()> {
-        self.0.flush()
+        self.0.commit()
     }
 }
 
-/// step,time,kinetic_energy,contacts.
-pub struct EnergyCsv(BufWriter<File>);
+/// step,time,kinetic_energy,contacts: a row every step, written to the file at each `commit`.
+pub struct EnergyCsv(RowFile);
 
 impl EnergyCsv {
     pub fn create(path: &Path) -> std::io::Result<Self> {
-        let mut w = BufWriter::new(File::create(path)?);
-        writeln!(w, "step,time,kinetic_energy,contacts")?;
-        Ok(Self(w))
+        RowFile::create(path, "step,time,kinetic_energy,contacts").map(Self)
     }
 
     pub fn write(&mut self, step: u64, world: &World) -> std::io::Result<()> {
         writeln!(
-            self.0,
+            self.0.staged(),
             "{step},{:e},{:e},{}",
             world.time,
             world.kinetic_energy(),
@@ -51,8 +45,9 @@ impl EnergyCsv {
         )
     }
 
-    pub fn flush(&mut self) -> std::io::Result<()> {
-        self.0.flush()
+    /// Writes the rows since the last commit (at each output step and at the end).
+    pub fn commit(&mut self) -> std::io::Result<()> {
+        self.0.commit()
     }
 }
 

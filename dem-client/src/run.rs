@@ -46,6 +46,13 @@ pub fn main(args: RunArgs) -> ExitCode {
         None => args.steps.unwrap_or(scene.time.steps),
     };
     let out = args.out.unwrap_or_else(|| PathBuf::from("out").join(&scene.name));
+    let _lock = match lock_output(&out) {
+        Ok(lock) => lock,
+        Err(e) => {
+            protocol::say!("dem-client: error: {e}");
+            return ExitCode::from(2);
+        }
+    };
     let interrupted = Arc::new(AtomicBool::new(false));
     let flag = interrupted.clone();
     if let Err(e) = ctrlc::set_handler(move || flag.store(true, Ordering::SeqCst)) {
@@ -61,6 +68,13 @@ pub fn main(args: RunArgs) -> ExitCode {
     }
 }
 
+/// The output folder `out`, made and locked for this run (a run into it already is refused).
+fn lock_output(out: &std::path::Path) -> Result<scene::output_lock::OutputLock, String> {
+    std::fs::create_dir_all(out)
+        .map_err(|e| format!("cannot create the output folder {}: {e}", out.display()))?;
+    scene::output_lock::OutputLock::take(out)
+}
+
 /// Runs `steps` output steps; Ok(false) when interrupted.
 fn simulate(
     scene: &scene::Scene,
@@ -69,7 +83,6 @@ fn simulate(
     out: &std::path::Path,
     interrupted: &AtomicBool,
 ) -> std::io::Result<bool> {
-    std::fs::create_dir_all(out)?;
     let removed = scene::outputs::clear_earlier(out, scene::outputs::DEM_CLIENT)?;
     if removed > 0 {
         protocol::say!("dem-client: removed {removed} output files of an earlier run");
@@ -95,6 +108,7 @@ fn simulate(
         energy.write(step, &world)?;
         if step % interval == 0 || step == steps {
             csv.write(step, &world)?;
+            energy.commit()?;
             if let Some(v) = vtk.as_mut() {
                 v.write(step, &world)?;
             }
@@ -105,8 +119,7 @@ fn simulate(
         world.advance(k);
         done += 1;
     }
-    csv.flush()?;
-    energy.flush()?;
+    energy.commit()?;
     let wall = started.elapsed().as_secs_f64();
     let particle_steps = (done * k) as f64 * world.bodies.len() as f64;
     protocol::say!(

@@ -166,8 +166,12 @@ pub fn run(scene: &Scene, scene_file: &str, steps: u64, out: &Path, interrupted:
         Err(Stop::Interrupted) => ("interrupted".to_string(), 130),
         Err(Stop::Failed(e)) => (format!("error: {e}"), 1),
     };
-    if let Err(Stop::Failed(e)) = &result {
-        protocol::say!("lbm-server: error: {e}");
+    match &result {
+        Err(Stop::Failed(e)) => protocol::say!("lbm-server: error: {e}"),
+        Err(Stop::Interrupted) => {
+            protocol::say!("lbm-server: interrupted after {} of {steps} steps", lattice.time)
+        }
+        Ok(()) => {}
     }
     let cells = units.n.iter().product::<usize>() as f64;
     let summary = FluidSummary {
@@ -184,7 +188,10 @@ pub fn run(scene: &Scene, scene_file: &str, steps: u64, out: &Path, interrupted:
         exit_reason: reason,
         exit_code: code,
     };
-    write_summary(&summary, out);
+    if let Err(e) = write_summary(&summary, out) {
+        protocol::say!("lbm-server: error: summary.json: {e}");
+        return 1;
+    }
     if code == 0 {
         protocol::say!(
             "lbm-server: {} steps in {wall:.2} s ({:.2} MLUPS); output in {}",
@@ -196,10 +203,12 @@ pub fn run(scene: &Scene, scene_file: &str, steps: u64, out: &Path, interrupted:
     code
 }
 
-/// The device and the scene's lattice on it, the run's first line said (and a warning where its
-/// tau is near 1/2).
+/// The device and the scene's lattice on it, the run's first line said once it is ready to step
+/// (and a warning where its tau is near 1/2).
 fn start_lattice(scene: &Scene, units: &LatticeUnits) -> Result<(Arc<Gpu>, GpuLattice), String> {
     let gpu = Arc::new(Gpu::new()?);
+    let lattice = GpuLattice::new(gpu.clone(), setup_of(units), health_of(units), None)?;
+    crate::run::started();
     protocol::say!(
         "lbm-server: scene '{}': {}x{}x{} cells, dx {:e} m, dt {:e} s, tau {:.4}, Mach {:.3}, {} on {}",
         scene.name,
@@ -216,16 +225,13 @@ fn start_lattice(scene: &Scene, units: &LatticeUnits) -> Result<(Arc<Gpu>, GpuLa
     if let Some(warning) = stability_warning(units, false) {
         protocol::say!("lbm-server: warning: {warning}");
     }
-    let lattice = GpuLattice::new(gpu.clone(), setup_of(units), health_of(units), None)?;
     Ok((gpu, lattice))
 }
 
-/// summary.json in `out` (an error said, not fatal: the run's other outputs are written).
-fn write_summary(summary: &FluidSummary, out: &Path) {
+/// summary.json in `out` (the run's other outputs are written before it).
+fn write_summary(summary: &FluidSummary, out: &Path) -> std::io::Result<()> {
     let text = serde_json::to_string_pretty(summary).unwrap_or_default();
-    if let Err(e) = std::fs::write(out.join("summary.json"), text + "\n") {
-        protocol::say!("lbm-server: error: summary.json: {e}");
-    }
+    std::fs::write(out.join("summary.json"), text + "\n")
 }
 
 /// The outputs of one fluid run.
@@ -287,6 +293,7 @@ impl<'a> FluidRun<'a> {
             self.last_good = Some(next);
             progress.update(next);
             if stopping {
+                progress.abandon();
                 self.fields.flush().map_err(Stop::Failed)?;
                 return Err(Stop::Interrupted);
             }
@@ -295,12 +302,15 @@ impl<'a> FluidRun<'a> {
         self.fields.flush().map_err(Stop::Failed)
     }
 
-    /// Describes an unhealthy cell and writes the last good snapshot.
+    /// Describes the cell furthest out of bounds (`bad`, the first found, where none is further)
+    /// and writes the last good snapshot.
     fn blow_up(&mut self, lattice: &GpuLattice, step: u64, check: u64, bad: Unhealthy) -> Stop {
+        let bad = lattice.furthest_unhealthy().unwrap_or(bad);
+        let (origin, dx) = (self.scene.domain.min, self.units.dx);
         let mut msg = format!(
-            "the fluid became unstable between steps {} and {step}: {}",
+            "the fluid became unstable between steps {} and {step}: furthest out of bounds, {}",
             step.saturating_sub(check),
-            bad.describe(&health_of(self.units))
+            bad.describe(&health_of(self.units), origin, dx)
         );
         if let Some((good, fields)) = self.last_good.take().zip(lattice.kept_fields()) {
             msg += &self.fields.write_last_good(good, &fields);

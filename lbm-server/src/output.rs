@@ -2,17 +2,18 @@
 //! report it, and progress on the terminal. A coupled run's summary.json is `run/summary.rs`'s.
 
 use protocol::{ParticleReply, ParticleState};
+use scene::row_file::RowFile;
 use serde::Serialize;
-use std::fs::File;
-use std::io::{BufWriter, IsTerminal, Write};
+use std::io::{IsTerminal, Write};
 use std::path::Path;
 use std::time::{Duration, Instant};
 
 /// The particles of a coupled run at its output steps, SI units: particles.csv (one row per
-/// particle per output step, header row first) and, with `dem.output.vtk`, particles_NNNNNN.vtp
+/// particle per output step, header row first; each step's rows written whole, at once, so a crash
+/// leaves whole rows) and, with `dem.output.vtk`, particles_NNNNNN.vtp
 /// + particles.pvd for ParaView (each particle's state and the fluid's load on it).
 pub struct ParticleOutput {
-    writer: BufWriter<File>,
+    rows: RowFile,
     vtk: Option<scene::vtp::ParticleSeries>,
 }
 
@@ -21,10 +22,9 @@ impl ParticleOutput {
 
     /// particles.csv in `out`, with its header; the .vtp series where `vtk`.
     pub fn create(out: &Path, vtk: bool) -> std::io::Result<Self> {
-        let mut writer = BufWriter::with_capacity(1 << 20, File::create(out.join("particles.csv"))?);
-        writeln!(writer, "{}", Self::HEADER)?;
+        let rows = RowFile::create(&out.join("particles.csv"), Self::HEADER)?;
         let vtk = vtk.then(|| scene::vtp::ParticleSeries::new(out));
-        Ok(Self { writer, vtk })
+        Ok(Self { rows, vtk })
     }
 
     /// Writes the particles of one step (states and replies in SI, same order); an error names
@@ -37,7 +37,7 @@ impl ParticleOutput {
         replies: &[ParticleReply],
     ) -> Result<(), String> {
         self.write_rows(step, time, states, replies)
-            .map_err(|e| format!("particles.csv: {e}"))?;
+            .map_err(|e| e.to_string())?;
         let Some(vtk) = &mut self.vtk else {
             return Ok(());
         };
@@ -70,19 +70,15 @@ impl ParticleOutput {
         states: &[ParticleState],
         replies: &[ParticleReply],
     ) -> std::io::Result<()> {
+        let w = self.rows.staged();
         for (s, r) in states.iter().zip(replies) {
-            let w = &mut self.writer;
             write!(w, "{step},{time:e},{}", s.id)?;
             for v in [s.position, s.velocity, s.angular_velocity, r.force, r.torque] {
                 write!(w, ",{:e},{:e},{:e}", v[0], v[1], v[2])?;
             }
             writeln!(w)?;
         }
-        Ok(())
-    }
-
-    pub fn flush(&mut self) -> std::io::Result<()> {
-        self.writer.flush()
+        self.rows.commit()
     }
 }
 
@@ -172,6 +168,13 @@ impl Progress {
     pub fn finish(&self) {
         if let Some(bar) = &self.bar {
             bar.finish();
+        }
+    }
+
+    /// Leaves the bar at the step where a run stopped early (`finish`, or dropping it, fills it).
+    pub fn abandon(&self) {
+        if let Some(bar) = &self.bar {
+            bar.abandon();
         }
     }
 }

@@ -30,7 +30,7 @@ use session::Session;
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 
 #[derive(clap::Args)]
 pub struct RunArgs {
@@ -66,7 +66,8 @@ const EXIT_FAILURE: u8 = 1;
 const EXIT_BAD_INPUT: u8 = 2;
 const EXIT_INTERRUPTED: u8 = 130;
 
-/// How a run ended without failure.
+/// How a run ended without failure: only a completed run exits 0; one stopped before its last
+/// step, by Ctrl-C or the DEM's STOP, exits 130.
 enum Ending {
     Completed,
     Interrupted,
@@ -74,6 +75,11 @@ enum Ending {
 }
 
 pub fn main(args: RunArgs) -> ExitCode {
+    let interrupted = Arc::new(AtomicBool::new(false));
+    let flag = interrupted.clone();
+    if let Err(e) = ctrlc::set_handler(move || on_ctrl_c(&flag)) {
+        protocol::say!("lbm-server: warning: cannot install the Ctrl-C handler: {e}");
+    }
     let prepared = match prepare(&args) {
         Ok(p) => p,
         Err(e) => {
@@ -81,11 +87,6 @@ pub fn main(args: RunArgs) -> ExitCode {
             return ExitCode::from(EXIT_BAD_INPUT);
         }
     };
-    let interrupted = Arc::new(AtomicBool::new(false));
-    let flag = interrupted.clone();
-    if let Err(e) = ctrlc::set_handler(move || flag.store(true, Ordering::SeqCst)) {
-        protocol::say!("lbm-server: warning: cannot install the Ctrl-C handler: {e}");
-    }
     if prepared.scene.lattice.is_some() && prepared.scene.particle_count() == 0 {
         let p = &prepared;
         return ExitCode::from(crate::fluid::run(
@@ -98,9 +99,38 @@ pub fn main(args: RunArgs) -> ExitCode {
     }
     protocol::cleanup::remove_stale_runs();
     let run = new_run_name();
+    let _ = RUN.set(run.clone());
     let code = Session::start(prepared, &run, args.dem, interrupted);
     protocol::cleanup::remove_run(&run);
     ExitCode::from(code)
+}
+
+/// Whether the run is still starting (the scene loaded, the device opened, its kernels compiled:
+/// seconds on a CPU driver), with nothing yet to end in order: Ctrl-C then ends the process at
+/// once. Over once the DEM is started or the fluid alone steps ([`started`]).
+static STARTING: AtomicBool = AtomicBool::new(true);
+
+/// The run's name, for Ctrl-C during start-up to remove the services made under it.
+static RUN: OnceLock<String> = OnceLock::new();
+
+/// Ctrl-C (SIGINT, SIGTERM): during start-up the process ends at once (exit 130, no outputs yet
+/// but the scene's copy); later the run stops at its next step (`interrupted`).
+fn on_ctrl_c(interrupted: &AtomicBool) {
+    if STARTING.load(Ordering::SeqCst) {
+        protocol::say!("lbm-server: interrupted during start-up");
+        if let Some(run) = RUN.get() {
+            protocol::cleanup::remove_run(run);
+        }
+        // _exit: the main thread may be inside the device's driver, whose exit handlers must not
+        // run under it.
+        unsafe { libc::_exit(i32::from(EXIT_INTERRUPTED)) };
+    }
+    interrupted.store(true, Ordering::SeqCst);
+}
+
+/// Start-up is over: Ctrl-C from now on stops the run in order.
+pub(crate) fn started() {
+    STARTING.store(false, Ordering::SeqCst);
 }
 
 impl Session {

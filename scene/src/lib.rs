@@ -545,8 +545,10 @@ pub mod dem;
 mod every_field;
 pub mod lattice;
 mod numbers;
+pub mod output_lock;
 pub mod outputs;
 pub mod overlap;
+pub mod row_file;
 mod times;
 pub mod vtp;
 

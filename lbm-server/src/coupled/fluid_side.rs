@@ -31,7 +31,7 @@ use std::sync::Arc;
 pub struct FluidSide {
     pub(super) lattice: GpuLattice,
     pub(super) units: LatticeUnits,
-    origin: [f64; 3],
+    pub(super) origin: [f64; 3],
     fluid_density: f64,
     gravity: [f64; 3],
     lubrication: Option<HeldLubrication>,

@@ -46,11 +46,16 @@ impl FluidSide {
         Ok(())
     }
 
-    /// The error of a blow-up found at this step: the step, the cell and its quantities, and
-    /// the fields of the last check that passed written as last_good.vti.
+    /// The error of a blow-up found at this step: the step, the cell furthest out of bounds
+    /// (`bad`, the first found, where none is further) and its quantities, and the fields of the
+    /// last check that passed written as last_good.vti.
     pub(super) fn unstable(&mut self, bad: Unhealthy) -> String {
-        let what = bad.describe(&health_of(&self.units));
-        let mut msg = format!("the fluid became unstable by step {}: {what}", self.steps);
+        let bad = self.lattice.furthest_unhealthy().unwrap_or(bad);
+        let what = bad.describe(&health_of(&self.units), self.origin, self.units.dx);
+        let mut msg = format!(
+            "the fluid became unstable by step {}: furthest out of bounds, {what}",
+            self.steps
+        );
         if let Some((good, fields)) = self.last_good.take().zip(self.lattice.kept_fields()) {
             msg += &self.fields.write_last_good(good, &fields);
         }

@@ -1,7 +1,7 @@
 //! Every GPU kernel against the f64 reference step, on random populations.
 
 use super::geometry::{Cell, Face, Operator, Setup};
-use super::gpu::{fits_device, Gpu, GpuLattice, Health, ListLayout};
+use super::gpu::{fits_device, furthest_out_of_bounds, Gpu, Health, GpuLattice, ListLayout};
 use super::mrt::Rates;
 use super::random::{random_populations, Random};
 use super::reference;
@@ -308,6 +308,60 @@ fn the_health_check_finds_the_cell_the_full_readback_finds() {
     assert_eq!((full.cell, full.coords), (one.cell, one.coords));
     assert_eq!([one.rho, one.u[0], one.u[1], one.u[2]], fields[77]);
     assert!((one.u[1] + 0.4).abs() < 1e-5, "{one:?}");
+}
+
+/// A blow-up is named where it is furthest out of bounds, not at the first cell in memory order
+/// that the check finds: of a cell a little too fast and one far too fast, the far one; a negative
+/// density is further out than a speed just above the limit; a non-finite value furthest of all.
+#[test]
+fn a_blow_up_is_named_at_the_cell_furthest_out_of_bounds() {
+    let setup = Setup::new([8, 6, 5], [Face::Wall; 6], 0.7, Operator::Bgk);
+    let mut f = random_populations(&setup, 11);
+    let lattice_health = Health::default();
+    let mut lattice = GpuLattice::new(gpu(), setup.clone(), lattice_health, None).unwrap();
+    lattice.set_populations(&f);
+    assert!(lattice.health().is_none());
+    assert!(lattice.furthest_unhealthy().is_none());
+    f[77] = std::array::from_fn(|i| super::d3q19::equilibrium_shifted(i, 1.0, [0.42, 0.0, 0.0]));
+    f[141] = std::array::from_fn(|i| super::d3q19::equilibrium_shifted(i, 1.0, [0.0, 0.0, -0.6]));
+    lattice.set_populations(&f);
+    assert_eq!(
+        lattice.health().expect("unhealthy").cell,
+        77,
+        "the check finds the first"
+    );
+    let furthest = lattice.furthest_unhealthy().expect("unhealthy");
+    assert_eq!((furthest.cell, furthest.coords), (141, setup.coords(141)));
+    let said = furthest.describe(&lattice_health, [0.5, 0.0, -1.0], 0.01);
+    let [i, j, k] = setup.coords(141);
+    let centre = |origin: f64, n: usize| origin + (n as f64 + 0.5) * 0.01;
+    let at = format!(
+        "cell 141 at ({i}, {j}, {k}), centre ({:.4e}, {:.4e}, {:.4e}) m: lattice speed 0.600",
+        centre(0.5, i),
+        centre(0.0, j),
+        centre(-1.0, k)
+    );
+    assert!(said.starts_with(&at), "{said}");
+    let health = Health::default();
+    let fields = [
+        [1.0, 0.0, 0.0, 0.0],
+        [1.0, 0.41, 0.0, 0.0],
+        [-0.2, 0.0, 0.0, 0.0],
+        [1.0, 0.0, 0.0, 0.5],
+    ];
+    assert_eq!(
+        furthest_out_of_bounds(&fields, &health),
+        Some(2),
+        "rho -0.2 is 2.4 x the bound"
+    );
+    let nan = [f32::NAN, 0.0, 0.0, 0.0];
+    let fields = [
+        [1.0, 0.0, 0.0, 0.0],
+        [-0.2, 0.0, 0.0, 0.0],
+        nan,
+        [f32::INFINITY; 4],
+    ];
+    assert_eq!(furthest_out_of_bounds(&fields, &health), Some(2));
 }
 
 mod validation_cases {

@@ -42,21 +42,29 @@ impl Session {
         if !end.stop {
             return Ok(None);
         }
-        progress.finish();
+        if last {
+            progress.finish();
+        } else {
+            progress.abandon();
+        }
         self.end_early(last).map(Some)
     }
 
     /// A run stopped by Ctrl-C or the DEM's STOP: the field outputs of the step it stopped at
-    /// (unless it was the last, which wrote them), and how it ended.
+    /// (unless it was the last, which wrote them), and how it ended (stopped at the last step, it
+    /// completed).
     fn end_early(&mut self, last: bool) -> Result<Ending, String> {
         if !last {
             self.fluid
                 .write_fields_of_early_end()
                 .map_err(|e| self.describe_fluid(e))?;
         }
-        // Ctrl-C on a terminal reaches both processes: our own interrupt takes precedence.
+        // Ctrl-C on a terminal reaches both processes: our own interrupt takes precedence. The
+        // DEM's STOP on the last step ends nothing early.
         Ok(if self.interrupted.load(Ordering::SeqCst) {
             Ending::Interrupted
+        } else if last {
+            Ending::Completed
         } else {
             Ending::StoppedByPeer
         })

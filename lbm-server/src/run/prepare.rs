@@ -1,12 +1,14 @@
-//! A scene ready to run: loaded, checked (a `[lattice]` where it has particles, the steps, the
-//! connect timeout), its output folder made and cleared of an earlier run's outputs.
+//! A scene ready to run: loaded, checked (a `[lattice]` where it has particles, one this device
+//! can hold, the steps, the connect timeout), its output folder made, locked for this run and
+//! cleared of an earlier run's outputs.
 
 use super::{DemMode, RunArgs};
+use scene::output_lock::OutputLock;
 use scene::Scene;
 use std::path::PathBuf;
 use std::time::Duration;
 
-/// A scene ready to run: validated, with its output folder made.
+/// A scene ready to run: validated, with its output folder made and locked.
 pub(super) struct Prepared {
     pub(super) scene: Scene,
     pub(super) scene_file: String,
@@ -14,6 +16,8 @@ pub(super) struct Prepared {
     pub(super) out: PathBuf,
     pub(super) scene_copy: PathBuf,
     pub(super) connect_timeout: Duration,
+    /// The output folder's lock, held for the whole run.
+    pub(super) _lock: OutputLock,
 }
 
 pub(super) fn prepare(args: &RunArgs) -> Result<Prepared, String> {
@@ -46,12 +50,16 @@ pub(super) fn prepare(args: &RunArgs) -> Result<Prepared, String> {
     if connect_timeout.is_nan() || connect_timeout <= 0.0 {
         return Err(format!("--connect-timeout = {connect_timeout} s: must be > 0"));
     }
+    if let Some(units) = &scene.lattice_units {
+        fits_the_device(units.n)?;
+    }
     let out = args
         .out
         .clone()
         .unwrap_or_else(|| PathBuf::from("out").join(&scene.name));
     std::fs::create_dir_all(&out)
         .map_err(|e| format!("cannot create the output folder {}: {e}", out.display()))?;
+    let lock = OutputLock::take(&out)?;
     clear_earlier_outputs(&out)?;
     let scene_copy = out.join("scene.toml");
     std::fs::write(&scene_copy, text).map_err(|e| format!("{}: {e}", scene_copy.display()))?;
@@ -62,7 +70,18 @@ pub(super) fn prepare(args: &RunArgs) -> Result<Prepared, String> {
         out,
         scene_copy,
         connect_timeout: Duration::try_from_secs_f64(connect_timeout).unwrap_or(Duration::MAX),
+        _lock: lock,
     })
+}
+
+/// A lattice the device cannot hold is refused before the output folder is touched or the
+/// lattice allocated: the limits of the adapter the run opens (where none is found, the run's
+/// start says why).
+fn fits_the_device(n: [usize; 3]) -> Result<(), String> {
+    match crate::lbm::gpu::Gpu::adapter_limits() {
+        Ok(limits) => crate::lbm::gpu::fits_device(&limits, n),
+        Err(_) => Ok(()),
+    }
 }
 
 /// Removes what an earlier run wrote into `out` under this run's output names, saying so.

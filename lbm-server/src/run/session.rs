@@ -1,6 +1,6 @@
 //! One coupled run in progress ([`Session`]): opened (the link, particles.csv, the fluid),
 //! connected to the DEM side (started or announced, then the handshake), stepped in lockstep
-//! (`lockstep.rs`), finished (outputs flushed, the DEM ended, summary.json written).
+//! (`lockstep.rs`), finished (the DEM ended, summary.json written).
 
 use super::counters::Counters;
 use super::prepare::Prepared;
@@ -55,7 +55,7 @@ impl Session {
         };
         let link = FluidLink::create(options, p.scene.capacity() as usize).map_err(|e| e.to_string())?;
         let particles = ParticleOutput::create(&p.out, p.scene.dem.output.vtk)
-            .map_err(|e| format!("{}: {e}", p.out.join("particles.csv").display()))?;
+            .map_err(|e| format!("{}: {e}", p.out.display()))?;
         let fluid = FluidSide::for_scene(&p.scene, p.steps, &p.out)?;
         Ok(Session {
             p,
@@ -73,6 +73,7 @@ impl Session {
 
     /// Starts or announces the DEM side and performs the handshake.
     fn connect(&mut self, mode: DemMode) -> Result<(), String> {
+        super::started();
         let spawned = self.start_dem(mode)?;
         let (scene, steps) = (&self.p.scene, self.p.steps);
         let physics = self.fluid.physics();
@@ -149,12 +150,13 @@ impl Session {
         format!("{e}{}; last completed step: {last}", e.hint())
     }
 
-    /// Flushes output, ends the DEM process, writes summary.json; returns the exit code.
+    /// Ends the DEM process, writes summary.json; returns the exit code (1 where summary.json
+    /// cannot be written).
     fn finish(mut self, result: Result<Ending, String>) -> u8 {
         let (reason, code) = match &result {
             Ok(Ending::Completed) => ("completed".to_string(), 0),
             Ok(Ending::Interrupted) => ("interrupted".to_string(), EXIT_INTERRUPTED),
-            Ok(Ending::StoppedByPeer) => ("stopped by the DEM client".to_string(), 0),
+            Ok(Ending::StoppedByPeer) => ("stopped by the DEM client".to_string(), EXIT_INTERRUPTED),
             Err(_) if self.interrupted.load(Ordering::SeqCst) => {
                 ("interrupted".to_string(), EXIT_INTERRUPTED)
             }
@@ -163,13 +165,21 @@ impl Session {
         if let (Err(msg), false) = (&result, code == EXIT_INTERRUPTED) {
             protocol::say!("lbm-server: error: {msg}");
         }
-        if let Err(e) = self.particles.flush() {
-            protocol::say!("lbm-server: error: particles.csv: {e}");
-        }
         self.end_dem(result.is_ok() || self.told_to_end);
         let summary = self.summary(reason, code);
         if let Err(e) = summary.write(&self.p.out.join("summary.json")) {
+            // The run's record lost: whatever the run did, it did not end well.
             protocol::say!("lbm-server: error: summary.json: {e}");
+            return EXIT_FAILURE;
+        }
+        if code == EXIT_INTERRUPTED {
+            protocol::say!(
+                "lbm-server: {} after {} of {} steps; output in {}",
+                summary.exit_reason,
+                summary.steps_completed,
+                summary.steps_requested,
+                self.p.out.display()
+            );
         }
         if code == 0 {
             protocol::say!(

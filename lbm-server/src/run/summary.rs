@@ -47,7 +47,8 @@ pub(super) struct Summary {
     /// The fluid's discretisation.
     pub lattice: LatticeSummary,
     pub peer: Option<PeerInfo>,
-    /// "completed", "interrupted", "stopped by the DEM client", or "error: ..."
+    /// "completed" (exit 0), "interrupted" (Ctrl-C or SIGTERM, exit 130), "stopped by the DEM
+    /// client" (its STOP before the last step, exit 130), or "error: ..." (exit 1)
     pub exit_reason: String,
     pub exit_code: u8,
 }

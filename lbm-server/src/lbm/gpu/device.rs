@@ -91,25 +91,37 @@ fn choose_adapter(found: &[AdapterOffer]) -> Result<usize, String> {
     ))
 }
 
+/// The adapter [`choose_adapter`] picks among those of the backends allowed by WGPU_BACKEND
+/// (default: all).
+fn chosen_adapter() -> Result<wgpu::Adapter, String> {
+    // WGPU_BACKEND (vulkan, metal, dx12, gl) and friends are honoured.
+    let mut descriptor = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
+    // wgpu checks each indirect dispatch's workgroup counts with a dispatch of its own and two
+    // barriers, four times per coupled step with the redo; `covered_groups` (imb.wgsl) writes
+    // them within the limits itself. WGPU_VALIDATION_INDIRECT_CALL=1 turns the check back on.
+    descriptor.flags = (descriptor.flags - wgpu::InstanceFlags::VALIDATION_INDIRECT_CALL).with_env();
+    let backends = descriptor.backends;
+    let instance = wgpu::Instance::new(descriptor);
+    let adapters = pollster::block_on(instance.enumerate_adapters(backends));
+    let found: Vec<AdapterOffer> = adapters.iter().map(AdapterOffer::of).collect();
+    let chosen = choose_adapter(&found)?;
+    Ok(adapters
+        .into_iter()
+        .nth(chosen)
+        .expect("an index into the adapters"))
+}
+
 impl Gpu {
+    /// The limits of the adapter [`Gpu::new`] opens, its device left closed: a lattice is checked
+    /// against them before a run removes or allocates anything.
+    pub fn adapter_limits() -> Result<wgpu::Limits, String> {
+        chosen_adapter().map(|adapter| adapter.limits())
+    }
+
     /// Opens the adapter [`choose_adapter`] picks among those of the backends allowed by
     /// WGPU_BACKEND (default: all).
     pub fn new() -> Result<Gpu, String> {
-        // WGPU_BACKEND (vulkan, metal, dx12, gl) and friends are honoured.
-        let mut descriptor = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
-        // wgpu checks each indirect dispatch's workgroup counts with a dispatch of its own and two
-        // barriers, four times per coupled step with the redo; `covered_groups` (imb.wgsl) writes
-        // them within the limits itself. WGPU_VALIDATION_INDIRECT_CALL=1 turns the check back on.
-        descriptor.flags = (descriptor.flags - wgpu::InstanceFlags::VALIDATION_INDIRECT_CALL).with_env();
-        let backends = descriptor.backends;
-        let instance = wgpu::Instance::new(descriptor);
-        let adapters = pollster::block_on(instance.enumerate_adapters(backends));
-        let found: Vec<AdapterOffer> = adapters.iter().map(AdapterOffer::of).collect();
-        let chosen = choose_adapter(&found)?;
-        let adapter = adapters
-            .into_iter()
-            .nth(chosen)
-            .expect("an index into the adapters");
+        let adapter = chosen_adapter()?;
         let limits = adapter.limits();
         // Timestamps between passes where the device has them (`bench --passes`: each pass's time
         // by the device's clock).

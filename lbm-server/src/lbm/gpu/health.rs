@@ -22,7 +22,8 @@ impl Default for Health {
     }
 }
 
-/// The first unhealthy cell found by a health check.
+/// An unhealthy cell found by a health check: the first in memory order ([`GpuLattice::health`]),
+/// or the one furthest out of bounds ([`GpuLattice::furthest_unhealthy`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Unhealthy {
     pub cell: usize,
@@ -32,9 +33,9 @@ pub struct Unhealthy {
 }
 
 impl Unhealthy {
-    /// "cell K at (i, j, k): QUANTITY", naming the quantity that failed the check.
-    pub fn describe(&self, health: &Health) -> String {
-        let quantity = if !(self.rho.is_finite() && self.u.iter().all(|v| v.is_finite())) {
+    /// The quantity that failed the check.
+    fn quantity(&self, health: &Health) -> String {
+        if !(self.rho.is_finite() && self.u.iter().all(|v| v.is_finite())) {
             format!("non-finite values (density {}, velocity {:?})", self.rho, self.u)
         } else if f64::from((self.rho - 1.0).abs()) > health.max_density_deviation {
             let (lo, hi) = (
@@ -48,10 +49,49 @@ impl Unhealthy {
                 "lattice speed {speed:.3} (Mach {:.2}) above the limit",
                 speed * 3f32.sqrt()
             )
-        };
-        let [x, y, z] = self.coords;
-        format!("cell {} at ({x}, {y}, {z}): {quantity}", self.cell)
+        }
     }
+
+    /// "cell K at (i, j, k), centre (x, y, z) m: QUANTITY", naming the quantity that failed the
+    /// check, the centre in SI in a lattice of cells `dx` [m] wide from `origin` [m].
+    pub fn describe(&self, health: &Health, origin: [f64; 3], dx: f64) -> String {
+        let [x, y, z]: [f64; 3] = std::array::from_fn(|a| origin[a] + (self.coords[a] as f64 + 0.5) * dx);
+        let [i, j, k] = self.coords;
+        format!(
+            "cell {} at ({i}, {j}, {k}), centre ({x:.4e}, {y:.4e}, {z:.4e}) m: {}",
+            self.cell,
+            self.quantity(health)
+        )
+    }
+}
+
+/// How far a cell's density and velocity `v` lie out of the check's bounds, as a multiple of
+/// them: the larger of |u| / max_speed and |rho - 1| / max_density_deviation (out of bounds above
+/// 1); infinite where a value is not finite.
+pub fn out_of_bounds(v: [f32; 4], health: &Health) -> f64 {
+    if !v.iter().all(|x| x.is_finite()) {
+        return f64::INFINITY;
+    }
+    let speed = v[1..].iter().map(|&u| f64::from(u).powi(2)).sum::<f64>().sqrt();
+    let density = (f64::from(v[0]) - 1.0).abs();
+    (speed / health.max_speed).max(density / health.max_density_deviation)
+}
+
+/// The cell of `fields` furthest out of the check's bounds, if any is out (of equals, the first in
+/// memory order).
+pub fn furthest_out_of_bounds(fields: &[[f32; 4]], health: &Health) -> Option<usize> {
+    let mut furthest = None;
+    let mut most = 1.0;
+    for (cell, &v) in fields.iter().enumerate() {
+        let by = out_of_bounds(v, health);
+        if by > most {
+            (furthest, most) = (Some(cell), by);
+        }
+        if by == f64::INFINITY {
+            break;
+        }
+    }
+    furthest
 }
 
 impl GpuLattice {
@@ -72,6 +112,19 @@ impl GpuLattice {
         self.gpu.queue.submit([encoder.finish()]);
         let status: Vec<u32> = bytemuck::cast_slice(&self.gpu.read_buffer(&self.status, 16)).to_vec();
         (status[0] != u32::MAX).then_some(status[0] as usize)
+    }
+
+    /// The cell furthest out of the check's bounds (largest |u| or |rho - 1| against its limit;
+    /// a non-finite value furthest of all) in the fields of the last `health` or `fields`, if any
+    /// is out: where a blow-up is, where the first in memory order is merely where the check
+    /// found one. The whole field is read back: once, as a run fails.
+    pub fn furthest_unhealthy(&self) -> Option<Unhealthy> {
+        let bytes = self
+            .gpu
+            .read_buffer(&self.fields, (self.setup.cells() * 16) as u64);
+        let fields: &[[f32; 4]] = bytemuck::cast_slice(&bytes);
+        let cell = furthest_out_of_bounds(fields, &self.health)?;
+        Some(self.unhealthy(cell, fields[cell]))
     }
 
     fn unhealthy(&self, cell: usize, v: [f32; 4]) -> Unhealthy {

@@ -11,14 +11,15 @@ mod state;
 mod step;
 mod way;
 
-#[cfg(test)]
-pub(in crate::lbm) use bindings::fits_device;
+pub use bindings::fits_device;
 pub(in crate::lbm) use bindings::storage_buffer;
 #[cfg(test)]
 pub(in crate::lbm) use cell_list::CellList;
 pub use device::Gpu;
 #[cfg(test)]
 pub(in crate::lbm) use device::ListLayout;
+#[cfg(test)]
+pub(in crate::lbm) use health::furthest_out_of_bounds;
 pub use health::{Health, Unhealthy};
 pub(in crate::lbm) use params::vec4;
 pub use state::{equilibrium_field, total_mass, GpuLattice};
