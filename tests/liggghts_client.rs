@@ -12,6 +12,8 @@ use std::time::Duration;
 const ADAPTER: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/clients/liggghts/lbm_liggghts.py");
 const CHECK_LOADS: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/clients/liggghts/check_loads.py");
 const DECK: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/clients/liggghts/ten_cate_e1.in");
+/// lbmdem.py and lbmdem_scene.py, which the adapter imports from PYTHONPATH.
+const PYTHON_CLIENTS: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/clients/python");
 
 /// Ten Cate E1's sphere and liquid (validation/scenes/ten-cate-e1.toml, 6 cells per diameter) in
 /// a smaller box, 20 x 20 x 32 cells, for `steps` steps.
@@ -115,6 +117,7 @@ fn adapter(dir: &Path, run: &str, scene: &Path, deck: &Path, vars: &[(&str, &str
         .arg(deck)
         .arg("--log")
         .arg(dir.join("log.liggghts"))
+        .env("PYTHONPATH", PYTHON_CLIENTS)
         .current_dir(dir);
     for (name, value) in vars {
         cmd.args(["--var", name, value]);
@@ -126,6 +129,7 @@ fn adapter(dir: &Path, run: &str, scene: &Path, deck: &Path, vars: &[(&str, &str
 fn liggghts_present(test: &str) -> bool {
     let probe = Command::new("python3")
         .args([ADAPTER, "--probe"])
+        .env("PYTHONPATH", PYTHON_CLIENTS)
         .output()
         .expect("python3 runs");
     let text = String::from_utf8_lossy(&probe.stderr).into_owned();

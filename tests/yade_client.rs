@@ -1,8 +1,8 @@
 //! YADE as the DEM of a coupled run (clients/yade): it settles the Ten Cate E1 sphere as the
 //! built-in DEM does, and a YADE script that does not fit the scene ends the run with exit 2.
 //! Where yade or iceoryx2 for Debian's python is missing, the YADE tests say they were skipped
-//! and why, and pass (CI installs both: .ci/run). The scene reader the YADE scripts use
-//! (clients/yade/lbmdem_scene.py) needs only Python 3.11 and is checked everywhere.
+//! and why, and pass (CI installs both: .ci/run). The scene reader the Python DEMs use
+//! (clients/python/lbmdem_scene.py) needs only Python 3.11 and is checked everywhere.
 
 mod common;
 use common::*;
@@ -12,6 +12,8 @@ use std::time::Duration;
 
 const TEN_CATE: &str = include_str!("../validation/scenes/ten-cate-e1.toml");
 const CLIENT_DIR: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/clients/yade");
+/// lbmdem.py and lbmdem_scene.py, which the YADE module imports from PYTHONPATH.
+const PYTHON_CLIENTS: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/clients/python");
 
 /// The Debian python YADE runs on.
 const SYSTEM_PYTHON: &str = "/usr/bin/python3";
@@ -53,7 +55,7 @@ impl Yade {
             return None;
         }
         Some(Yade {
-            pythonpath: format!("{iox}:{CLIENT_DIR}"),
+            pythonpath: format!("{iox}:{PYTHON_CLIENTS}:{CLIENT_DIR}"),
             _one_run_at_a_time: SERIAL.lock().unwrap_or_else(|e| e.into_inner()),
         })
     }
@@ -321,7 +323,7 @@ for p in lbmdem_scene.Scene.load(sys.argv[2]).particles:
     print(" ".join(repr(float(v)) for v in (p.id, *p.position, *p.velocity, *p.angular_velocity, p.radius)))
 "#;
 
-/// The particles a DEM builds from the scene file (clients/yade/lbmdem_scene.py) are the scene
+/// The particles a DEM builds from the scene file (clients/python/lbmdem_scene.py) are the scene
 /// crate's to the bit: ids, positions (jittered insertion included), velocities, spins and radii
 /// of dem-client's step 0 (particles.csv and the step-0 VTK polydata).
 #[test]
@@ -358,7 +360,7 @@ fn the_python_scene_reader_makes_the_scenes_particles() {
         .expect("dem-client runs");
     assert!(run.status.success(), "{}", text(&run.stderr));
     let read = Command::new(python)
-        .args(["-c", READ_SCENE, CLIENT_DIR])
+        .args(["-c", READ_SCENE, PYTHON_CLIENTS])
         .arg(&scene)
         .output()
         .expect("python runs");
