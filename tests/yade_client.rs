@@ -389,3 +389,38 @@ fn vtp_radii(path: &Path) -> Vec<f64> {
     let values = after.split('>').nth(1).unwrap().split('<').next().unwrap();
     values.split_whitespace().map(|v| v.parse().unwrap()).collect()
 }
+
+/// `lbm-server run SCENE --dem yade` in one command: the YADE script written from the scene
+/// (OUT/dem.yade.py: the sphere from the scene reader, the domain's faces as walls,
+/// Hertz-Mindlin) settles the Ten Cate sphere as the built-in DEM does, peak speeds within 0.5%.
+#[test]
+fn dem_yade_in_one_command_settles_the_ten_cate_sphere_as_the_builtin_dem_does() {
+    let test = "dem_yade_in_one_command_settles_the_ten_cate_sphere_as_the_builtin_dem_does";
+    let Some(yade) = Yade::find(test) else {
+        return;
+    };
+    let (dir, scene) = ten_cate_scene("dem-yade", 60);
+    let builtin = dir.join("builtin");
+    let run = server(&scene, &builtin, &[]).output().expect("lbm-server runs");
+    assert!(run.status.success(), "built-in DEM run: {}", text(&run.stderr));
+    let out = dir.join("yade");
+    let mut command = server(&scene, &out, &["--dem", "yade"]);
+    command.env("PYTHONPATH", &yade.pythonpath);
+    let mut fluid = Fluid(start(command));
+    let (code, _) = fluid.0.wait_exit(Duration::from_secs(300));
+    let said = Proc::drain(&fluid.0.stdout) + &Proc::drain(&fluid.0.stderr);
+    assert_eq!(code, Some(0), "{said}");
+    let script = std::fs::read_to_string(out.join("dem.yade.py")).expect("the script is in OUT");
+    assert!(script.contains("Law2_ScGeom_MindlinPhys_Mindlin"), "{script}");
+    let s = summary(&out);
+    assert_eq!(s["steps_completed"], 60);
+    assert!(s["peer"]["software"].as_str().unwrap().contains("YADE"), "{s}");
+    let (with_builtin, with_yade) = (peak_settling_speed(&builtin), peak_settling_speed(&out));
+    eprintln!("peak settling speed: built-in DEM {with_builtin} m/s, --dem yade {with_yade} m/s");
+    assert!(
+        (with_yade - with_builtin).abs() <= 0.005 * with_builtin,
+        "peak settling speed with --dem yade {with_yade} m/s, with the built-in DEM {with_builtin} m/s"
+    );
+    let run = format!("lbmdem_{}_", fluid.0.child.id());
+    assert!(leftover_files(&run).is_empty(), "{:?}", leftover_files(&run));
+}

@@ -22,9 +22,6 @@ import sys
 import lbmdem_scene
 import scene_dem
 
-PROG = "scene_deck"
-
-
 def deck_text(scene: lbmdem_scene.Scene, setup: scene_dem.DemSetup, data_file: str) -> str:
     names = [m.name for m in setup.materials]
     boundary = " ".join("p" if p else "f" for p in setup.periodic)
@@ -111,27 +108,13 @@ def data_text(scene: lbmdem_scene.Scene, setup: scene_dem.DemSetup) -> str:
     return "\n".join(lines) + "\n"
 
 
-def main(argv: list) -> int:
-    if len(argv) != 3:
-        print(f"usage: {PROG}.py SCENE.toml DECK.in", file=sys.stderr)
-        return 2
-    scene_path, deck = argv[1], os.path.abspath(argv[2])
-    try:
-        scene = lbmdem_scene.Scene.load(scene_path)
-        setup = scene_dem.DemSetup(scene)
-    except (lbmdem_scene.SceneError, scene_dem.Unsupported) as e:
-        print(f"{PROG}: error: {e}", file=sys.stderr)
-        return 2
+def write(scene: lbmdem_scene.Scene, setup: scene_dem.DemSetup, deck: str) -> None:
     data = os.path.splitext(deck)[0] + ".data"
     with open(data, "w") as f:
         f.write(data_text(scene, setup))
     with open(deck, "w") as f:
         f.write(deck_text(scene, setup, data))
-    if setup.preset != "liggghts":
-        print(f"{PROG}: warning: the scene's contact preset is '{setup.preset}'; LIGGGHTS runs "
-              "dem-client's 'liggghts' preset", file=sys.stderr)
-    return 0
 
 
 if __name__ == "__main__":
-    sys.exit(main(sys.argv))
+    sys.exit(scene_dem.writer_main(sys.argv, "scene_deck.py", "liggghts", write))

@@ -20,11 +20,13 @@ material pair, time step, the way ``dem-client`` derives them (scene/src/dem.rs,
 from __future__ import annotations
 
 import math
-from typing import NamedTuple
+import os
+import sys
+from typing import Callable, NamedTuple
 
 import lbmdem_scene
 
-__all__ = ["DemSetup", "Wall", "Unsupported"]
+__all__ = ["DemSetup", "Wall", "Unsupported", "writer_main"]
 
 #: (2/5) B(2/5, 1/2), of the undamped Hertz contact time (dem-client/src/dem/timestep.rs).
 HERTZ_INTEGRAL = 1.471637592
@@ -179,3 +181,23 @@ def walls(scene: lbmdem_scene.Scene, periodic: tuple) -> list:
             out += [Wall(a, b["min"][a], 1, b.get("material") or own),
                     Wall(a, b["max"][a], -1, b.get("material") or own)]
     return out
+
+
+def writer_main(argv: list, prog: str, code: str, write: Callable) -> int:
+    """The command line of a writer, ``prog SCENE.toml FILE``: ``write(scene, setup, FILE)``
+    (FILE absolute); exit status 2 where the scene cannot be read or written, a warning where the
+    scene's contact preset is not the one ``code`` reproduces."""
+    if len(argv) != 3:
+        print(f"usage: {prog} SCENE.toml FILE", file=sys.stderr)
+        return 2
+    try:
+        scene = lbmdem_scene.Scene.load(argv[1])
+        setup = DemSetup(scene)
+    except (lbmdem_scene.SceneError, Unsupported) as e:
+        print(f"{prog}: error: {e}", file=sys.stderr)
+        return 2
+    write(scene, setup, os.path.abspath(argv[2]))
+    if setup.preset != code:
+        print(f"{prog}: warning: the scene's contact preset is '{setup.preset}'; {code.upper()} "
+              f"runs dem-client's '{code}' preset (docs/dem.md)", file=sys.stderr)
+    return 0

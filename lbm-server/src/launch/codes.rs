@@ -64,17 +64,23 @@ fn interpreter_of(script: &Path) -> String {
         .to_string()
 }
 
-/// Runs `interpreter args` to completion with `paths` before the user's PYTHONPATH; its stderr is
-/// the error where it fails.
+/// Runs `interpreter args` to completion with `paths` before the user's PYTHONPATH; the last line
+/// of its stderr is the error where it fails.
 fn python(what: &str, interpreter: &str, args: &[OsString], paths: &[PathBuf]) -> Result<(), String> {
     let output = Command::new(interpreter)
         .args(args)
         .env("PYTHONPATH", python_path(paths).map_err(|e| e.to_string())?)
         .output()
         .map_err(|e| format!("{what}: cannot run {interpreter}: {e}"))?;
+    let said = String::from_utf8_lossy(&output.stderr);
     if output.status.success() {
+        // A warning of the writer (another contact preset than the code's).
+        if !said.trim().is_empty() {
+            protocol::say!("lbm-server: {what}: {}", said.trim());
+        }
         return Ok(());
     }
-    let said = String::from_utf8_lossy(&output.stderr);
-    Err(format!("{what}: {}", said.trim()))
+    // Its last line: the message (a traceback's exception line).
+    let last = said.lines().rev().find(|l| !l.trim().is_empty()).unwrap_or("failed");
+    Err(format!("{what}: {}", last.trim()))
 }
