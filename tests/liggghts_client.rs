@@ -12,6 +12,8 @@ use std::time::Duration;
 const ADAPTER: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/clients/liggghts/lbm_liggghts.py");
 const CHECK_LOADS: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/clients/liggghts/check_loads.py");
 const DECK: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/clients/liggghts/ten_cate_e1.in");
+/// lbmdem.py and lbmdem_scene.py, which the adapter imports from PYTHONPATH.
+const PYTHON_CLIENTS: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/clients/python");
 
 /// Ten Cate E1's sphere and liquid (validation/scenes/ten-cate-e1.toml, 6 cells per diameter) in
 /// a smaller box, 20 x 20 x 32 cells, for `steps` steps.
@@ -115,6 +117,7 @@ fn adapter(dir: &Path, run: &str, scene: &Path, deck: &Path, vars: &[(&str, &str
         .arg(deck)
         .arg("--log")
         .arg(dir.join("log.liggghts"))
+        .env("PYTHONPATH", PYTHON_CLIENTS)
         .current_dir(dir);
     for (name, value) in vars {
         cmd.args(["--var", name, value]);
@@ -126,6 +129,7 @@ fn adapter(dir: &Path, run: &str, scene: &Path, deck: &Path, vars: &[(&str, &str
 fn liggghts_present(test: &str) -> bool {
     let probe = Command::new("python3")
         .args([ADAPTER, "--probe"])
+        .env("PYTHONPATH", PYTHON_CLIENTS)
         .output()
         .expect("python3 runs");
     let text = String::from_utf8_lossy(&probe.stderr).into_owned();
@@ -342,4 +346,55 @@ fn decks_whose_atoms_are_not_the_scenes_particles_are_refused() {
         &[],
         &["failed: ERROR: Unknown command: fixx oops"],
     );
+}
+
+/// `lbm-server run SCENE --dem liggghts` in one command: the deck written from the scene
+/// (OUT/dem.liggghts.in: the sphere from the scene reader, the domain's faces as walls, Hertz)
+/// settles the sphere as the built-in DEM does, peak speeds within 0.5%.
+#[test]
+fn dem_liggghts_in_one_command_settles_a_sphere_as_the_builtin_dem_does() {
+    let test = "dem_liggghts_in_one_command_settles_a_sphere_as_the_builtin_dem_does";
+    if !liggghts_present(test) {
+        return;
+    }
+    let dir = temp_dir("dem-liggghts");
+    let scene = write_scene(&dir, &settling_scene(120));
+    let builtin_out = dir.join("builtin");
+    let builtin = server(&scene, &builtin_out, &[]).output().expect("lbm-server runs");
+    assert!(builtin.status.success(), "built-in DEM run:\n{}", text(&builtin));
+    let out = dir.join("liggghts");
+    let mut fluid = start(server(&scene, &out, &["--dem", "liggghts"]));
+    let (code, _) = fluid.wait_exit(Duration::from_secs(300));
+    let said = Proc::drain(&fluid.stdout) + &Proc::drain(&fluid.stderr);
+    assert_eq!(code, Some(0), "{said}");
+    let deck = std::fs::read_to_string(out.join("dem.liggghts.in")).expect("the deck is in OUT");
+    assert!(deck.contains("pair_style gran model hertz tangential history"), "{deck}");
+    assert!(deck.contains("zplane 0.08"), "{deck}");
+    let s = summary(&out);
+    assert_eq!(s["steps_completed"], 120);
+    assert!(s["peer"]["software"].as_str().unwrap().contains("LIGGGHTS"), "{s}");
+    same_within_half_a_percent(
+        "peak settling speed [m/s]",
+        peak_settling_speed(&builtin_out),
+        peak_settling_speed(&out),
+    );
+    let run = format!("lbmdem_{}_", fluid.child.id());
+    assert!(leftover_files(&run).is_empty(), "{:?}", leftover_files(&run));
+}
+
+/// `--dem liggghts` where LIGGGHTS cannot be loaded: exit 2 before the fluid starts, saying how to
+/// install it.
+#[test]
+fn dem_liggghts_without_liggghts_says_how_to_install_it() {
+    let dir = temp_dir("dem-liggghts-missing");
+    let scene = write_scene(&dir, &settling_scene(10));
+    let run = server(&scene, &dir.join("out"), &["--dem", "liggghts"])
+        .env("LIGGGHTS_LIBRARY", "/nonexistent/libliggghts.so.3")
+        .output()
+        .expect("lbm-server runs");
+    let said = text(&run);
+    assert_eq!(run.status.code(), Some(2), "{said}");
+    assert!(said.contains("LIGGGHTS is not installed"), "{said}");
+    assert!(said.contains("apt-get install liggghts"), "{said}");
+    assert!(!said.contains("DEM:"), "nothing ran: {said}");
 }

@@ -126,3 +126,53 @@ fn a_dem_in_other_units_runs_the_same_physics_as_in_si() {
         }
     }
 }
+
+/// `lbm-server run SCENE --dem-command CMD` starts any DEM itself: the Python example through
+/// `sh -c`, the run name in $LBMDEM_RUN, the scene in $LBMDEM_SCENE and clients/python on
+/// PYTHONPATH (the command imports lbmdem from another folder), runs to the last step and leaves
+/// no shared-memory file.
+#[test]
+fn dem_command_starts_the_python_dem_and_runs_to_the_end() {
+    let steps = 40;
+    let text = scene_text("dem-command", [2, 2, 2], steps, 10, 10.0)
+        .replace("timeout = 10", "timeout = 10\ncapacity = 64");
+    let dir = temp_dir("dem-command");
+    let scene = write_scene(&dir, &text);
+    let out = dir.join("out");
+    let script = concat!(env!("CARGO_MANIFEST_DIR"), "/clients/python/example_dem.py");
+    let line = format!(
+        "cd / && test -f \"$LBMDEM_SCENE\" && python3 -c 'import lbmdem, lbmdem_scene' && \
+         exec python3 {script} --particles 27"
+    );
+    let mut fluid = start(server(&scene, &out, &["--dem-command", &line]));
+    let (code, _) = fluid.wait_exit(Duration::from_secs(240));
+    let said = Proc::drain(&fluid.stdout) + &Proc::drain(&fluid.stderr);
+    assert_eq!(code, Some(0), "{said}");
+    assert!(
+        said.contains(&format!("python-dem: completed {steps} steps, 27 particles")),
+        "{said}"
+    );
+    let s = summary(&out);
+    assert_eq!(s["steps_completed"], steps);
+    assert!(s["peer"]["software"].as_str().unwrap().contains("example_dem.py"), "{s}");
+    // The run's name is lbmdem_<pid of lbm-server>_<nonce>.
+    let run = format!("lbmdem_{}_", fluid.child.id());
+    assert!(leftover_files(&run).is_empty(), "{:?}", leftover_files(&run));
+}
+
+/// A `--dem-command` that dies before it joins ends the run with exit 1, naming it, as a
+/// dem-client that dies does: without waiting for the connect timeout (here 600 s).
+#[test]
+fn dem_command_that_dies_ends_the_run() {
+    let dir = temp_dir("dem-command-dies");
+    let scene = write_scene(&dir, &scene_text("dem-command-dies", [1, 1, 1], 10, 10, 10.0));
+    let started = std::time::Instant::now();
+    let args = ["--dem-command", "exit 3", "--connect-timeout", "600"];
+    let run = server(&scene, &dir.join("out"), &args)
+        .output()
+        .expect("lbm-server runs");
+    let said = String::from_utf8_lossy(&run.stderr).into_owned();
+    assert_eq!(run.status.code(), Some(1), "{said}");
+    assert!(said.contains("died"), "{said}");
+    assert!(started.elapsed() < Duration::from_secs(300), "{said}");
+}

@@ -1,8 +1,8 @@
 //! YADE as the DEM of a coupled run (clients/yade): it settles the Ten Cate E1 sphere as the
 //! built-in DEM does, and a YADE script that does not fit the scene ends the run with exit 2.
 //! Where yade or iceoryx2 for Debian's python is missing, the YADE tests say they were skipped
-//! and why, and pass (CI installs both: .ci/run). The scene reader the YADE scripts use
-//! (clients/yade/lbmdem_scene.py) needs only Python 3.11 and is checked everywhere.
+//! and why, and pass (CI installs both: .ci/run). The scene reader the Python DEMs use
+//! (clients/python/lbmdem_scene.py) needs only Python 3.11 and is checked everywhere.
 
 mod common;
 use common::*;
@@ -12,6 +12,8 @@ use std::time::Duration;
 
 const TEN_CATE: &str = include_str!("../validation/scenes/ten-cate-e1.toml");
 const CLIENT_DIR: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/clients/yade");
+/// lbmdem.py and lbmdem_scene.py, which the YADE module imports from PYTHONPATH.
+const PYTHON_CLIENTS: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/clients/python");
 
 /// The Debian python YADE runs on.
 const SYSTEM_PYTHON: &str = "/usr/bin/python3";
@@ -53,7 +55,7 @@ impl Yade {
             return None;
         }
         Some(Yade {
-            pythonpath: format!("{iox}:{CLIENT_DIR}"),
+            pythonpath: format!("{iox}:{PYTHON_CLIENTS}:{CLIENT_DIR}"),
             _one_run_at_a_time: SERIAL.lock().unwrap_or_else(|e| e.into_inner()),
         })
     }
@@ -326,7 +328,7 @@ for p in lbmdem_scene.Scene.load(sys.argv[2]).particles:
     print(" ".join(repr(float(v)) for v in (p.id, *p.position, *p.velocity, *p.angular_velocity, p.radius)))
 "#;
 
-/// The particles a DEM builds from the scene file (clients/yade/lbmdem_scene.py) are the scene
+/// The particles a DEM builds from the scene file (clients/python/lbmdem_scene.py) are the scene
 /// crate's to the bit: ids, positions (jittered insertion included), velocities, spins and radii
 /// of dem-client's step 0 (particles.csv and the step-0 VTK polydata).
 #[test]
@@ -363,7 +365,7 @@ fn the_python_scene_reader_makes_the_scenes_particles() {
         .expect("dem-client runs");
     assert!(run.status.success(), "{}", text(&run.stderr));
     let read = Command::new(python)
-        .args(["-c", READ_SCENE, CLIENT_DIR])
+        .args(["-c", READ_SCENE, PYTHON_CLIENTS])
         .arg(&scene)
         .output()
         .expect("python runs");
@@ -391,4 +393,39 @@ fn vtp_radii(path: &Path) -> Vec<f64> {
     let after = xml.split("Name=\"radius\"").nth(1).expect("a radius array");
     let values = after.split('>').nth(1).unwrap().split('<').next().unwrap();
     values.split_whitespace().map(|v| v.parse().unwrap()).collect()
+}
+
+/// `lbm-server run SCENE --dem yade` in one command: the YADE script written from the scene
+/// (OUT/dem.yade.py: the sphere from the scene reader, the domain's faces as walls,
+/// Hertz-Mindlin) settles the Ten Cate sphere as the built-in DEM does, peak speeds within 0.5%.
+#[test]
+fn dem_yade_in_one_command_settles_the_ten_cate_sphere_as_the_builtin_dem_does() {
+    let test = "dem_yade_in_one_command_settles_the_ten_cate_sphere_as_the_builtin_dem_does";
+    let Some(yade) = Yade::find(test) else {
+        return;
+    };
+    let (dir, scene) = ten_cate_scene("dem-yade", 60);
+    let builtin = dir.join("builtin");
+    let run = server(&scene, &builtin, &[]).output().expect("lbm-server runs");
+    assert!(run.status.success(), "built-in DEM run: {}", text(&run.stderr));
+    let out = dir.join("yade");
+    let mut command = server(&scene, &out, &["--dem", "yade"]);
+    command.env("PYTHONPATH", &yade.pythonpath);
+    let mut fluid = Fluid(start(command));
+    let (code, _) = fluid.0.wait_exit(Duration::from_secs(300));
+    let said = Proc::drain(&fluid.0.stdout) + &Proc::drain(&fluid.0.stderr);
+    assert_eq!(code, Some(0), "{said}");
+    let script = std::fs::read_to_string(out.join("dem.yade.py")).expect("the script is in OUT");
+    assert!(script.contains("Law2_ScGeom_MindlinPhys_Mindlin"), "{script}");
+    let s = summary(&out);
+    assert_eq!(s["steps_completed"], 60);
+    assert!(s["peer"]["software"].as_str().unwrap().contains("YADE"), "{s}");
+    let (with_builtin, with_yade) = (peak_settling_speed(&builtin), peak_settling_speed(&out));
+    eprintln!("peak settling speed: built-in DEM {with_builtin} m/s, --dem yade {with_yade} m/s");
+    assert!(
+        (with_yade - with_builtin).abs() <= 0.005 * with_builtin,
+        "peak settling speed with --dem yade {with_yade} m/s, with the built-in DEM {with_builtin} m/s"
+    );
+    let run = format!("lbmdem_{}_", fluid.0.child.id());
+    assert!(leftover_files(&run).is_empty(), "{:?}", leftover_files(&run));
 }

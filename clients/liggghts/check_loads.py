@@ -20,11 +20,8 @@ import tempfile
 
 import numpy as np
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, HERE)
-
-import liggghts  # noqa: E402
-from held_loads import HeldLoads  # noqa: E402
+import liggghts
+from held_loads import HeldLoads
 
 RADIUS, DENSITY, DT = 0.005, 1000.0, 1.0e-5
 #: (force [N], torque [N m]) held over each span.

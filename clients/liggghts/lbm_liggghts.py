@@ -27,16 +27,12 @@ import time
 
 import numpy as np
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, HERE)
-sys.path.insert(0, os.path.join(HERE, "..", "python"))
-
-import lbmdem  # noqa: E402
-import liggghts  # noqa: E402
-from deck import BadInput, check_atoms, log_errors, open_deck, substeps, units_of, version  # noqa: E402
-from exit_guard import ExitGuard  # noqa: E402
-from held_loads import HeldLoads  # noqa: E402
-from scene_particles import SceneError, particle_count  # noqa: E402
+import lbmdem  # clients/python on PYTHONPATH (lbm-server sets it when it starts the adapter)
+import lbmdem_scene
+import liggghts
+from deck import BadInput, check_atoms, log_errors, open_deck, substeps, units_of, version
+from exit_guard import ExitGuard
+from held_loads import HeldLoads
 
 PROG = "lbm-liggghts"
 EXIT_FAILURE, EXIT_BAD_INPUT = 1, 2
@@ -50,9 +46,11 @@ def say(message: str) -> None:
 
 def parse_args(argv=None) -> argparse.Namespace:
     ap = argparse.ArgumentParser(prog=PROG, description=__doc__.split("\n\n")[0])
-    ap.add_argument("--service", help="run name printed by lbm-server (DEM service: RUN)")
-    ap.add_argument("--scene", help="the scene file of the run (checks the deck's atoms against "
-                                    "its particles)")
+    ap.add_argument("--service", default=os.environ.get("LBMDEM_RUN"),
+                    help="run name printed by lbm-server (DEM service: RUN; default $LBMDEM_RUN)")
+    ap.add_argument("--scene", default=os.environ.get("LBMDEM_SCENE"),
+                    help="the scene file of the run (checks the deck's atoms against its "
+                         "particles; default $LBMDEM_SCENE)")
     ap.add_argument("--deck", help="the LIGGGHTS input deck")
     ap.add_argument("--var", nargs=2, action="append", metavar=("NAME", "VALUE"),
                     help="a deck variable, as liggghts -var NAME VALUE (repeatable)")
@@ -99,7 +97,7 @@ class Adapter:
     def run(self) -> int:
         try:
             lib = liggghts.load_library()
-            expected = particle_count(self.args.scene)
+            expected = len(lbmdem_scene.Scene.load(self.args.scene).particles)
             self.guard.arm(self._deck_failed)
             self.lmp = open_deck(lib, self.args)
             check_atoms(self.lmp, self.args.deck, self.args.scene, expected)
@@ -108,7 +106,7 @@ class Adapter:
             welcome = self._connect(units)
             k = self._configure(welcome)
             self._loop(welcome, k)
-        except (liggghts.NotInstalled, BadInput, SceneError, liggghts.Unsupported) as e:
+        except (liggghts.NotInstalled, BadInput, lbmdem_scene.SceneError, liggghts.Unsupported) as e:
             return self._leave(f"error: {e}", EXIT_BAD_INPUT)
         except lbmdem.LinkError as e:
             return self._leave(f"error: {e}", EXIT_FAILURE)

@@ -23,8 +23,7 @@ import time
 
 import numpy as np
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-import lbmdem  # noqa: E402
+import lbmdem
 
 SOFTWARE = "lbmdem example_dem.py 1.0"
 
@@ -48,7 +47,9 @@ def grid_positions(n: int, lo: np.ndarray, hi: np.ndarray, radius: float) -> np.
 
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--service", required=True, help="run name printed by lbm-server")
+    ap.add_argument("--service", default=os.environ.get("LBMDEM_RUN"),
+                    help="run name printed by lbm-server (default: $LBMDEM_RUN, which "
+                         "lbm-server run --dem-command sets)")
     ap.add_argument("--particles", type=int, default=64, help="number of spheres (default 64)")
     ap.add_argument("--density", type=float, default=2500.0,
                     help="particle density [kg/m^3] (default 2500)")
@@ -58,6 +59,8 @@ def main() -> int:
     ap.add_argument("--timeout", type=float, default=10.0,
                     help="longest wait for a live but silent fluid server [s] (default 10)")
     args = ap.parse_args()
+    if not args.service:
+        ap.error("--service is required (or $LBMDEM_RUN)")
     if args.particles < 1:
         print("python-dem: error: --particles must be at least 1", file=sys.stderr)
         return 1

@@ -6,7 +6,7 @@ A user's own YADE script builds its bodies, materials and engines, then calls :f
     ...                                                   # O.bodies, O.engines, O.dt: plain YADE
     lbmdem_yade.couple("lbmdem_4242_1a2b3c", scene="validation/scenes/ten-cate-e1.toml")
 
-and runs it with ``PYTHONPATH=IOX:clients/yade yade -n -x script.py``. Each fluid step it sends
+and runs it with ``PYTHONPATH=IOX:clients/python:clients/yade yade -n -x script.py``. Each fluid step it sends
 the coupled spheres' states (ids: the scene's particle ids, through an id map), receives the
 fluid's force and torque, holds them on the spheres (``O.forces.setPermF`` / ``setPermT``: YADE's
 ForceResetter wipes a force added from outside the loop, a permanent one it keeps) over ``k``
@@ -33,14 +33,11 @@ from typing import Dict, Mapping, NamedTuple, Optional, Sequence, Union
 
 import numpy as np
 
-_HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, os.path.join(_HERE, "..", "python"))
-sys.path.insert(0, _HERE)
-import lbmdem  # noqa: E402
-import lbmdem_scene  # noqa: E402
+import lbmdem  # clients/python on PYTHONPATH (lbm-server sets it when it starts YADE)
+import lbmdem_scene
 
-import yade  # noqa: E402  (this module runs inside YADE: `yade -n -x script.py`)
-from yade.minieigenHP import Vector3  # noqa: E402
+import yade  # this module runs inside YADE: `yade -n -x script.py`
+from yade.minieigenHP import Vector3
 
 __all__ = ["couple", "Coupled", "BadInput", "id_map", "RUN_ENV", "SCENE_ENV"]
 

@@ -2,7 +2,7 @@
 # (and any other particles) from the scene file, the box's faces as its walls, and couples.
 #
 #   lbm-server run validation/scenes/ten-cate-e1.toml --dem external     # DEM service: RUN
-#   PYTHONPATH=IOX yade -n -x clients/yade/ten_cate_e1.py --service RUN [--scene SCENE]
+#   PYTHONPATH=IOX:clients/python:clients/yade yade -n -x clients/yade/ten_cate_e1.py --service RUN [--scene SCENE]
 #
 # IOX: the folder where iceoryx2 for Debian's python is installed (README.md beside this file).
 # A YADE script runs through execfile: __file__ is /usr/bin/yade, sys.argv[0] is this script.
@@ -11,10 +11,10 @@ import math
 import os
 import sys
 
+import lbmdem_scene  # clients/python and clients/yade on PYTHONPATH (README.md)
+import lbmdem_yade
+
 HERE = os.path.dirname(os.path.abspath(sys.argv[0]))
-sys.path.insert(0, HERE)
-import lbmdem_scene  # noqa: E402
-import lbmdem_yade  # noqa: E402
 
 ap = argparse.ArgumentParser(prog="ten_cate_e1.py",
                              description="YADE as the DEM of a coupled lbm-server run")

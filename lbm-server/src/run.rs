@@ -21,6 +21,7 @@ mod session;
 mod summary;
 mod welcome;
 
+use crate::launch::{self, DemStart};
 use crate::output::Progress;
 use exchange::SiStates;
 use prepare::prepare;
@@ -46,10 +47,16 @@ pub struct RunArgs {
     /// Output folder (default: out/SCENE_NAME).
     #[arg(long)]
     out: Option<PathBuf>,
-    /// Who runs the DEM side: `spawn` starts dem-client; `external` prints the service name and
-    /// waits for any client that speaks the protocol (PROTOCOL.md).
-    #[arg(long, value_enum, default_value_t = DemMode::Spawn)]
+    /// Who runs the DEM side: `builtin` starts dem-client; `yade` / `liggghts` write the scene's
+    /// DEM as OUT/dem.yade.py / OUT/dem.liggghts.in and run it (clients/yade, clients/liggghts);
+    /// `external` prints the service name and waits for any client that speaks the protocol
+    /// (PROTOCOL.md).
+    #[arg(long, value_enum, default_value_t = DemMode::Builtin)]
     dem: DemMode,
+    /// Starts CMD (through sh) as the DEM side, the run name in $LBMDEM_RUN, the scene in
+    /// $LBMDEM_SCENE, clients/python on PYTHONPATH; supervised as dem-client is.
+    #[arg(long, value_name = "CMD", conflicts_with = "dem")]
+    dem_command: Option<String>,
     /// Longest wait for the DEM side to connect [s] (default: 30 when spawned, unlimited when external).
     #[arg(long)]
     connect_timeout: Option<f64>,
@@ -57,8 +64,11 @@ pub struct RunArgs {
 
 #[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 enum DemMode {
-    Spawn,
+    #[value(alias = "spawn")]
+    Builtin,
     External,
+    Yade,
+    Liggghts,
 }
 
 /// Exit codes.
@@ -97,10 +107,17 @@ pub fn main(args: RunArgs) -> ExitCode {
             interrupted,
         ));
     }
+    let dem = match dem_start(&args, &prepared) {
+        Ok(dem) => dem,
+        Err(e) => {
+            protocol::say!("lbm-server: error: {e}");
+            return ExitCode::from(EXIT_BAD_INPUT);
+        }
+    };
     protocol::cleanup::remove_stale_runs();
     let run = new_run_name();
     let _ = RUN.set(run.clone());
-    let code = Session::start(prepared, &run, args.dem, interrupted);
+    let code = Session::start(prepared, &run, dem, interrupted);
     protocol::cleanup::remove_run(&run);
     ExitCode::from(code)
 }
@@ -131,6 +148,18 @@ fn on_ctrl_c(interrupted: &AtomicBool) {
 /// Start-up is over: Ctrl-C from now on stops the run in order.
 pub(crate) fn started() {
     STARTING.store(false, Ordering::SeqCst);
+}
+
+/// How the DEM side starts (`--dem`, `--dem-command`); YADE and LIGGGHTS checked and their
+/// script / deck written now, before the fluid starts.
+fn dem_start(args: &RunArgs, p: &prepare::Prepared) -> Result<DemStart, String> {
+    Ok(match (&args.dem_command, args.dem) {
+        (Some(line), _) => DemStart::Command(launch::DemCommand::shell(line)),
+        (None, DemMode::Builtin) => DemStart::Builtin,
+        (None, DemMode::External) => DemStart::External,
+        (None, DemMode::Yade) => DemStart::Command(launch::yade(&p.scene_copy, &p.out)?),
+        (None, DemMode::Liggghts) => DemStart::Command(launch::liggghts(&p.scene_copy, &p.out)?),
+    })
 }
 
 impl Session {

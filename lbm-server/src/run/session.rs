@@ -6,9 +6,9 @@ use super::counters::Counters;
 use super::prepare::Prepared;
 use super::summary::PeerInfo;
 use super::welcome::{welcome_for, yielded};
-use super::{DemMode, Ending, EXIT_FAILURE, EXIT_INTERRUPTED};
+use super::{Ending, EXIT_FAILURE, EXIT_INTERRUPTED};
 use crate::coupled::FluidSide;
-use crate::launch;
+use crate::launch::{self, DemStart};
 use crate::output::ParticleOutput;
 use protocol::transport::LinkOptions;
 use protocol::{FluidLink, Hello, LinkError, Physics};
@@ -35,7 +35,7 @@ pub(super) struct Session {
 
 impl Session {
     /// Runs the whole session and returns the process exit code.
-    pub(super) fn start(p: Prepared, run: &str, mode: DemMode, interrupted: Arc<AtomicBool>) -> u8 {
+    pub(super) fn start(p: Prepared, run: &str, dem: DemStart, interrupted: Arc<AtomicBool>) -> u8 {
         let mut session = match Session::open(p, run, interrupted) {
             Ok(session) => session,
             Err(e) => {
@@ -43,7 +43,7 @@ impl Session {
                 return EXIT_FAILURE;
             }
         };
-        let result = session.connect(mode).and_then(|()| session.step_loop());
+        let result = session.connect(&dem).and_then(|()| session.step_loop());
         session.finish(result)
     }
 
@@ -72,9 +72,9 @@ impl Session {
     }
 
     /// Starts or announces the DEM side and performs the handshake.
-    fn connect(&mut self, mode: DemMode) -> Result<(), String> {
+    fn connect(&mut self, dem: &DemStart) -> Result<(), String> {
         super::started();
-        let spawned = self.start_dem(mode)?;
+        let spawned = self.start_dem(dem)?;
         let (scene, steps) = (&self.p.scene, self.p.steps);
         let physics = self.fluid.physics();
         let interrupted = self.interrupted.clone();
@@ -109,11 +109,20 @@ impl Session {
         Ok(())
     }
 
-    /// Starts dem-client (`spawn`: its pid) or prints the service name for an external DEM.
-    fn start_dem(&mut self, mode: DemMode) -> Result<Option<u32>, String> {
+    /// Starts dem-client or the DEM's command (its pid) or prints the service name for an
+    /// external DEM.
+    fn start_dem(&mut self, dem: &DemStart) -> Result<Option<u32>, String> {
         let run = self.link.run().to_string();
-        match mode {
-            DemMode::Spawn => {
+        match dem {
+            DemStart::Command(command) => {
+                let child = command
+                    .spawn(&run, &self.p.scene_copy)
+                    .map_err(|e| format!("cannot start the DEM `{}`: {e}", command.describe()))?;
+                let pid = child.id();
+                self.child = Some(child);
+                Ok(Some(pid))
+            }
+            DemStart::Builtin => {
                 let exe = launch::find_dem_client()
                     .ok_or("cannot find dem-client next to lbm-server or on PATH (build it: cargo build)")?;
                 let child =
@@ -123,7 +132,7 @@ impl Session {
                 self.child = Some(child);
                 Ok(Some(pid))
             }
-            DemMode::External => {
+            DemStart::External => {
                 println!("DEM service: {run}");
                 println!(
                     "join with: dem-client connect --service {run} --scene {}",

@@ -12,12 +12,16 @@ module reads them the way ``scene::Scene::initial_particles`` does, ids 0, 1, 2,
 4. ``[[dem.csv]]``: rows of a CSV file (header naming x, y, z, r or radius; optional vx, vy, vz,
    wx, wy, wz; a relative path is taken next to the scene file, else from the working folder).
 
-    import lbmdem_scene
+    import lbmdem_scene                # clients/python on PYTHONPATH, beside lbmdem.py
     scene = lbmdem_scene.Scene.load("validation/scenes/ten-cate-e1.toml")
     for p in scene.particles:          # SceneParticle(id, position, velocity, angular_velocity,
         ...                            #               radius, material, density)
 
-It reads; it does not validate (``lbm-server`` does, and refuses a bad scene with exit 2).
+It reads; it does not validate (``lbm-server`` does, and refuses a bad scene with exit 2). A file
+that cannot be read or is not TOML raises ``SceneError``. Every Python DEM client uses it: the YADE
+module (clients/yade), the LIGGGHTS adapter (clients/liggghts, which checks its deck's atom count
+against ``len(scene.particles)``) and the YADE script / LIGGGHTS deck that ``lbm-server run SCENE
+--dem yade|liggghts`` writes.
 """
 
 from __future__ import annotations
@@ -26,13 +30,17 @@ import os
 import tomllib
 from typing import NamedTuple, Optional
 
-__all__ = ["SceneParticle", "Material", "Scene", "SplitMix64"]
+__all__ = ["SceneParticle", "Material", "Scene", "SceneError", "SplitMix64"]
 
 #: The scene crate's defaults of a `[[dem.material]]` (scene/src/dem.rs).
 DEFAULT_MATERIAL = {"name": "default", "young_modulus": 5.0e6, "poisson_ratio": 0.3,
                     "restitution": 0.9, "friction": 0.5, "rolling_friction": 0.0}
 DEFAULT_GRAVITY = (0.0, 0.0, -9.81)
 _MASK = (1 << 64) - 1
+
+
+class SceneError(ValueError):
+    """The scene file cannot be read."""
 
 
 class SplitMix64:
@@ -98,8 +106,12 @@ class Scene:
 
     @classmethod
     def load(cls, path: str) -> "Scene":
-        with open(path, "rb") as f:
-            return cls(tomllib.load(f), str(path))
+        try:
+            with open(path, "rb") as f:
+                data = tomllib.load(f)
+        except (OSError, tomllib.TOMLDecodeError) as e:
+            raise SceneError(f"{path}: {e}") from None
+        return cls(data, str(path))
 
     @property
     def capacity(self) -> int:
