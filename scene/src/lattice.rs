@@ -543,9 +543,17 @@ mod tests {
         assert_eq!(plain.ramp_steps, 0.0, "no ramp");
     }
 
+    /// The default scene with `lines` added to its `[lattice]`; a `tau` among them replaces the
+    /// scene's.
     fn with_lattice(lines: &str) -> Result<super::LatticeUnits, crate::SceneError> {
-        let text =
-            crate::DEFAULT_SCENE.replace("check_interval = 100", &format!("check_interval = 100\n{lines}"));
+        let own_tau = "tau = 0.75 ";
+        assert!(crate::DEFAULT_SCENE.contains(own_tau));
+        let scene = if lines.lines().any(|l| l.starts_with("tau =")) {
+            crate::DEFAULT_SCENE.replace(own_tau, "# tau = 0.75 ")
+        } else {
+            crate::DEFAULT_SCENE.to_string()
+        };
+        let text = scene.replace("check_interval = 100", &format!("check_interval = 100\n{lines}"));
         Scene::parse(&text, "tau_minus.toml").map(|s| s.lattice_units.expect("lattice"))
     }
 

@@ -145,17 +145,17 @@ mod tests {
         Scene::parse(&DEFAULT_SCENE.replacen(from, to, 1), "s.toml").map_err(|e| e.to_string())
     }
 
-    const STEPS: &str = "steps = 900 ";
+    const STEPS: &str = "steps = 1150 ";
     const ROWS: &str = "interval = 20 ";
 
-    /// The default scene's dt is 1.1547 ms: 1.04 s is 900.67 steps, so the run takes 901; a row
-    /// every 0.02 s is every 17 steps (17.3), a snapshot every 0.1 s every 87 (86.6).
+    /// The default scene's dt is 0.56269 ms: 0.65 s is 1155.2 steps, so the run takes 1156; a row
+    /// every 0.02 s is every 36 steps (35.5), a snapshot every 0.1 s every 178 (177.7).
     #[test]
     fn times_in_seconds_become_whole_steps() {
-        let scene = with(STEPS, "duration = 1.04 ").unwrap();
+        let scene = with(STEPS, "duration = 0.65 ").unwrap();
         let dt = scene.time.dt;
-        assert!((dt - 1.1547005e-3).abs() < 1e-9, "{dt}");
-        assert_eq!(scene.time.steps, 901);
+        assert!((dt - 5.6268601e-4).abs() < 1e-10, "{dt}");
+        assert_eq!(scene.time.steps, 1156);
         let scene = with(ROWS, "time_interval = 0.02\nfields_time_interval = 0.1 ").unwrap();
         assert_eq!(
             (
@@ -163,7 +163,7 @@ mod tests {
                 scene.output.interval,
                 scene.output.fields_interval
             ),
-            (900, 17, 87)
+            (1150, 36, 178)
         );
         // A duration of exactly n steps is n steps, not n + 1.
         let exact = format!("duration = {:.17e} ", 300.0 * dt);
@@ -176,7 +176,7 @@ mod tests {
                 scene.output.interval,
                 scene.output.fields_interval
             ),
-            (900, 100, 0)
+            (1150, 100, 0)
         );
     }
 
@@ -184,7 +184,7 @@ mod tests {
     #[test]
     fn a_duration_given_apart_from_the_scene_is_the_steps_that_cover_it() {
         let scene = with(STEPS, STEPS).unwrap();
-        assert_eq!(scene.steps_covering(1.04, "--duration"), Ok(901));
+        assert_eq!(scene.steps_covering(0.65, "--duration"), Ok(1156));
         assert_eq!(
             scene.steps_covering(-1.0, "--duration"),
             Err("--duration = -1 s: must be a finite number > 0".to_string())
@@ -194,12 +194,12 @@ mod tests {
     #[test]
     fn a_time_and_its_steps_are_refused_together_and_bad_times_named() {
         let cases = [
-            (STEPS, "steps = 900\nduration = 1.0 ", "time.duration = 1 s: time.steps is given too"),
+            (STEPS, "steps = 1150\nduration = 1.0 ", "time.duration = 1 s: time.steps is given too"),
             (STEPS, "", "time.steps = missing: give the run's length: time.steps (coupled steps) or time.duration [s]"),
             (STEPS, "duration = -1.0 ", "time.duration = -1 s: must be a finite number > 0"),
-            (STEPS, "duration = 1e20 ", "time.duration = 100000000000000000000 s: is 8.66025403784438"),
+            (STEPS, "duration = 1e20 ", "time.duration = 100000000000000000000 s: is 1.77719"),
             (ROWS, "interval = 20\ntime_interval = 0.02 ", "output.time_interval = 0.02 s: output.interval is given too"),
-            (ROWS, "time_interval = 0.0005 ", "output.time_interval = 0.0005 s: is shorter than half a step (time.dt = 1.1547"),
+            (ROWS, "time_interval = 0.0002 ", "output.time_interval = 0.0002 s: is shorter than half a step (time.dt = 5.6268"),
             (ROWS, "fields_interval = 5\nfields_time_interval = 0.1 ", "output.fields_time_interval = 0.1 s: output.fields_interval is given too"),
             (ROWS, "fields_time_interval = nan ", "output.fields_time_interval = NaN s"),
         ];
