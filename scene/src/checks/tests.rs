@@ -27,7 +27,7 @@ fn a_box_that_does_nothing_warns() {
     let boxes = "check_interval = 100\n\
                  [[lattice.solid_box]]\nmin = [0.0, 0.0, 0.0]\nmax = [0.032, 0.032, 0.002]\n\
                  [[lattice.solid_box]]\nmin = [0.1, 0.0, 0.0]\nmax = [0.2, 0.032, 0.002]\n\
-                 [[lattice.solid_box]]\nmin = [0.0, 0.0, 0.0026]\nmax = [0.032, 0.032, 0.0034]\n";
+                 [[lattice.solid_box]]\nmin = [0.0, 0.0, 0.0029]\nmax = [0.032, 0.032, 0.0034]\n";
     let scene = with("check_interval = 100", boxes).expect("a warning, not an error");
     assert_eq!(scene.warnings.len(), 2, "{:?}", scene.warnings);
     assert!(
