@@ -188,7 +188,7 @@ pub struct Welcome {
     /// A [`Status`]; anything but `Accepted` ends the run, `reason` says why.
     pub status: u32,
     /// The axes along which the domain is periodic: bit 0 x, bit 1 y, bit 2 z (0: none). A DEM
-    /// wraps its spheres and pairs along them (PROTOCOL.md 6.2). Reserved (0) before 2026-12-01.
+    /// wraps its spheres and pairs along them (PROTOCOL.md 6.2).
     pub periodic: u32,
     /// Most particles a step may carry.
     pub capacity: u64,
