@@ -360,7 +360,9 @@ fn dem_liggghts_in_one_command_settles_a_sphere_as_the_builtin_dem_does() {
     let dir = temp_dir("dem-liggghts");
     let scene = write_scene(&dir, &settling_scene(120));
     let builtin_out = dir.join("builtin");
-    let builtin = server(&scene, &builtin_out, &[]).output().expect("lbm-server runs");
+    let builtin = server(&scene, &builtin_out, &[])
+        .output()
+        .expect("lbm-server runs");
     assert!(builtin.status.success(), "built-in DEM run:\n{}", text(&builtin));
     let out = dir.join("liggghts");
     let mut fluid = start(server(&scene, &out, &["--dem", "liggghts"]));
@@ -368,11 +370,17 @@ fn dem_liggghts_in_one_command_settles_a_sphere_as_the_builtin_dem_does() {
     let said = Proc::drain(&fluid.stdout) + &Proc::drain(&fluid.stderr);
     assert_eq!(code, Some(0), "{said}");
     let deck = std::fs::read_to_string(out.join("dem.liggghts.in")).expect("the deck is in OUT");
-    assert!(deck.contains("pair_style gran model hertz tangential history"), "{deck}");
+    assert!(
+        deck.contains("pair_style gran model hertz tangential history"),
+        "{deck}"
+    );
     assert!(deck.contains("zplane 0.08"), "{deck}");
     let s = summary(&out);
     assert_eq!(s["steps_completed"], 120);
-    assert!(s["peer"]["software"].as_str().unwrap().contains("LIGGGHTS"), "{s}");
+    assert!(
+        s["peer"]["software"].as_str().unwrap().contains("LIGGGHTS"),
+        "{s}"
+    );
     same_within_half_a_percent(
         "peak settling speed [m/s]",
         peak_settling_speed(&builtin_out),

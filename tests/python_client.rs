@@ -154,7 +154,10 @@ fn dem_command_starts_the_python_dem_and_runs_to_the_end() {
     );
     let s = summary(&out);
     assert_eq!(s["steps_completed"], steps);
-    assert!(s["peer"]["software"].as_str().unwrap().contains("example_dem.py"), "{s}");
+    assert!(
+        s["peer"]["software"].as_str().unwrap().contains("example_dem.py"),
+        "{s}"
+    );
     // The run's name is lbmdem_<pid of lbm-server>_<nonce>.
     let run = format!("lbmdem_{}_", fluid.child.id());
     assert!(leftover_files(&run).is_empty(), "{:?}", leftover_files(&run));

@@ -435,7 +435,12 @@ fn cell_size(scene: &Scene, lattice: &LatticeSection, file: &str) -> Result<f64,
 /// The cells along each axis of cell size `dx`, refused (naming `lattice.dx` or
 /// `lattice.resolution`, whichever gave it) where one is not a whole number or all are 2^31 or more.
 #[allow(clippy::needless_range_loop)]
-fn cell_counts(scene: &Scene, lattice: &LatticeSection, dx: f64, file: &str) -> Result<[usize; 3], SceneError> {
+fn cell_counts(
+    scene: &Scene,
+    lattice: &LatticeSection,
+    dx: f64,
+    file: &str,
+) -> Result<[usize; 3], SceneError> {
     let (field, value) = match lattice.resolution {
         Some(r) => ("lattice.resolution", r.to_string()),
         None => ("lattice.dx", format!("{dx} m")),

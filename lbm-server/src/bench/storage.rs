@@ -4,7 +4,7 @@
 
 use super::{best, list, BenchArgs};
 use crate::lbm::geometry::Setup;
-use crate::lbm::gpu::{Gpu, Health, GpuLattice};
+use crate::lbm::gpu::{Gpu, GpuLattice, Health};
 use crate::lbm::storage::Storage;
 use std::sync::Arc;
 use std::time::Instant;

@@ -20,7 +20,12 @@ pub fn liggghts(scene: &Path, out: &Path) -> Result<DemCommand, String> {
     python("--dem liggghts", "python3", &probe, &python_path)?;
     let deck = std::path::absolute(out.join("dem.liggghts.in")).map_err(|e| e.to_string())?;
     let writer = clients.join("liggghts").join("scene_deck.py");
-    python("--dem liggghts", "python3", &[writer.into(), scene.into(), deck.clone().into()], &python_path)?;
+    python(
+        "--dem liggghts",
+        "python3",
+        &[writer.into(), scene.into(), deck.clone().into()],
+        &python_path,
+    )?;
     protocol::say!("lbm-server: the LIGGGHTS deck of the scene: {}", deck.display());
     Ok(DemCommand {
         argv: vec!["python3".into(), adapter.into(), "--deck".into(), deck.into()],
@@ -44,7 +49,12 @@ pub fn yade(scene: &Path, out: &Path) -> Result<DemCommand, String> {
     })?;
     let script = std::path::absolute(out.join("dem.yade.py")).map_err(|e| e.to_string())?;
     let writer = clients.join("yade").join("scene_script.py");
-    python("--dem yade", &interpreter, &[writer.into(), scene.into(), script.clone().into()], &python_path)?;
+    python(
+        "--dem yade",
+        &interpreter,
+        &[writer.into(), scene.into(), script.clone().into()],
+        &python_path,
+    )?;
     protocol::say!("lbm-server: the YADE script of the scene: {}", script.display());
     Ok(DemCommand {
         argv: vec![exe.into(), "-n".into(), "-x".into(), script.into()],
@@ -81,6 +91,10 @@ fn python(what: &str, interpreter: &str, args: &[OsString], paths: &[PathBuf]) -
         return Ok(());
     }
     // Its last line: the message (a traceback's exception line).
-    let last = said.lines().rev().find(|l| !l.trim().is_empty()).unwrap_or("failed");
+    let last = said
+        .lines()
+        .rev()
+        .find(|l| !l.trim().is_empty())
+        .unwrap_or("failed");
     Err(format!("{what}: {}", last.trim()))
 }

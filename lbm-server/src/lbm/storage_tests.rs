@@ -5,7 +5,7 @@
 //! relative for FP16S, 2^-12 for FP16C, half the subnormal step near zero).
 
 use super::geometry::{Cell, Setup};
-use super::gpu::{Health, GpuLattice};
+use super::gpu::{GpuLattice, Health};
 use super::imb::{CoveredCells, ImbOptions};
 use super::random::random_populations;
 use super::reference;
@@ -92,7 +92,8 @@ fn sixteen_bit_coupled_steps_match_reference() {
                 covered_cells,
                 ..ImbOptions::default()
             };
-            let mut lattice = GpuLattice::new(gpu(), setup.clone(), Health::default(), Some(options)).unwrap();
+            let mut lattice =
+                GpuLattice::new(gpu(), setup.clone(), Health::default(), Some(options)).unwrap();
             lattice.set_populations(&random_populations(&setup, 11));
             for (step, shift) in [0.0, 0.37, 0.81].into_iter().enumerate() {
                 let f = lattice.populations();

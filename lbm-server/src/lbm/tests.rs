@@ -1,7 +1,7 @@
 //! Every GPU kernel against the f64 reference step, on random populations.
 
 use super::geometry::{Cell, Face, Operator, Setup};
-use super::gpu::{fits_device, furthest_out_of_bounds, Gpu, Health, GpuLattice, ListLayout};
+use super::gpu::{fits_device, furthest_out_of_bounds, Gpu, GpuLattice, Health, ListLayout};
 use super::mrt::Rates;
 use super::random::{random_populations, Random};
 use super::reference;

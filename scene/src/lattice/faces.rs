@@ -2,7 +2,7 @@
 //! numbers (a finite velocity below the operator's Mach limit, a finite pressure above -rho c_s^2)
 //! and of the periodic pairs.
 
-use super::{mach_limit, FaceSpec, FaceTable, LatticeSection, LatticeFace};
+use super::{mach_limit, FaceSpec, FaceTable, LatticeFace, LatticeSection};
 use crate::numbers::{fail, finite3};
 use crate::{Scene, SceneError};
 

@@ -5,9 +5,9 @@ use super::bindings::{bind_group_layout, fits_device, LatticeBuffers};
 use super::device::Gpu;
 use super::health::Health;
 use super::way::{shader_module, Way};
+use crate::lbm::d3q19::{opposite, C, W};
 use crate::lbm::geometry::{Cell, Link, Setup};
 use crate::lbm::imb::{Coupling, CoveredCells, ImbOptions};
-use crate::lbm::d3q19::{opposite, C, W};
 use crate::lbm::storage::Storage;
 
 /// A lattice living on the GPU.
