@@ -9,6 +9,13 @@ fluid step uses the forces LIGGGHTS summed at the end of the previous one, with 
 loads: :meth:`HeldLoads.hold` adds the change of the loads to them, so that every LIGGGHTS step of
 fluid step n sees the loads of step n (a constant force F over k steps changes the momentum by
 exactly k dt F).
+
+With :class:`substep_loads.SubstepLoads` (the scene's ``coupling.substep_drag`` or
+``coupling.lubrication``) the loads are not held constant but follow the atoms within the fluid
+step as ``dem-client``'s do (PROTOCOL.md 3.2 and 4.5): the callback evaluates them at every
+LIGGGHTS step from the atoms' x, v, omega and the contact force LIGGGHTS summed for that step
+(the atoms' force less gravity: the deck's ``fix gravity`` and the walls come before
+``fix external``).
 """
 
 from __future__ import annotations
@@ -18,15 +25,18 @@ from typing import Optional
 import numpy as np
 
 from liggghts import Atoms, Liggghts
+from substep_loads import SubstepLoads
 
 
 class HeldLoads:
     """Force and torque by particle id (atom ID - 1), applied by ``fix external``."""
 
-    def __init__(self, lmp: Liggghts):
+    def __init__(self, lmp: Liggghts, within: Optional[SubstepLoads] = None):
         self.lmp = lmp
         self.force = np.zeros((0, 3))
         self.torque = np.zeros((0, 3))
+        #: The loads within the fluid step (None: held constant), the LIGGGHTS step at its start.
+        self.within, self.first_step = within, 0
         #: An exception raised in the callback (LIGGGHTS cannot be stopped from there).
         self.error: Optional[BaseException] = None
 
@@ -47,23 +57,56 @@ class HeldLoads:
         self._fit(ids)
         new_force, new_torque = np.zeros_like(self.force), np.zeros_like(self.torque)
         new_force[ids], new_torque[ids] = force, torque
+        if self.within is not None:
+            self._hold_within(new_force, new_torque, atoms)
         if atoms is not None and atoms.count:
             rows = atoms.tag.astype(np.int64) - 1
             atoms.f += new_force[rows] - self.force[rows]
             atoms.torque += new_torque[rows] - self.torque[rows]
         self.force, self.torque = new_force, new_torque
 
-    def apply(self, _step: int, n: int, tag, _x, fexternal) -> None:
+    def _hold_within(self, new_force: np.ndarray, new_torque: np.ndarray,
+                     atoms: Optional[Atoms]) -> None:
+        """Starts the fluid step of ``self.within`` from the atoms' state; ``new_force`` takes the
+        loads at its start (the drag is 0 there: F_n and the films)."""
+        now = atoms if atoms is not None else self.lmp.atoms()
+        rows = now.tag.astype(np.int64) - 1
+        order = np.argsort(rows)
+        mass = self.lmp.vector(b"rmass", now.count)[order]
+        self.within.hold(rows[order], new_force[rows[order]], new_torque[rows[order]],
+                         now.x[order], now.v[order], now.omega[order], now.radius[order], mass)
+        self.first_step = self.lmp.ntimestep()
+        new_force[rows] = self.within.loads(rows, 0.0, now.x, now.v, now.omega, now.radius,
+                                            0.0, 0.0, 0.0)[0]
+
+    def apply(self, step: int, n: int, tag, _x, fexternal) -> None:
         """``fix external``'s callback: fexternal = the held force, torque += the held torque."""
         if n <= 0 or self.error is not None:
             return
         try:
             rows = np.ctypeslib.as_array(tag, shape=(n,)).astype(np.int64) - 1
             self._fit(rows)
+            if self.within is not None:
+                self._follow(step, n, rows, fexternal)
+                return
             np.ctypeslib.as_array(fexternal[0], shape=(n, 3))[:] = self.force[rows]
             self.lmp.array(b"torque", n)[:] += self.torque[rows]
         except BaseException as e:  # noqa: BLE001 - raised after the run by check()
             self.error = e
+
+    def _follow(self, step: int, n: int, rows: np.ndarray, fexternal) -> None:
+        """The loads of ``self.within`` at this LIGGGHTS step; what the callback wrote is kept
+        in ``self.force``, ``self.torque`` (the next ``hold`` corrects the first half kick by it)."""
+        lmp, dt = self.lmp, self.lmp.timestep()
+        f, torque = lmp.array(b"f", n), lmp.array(b"torque", n)
+        mass = lmp.vector(b"rmass", n)
+        contact = f - mass[:, None] * self.within.gravity
+        force, spin = self.within.loads(rows, (step - self.first_step) * dt, lmp.array(b"x", n),
+                                        lmp.array(b"v", n), lmp.array(b"omega", n),
+                                        lmp.vector(b"radius", n), contact, torque.copy(), dt)
+        np.ctypeslib.as_array(fexternal[0], shape=(n, 3))[:] = force
+        torque += spin
+        self.force[rows], self.torque[rows] = force, spin
 
     def check(self) -> None:
         """Raises what went wrong in the callback during the last run."""

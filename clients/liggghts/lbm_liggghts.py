@@ -30,9 +30,11 @@ import numpy as np
 import lbmdem  # clients/python on PYTHONPATH (lbm-server sets it when it starts the adapter)
 import lbmdem_scene
 import liggghts
+import scene_dem
 from deck import BadInput, check_atoms, log_errors, open_deck, substeps, units_of, version
 from exit_guard import ExitGuard
 from held_loads import HeldLoads
+from substep_loads import SqueezeFilms, SubstepLoads
 
 PROG = "lbm-liggghts"
 EXIT_FAILURE, EXIT_BAD_INPUT = 1, 2
@@ -82,6 +84,25 @@ def states_of(atoms: liggghts.Atoms, lo: np.ndarray, hi: np.ndarray,
     return states
 
 
+def within_step(scene: lbmdem_scene.Scene, welcome: lbmdem.Welcome,
+                units: lbmdem.Units):
+    """The loads within a fluid step as dem-client applies them (the scene's
+    ``coupling.substep_drag`` and ``coupling.lubrication`` with a lattice), or None: held
+    constant."""
+    drag = bool(scene.coupling.get("substep_drag", True)) and scene.lattice is not None
+    films = None
+    if scene.lubrication:
+        lo, hi = np.array(welcome.domain_min[:]), np.array(welcome.domain_max[:])
+        periodic = welcome.periodic_axes()
+        walls = [(w.axis, w.at / units.length_m, w.sense)
+                 for w in scene_dem.walls(scene, tuple(periodic))]
+        films = SqueezeFilms(welcome.fluid_viscosity, scene.cell_size() / units.length_m, walls,
+                             np.where(periodic, hi - lo, 0.0))
+    if not drag and films is None:
+        return None
+    return SubstepLoads(welcome.fluid_density, welcome.dt, welcome.gravity[:], drag, films)
+
+
 class Adapter:
     """One coupled run of a deck: open, check, connect, step, leave."""
 
@@ -97,7 +118,8 @@ class Adapter:
     def run(self) -> int:
         try:
             lib = liggghts.load_library()
-            expected = len(lbmdem_scene.Scene.load(self.args.scene).particles)
+            self.scene = lbmdem_scene.Scene.load(self.args.scene)
+            expected = len(self.scene.particles)
             self.guard.arm(self._deck_failed)
             self.lmp = open_deck(lib, self.args)
             check_atoms(self.lmp, self.args.deck, self.args.scene, expected)
@@ -152,7 +174,9 @@ class Adapter:
         signal.signal(signal.SIGTERM, self._on_signal)
         if self.lmp.unit_style() is None:
             say("warning: cannot read this LIGGGHTS build's unit style: assuming units si")
-        hello = lbmdem.Hello.new(units, lbmdem.Physics.GRAVITY | lbmdem.Physics.CONTACTS,
+        films = lbmdem.Physics.LUBRICATION if self.scene.lubrication else 0
+        self.units = units
+        hello = lbmdem.Hello.new(units, lbmdem.Physics.GRAVITY | lbmdem.Physics.CONTACTS | films,
                                  initial_count=self.lmp.natoms(),
                                  software=f"{version(self.args.log)} (lbm_liggghts.py)")
         self.link = lbmdem.DemLink(self.args.service, timeout_s=self.args.timeout,
@@ -181,8 +205,22 @@ class Adapter:
             say(f"gravity: the deck has no fix gravity: added the scene's, {g.tolist()}")
         if not lmp.has_fix_style("nve"):
             say("warning: the deck has no fix nve/sphere: its atoms do not move")
-        self.loads = HeldLoads(lmp)
+        within = within_step(self.scene, welcome, self.units)
+        if within is not None:
+            k = self._limit_step(welcome, k, within)
+        self.loads = HeldLoads(lmp, within)
         lmp.fix_external(FIX_FLUID, self.loads.apply)
+        return k
+
+    def _limit_step(self, welcome: lbmdem.Welcome, k: int, within: SubstepLoads) -> int:
+        """More LIGGGHTS steps per fluid step where the drag or the films need a shorter one."""
+        atoms, lmp = self.lmp.atoms(), self.lmp
+        limit = within.step_limit(atoms.radius, lmp.vector(b"rmass", atoms.count))
+        if welcome.dt / k > limit:
+            k = math.ceil(welcome.dt / limit)
+            say(f"the fluid's loads within a step (PROTOCOL.md 3.2, 4.5) need LIGGGHTS steps of at "
+                f"most {limit:g}: LIGGGHTS steps at {welcome.dt / k:g} (fluid step / {k})")
+            lmp.command(f"timestep {welcome.dt / k!r}")
         return k
 
     def _loop(self, welcome: lbmdem.Welcome, k: int) -> None:

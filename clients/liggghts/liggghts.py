@@ -160,6 +160,9 @@ class Liggghts:
     def natoms(self) -> int:
         return ctypes.c_int64.from_address(self._global(b"natoms")).value
 
+    def ntimestep(self) -> int:
+        return ctypes.c_int64.from_address(self._global(b"ntimestep")).value
+
     def timestep(self) -> float:
         return ctypes.c_double.from_address(self._global(b"dt")).value
 

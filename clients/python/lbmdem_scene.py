@@ -124,6 +124,16 @@ class Scene:
         with a `[lattice]`)."""
         return bool(self.coupling.get("lubrication", True)) and self.lattice is not None
 
+    def cell_size(self) -> float:
+        """The lattice's cell size dx [m] (`lattice.dx`, or the domain's x length over
+        `lattice.resolution`): the squeeze films' cut-off (PROTOCOL.md 4.5)."""
+        lattice = self.lattice or {}
+        if "dx" in lattice:
+            return float(lattice["dx"])
+        if "resolution" in lattice:
+            return (self.domain_max[0] - self.domain_min[0]) / float(lattice["resolution"])
+        raise SceneError(f"{self.path}: the scene has no lattice.dx or lattice.resolution")
+
     def _material(self, m: dict) -> Material:
         full = {**DEFAULT_MATERIAL, **m}
         density = full.get("density", self.density)
