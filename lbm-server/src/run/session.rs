@@ -6,7 +6,7 @@ use super::counters::Counters;
 use super::prepare::Prepared;
 use super::summary::PeerInfo;
 use super::welcome::{welcome_for, yielded};
-use super::{Ending, EXIT_FAILURE, EXIT_INTERRUPTED};
+use super::{Ending, EXIT_BAD_INPUT, EXIT_FAILURE, EXIT_INTERRUPTED};
 use crate::coupled::FluidSide;
 use crate::launch::{self, DemStart};
 use crate::output::ParticleOutput;
@@ -162,7 +162,16 @@ impl Session {
     /// Ends the DEM process, writes summary.json; returns the exit code (1 where summary.json
     /// cannot be written).
     fn finish(mut self, result: Result<Ending, String>) -> u8 {
+        let dem_status = self.end_dem(result.is_ok() || self.told_to_end);
         let (reason, code) = match &result {
+            // A DEM the run started that refused its input (exit 2: YADE or LIGGGHTS missing, a
+            // deck or script that does not fit the scene) before or at step 0: the run's input
+            // was bad, and it said why.
+            _ if dem_status == Some(i32::from(EXIT_BAD_INPUT)) && self.counters.steps_completed() <= 1 => {
+                let why = "the DEM refused its input (exit status 2; its message is above)";
+                protocol::say!("lbm-server: error: {why}");
+                (format!("error: {why}"), EXIT_BAD_INPUT)
+            }
             Ok(Ending::Completed) => ("completed".to_string(), 0),
             Ok(Ending::Interrupted) => ("interrupted".to_string(), EXIT_INTERRUPTED),
             Ok(Ending::StoppedByPeer) => ("stopped by the DEM client".to_string(), EXIT_INTERRUPTED),
@@ -171,10 +180,9 @@ impl Session {
             }
             Err(e) => (format!("error: {e}"), EXIT_FAILURE),
         };
-        if let (Err(msg), false) = (&result, code == EXIT_INTERRUPTED) {
+        if let (Err(msg), true) = (&result, code == EXIT_FAILURE) {
             protocol::say!("lbm-server: error: {msg}");
         }
-        self.end_dem(result.is_ok() || self.told_to_end);
         let summary = self.summary(reason, code);
         if let Err(e) = summary.write(&self.p.out.join("summary.json")) {
             // The run's record lost: whatever the run did, it did not end well.
@@ -207,17 +215,19 @@ impl Session {
 
     /// Ends the DEM side: a DEM `told` to end (its last reply said FINAL or STOP) ends on its own
     /// and is given the time to; a spawned one is then ended, an external one is left the time to
-    /// read the last reply before our ports close.
-    fn end_dem(&mut self, told: bool) {
+    /// read the last reply before our ports close. Returns a spawned DEM's exit status.
+    fn end_dem(&mut self, told: bool) -> Option<i32> {
         let grace = if told {
             Duration::from_secs(2)
         } else {
             Duration::ZERO
         };
         if let Some(child) = self.child.as_mut() {
-            launch::end_child(child, grace);
-        } else if told {
+            return launch::end_child(child, grace);
+        }
+        if told {
             self.link.linger(protocol::transport::LINGER);
         }
+        None
     }
 }
