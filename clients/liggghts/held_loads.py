@@ -20,6 +20,7 @@ LIGGGHTS step from the atoms' x, v, omega and the contact force LIGGGHTS summed 
 
 from __future__ import annotations
 
+import ctypes
 from typing import Optional
 
 import numpy as np
@@ -37,6 +38,9 @@ class HeldLoads:
         self.torque = np.zeros((0, 3))
         #: The loads within the fluid step (None: held constant), the LIGGGHTS step at its start.
         self.within, self.first_step = within, 0
+        #: The atoms' tags, the held force and torque in their order, whether any torque is not
+        #: 0 (None: not yet known); the address of the fexternal written with them.
+        self._order, self._written = None, None
         #: An exception raised in the callback (LIGGGHTS cannot be stopped from there).
         self.error: Optional[BaseException] = None
 
@@ -64,6 +68,7 @@ class HeldLoads:
             atoms.f += new_force[rows] - self.force[rows]
             atoms.torque += new_torque[rows] - self.torque[rows]
         self.force, self.torque = new_force, new_torque
+        self._order = None
 
     def _hold_within(self, new_force: np.ndarray, new_torque: np.ndarray,
                      atoms: Optional[Atoms]) -> None:
@@ -84,15 +89,38 @@ class HeldLoads:
         if n <= 0 or self.error is not None:
             return
         try:
-            rows = np.ctypeslib.as_array(tag, shape=(n,)).astype(np.int64) - 1
+            tags = np.ctypeslib.as_array(tag, shape=(n,))
+            if self.within is None and self._order is not None and np.array_equal(
+                    tags, self._order[0]):
+                # fexternal is the fix's own array: it keeps what was written while LIGGGHTS
+                # keeps its atoms in that order and the array where it was.
+                address = ctypes.addressof(fexternal[0].contents)
+                if address != self._written:
+                    np.ctypeslib.as_array(fexternal[0], shape=(n, 3))[:] = self._order[1]
+                    self._written = address
+                if self._order[3]:
+                    self.lmp.array(b"torque", n)[:] += self._order[2]
+                return
+            rows = tags.astype(np.int64) - 1
             self._fit(rows)
             if self.within is not None:
                 self._follow(step, n, rows, fexternal)
                 return
-            np.ctypeslib.as_array(fexternal[0], shape=(n, 3))[:] = self.force[rows]
-            self.lmp.array(b"torque", n)[:] += self.torque[rows]
+            force, torque = self._in_atom_order(tags)
+            np.ctypeslib.as_array(fexternal[0], shape=(n, 3))[:] = force
+            self._written = ctypes.addressof(fexternal[0].contents)
+            self.lmp.array(b"torque", n)[:] += torque
         except BaseException as e:  # noqa: BLE001 - raised after the run by check()
             self.error = e
+
+    def _in_atom_order(self, tags: np.ndarray):
+        """The held loads in the order of the atoms (``tags``), kept for the next calls while
+        LIGGGHTS keeps its atoms in that order (it sorts them now and then)."""
+        rows = tags.astype(np.int64) - 1
+        torque = self.torque[rows]
+        self._order = (tags.copy(), self.force[rows], torque, bool(np.any(torque)))
+        self._written = None
+        return self._order[1], self._order[2]
 
     def _follow(self, step: int, n: int, rows: np.ndarray, fexternal) -> None:
         """The loads of ``self.within`` at this LIGGGHTS step; what the callback wrote is kept

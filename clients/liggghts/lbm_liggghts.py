@@ -77,7 +77,10 @@ def states_of(atoms: liggghts.Atoms, lo: np.ndarray, hi: np.ndarray,
     axes, where LIGGGHTS wraps only when it rebuilds its neighbour lists)."""
     states = np.zeros(atoms.count, lbmdem.STATE_DTYPE)
     states["id"] = atoms.tag.astype(np.int64) - 1
-    states["position"] = np.where(periodic, lo + np.mod(atoms.x - lo, hi - lo), atoms.x)
+    states["position"] = atoms.x
+    for axis in np.flatnonzero(periodic):
+        states["position"][:, axis] = lo[axis] + np.mod(atoms.x[:, axis] - lo[axis],
+                                                        hi[axis] - lo[axis])
     states["velocity"] = atoms.v
     states["angular_velocity"] = atoms.omega
     states["radius"] = atoms.radius

@@ -57,10 +57,13 @@ def script_text(scene: lbmdem_scene.Scene, setup: scene_dem.DemSetup) -> str:
         lengths = [hi - lo for lo, hi in zip(scene.domain_min, scene.domain_max)]
         lines += ["O.periodic = True", f"O.cell.setBox({', '.join(repr(v) for v in lengths)})"]
     ip2, law = _law(setup)
+    # A wall spans a periodic cell: YADE's collider refuses bodies as long as the period unless
+    # told (its floor-in-a-periodic-cell case); the walls never move.
+    bigger = ", allowBiggerThanPeriod=True" if any(setup.periodic) and setup.walls else ""
     lines += [
         "O.engines = [",
         "    ForceResetter(),",
-        "    InsertionSortCollider([Bo1_Sphere_Aabb(), Bo1_Wall_Aabb()]),",
+        f"    InsertionSortCollider([Bo1_Sphere_Aabb(), Bo1_Wall_Aabb()]{bigger}),",
         "    InteractionLoop([Ig2_Sphere_Sphere_ScGeom(), Ig2_Wall_Sphere_ScGeom()],",
         f"                    [{ip2}],",
         f"                    [{law}]),",

@@ -2,7 +2,7 @@
 """Cross-DEM coupled validation: the same scene with the built-in DEM, YADE and LIGGGHTS.
 
     python3 validation/crossdem/crossdem.py [--cases e1,default,shear] [--dems builtin,yade,liggghts]
-                                            [--steps N] [--out DIR] [--server PATH]
+                                            [--steps N] [--out DIR] [--server PATH] [--reuse]
 
 Each case runs `lbm-server run SCENE --dem DEM` once per DEM (YADE's python finds iceoryx2 in
 target/yade-py, as .ci/run installs it), reads OUT/particles.csv and compares one number:
@@ -13,7 +13,7 @@ target/yade-py, as .ci/run installs it), reads OUT/particles.csv and compares on
 | default | validation/scenes/default.toml (27 beads onto the floor and each other) | final mean height |
 | shear | validation/crossdem/shear.toml (a sphere in a Couette flow) | final spin about y |
 
-Writes DIR/results.json (the numbers, each DEM's difference from the built-in DEM, wall times) and
+Writes DIR/results.json and validation/crossdem/results.json (the numbers, each DEM's difference from the built-in DEM, wall times) and
 validation/crossdem/crossdem.png (the three cases, the three DEMs); REPORT.md quotes them. A DEM
 that cannot run here (not installed) is left out with the reason.
 """
@@ -51,9 +51,26 @@ def run(server: str, case: str, dem: str, out: Path, steps) -> dict:
     env["PYTHONPATH"] = os.pathsep.join(p for p in (str(iox), env.get("PYTHONPATH")) if p)
     t0 = time.perf_counter()
     p = subprocess.run(cmd, env=env, capture_output=True, text=True)
+    cmd[2] = str(SCENES[case].relative_to(ROOT))
     return {"command": " ".join(cmd[1:]), "status": p.returncode,
             "wall_s": round(time.perf_counter() - t0, 1),
             "said": (p.stdout + p.stderr).strip().splitlines()[-3:]}
+
+
+def reused(server: str, case: str, dem: str, out: Path) -> dict:
+    """A run of an earlier call (--reuse), as its summary.json records it."""
+    s = json.loads((out / "summary.json").read_text())
+    return {"command": f"run {SCENES[case].relative_to(ROOT)} --dem {dem} --out {out}",
+            "status": 0 if s["exit_reason"] == "completed" else 1,
+            "wall_s": round(s["wall_time_s"], 1), "said": [s["exit_reason"]]}
+
+
+def timing(out: Path) -> dict:
+    """The server's lockstep wall time per fluid step and the shares of its parts."""
+    s = json.loads((out / "summary.json").read_text())
+    wall, steps = s["wall_time_s"], s["steps_completed"]
+    return {"steps": steps, "ms_per_step": round(1e3 * wall / steps, 2),
+            "share": {k: round(v / wall, 3) for k, v in s["time_s"].items()}}
 
 
 def series(out: Path) -> dict:
@@ -128,6 +145,8 @@ def main(argv=None) -> int:
     ap.add_argument("--out", default=str(ROOT / "out/crossdem"))
     ap.add_argument("--server", default=str(ROOT / "target/debug/lbm-server"))
     ap.add_argument("--chart", default=str(HERE / "crossdem.png"))
+    ap.add_argument("--reuse", action="store_true",
+                    help="take the runs whose OUT/CASE-DEM/summary.json exists from there")
     args = ap.parse_args(argv)
     out = Path(args.out)
     results, curves = {}, {}
@@ -139,10 +158,16 @@ def main(argv=None) -> int:
                 results[case][dem] = {"skipped": why}
                 print(f"{case} {dem}: skipped: {why}", flush=True)
                 continue
-            r = run(args.server, case, dem, out / f"{case}-{dem}", args.steps)
+            done = out / f"{case}-{dem}" / "summary.json"
+            if args.reuse and done.exists():
+                r = reused(args.server, case, dem, out / f"{case}-{dem}")
+            else:
+                r = run(args.server, case, dem, out / f"{case}-{dem}", args.steps)
             if r["status"] == 0:
                 curves[case][dem] = series(out / f"{case}-{dem}")
                 r["value"] = measure(case, curves[case][dem])
+                r.update(timing(out / f"{case}-{dem}"))
+                del r["said"]
             results[case][dem] = r
             print(f"{case} {dem}: {r.get('value')} ({r['wall_s']} s, exit {r['status']})",
                   flush=True)
@@ -153,6 +178,7 @@ def main(argv=None) -> int:
                 results[case][dem]["vs_builtin"] = v / base - 1.0
     out.mkdir(parents=True, exist_ok=True)
     (out / "results.json").write_text(json.dumps(results, indent=1))
+    (HERE / "results.json").write_text(json.dumps(results, indent=1))
     chart(results, curves, Path(args.chart))
     print(f"results: {out / 'results.json'}; chart: {args.chart}")
     return 0
