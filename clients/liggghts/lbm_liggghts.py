@@ -10,8 +10,10 @@ one atom per particle of the scene (atom ID i is the scene's particle i - 1), a 
 style, materials, contact law, walls, gravity and ``fix nve/sphere``. Then, each fluid step, the
 adapter reads the atoms' x, v, omega and radius, sends them to the fluid (clients/python/lbmdem.py,
 PROTOCOL.md), and runs k LIGGGHTS steps (k = fluid dt / LIGGGHTS timestep) with the fluid's force
-and torque held over them (``fix external``; held_loads.py). LIGGGHTS applies gravity; the fluid
-adds buoyancy and lubrication. Exit status 0 after the FINAL reply or a STOP, 1 when the link or
+and torque on them (``fix external``; held_loads.py), following the atoms within the fluid step
+as the scene's ``coupling.substep_drag`` and ``coupling.lubrication`` say (substep_loads.py: the
+adapter then integrates the squeeze films). LIGGGHTS applies gravity; the fluid adds buoyancy
+(and lubrication where the scene turns the adapter's films off). Exit status 0 after the FINAL reply or a STOP, 1 when the link or
 LIGGGHTS fails during the run, 2 for bad input (LIGGGHTS missing, a deck error, atoms that are not
 the scene's particles).
 """

@@ -137,6 +137,7 @@ class Liggghts:
             raise Unsupported("lammps_open_no_mpi returned no instance")
         self.handle = handle.value
         self._callback = None  # keeps the C callable alive while LIGGGHTS may call it
+        self._views = {}
 
     def file(self, path: str) -> None:
         self.lib.lammps_file(self.handle, path.encode())
@@ -178,11 +179,24 @@ class Liggghts:
     def array(self, name: bytes, n: int) -> np.ndarray:
         """A per-atom double[n][3] (LAMMPS allocates its rows as one block)."""
         rows = ctypes.cast(self._atom(name), _dpp)
-        return np.ctypeslib.as_array(rows[0], shape=(n, 3)) if n else np.zeros((0, 3))
+        return self._view(ctypes.cast(rows[0], ctypes.c_void_p).value, (n, 3))
 
     def vector(self, name: bytes, n: int) -> np.ndarray:
-        data = ctypes.cast(self._atom(name), _dp)
-        return np.ctypeslib.as_array(data, shape=(n,)) if n else np.zeros(0)
+        return self._view(self._atom(name), (n,))
+
+    def _view(self, address: Optional[int], shape: tuple) -> np.ndarray:
+        """A numpy view of the doubles at ``address`` (kept while the address and shape are: a
+        view costs tens of microseconds to make, and the callback asks for several each step)."""
+        if not address or not shape[0]:
+            return np.zeros(shape)
+        key = (address, shape)
+        view = self._views.get(key)
+        if view is None:
+            if len(self._views) > 64:
+                self._views.clear()
+            data = ctypes.cast(address, _dp)
+            view = self._views[key] = np.ctypeslib.as_array(data, shape=shape)
+        return view
 
     def int_vector(self, name: bytes, n: int) -> np.ndarray:
         data = ctypes.cast(self._atom(name), ctypes.POINTER(ctypes.c_int))

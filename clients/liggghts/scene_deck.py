@@ -30,7 +30,8 @@ def deck_text(scene: lbmdem_scene.Scene, setup: scene_dem.DemSetup, data_file: s
         f"# The DEM of scene '{scene.name}' ({scene.path}) for LIGGGHTS, written by",
         "# clients/liggghts/scene_deck.py for `lbm-server run SCENE --dem liggghts`: edit it and run",
         "# it with clients/liggghts/lbm_liggghts.py --deck (README.md there). The fluid adds its force,",
-        "# torque, buoyancy and lubrication; this deck applies gravity.",
+        "# torque and buoyancy, the adapter the squeeze films (coupling.lubrication); this deck",
+        "# applies gravity.",
         "# Atom types: " + ", ".join(f"{i + 1} = {name}" for i, name in enumerate(names)),
     ]
     if setup.preset != "liggghts":

@@ -84,39 +84,54 @@ class SqueezeFilms:
 
     def __init__(self, viscosity: float, cutoff: float, walls: list, periods):
         self.viscosity, self.cutoff = viscosity, cutoff
-        #: (axis, coordinate, inward normal sign) of each wall plane.
-        self.walls = walls
+        #: The walls: axis, coordinate and inward normal sign of each plane.
+        walls = list(walls)
+        self.wall_axis = np.array([w[0] for w in walls], np.int64)
+        self.wall_at = np.array([w[1] for w in walls], float)
+        self.wall_sign = np.array([w[2] for w in walls], float)
+        #: Sums each wall's force into its axis.
+        self.wall_to_axis = np.eye(3)[self.wall_axis] if walls else np.zeros((0, 3))
         self.periods = np.asarray(periods, float)
         self.i = self.j = np.zeros(0, np.int64)
+        self._rows = (None, None, None)
 
     def candidates(self, ids, x: np.ndarray, radius: np.ndarray, travel: float) -> None:
         """The pairs (by id) that can come within the cut-off while each sphere moves up to
         ``travel``."""
         i, j = near_pairs(x, radius, self.cutoff + 2.0 * travel, self.periods)
         self.i, self.j = ids[i], ids[j]
+        self._rows = (None, None, None)
+
+    def _pair_rows(self, ids: np.ndarray):
+        """The candidate pairs as rows of ``ids`` (kept while the order of ids is)."""
+        if self._rows[0] is None or not np.array_equal(self._rows[0], ids):
+            row = np.full(int(max(ids.max(), self.i.max(), self.j.max())) + 1, -1)
+            row[ids] = np.arange(len(ids))
+            i, j = row[self.i], row[self.j]
+            keep = (i >= 0) & (j >= 0)
+            self._rows = (ids.copy(), i[keep], j[keep])
+        return self._rows[1], self._rows[2]
 
     def forces(self, ids, x: np.ndarray, v: np.ndarray, radius: np.ndarray) -> np.ndarray:
         """The film force on each sphere (rows as ids, x) for the present gaps and velocities."""
         f = np.zeros_like(x)
-        if self.i.size:
-            row = np.full(int(max(ids.max(), self.i.max(), self.j.max())) + 1, -1)
-            row[ids] = np.arange(len(ids))
-            i, j = row[self.i], row[self.j]
-            i, j = i[(i >= 0) & (j >= 0)], j[(i >= 0) & (j >= 0)]
+        if self.i.size and len(ids):
+            i, j = self._pair_rows(ids)
             d = separation(x[i] - x[j], self.periods)
-            dist = np.linalg.norm(d, axis=1)
+            dist = np.sqrt(np.einsum("ij,ij->i", d, d))
             normal = d / np.where(dist > 0.0, dist, 1.0)[:, None]
             r_eff = radius[i] * radius[j] / (radius[i] + radius[j])
             approach = -np.einsum("ij,ij->i", v[i] - v[j], normal)
             pair = normal * (film_damping(self.viscosity, r_eff, dist - radius[i] - radius[j],
                                           self.cutoff) * approach)[:, None]
-            for axis in range(3):
-                f[:, axis] += np.bincount(i, pair[:, axis], len(x))
-                f[:, axis] -= np.bincount(j, pair[:, axis], len(x))
-        for axis, coordinate, sign in self.walls:
-            gap = sign * (x[:, axis] - coordinate) - radius
-            f[:, axis] += sign * film_damping(self.viscosity, radius, gap, self.cutoff) * (
-                -sign * v[:, axis])
+            slots = np.concatenate([3 * i[:, None], 3 * j[:, None]]) + np.arange(3)
+            f += np.bincount(slots.ravel(), np.concatenate([pair, -pair]).ravel(),
+                             3 * len(x)).reshape(-1, 3)
+        if self.wall_axis.size:
+            gap = self.wall_sign * (x[:, self.wall_axis] - self.wall_at) - radius[:, None]
+            damping = film_damping(self.viscosity, radius[:, None], gap, self.cutoff)
+            # sign * c * (approach speed -sign v) = -c v along the wall's axis
+            f -= (damping * v[:, self.wall_axis]) @ self.wall_to_axis
         return f
 
     def step_limit(self, radius: np.ndarray, mass: np.ndarray) -> float:

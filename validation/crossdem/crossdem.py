@@ -13,7 +13,7 @@ target/yade-py, as .ci/run installs it), reads OUT/particles.csv and compares on
 | default | validation/scenes/default.toml (27 beads onto the floor and each other) | final mean height |
 | shear | validation/crossdem/shear.toml (a sphere in a Couette flow) | final spin about y |
 
-Writes DIR/results.json and validation/crossdem/results.json (the numbers, each DEM's difference from the built-in DEM, wall times) and
+Writes DIR/results.json and, without --steps, validation/crossdem/results.json (the numbers, each DEM's difference from the built-in DEM, wall times) and
 validation/crossdem/crossdem.png (the three cases, the three DEMs); REPORT.md quotes them. A DEM
 that cannot run here (not installed) is left out with the reason.
 """
@@ -178,7 +178,8 @@ def main(argv=None) -> int:
                 results[case][dem]["vs_builtin"] = v / base - 1.0
     out.mkdir(parents=True, exist_ok=True)
     (out / "results.json").write_text(json.dumps(results, indent=1))
-    (HERE / "results.json").write_text(json.dumps(results, indent=1))
+    if not args.steps:  # the report's runs, not a cut one
+        (HERE / "results.json").write_text(json.dumps(results, indent=1))
     chart(results, curves, Path(args.chart))
     print(f"results: {out / 'results.json'}; chart: {args.chart}")
     return 0
