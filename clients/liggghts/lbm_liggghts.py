@@ -63,6 +63,11 @@ def parse_args(argv=None) -> argparse.Namespace:
     ap.add_argument("--echo", action="store_true", help="show LIGGGHTS's screen output")
     ap.add_argument("--timeout", type=float, default=10.0,
                     help="longest wait for a live but silent fluid server [s] (default 10)")
+    ap.add_argument("--loads", choices=("follow", "held"), default="follow",
+                    help="follow: the fluid's loads follow the atoms within a fluid step as the "
+                         "scene's coupling.substep_drag and coupling.lubrication say, the films "
+                         "integrated here (default); held: held constant, the fluid adds its own "
+                         "lubrication (cheaper for large beds)")
     ap.add_argument("--probe", action="store_true",
                     help="only say whether LIGGGHTS can be loaded (exit 0) or not (exit 2)")
     args = ap.parse_args(argv)
@@ -179,7 +184,8 @@ class Adapter:
         signal.signal(signal.SIGTERM, self._on_signal)
         if self.lmp.unit_style() is None:
             say("warning: cannot read this LIGGGHTS build's unit style: assuming units si")
-        films = lbmdem.Physics.LUBRICATION if self.scene.lubrication else 0
+        following = self.args.loads == "follow"
+        films = lbmdem.Physics.LUBRICATION if following and self.scene.lubrication else 0
         self.units = units
         hello = lbmdem.Hello.new(units, lbmdem.Physics.GRAVITY | lbmdem.Physics.CONTACTS | films,
                                  initial_count=self.lmp.natoms(),
@@ -210,7 +216,8 @@ class Adapter:
             say(f"gravity: the deck has no fix gravity: added the scene's, {g.tolist()}")
         if not lmp.has_fix_style("nve"):
             say("warning: the deck has no fix nve/sphere: its atoms do not move")
-        within = within_step(self.scene, welcome, self.units)
+        within = (within_step(self.scene, welcome, self.units) if self.args.loads == "follow"
+                  else None)
         if within is not None:
             k = self._limit_step(welcome, k, within)
         self.loads = HeldLoads(lmp, within)

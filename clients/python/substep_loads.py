@@ -66,16 +66,20 @@ def near_pairs(x: np.ndarray, radius: np.ndarray, reach: float, periods: np.ndar
         i = np.repeat(np.arange(n), count)
         within = np.arange(count.sum()) - np.repeat(np.cumsum(count) - count, count)
         j = order[np.repeat(first, count) + within]
-        found.append(i[i < j] * n + j[i < j])
-    code = np.unique(np.concatenate(found))
-    i, j = code // n, code % n
-    d = separation(x[i] - x[j], periods)
-    close = np.linalg.norm(d, axis=1) - radius[i] - radius[j] < reach
-    return i[close], j[close]
+        i, j = i[i < j], j[i < j]
+        d = separation(x[i] - x[j], periods)
+        close = np.sqrt(np.einsum("ij,ij->i", d, d)) - radius[i] - radius[j] < reach
+        found.append(i[close] * n + j[close])
+    code = np.concatenate(found)
+    if np.any((periods > 0) & (dims < 3)):  # a wrapped offset can meet the same cell twice
+        code = np.unique(code)
+    return code // n, code % n
 
 
 def separation(d: np.ndarray, periods: np.ndarray) -> np.ndarray:
     """x_i - x_j at the nearest image along the periodic axes."""
+    if not np.any(periods > 0):
+        return d
     return np.where(periods > 0, d - periods * np.round(d / np.where(periods > 0, periods, 1.0)), d)
 
 

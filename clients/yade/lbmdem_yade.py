@@ -35,6 +35,7 @@ import numpy as np
 
 import lbmdem  # clients/python on PYTHONPATH (lbm-server sets it when it starts YADE)
 import lbmdem_scene
+import following_loads
 
 import yade  # this module runs inside YADE: `yade -n -x script.py`
 from yade.minieigenHP import Vector3
@@ -249,6 +250,8 @@ class _Spheres:
         self.scene_ids = list(ids)
         self.body_ids = [ids[i] for i in self.scene_ids]
         self.wrap = wrap
+        #: The run's scene (None: not given).
+        self.scene = None
 
     def __len__(self) -> int:
         return len(self.body_ids)
@@ -339,7 +342,7 @@ def _software() -> str:
 def couple(run: Optional[str] = None, scene: Optional[str] = None,
            ids: Union[None, Mapping[int, int], Sequence[int]] = None,
            max_dt: Optional[float] = None, timeout_s: float = 10.0,
-           exit_on_error: bool = True) -> Coupled:
+           exit_on_error: bool = True, loads: str = "follow") -> Coupled:
     """Runs YADE as the DEM of the lbm-server run ``run`` until its last step.
 
     run: the name lbm-server printed (``DEM service: RUN``; default: $LBMDEM_RUN).
@@ -351,6 +354,9 @@ def couple(run: Optional[str] = None, scene: Optional[str] = None,
         step / k not above it (e.g. ``0.5 * PWaveTimeStep()``).
     timeout_s: longest wait for a live fluid server that does not answer.
     exit_on_error: exit the process (2 bad input, 1 broken link) instead of raising.
+    loads: "follow": the fluid's loads follow the spheres within a fluid step as the scene's
+        coupling.substep_drag and coupling.lubrication say (following_loads.py; the films are
+        integrated here); "held": held constant, the fluid adds its own lubrication.
     """
     stop = _StopRequest()
     stop.install()
@@ -358,7 +364,9 @@ def couple(run: Optional[str] = None, scene: Optional[str] = None,
     spheres = None
     try:
         run = _run_name(run)
-        spheres, hello = _prepare(scene or os.environ.get(SCENE_ENV), ids)
+        if loads not in ("follow", "held"):
+            raise BadInput(f"loads = {loads!r}: 'follow' or 'held'")
+        spheres, hello = _prepare(scene or os.environ.get(SCENE_ENV), ids, loads == "follow")
         link = lbmdem.DemLink(run, timeout_s=timeout_s, interrupt=stop)
         return _exchange(link, hello, spheres, max_dt, stop)
     except BadInput as e:
@@ -396,9 +404,10 @@ def _run_name(run: Optional[str]) -> str:
     return run
 
 
-def _prepare(scene_path: Optional[str], ids):
+def _prepare(scene_path: Optional[str], ids, follow: bool = True):
     """Checks the YADE script against the scene before joining; returns the spheres and Hello."""
     coupled = id_map(ids)
+    scene = None
     if scene_path:
         try:
             scene = lbmdem_scene.Scene.load(scene_path)
@@ -410,9 +419,14 @@ def _prepare(scene_path: Optional[str], ids):
     if not coupled:
         _say("warning: no dynamic sphere to couple: the fluid sees no particle")
     _check_engines()
-    hello = lbmdem.Hello.new(lbmdem.Units.si(), lbmdem.Physics.GRAVITY | lbmdem.Physics.CONTACTS,
+    scene = scene if follow else None  # the loads within the step follow the scene's coupling
+    films = lbmdem.Physics.LUBRICATION if scene is not None and scene.lubrication else 0
+    hello = lbmdem.Hello.new(lbmdem.Units.si(),
+                             lbmdem.Physics.GRAVITY | lbmdem.Physics.CONTACTS | films,
                              initial_count=len(coupled), software=_software())
-    return _Spheres(coupled), hello
+    spheres = _Spheres(coupled)
+    spheres.scene = scene
+    return spheres, hello
 
 
 def _exchange(link: lbmdem.DemLink, hello: lbmdem.Hello, spheres: _Spheres,
@@ -430,6 +444,12 @@ def _exchange(link: lbmdem.DemLink, hello: lbmdem.Hello, spheres: _Spheres,
     k = _substeps(dt, max_dt)
     _set_gravity(welcome)
     spheres.wrap = _periodic_wrap(welcome)
+    following = _following(spheres, welcome)
+    if following is not None and O.dt > following.step_limit():
+        k = math.ceil(dt / following.step_limit())
+        O.dt = dt / k
+        _say(f"the fluid's loads within a step (PROTOCOL.md 3.2, 4.5) need YADE steps of at most "
+             f"{following.step_limit():g} s: O.dt = {O.dt:g} s (fluid step / {k})")
     _say(f"connected to {welcome.software_text()} (pid {welcome.pid}): {welcome.steps} steps "
          f"of {dt:g} s, {len(spheres)} spheres, {k} YADE steps of {O.dt:g} s each, capacity "
          f"{welcome.capacity}, fluid physics {lbmdem.Physics.names(welcome.physics)}")
@@ -443,9 +463,13 @@ def _exchange(link: lbmdem.DemLink, hello: lbmdem.Hello, spheres: _Spheres,
         if step + 1 >= welcome.steps:
             raise lbmdem.BadReply(f"the {lbmdem.FLUID} did not mark the reply to step {step}, "
                                   f"the last of {welcome.steps}, FINAL", step)
-        spheres.hold(loads)
-        for _ in range(k):
-            O.step()
+        if following is not None:
+            following.hold(loads)
+            following.advance(k)
+        else:
+            spheres.hold(loads)
+            for _ in range(k):
+                O.step()
         step += 1
     link.close()
     ending = ("interrupted" if flags else
@@ -456,6 +480,15 @@ def _exchange(link: lbmdem.DemLink, hello: lbmdem.Hello, spheres: _Spheres,
     print(f"{NAME}: completed {step + 1} steps, {len(spheres)} particles, last step {step}",
           flush=True)
     return Coupled(step + 1, ending, len(spheres), k, dt)
+
+
+def _following(spheres: _Spheres, welcome: lbmdem.Welcome):
+    """The loads that follow the spheres within a fluid step (following_loads.py), as the
+    scene's coupling.substep_drag and coupling.lubrication say; None: held constant."""
+    loads = following_loads.within_step(spheres.scene, welcome)
+    if loads is None:
+        return None
+    return following_loads.FollowingLoads(loads, spheres.scene_ids, spheres.body_ids)
 
 
 def _end_run(link: Optional[lbmdem.DemLink], run: Optional[str], timeout_s: float) -> None:
