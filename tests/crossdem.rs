@@ -11,8 +11,6 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 const ROOT: &str = env!("CARGO_MANIFEST_DIR");
-const ADAPTER: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/clients/liggghts/lbm_liggghts.py");
-const PYTHON_CLIENTS: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/clients/python");
 const YADE_CLIENT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/clients/yade");
 /// Where .ci/run installs iceoryx2 for Debian's python (YADE's).
 const YADE_IOX: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/target/yade-py");
@@ -21,20 +19,6 @@ const YADE_IOX: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/target/yade-py");
 fn skipped(why: &str) {
     use std::io::Write;
     let _ = writeln!(std::io::stderr().lock(), "{why}");
-}
-
-/// Whether LIGGGHTS can be loaded; where not, says that `test` was skipped and why.
-fn liggghts_present(test: &str) -> bool {
-    let probe = Command::new("python3")
-        .args([ADAPTER, "--probe"])
-        .env("PYTHONPATH", PYTHON_CLIENTS)
-        .output()
-        .expect("python3 runs");
-    if probe.status.success() {
-        return true;
-    }
-    skipped(&format!("{test}: skipped: {}", text(&probe).trim()));
-    false
 }
 
 /// Whether YADE and iceoryx2 for its python are here; where not, says that `test` was skipped.
@@ -59,13 +43,6 @@ fn launch_path(name: &str) -> Option<PathBuf> {
     std::env::split_paths(&path).map(|d| d.join(name)).find(|p| p.is_file())
 }
 
-fn text(output: &Output) -> String {
-    format!(
-        "{}{}",
-        String::from_utf8_lossy(&output.stdout),
-        String::from_utf8_lossy(&output.stderr)
-    )
-}
 
 /// `lbm-server run SCENE --steps N --dem DEM`, to completion (YADE's iceoryx2 on PYTHONPATH).
 fn run_with(scene: &Path, out: &Path, steps: u64, extra: &[&str]) -> Output {
@@ -95,7 +72,7 @@ fn the_default_scene_settles_alike_with_each_dem() {
     let scene = Path::new(ROOT).join("validation/scenes/default.toml");
     let dir = temp_dir("crossdem-default");
     let builtin = run_with(&scene, &dir.join("builtin"), 400, &[]);
-    assert!(builtin.status.success(), "{}", text(&builtin));
+    assert!(builtin.status.success(), "{}", output_text(&builtin));
     let reference = final_mean_height(&dir.join("builtin"));
     for dem in ["liggghts", "yade"] {
         let present = match dem {
@@ -107,7 +84,7 @@ fn the_default_scene_settles_alike_with_each_dem() {
         }
         let out = dir.join(dem);
         let run = run_with(&scene, &out, 400, &["--dem", dem]);
-        assert!(run.status.success(), "{dem}: {}", text(&run));
+        assert!(run.status.success(), "{dem}: {}", output_text(&run));
         let z = final_mean_height(&out);
         eprintln!("{test}: mean height at step 399: built-in {reference:.7e} m, {dem} {z:.7e} m");
         assert!(
@@ -132,7 +109,7 @@ fn refused_run(tag: &str, scene: &Path, command: &str, expected: &[&str]) {
         .expect("lbm-server runs");
     let run = format!("lbmdem_{}_", child.id());
     let output = child.wait_with_output().expect("lbm-server ends");
-    let said = text(&output);
+    let said = output_text(&output);
     assert_eq!(output.status.code(), Some(2), "{tag}: {said}");
     for needle in expected.iter().chain(&["lbm-server: error: the DEM refused its input"]) {
         assert!(said.contains(needle), "{tag}: no {needle:?} in:\n{said}");
@@ -218,7 +195,7 @@ fn liggghts_decks_that_do_not_fit_the_scene_end_the_run_with_exit_2() {
         ),
     ];
     for (tag, deck, message) in cases {
-        let command = format!("python3 {ADAPTER} --deck {} --log none", deck.display());
+        let command = format!("python3 {LIGGGHTS_ADAPTER} --deck {} --log none", deck.display());
         refused_run(&format!("crossdem-deck-{tag}"), &scene, &command, &[message]);
     }
 }
@@ -264,7 +241,7 @@ fn dem_yade_without_yade_says_how_to_install_it() {
         .env("PATH", "/nonexistent")
         .output()
         .expect("lbm-server runs");
-    let said = text(&output);
+    let said = output_text(&output);
     assert_eq!(output.status.code(), Some(2), "{said}");
     assert!(said.contains("YADE is not installed"), "{said}");
     assert!(said.contains("apt-get install yade python3-yade"), "{said}");

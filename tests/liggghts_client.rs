@@ -9,11 +9,9 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 use std::time::Duration;
 
-const ADAPTER: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/clients/liggghts/lbm_liggghts.py");
+const ADAPTER: &str = LIGGGHTS_ADAPTER;
 const CHECK_LOADS: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/clients/liggghts/check_loads.py");
 const DECK: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/clients/liggghts/ten_cate_e1.in");
-/// lbmdem.py and lbmdem_scene.py, which the adapter imports from PYTHONPATH.
-const PYTHON_CLIENTS: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/clients/python");
 
 /// Ten Cate E1's sphere and liquid (validation/scenes/ten-cate-e1.toml, 6 cells per diameter) in
 /// a smaller box, 20 x 20 x 32 cells, for `steps` steps.
@@ -125,35 +123,13 @@ fn adapter(dir: &Path, run: &str, scene: &Path, deck: &Path, vars: &[(&str, &str
     cmd
 }
 
-/// Whether LIGGGHTS can be loaded; where it cannot, prints that `test` was skipped and why.
-fn liggghts_present(test: &str) -> bool {
-    let probe = Command::new("python3")
-        .args([ADAPTER, "--probe"])
-        .env("PYTHONPATH", PYTHON_CLIENTS)
-        .output()
-        .expect("python3 runs");
-    let text = String::from_utf8_lossy(&probe.stderr).into_owned();
-    match probe.status.code() {
-        Some(0) => true,
-        Some(2) => {
-            eprintln!("{test}: skipped: {}", text.trim());
-            false
-        }
-        _ => panic!("the adapter's probe failed (iceoryx2 for python3?):\n{text}"),
-    }
-}
-
 /// The largest settling speed (-vz) in a run's particles.csv.
 fn peak_settling_speed(out: &Path) -> f64 {
     particle_rows(out).iter().map(|r| -r[8]).fold(f64::MIN, f64::max)
 }
 
 fn text(output: &Output) -> String {
-    format!(
-        "{}{}",
-        String::from_utf8_lossy(&output.stdout),
-        String::from_utf8_lossy(&output.stderr)
-    )
+    output_text(output)
 }
 
 /// Runs `scene_text` with the built-in DEM, then with LIGGGHTS on `deck` (with `vars`); both must

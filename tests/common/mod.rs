@@ -3,7 +3,7 @@
 
 use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Stdio};
+use std::process::{Child, Command, Output, Stdio};
 use std::sync::mpsc::{channel, Receiver};
 use std::time::{Duration, Instant};
 
@@ -289,4 +289,35 @@ pub fn csv_steps(out: &Path) -> std::collections::BTreeMap<u64, Vec<u64>> {
         entry.push(cols[2].parse().unwrap());
     }
     steps
+}
+
+/// The LIGGGHTS adapter, and the Python clients it imports from PYTHONPATH.
+pub const LIGGGHTS_ADAPTER: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/clients/liggghts/lbm_liggghts.py");
+pub const PYTHON_CLIENTS: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/clients/python");
+
+/// Whether LIGGGHTS can be loaded; where it cannot, prints that `test` was skipped and why.
+pub fn liggghts_present(test: &str) -> bool {
+    let probe = Command::new("python3")
+        .args([LIGGGHTS_ADAPTER, "--probe"])
+        .env("PYTHONPATH", PYTHON_CLIENTS)
+        .output()
+        .expect("python3 runs");
+    let text = String::from_utf8_lossy(&probe.stderr).into_owned();
+    match probe.status.code() {
+        Some(0) => true,
+        Some(2) => {
+            eprintln!("{test}: skipped: {}", text.trim());
+            false
+        }
+        _ => panic!("the adapter's probe failed (iceoryx2 for python3?):\n{text}"),
+    }
+}
+
+/// A finished process's stdout and stderr, one after the other.
+pub fn output_text(output: &Output) -> String {
+    format!(
+        "{}{}",
+        String::from_utf8_lossy(&output.stdout),
+        String::from_utf8_lossy(&output.stderr)
+    )
 }
