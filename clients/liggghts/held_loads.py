@@ -21,12 +21,14 @@ LIGGGHTS step from the atoms' x, v, omega and the contact force LIGGGHTS summed 
 from __future__ import annotations
 
 import ctypes
-from typing import Optional
+from typing import TYPE_CHECKING, Optional
 
 import numpy as np
 
 from liggghts import Atoms, Liggghts
-from substep_loads import SubstepLoads
+
+if TYPE_CHECKING:  # clients/python, on PYTHONPATH where the loads follow the atoms
+    from substep_loads import SubstepLoads
 
 
 class HeldLoads:
