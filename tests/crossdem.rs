@@ -40,9 +40,10 @@ fn yade_present(test: &str) -> bool {
 
 fn launch_path(name: &str) -> Option<PathBuf> {
     let path = std::env::var_os("PATH")?;
-    std::env::split_paths(&path).map(|d| d.join(name)).find(|p| p.is_file())
+    std::env::split_paths(&path)
+        .map(|d| d.join(name))
+        .find(|p| p.is_file())
 }
-
 
 /// `lbm-server run SCENE --steps N --dem DEM`, to completion (YADE's iceoryx2 on PYTHONPATH).
 fn run_with(scene: &Path, out: &Path, steps: u64, extra: &[&str]) -> Output {
@@ -100,28 +101,43 @@ fn refused_run(tag: &str, scene: &Path, command: &str, expected: &[&str]) {
     let dir = temp_dir(tag);
     let pid_file = dir.join("dem.pid");
     let line = format!("echo $$ > {}; exec {command}", pid_file.display());
-    let child = server(scene, &dir.join("out"), &["--steps", "20", "--dem-command", &line])
-        .current_dir(&dir)
-        .env("PYTHONPATH", format!("{YADE_IOX}:{PYTHON_CLIENTS}:{YADE_CLIENT}"))
-        .stdout(std::process::Stdio::piped())
-        .stderr(std::process::Stdio::piped())
-        .spawn()
-        .expect("lbm-server runs");
+    let child = server(
+        scene,
+        &dir.join("out"),
+        &["--steps", "20", "--dem-command", &line],
+    )
+    .current_dir(&dir)
+    .env("PYTHONPATH", format!("{YADE_IOX}:{PYTHON_CLIENTS}:{YADE_CLIENT}"))
+    .stdout(std::process::Stdio::piped())
+    .stderr(std::process::Stdio::piped())
+    .spawn()
+    .expect("lbm-server runs");
     let run = format!("lbmdem_{}_", child.id());
     let output = child.wait_with_output().expect("lbm-server ends");
     let said = output_text(&output);
     assert_eq!(output.status.code(), Some(2), "{tag}: {said}");
-    for needle in expected.iter().chain(&["lbm-server: error: the DEM refused its input"]) {
+    for needle in expected
+        .iter()
+        .chain(&["lbm-server: error: the DEM refused its input"])
+    {
         assert!(said.contains(needle), "{tag}: no {needle:?} in:\n{said}");
     }
-    let pid: u32 = std::fs::read_to_string(&pid_file).unwrap().trim().parse().unwrap();
+    let pid: u32 = std::fs::read_to_string(&pid_file)
+        .unwrap()
+        .trim()
+        .parse()
+        .unwrap();
     assert!(is_gone(pid), "{tag}: the DEM {pid} is still running");
     let s = summary(&dir.join("out"));
     assert!(
         s["exit_reason"].as_str().unwrap().contains("refused its input"),
         "{tag}: {s}"
     );
-    assert!(leftover_files(&run).is_empty(), "{tag}: {:?}", leftover_files(&run));
+    assert!(
+        leftover_files(&run).is_empty(),
+        "{tag}: {:?}",
+        leftover_files(&run)
+    );
 }
 
 /// Ten Cate E1's sphere in a 20 x 20 x 32 box, as tests/liggghts_client.rs's settling scene.
@@ -129,7 +145,10 @@ fn one_sphere_scene(dir: &Path) -> PathBuf {
     let text = std::fs::read_to_string(Path::new(ROOT).join("validation/scenes/ten-cate-e1.toml"))
         .unwrap()
         .replace("max = [0.1, 0.1, 0.16]", "max = [0.05, 0.05, 0.08]")
-        .replace("position = [0.05, 0.05, 0.1275]", "position = [0.025, 0.025, 0.06]");
+        .replace(
+            "position = [0.05, 0.05, 0.1275]",
+            "position = [0.025, 0.025, 0.06]",
+        );
     write_scene(dir, &text)
 }
 
@@ -188,8 +207,10 @@ fn liggghts_decks_that_do_not_fit_the_scene_end_the_run_with_exit_2() {
             deck(
                 &dir.join("ids"),
                 "granular",
-                &format!("create_atoms 1 single 0.01 0.01 0.01 units box\n{sphere}{granular}\
-                          group first id 1\ndelete_atoms group first compress no\n"),
+                &format!(
+                    "create_atoms 1 single 0.01 0.01 0.01 units box\n{sphere}{granular}\
+                          group first id 1\ndelete_atoms group first compress no\n"
+                ),
             ),
             "atom ID 2 of",
         ),
