@@ -5,10 +5,9 @@ use crate::fields::FieldOutput;
 use crate::lbm::geometry::{tau_minus, Face, Operator, Setup};
 use crate::lbm::gpu::{Gpu, GpuLattice, Health, Unhealthy};
 use crate::lbm::mrt::Rates;
-use crate::lbm::storage::Storage;
 use crate::output::LatticeSummary;
 use crate::terminal::{Progress, Warning};
-use scene::lattice::{mach_limit, LatticeFace, LatticeUnits};
+use scene::lattice::{mach_limit, CollisionOperator, LatticeFace, LatticeUnits};
 use scene::Scene;
 use serde::Serialize;
 use std::path::Path;
@@ -25,10 +24,10 @@ pub fn setup_of(units: &LatticeUnits) -> Setup {
         LatticeFace::VelocityInlet(u) => Face::VelocityInlet(u),
         LatticeFace::PressureOutlet(rho) => Face::PressureOutlet(rho),
     };
-    let operator = match units.operator.as_str() {
-        "bgk" => Operator::Bgk,
-        "trt" => Operator::Trt { magic: units.magic },
-        _ => {
+    let operator = match units.operator {
+        CollisionOperator::Bgk => Operator::Bgk,
+        CollisionOperator::Trt => Operator::Trt { magic: units.magic },
+        CollisionOperator::Mrt => {
             let r = units.mrt;
             Operator::Mrt {
                 rates: Rates {
@@ -46,7 +45,7 @@ pub fn setup_of(units: &LatticeUnits) -> Setup {
     setup.solid = units.solid.clone();
     setup.force = units.force;
     setup.ramp_steps = units.ramp_steps;
-    setup.storage = Storage::named(&units.storage).expect("a storage the scene accepted");
+    setup.storage = units.storage;
     setup
 }
 
@@ -73,8 +72,8 @@ pub fn stability_warning(units: &LatticeUnits, particles: bool) -> Option<Warnin
         .any(|f| matches!(f, LatticeFace::VelocityInlet(_)));
     let tau = units.tau;
     let tau_minus = tau_minus(units.magic, tau);
-    let (name, measured, advice) = match units.operator.as_str() {
-        "trt" if tau_minus <= BOUNDED_TAU_MINUS + 1e-9 => (
+    let (name, measured, advice) = match units.operator {
+        CollisionOperator::Trt if tau_minus <= BOUNDED_TAU_MINUS + 1e-9 => (
             format!("TRT with tau- = {tau_minus:.2}"),
             if (inlet || particles) && tau < BGK_LIKE_TAU {
                 "with tau- <= 1 held to tau 0.5048 and blew up at 0.5024, in a periodic box and \
@@ -86,7 +85,7 @@ pub fn stability_warning(units: &LatticeUnits, particles: bool) -> Option<Warnin
             },
             "",
         ),
-        "trt" => (
+        CollisionOperator::Trt => (
             format!(
                 "TRT: its antisymmetric modes relax with tau- = 1/2 + lattice.magic / (tau - 1/2) \
                  = {tau_minus:.1}, hardly at all"
@@ -102,7 +101,7 @@ pub fn stability_warning(units: &LatticeUnits, particles: bool) -> Option<Warnin
             },
             " or lattice.max_tau_minus = 1",
         ),
-        "bgk" if (inlet || particles) && tau < BGK_LIKE_TAU => (
+        CollisionOperator::Bgk if (inlet || particles) && tau < BGK_LIKE_TAU => (
             "BGK".to_string(),
             "held to tau 0.5024 in a periodic box and to 0.5048 between inlet and outlet, where \
              it blew up at 0.5024 and MRT held; a fluidized bed of 216 grains between walls \
@@ -111,8 +110,8 @@ pub fn stability_warning(units: &LatticeUnits, particles: bool) -> Option<Warnin
         ),
         _ => return None,
     };
-    let short_name = match units.operator.as_str() {
-        "trt" => format!("TRT (tau- = {tau_minus:.2})"),
+    let short_name = match units.operator {
+        CollisionOperator::Trt => format!("TRT (tau- = {tau_minus:.2})"),
         _ => "BGK".to_string(),
     };
     Some(Warning {
@@ -131,7 +130,7 @@ pub fn stability_warning(units: &LatticeUnits, particles: bool) -> Option<Warnin
 /// Health limits: twice the operator's Mach limit, and a density deviation of 50%.
 pub fn health_of(units: &LatticeUnits) -> Health {
     Health {
-        max_speed: 2.0 * mach_limit(&units.operator) / 3f64.sqrt(),
+        max_speed: 2.0 * mach_limit(units.operator) / 3f64.sqrt(),
         max_density_deviation: 0.5,
     }
 }

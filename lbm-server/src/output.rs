@@ -103,14 +103,14 @@ pub struct LatticeSummary {
 
 impl LatticeSummary {
     pub fn of(u: &scene::lattice::LatticeUnits) -> Self {
-        let trt = u.operator == "trt";
+        let trt = u.operator == scene::lattice::CollisionOperator::Trt;
         Self {
             cells: u.n,
             dx_m: u.dx,
             dt_s: u.dt,
             tau: u.tau,
             mach: u.mach,
-            operator: u.operator.clone(),
+            operator: u.operator.to_string(),
             magic: trt.then_some(u.magic),
             tau_minus: trt.then(|| crate::lbm::geometry::tau_minus(u.magic, u.tau)),
             ramp_time_s: u.ramp_steps * u.dt,

@@ -8,7 +8,7 @@ use super::accuracy::{
 };
 use crate::fluid::stability_warning;
 use crate::terminal::Warning;
-use scene::lattice::LatticeUnits;
+use scene::lattice::{CollisionOperator, LatticeUnits};
 use scene::Scene;
 
 /// The warnings of a coupled lattice for the scene's initial particles (`radii` in m), in the
@@ -19,7 +19,7 @@ pub(super) fn lattice_warnings(scene: &Scene, units: &LatticeUnits, radii: &[f64
     let diameter = 2.0 * radii.iter().fold(0.0, |a, &r| r.max(a));
     let smallest = 2.0 * radii.iter().fold(f64::INFINITY, |a, &r| r.min(a));
     let warning = if correction == "none" {
-        tau_warning(&units.operator, units.tau)
+        tau_warning(units.operator.name(), units.tau)
     } else {
         correction_warning(units, diameter)
     };
@@ -43,13 +43,13 @@ const SMALL_SPHERE_RESOLVED: f64 = 6.0;
 /// `calibrated`, larger by the radius correction; warned of where it is off by more than
 /// [`DRAG_ERROR_WARN`] at the measured tau nearer the lattice's.
 fn small_sphere_warning(units: &LatticeUnits, diameter: f64, calibrated: bool) -> Option<Warning> {
-    let k = operator_index(&units.operator)?;
+    let k = operator_index(units.operator.name())?;
     let cells = diameter / units.dx;
     if cells >= SMALL_SPHERE_RESOLVED {
         return None;
     }
     let plain: Vec<(f64, [f64; 2])> = SMALL_SPHERE_DRAG.iter().map(|&(d, e)| (d, e[k])).collect();
-    let trt = units.operator == "trt";
+    let trt = units.operator == CollisionOperator::Trt;
     let corrected = at_diameter(&SMALL_SPHERE_DRAG_CALIBRATED, cells);
     let error = if calibrated && trt {
         corrected
@@ -139,7 +139,7 @@ const CORRECTION_BOUNDARY_LAYER_CELLS: f64 = 2.0;
 fn correction_warning(units: &LatticeUnits, diameter: f64) -> Option<Warning> {
     let (reynolds, cells, layer) = boundary_layer(units, diameter);
     let refined = (CORRECTION_BOUNDARY_LAYER_CELLS * reynolds.sqrt()).ceil();
-    (units.operator == "trt" && layer < CORRECTION_BOUNDARY_LAYER_CELLS).then(|| Warning {
+    (units.operator == CollisionOperator::Trt && layer < CORRECTION_BOUNDARY_LAYER_CELLS).then(|| Warning {
         brief: format!(
             "coupling.radius_correction = \"calibrated\" with TRT at particle Reynolds number \
              {reynolds:.1}: the boundary layer spans {layer:.2} cells, too few for the correction \
