@@ -113,7 +113,7 @@ impl LatticeSummary {
             operator: u.operator.to_string(),
             magic: trt.then_some(u.magic),
             tau_minus: trt.then(|| crate::lbm::geometry::tau_minus(u.magic, u.tau)),
-            ramp_time_s: u.ramp_steps * u.dt,
+            ramp_time_s: u.seconds(u.ramp_steps),
         }
     }
 }

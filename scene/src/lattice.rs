@@ -5,6 +5,7 @@ use crate::numbers::{fail, finite3, non_negative, positive, vec3};
 use crate::{Scene, SceneError};
 use serde::Deserialize;
 
+mod conversions;
 mod faces;
 mod operator;
 mod storage;
@@ -376,11 +377,6 @@ impl LatticeUnits {
             storage,
         };
         Ok((units, warnings))
-    }
-
-    /// Lattice velocity of an SI velocity.
-    pub fn velocity(&self, u: [f64; 3]) -> [f64; 3] {
-        u.map(|v| v * self.dt / self.dx)
     }
 }
 

@@ -206,20 +206,19 @@ impl FluidSide {
     /// not carry. Whether a load is not finite (found by the pass that converts the loads: no
     /// pass of its own).
     fn loads(&mut self, states: &[ParticleState], out: &mut Vec<ParticleReply>) -> Result<bool, String> {
-        let (dx, dt) = (self.units.dx, self.units.dt);
+        let units = &self.units;
         let lattice_states = LatticeStates {
             states,
             origin: self.origin,
-            dx,
-            dt,
+            units,
             deficit_product: self.deficit_product,
         };
-        let force_unit = self.fluid_density * dx.powi(4) / (dt * dt);
-        let torque_unit = force_unit * dx;
+        let force_unit = units.force_unit(self.fluid_density);
+        let torque_unit = units.torque_unit(self.fluid_density);
         // What the lattice does not carry: the hydrostatic gradient (buoyancy) and the mean
         // pressure gradient that the body acceleration stands for, as -grad p / rho_f.
         let pressure_acceleration: [f64; 3] =
-            std::array::from_fn(|a| self.units.force[a] * dx / (dt * dt) - self.gravity[a]);
+            std::array::from_fn(|a| units.si_acceleration(units.force[a]) - self.gravity[a]);
         let fluid_density = self.fluid_density;
         let not_finite = AtomicBool::new(false);
         self.lattice.step_coupled_with(&lattice_states, out, |j, l| {

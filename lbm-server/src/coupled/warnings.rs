@@ -44,7 +44,7 @@ const SMALL_SPHERE_RESOLVED: f64 = 6.0;
 /// [`DRAG_ERROR_WARN`] at the measured tau nearer the lattice's.
 fn small_sphere_warning(units: &LatticeUnits, diameter: f64, calibrated: bool) -> Option<Warning> {
     let k = operator_index(units.operator.name())?;
-    let cells = diameter / units.dx;
+    let cells = units.cells(diameter);
     if cells >= SMALL_SPHERE_RESOLVED {
         return None;
     }
@@ -172,7 +172,7 @@ const DRAG_BOUNDARY_LAYER_CELLS: f64 = 1.0;
 /// with its cells per diameter and boundary-layer cells (d / sqrt(Re), in cells).
 fn boundary_layer(units: &LatticeUnits, diameter: f64) -> (f64, f64, f64) {
     let speed = units.mach / 3f64.sqrt();
-    let cells = diameter / units.dx;
+    let cells = units.cells(diameter);
     let reynolds = speed * cells / units.nu;
     (reynolds, cells, cells / reynolds.sqrt())
 }

@@ -26,7 +26,7 @@ pub(super) fn covered_cells(
             scene.coupling.covered_cells
         )
     })?;
-    let radii = radii.iter().map(|r| r / units.dx);
+    let radii = radii.iter().map(|&r| units.cells(r));
     let cells = units.n.iter().product();
     Ok(mode.for_scene(covered_fraction(radii, cells)))
 }
