@@ -641,7 +641,10 @@ fn a_run_says_a_short_header_and_a_line_per_warning() {
     );
     let (code, err, _) = run("brief", &scene);
     assert_eq!(code, Some(0), "{err}");
-    let said: Vec<&str> = err.lines().filter(|l| !l.starts_with("lbm-server: step ")).collect();
+    let said: Vec<&str> = err
+        .lines()
+        .filter(|l| !l.starts_with("lbm-server: step "))
+        .collect();
     let header = "lbm-server: scene 'brief': 3 particles, lattice 16x12x16 (trt, tau 1.061), immersed \
                   moving boundary; 30 steps = 0.035 s; ";
     let more = "(--verbose says more)";

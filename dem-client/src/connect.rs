@@ -210,7 +210,13 @@ fn join(
 
 /// What the DEM says at the start: its step against the fluid's; with `verbose` what limits it,
 /// the walls, free flight and the films.
-fn say_coupling(verbose: bool, particles: &CoupledParticles, sub: Substeps, contact_time: f64, limits: [f64; 3]) {
+fn say_coupling(
+    verbose: bool,
+    particles: &CoupledParticles,
+    sub: Substeps,
+    contact_time: f64,
+    limits: [f64; 3],
+) {
     if verbose {
         let line = coupling_line(particles, sub, contact_time, limits);
         protocol::say!("dem-client: {line}");

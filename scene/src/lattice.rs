@@ -297,7 +297,12 @@ fn lattice_mach(
 
 /// TRT's magic parameter at `tau`: `lattice.magic`, or less where `lattice.max_tau_minus` bounds
 /// tau- = 1/2 + magic / (tau - 1/2).
-fn trt_magic(lattice: &LatticeSection, op: CollisionOperator, tau: f64, file: &str) -> Result<f64, SceneError> {
+fn trt_magic(
+    lattice: &LatticeSection,
+    op: CollisionOperator,
+    tau: f64,
+    file: &str,
+) -> Result<f64, SceneError> {
     positive(file, "lattice.magic", lattice.magic, "")?;
     let Some(max) = lattice.max_tau_minus else {
         return Ok(lattice.magic);

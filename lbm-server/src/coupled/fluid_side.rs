@@ -71,8 +71,11 @@ impl FluidSide {
             ));
         };
         // The scene's coupling settings are checked before the device is opened.
-        let deficit_product =
-            radius_deficit_product(&scene.coupling.radius_correction, units.operator.name(), units.tau)?;
+        let deficit_product = radius_deficit_product(
+            &scene.coupling.radius_correction,
+            units.operator.name(),
+            units.tau,
+        )?;
         let gpu = Arc::new(Gpu::new()?);
         let radii: Vec<f64> = scene.initial_particles().iter().map(|p| p.radius).collect();
         let options = imb_options(scene, &units, &radii)?;

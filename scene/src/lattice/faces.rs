@@ -121,9 +121,7 @@ fn check_face_speeds(
                     file,
                     format!("lattice.faces.{name}.velocity"),
                     format!("[{}, {}, {}] m/s", si[0], si[1], si[2]),
-                    format!(
-                        "is lattice Mach {mach:.3}, above {limit} for {operator}"
-                    ),
+                    format!("is lattice Mach {mach:.3}, above {limit} for {operator}"),
                 ));
             }
         }
