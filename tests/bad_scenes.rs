@@ -188,6 +188,9 @@ fn a_solid_box_outside_the_domain_warns() {
         err.contains(&named) && err.contains("wholly outside the domain"),
         "{err}"
     );
+    // Said once, by lbm-server: the dem-client it starts loads the same scene and says nothing.
+    assert_eq!(err.matches(&named).count(), 1, "{err}");
+    assert!(err.contains(&format!("lbm-server: warning: {named}")), "{err}");
 }
 
 #[test]

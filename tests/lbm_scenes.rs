@@ -9,10 +9,19 @@ const POISEUILLE: &str = include_str!("../validation/scenes/poiseuille.toml");
 const CAVITY: &str = include_str!("../validation/scenes/cavity-unstable.toml");
 
 fn run(tag: &str, text: &str) -> (Option<i32>, String, std::path::PathBuf) {
+    run_with(tag, text, &[])
+}
+
+/// `run` with `--verbose`: the whole explanations, the run's settings and the DEM's figures.
+fn run_verbose(tag: &str, text: &str) -> (Option<i32>, String, std::path::PathBuf) {
+    run_with(tag, text, &["--verbose"])
+}
+
+fn run_with(tag: &str, text: &str, extra: &[&str]) -> (Option<i32>, String, std::path::PathBuf) {
     let dir = temp_dir(tag);
     let scene = write_scene(&dir, text);
     let out = dir.join("out");
-    let result = server(&scene, &out, &[]).output().unwrap();
+    let result = server(&scene, &out, extra).output().unwrap();
     (
         result.status.code(),
         String::from_utf8_lossy(&result.stderr).into_owned(),
@@ -283,7 +292,7 @@ fn a_calibrated_radius_correction_draws_the_sphere_larger_and_slows_it() {
     let short = SCENE.replace("steps = 400", "steps = 60");
     let calibrated = format!("{short}\n[coupling]\nradius_correction = \"calibrated\"\n");
     let speed = |tag: &str, scene: &str| {
-        let (code, err, out) = run(tag, scene);
+        let (code, err, out) = run_verbose(tag, scene);
         assert_eq!(code, Some(0), "{err}");
         let rows = particle_rows(&out);
         (-rows.last().unwrap()[8], err)
@@ -460,13 +469,13 @@ fn a_coupled_run_writes_the_fields_the_scene_asks_for() {
 /// and the DEM. Its first 40 steps (0.022 s, up to the lowest layer's peak speed): the beads fall
 /// faster and faster, the fluid pushes back harder and harder, and the first bead, in the lowest
 /// layer, stays far below a lone bead's 0.10 m/s (it peaks at 0.039 m/s: the box's walls and the
-/// liquid pushed back up between the beads).
+/// liquid pushed back up between the beads). `--verbose`: the run's settings and the DEM's figures.
 #[test]
 fn the_default_scene_is_a_coupled_run() {
     let dir = temp_dir("default");
     let out = dir.join("out");
     let result = std::process::Command::new(bin("lbm-server"))
-        .args(["run", "--steps", "40", "--out"])
+        .args(["run", "--verbose", "--steps", "40", "--out"])
         .arg(&out)
         .output()
         .unwrap();
@@ -593,7 +602,7 @@ fn crowded_cells_give_the_same_run_every_time() {
             ("crowd_skip", &skip, "skipped by the fluid kernels"),
         ])
         .map(|(tag, scene, mode)| {
-            let (code, err, out) = run(tag, scene);
+            let (code, err, out) = run_verbose(tag, scene);
             assert_eq!(code, Some(0), "{err}");
             assert!(
                 err.contains("by step 40,") && err.contains("did not fit coupling.slots = 1"),
@@ -615,6 +624,58 @@ fn crowded_cells_give_the_same_run_every_time() {
     );
 }
 
+/// Without `--verbose` a run says a short header (scene, particles, lattice, steps and simulated
+/// time, device), a line per warning pointing at `--verbose`, the dropped covers once, the DEM's
+/// step and its end in a line each, its progress and its last line; with it each warning in full
+/// and the dropped covers at every check. Three beads of 4 cells at tau 1.06 (two warnings), one
+/// slot per cell (covers dropped by the checks of steps 20 and 30, none by step 10).
+#[test]
+fn a_run_says_a_short_header_and_a_line_per_warning() {
+    let beads = beads_in_a_row(&[3.7, 7.9, 12.1]);
+    let scene = format!(
+        "name = \"brief\"\ngravity = [0.0, 0.0, -9.81]\n[domain]\nmin = [0.0, 0.0, 0.0]\n\
+         max = [0.016, 0.012, 0.016]\n[fluid]\ndensity = 1235.0\ndynamic_viscosity = 0.2\n\
+         [time]\nsteps = 30\n[lattice]\ndx = 0.001\noperator = \"trt\"\nvelocity_scale = 0.05\n\
+         mach = 0.1\ncheck_interval = 10\n[output]\ninterval = 10\n[coupling]\nslots = 1\n\
+         [particles]\ndensity = 2500.0\n{beads}"
+    );
+    let (code, err, _) = run("brief", &scene);
+    assert_eq!(code, Some(0), "{err}");
+    let said: Vec<&str> = err
+        .lines()
+        .filter(|l| !l.starts_with("lbm-server: step "))
+        .collect();
+    let header = "lbm-server: scene 'brief': 3 particles, lattice 16x12x16 (trt, tau 1.061), immersed \
+                  moving boundary; 30 steps = 0.035 s; ";
+    let more = "(--verbose says more)";
+    let expected = [
+        header,
+        "lbm-server: warning: lattice tau = 1.061 (trt): the immersed boundary's drag falls as tau grows",
+        "lbm-server: warning: the smallest particles are 4.0 cells across",
+        "lbm-server: warning: by step 20, ",
+        "dem-client: DEM step ",
+        "dem-client: finished after 30 steps (",
+        "lbm-server: 30 steps in ",
+    ];
+    for start in expected {
+        assert!(said.iter().any(|l| l.starts_with(start)), "{start:?} in {err}");
+    }
+    assert_eq!(said.len(), expected.len(), "a line each: {err}");
+    let warnings = said.iter().filter(|l| l.contains(": warning: "));
+    assert!(
+        warnings.take(2).all(|l| l.ends_with(more)) && err.contains("(--verbose: what limits it)"),
+        "{err}"
+    );
+    let (code, err, _) = run_verbose("brief_verbose", &scene);
+    assert_eq!(code, Some(0), "{err}");
+    assert!(
+        !err.contains(more) && err.contains("(validation/lbm/REPORT.md, \"drag against tau\")"),
+        "the warnings in full: {err}"
+    );
+    assert_eq!(err.matches("did not fit coupling.slots = 1").count(), 2, "{err}");
+    assert!(err.contains("lubrication below"), "the DEM's step limits: {err}");
+}
+
 /// `coupling.covered_cells = "timed"`: the run times redo, skip and fused on its own steps (from
 /// step 10, each way 6 steps a round, 3 rounds), says what it measured and kept, and writes the
 /// same particles.csv as a run that redoes the covered cells throughout (the ways agree bit for
@@ -631,10 +692,10 @@ fn a_timed_run_changes_ways_and_not_its_particles() {
              [particles]\ndensity = 2500.0\n{beads}"
         )
     };
-    let (code, redo_err, redo) = run("timed_redo", &scene("redo"));
+    let (code, redo_err, redo) = run_verbose("timed_redo", &scene("redo"));
     assert_eq!(code, Some(0), "{redo_err}");
     assert!(!redo_err.contains("covered cells timed"), "{redo_err}");
-    let (code, err, timed) = run("timed", &scene("timed"));
+    let (code, err, timed) = run_verbose("timed", &scene("timed"));
     assert_eq!(code, Some(0), "{err}");
     assert!(err.contains("the ways timed on the run's steps"), "{err}");
     let line = err
@@ -684,7 +745,7 @@ fn beads_pass_through_periodic_faces() {
     };
     let periodic = "x_min = \"periodic\"\nx_max = \"periodic\"\ny_min = \"periodic\"\ny_max = \"periodic\"\n\
                     z_min = \"wall\"\nz_max = \"wall\"\n";
-    let (code, err, out) = run("periodic", &scene(periodic));
+    let (code, err, out) = run_verbose("periodic", &scene(periodic));
     assert_eq!(code, Some(0), "{err}");
     assert!(
         err.contains(", 2 walls"),
@@ -695,7 +756,7 @@ fn beads_pass_through_periodic_faces() {
         [true, true],
         "both beads came back through x_min"
     );
-    let (code, err, out) = run(
+    let (code, err, out) = run_verbose(
         "walled",
         &scene("").replace("position = [0.0155,", "position = [0.0145,"),
     );
@@ -763,14 +824,14 @@ fn resting_beads_take_the_sub_steps_while_the_falling_ones_fly() {
     };
     let last =
         |out: &Path| -> Vec<Vec<f64>> { particle_rows(out).into_iter().filter(|r| r[0] == 39.0).collect() };
-    let (code, err, out) = run("islands", &scene(true));
+    let (code, err, out) = run_verbose("islands", &scene(true));
     assert_eq!(code, Some(0), "{err}");
     assert!(
         err.contains("0 steps in free flight, 39 with an island (0 dropped for a sphere beyond its reach); 60.0% of the sphere-steps flown"),
         "{err}"
     );
     let flown = last(&out);
-    let (code, err, out) = run("islands_off", &scene(false));
+    let (code, err, out) = run_verbose("islands_off", &scene(false));
     assert_eq!(code, Some(0), "{err}");
     assert!(err.contains("0 with an island"), "{err}");
     let stepped = last(&out);

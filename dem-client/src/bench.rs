@@ -67,6 +67,7 @@ fn bench(args: &BenchArgs) -> Result<(), String> {
         return Err("--threads = 0: must be at least 1".into());
     }
     let scene = scene::Scene::load(&args.scene).map_err(|e| e.to_string())?;
+    crate::say_scene_warnings(&scene);
     if scene.lattice.is_none() {
         return Err(format!(
             "{}: the scene has no [lattice]: `dem-client bench` times the DEM side of a coupled scene \

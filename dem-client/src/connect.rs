@@ -27,6 +27,11 @@ pub struct ConnectArgs {
     /// is waited for up to 60 times as long.
     #[arg(long, default_value_t = 10.0)]
     timeout: f64,
+    /// Say the DEM step's limits (contacts, the drag within a fluid step, the squeeze films), the
+    /// walls and the films at the start, and the run's figures (DEM steps, neighbour-list builds,
+    /// free flight, islands) at the end; without it a line each.
+    #[arg(long, short)]
+    verbose: bool,
     /// Testing: announce this protocol version instead of ours.
     #[arg(long, hide = true)]
     protocol_version: Option<u32>,
@@ -126,10 +131,7 @@ pub fn main(args: ConnectArgs) -> ExitCode {
         stall_busy: args.stall_busy,
     };
     let (sub, limits) = particles.couple(&scene, &welcome, setup.dt_max);
-    protocol::say!(
-        "dem-client: {}",
-        coupling_line(&particles, sub, setup.contact_time, limits)
-    );
+    say_coupling(args.verbose, &particles, sub, setup.contact_time, limits);
     match step_loop(
         &link,
         &welcome,
@@ -140,16 +142,8 @@ pub fn main(args: ConnectArgs) -> ExitCode {
         &mut last,
     ) {
         Ok(steps) => {
-            protocol::say!("dem-client: {}", finish_line(&particles, steps));
-            if steps < welcome.steps && !interrupted.load(Ordering::SeqCst) {
-                protocol::say!(
-                    "dem-client: the fluid server stopped the run after {steps} of {} steps",
-                    welcome.steps
-                );
-            }
-            if let Some(line) = particles.world.everyone.summary() {
-                protocol::say!("dem-client: {line}");
-            }
+            let stopped = steps < welcome.steps && !interrupted.load(Ordering::SeqCst);
+            say_finish(args.verbose, &particles, steps, stopped.then_some(welcome.steps));
             if steps < welcome.steps && interrupted.load(Ordering::SeqCst) {
                 protocol::say!("dem-client: interrupted after {steps} of {} steps", welcome.steps);
                 return ExitCode::from(130);
@@ -212,6 +206,46 @@ fn join(
         ));
     }
     Ok((link, welcome))
+}
+
+/// What the DEM says at the start: its step against the fluid's; with `verbose` what limits it,
+/// the walls, free flight and the films.
+fn say_coupling(
+    verbose: bool,
+    particles: &CoupledParticles,
+    sub: Substeps,
+    contact_time: f64,
+    limits: [f64; 3],
+) {
+    if verbose {
+        let line = coupling_line(particles, sub, contact_time, limits);
+        protocol::say!("dem-client: {line}");
+    } else {
+        protocol::say!(
+            "dem-client: DEM step {:.3e} s = fluid step / {} (--verbose: what limits it)",
+            particles.world.dt,
+            sub.contact
+        );
+    }
+}
+
+/// What the DEM says after a run of `steps` fluid steps (of `stopped_of` where the fluid server
+/// stopped it early): the DEM steps taken; with `verbose` its figures and the islands' timing.
+fn say_finish(verbose: bool, particles: &CoupledParticles, steps: u64, stopped_of: Option<u64>) {
+    if verbose {
+        protocol::say!("dem-client: {}", finish_line(particles, steps));
+    } else {
+        protocol::say!(
+            "dem-client: finished after {steps} steps ({} DEM steps)",
+            particles.dem_steps
+        );
+    }
+    if let Some(of) = stopped_of {
+        protocol::say!("dem-client: the fluid server stopped the run after {steps} of {of} steps");
+    }
+    if let Some(line) = particles.world.everyone.summary().filter(|_| verbose) {
+        protocol::say!("dem-client: {line}");
+    }
 }
 
 /// The DEM step against the fluid's and what limits it, the walls, free flight and lubrication.

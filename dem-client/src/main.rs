@@ -42,6 +42,14 @@ pub fn scene_or_default(path: Option<&PathBuf>) -> Result<scene::Scene, scene::S
     }
 }
 
+/// Says the scene's warnings (a box that does nothing), where this process runs the scene alone
+/// (`run`, `bench`); a coupled run's lbm-server says them, not the dem-client it starts.
+pub fn say_scene_warnings(scene: &scene::Scene) {
+    for warning in &scene.warnings {
+        protocol::say!("dem-client: warning: {warning}");
+    }
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {

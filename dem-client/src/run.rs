@@ -29,7 +29,9 @@ pub struct RunArgs {
 
 pub fn main(args: RunArgs) -> ExitCode {
     let file = args.scene.display().to_string();
-    let prepared = scene::Scene::load(&args.scene).and_then(|s| crate::dem::setup(&s, &file).map(|d| (s, d)));
+    let prepared = scene::Scene::load(&args.scene)
+        .inspect(crate::say_scene_warnings)
+        .and_then(|s| crate::dem::setup(&s, &file).map(|d| (s, d)));
     let (scene, setup) = match prepared {
         Ok(ok) => ok,
         Err(e) => {

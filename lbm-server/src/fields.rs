@@ -17,6 +17,8 @@ pub struct FieldOutput {
     domain_min: [f64; 3],
     fluid_density: f64,
     dt: f64,
+    /// The SI velocity of a lattice velocity of 1 [m/s] (`LatticeUnits::velocity_unit`).
+    velocity_unit: f64,
 }
 
 impl FieldOutput {
@@ -43,6 +45,7 @@ impl FieldOutput {
             domain_min: scene.domain.min,
             fluid_density: scene.fluid.density,
             dt: units.dt,
+            velocity_unit: units.velocity_unit(),
         })
     }
 
@@ -54,7 +57,7 @@ impl FieldOutput {
     /// Density [kg/m^3] and velocity [m/s] of every cell of the lattice `fields`.
     fn si_fields(&self, fields: &[[f32; 4]]) -> (Vec<f32>, Vec<[f32; 3]>) {
         let rho = self.fluid_density as f32;
-        let c = (self.grid.dx / self.dt) as f32;
+        let c = self.velocity_unit as f32;
         (
             fields.iter().map(|f| f[0] * rho).collect(),
             fields.iter().map(|f| [f[1] * c, f[2] * c, f[3] * c]).collect(),
@@ -85,7 +88,7 @@ impl FieldOutput {
     /// A row per cell of each probe line after `step` steps.
     pub fn write_lines(&mut self, step: u64, fields: &[[f32; 4]]) -> Result<(), String> {
         let (n, dx) = (self.grid.n, self.grid.dx);
-        let (rho, c) = (self.fluid_density, dx / self.dt);
+        let (rho, c) = (self.fluid_density, self.velocity_unit);
         let (min, dt) = (self.domain_min, self.dt);
         for (line, w) in &mut self.probes {
             let axis = ["x", "y", "z"]

@@ -5,9 +5,9 @@ use crate::fields::FieldOutput;
 use crate::lbm::geometry::{tau_minus, Face, Operator, Setup};
 use crate::lbm::gpu::{Gpu, GpuLattice, Health, Unhealthy};
 use crate::lbm::mrt::Rates;
-use crate::lbm::storage::Storage;
-use crate::output::{LatticeSummary, Progress};
-use scene::lattice::{mach_limit, LatticeFace, LatticeUnits};
+use crate::output::LatticeSummary;
+use crate::terminal::{Progress, Warning};
+use scene::lattice::{mach_limit, CollisionOperator, LatticeFace, LatticeUnits};
 use scene::Scene;
 use serde::Serialize;
 use std::path::Path;
@@ -24,10 +24,10 @@ pub fn setup_of(units: &LatticeUnits) -> Setup {
         LatticeFace::VelocityInlet(u) => Face::VelocityInlet(u),
         LatticeFace::PressureOutlet(rho) => Face::PressureOutlet(rho),
     };
-    let operator = match units.operator.as_str() {
-        "bgk" => Operator::Bgk,
-        "trt" => Operator::Trt { magic: units.magic },
-        _ => {
+    let operator = match units.operator {
+        CollisionOperator::Bgk => Operator::Bgk,
+        CollisionOperator::Trt => Operator::Trt { magic: units.magic },
+        CollisionOperator::Mrt => {
             let r = units.mrt;
             Operator::Mrt {
                 rates: Rates {
@@ -45,7 +45,7 @@ pub fn setup_of(units: &LatticeUnits) -> Setup {
     setup.solid = units.solid.clone();
     setup.force = units.force;
     setup.ramp_steps = units.ramp_steps;
-    setup.storage = Storage::named(&units.storage).expect("a storage the scene accepted");
+    setup.storage = units.storage;
     setup
 }
 
@@ -65,15 +65,16 @@ const BOUNDED_TAU_MINUS: f64 = 1.0;
 /// The warning for a lattice at a tau near where its operator was measured to blow up: TRT with
 /// a velocity inlet below [`TRT_INLET_TAU`], with `particles` below [`TRT_PARTICLES_TAU`]; BGK,
 /// or TRT with a bounded tau-, with an inlet or particles below [`BGK_LIKE_TAU`].
-pub fn stability_warning(units: &LatticeUnits, particles: bool) -> Option<String> {
+pub fn stability_warning(units: &LatticeUnits, particles: bool) -> Option<Warning> {
     let inlet = units
         .faces
         .iter()
         .any(|f| matches!(f, LatticeFace::VelocityInlet(_)));
     let tau = units.tau;
-    let (name, measured, advice) = match units.operator.as_str() {
-        "trt" if tau_minus(units.magic, tau) <= BOUNDED_TAU_MINUS + 1e-9 => (
-            format!("TRT with tau- = {:.2}", tau_minus(units.magic, tau)),
+    let tau_minus = tau_minus(units.magic, tau);
+    let (name, measured, advice) = match units.operator {
+        CollisionOperator::Trt if tau_minus <= BOUNDED_TAU_MINUS + 1e-9 => (
+            format!("TRT with tau- = {tau_minus:.2}"),
             if (inlet || particles) && tau < BGK_LIKE_TAU {
                 "with tau- <= 1 held to tau 0.5048 and blew up at 0.5024, in a periodic box and \
                  between inlet and outlet alike, where MRT held; a fluidized bed of 216 grains \
@@ -84,11 +85,10 @@ pub fn stability_warning(units: &LatticeUnits, particles: bool) -> Option<String
             },
             "",
         ),
-        "trt" => (
+        CollisionOperator::Trt => (
             format!(
                 "TRT: its antisymmetric modes relax with tau- = 1/2 + lattice.magic / (tau - 1/2) \
-                 = {:.1}, hardly at all",
-                tau_minus(units.magic, tau)
+                 = {tau_minus:.1}, hardly at all"
             ),
             if inlet && tau < TRT_INLET_TAU {
                 "blew up at the velocity inlet from tau 0.5192 (magic 3/16 and 1/4; held at \
@@ -101,7 +101,7 @@ pub fn stability_warning(units: &LatticeUnits, particles: bool) -> Option<String
             },
             " or lattice.max_tau_minus = 1",
         ),
-        "bgk" if (inlet || particles) && tau < BGK_LIKE_TAU => (
+        CollisionOperator::Bgk if (inlet || particles) && tau < BGK_LIKE_TAU => (
             "BGK".to_string(),
             "held to tau 0.5024 in a periodic box and to 0.5048 between inlet and outlet, where \
              it blew up at 0.5024 and MRT held; a fluidized bed of 216 grains between walls \
@@ -110,17 +110,27 @@ pub fn stability_warning(units: &LatticeUnits, particles: bool) -> Option<String
         ),
         _ => return None,
     };
-    Some(format!(
-        "lattice tau = {tau:.4} with {name}. A sphere of 8 cells held in a stream \
-         (validation/lbm/REPORT.md, \"Stability near tau = 1/2\") {measured}; consider \
-         lattice.operator = \"mrt\"{advice}"
-    ))
+    let short_name = match units.operator {
+        CollisionOperator::Trt => format!("TRT (tau- = {tau_minus:.2})"),
+        _ => "BGK".to_string(),
+    };
+    Some(Warning {
+        brief: format!(
+            "lattice tau = {tau:.4} with {short_name}: near the taus where it blew up; consider \
+             lattice.operator = \"mrt\"{advice}"
+        ),
+        full: format!(
+            "lattice tau = {tau:.4} with {name}. A sphere of 8 cells held in a stream \
+             (validation/lbm/REPORT.md, \"Stability near tau = 1/2\") {measured}; consider \
+             lattice.operator = \"mrt\"{advice}"
+        ),
+    })
 }
 
 /// Health limits: twice the operator's Mach limit, and a density deviation of 50%.
 pub fn health_of(units: &LatticeUnits) -> Health {
     Health {
-        max_speed: 2.0 * mach_limit(&units.operator) / 3f64.sqrt(),
+        max_speed: 2.0 * mach_limit(units.operator) / 3f64.sqrt(),
         max_density_deviation: 0.5,
     }
 }
@@ -223,7 +233,7 @@ fn start_lattice(scene: &Scene, units: &LatticeUnits) -> Result<(Arc<Gpu>, GpuLa
         gpu.adapter.name
     );
     if let Some(warning) = stability_warning(units, false) {
-        protocol::say!("lbm-server: warning: {warning}");
+        warning.say();
     }
     Ok((gpu, lattice))
 }

@@ -104,11 +104,18 @@ pub fn find_on_path(name: &str) -> Option<PathBuf> {
     })
 }
 
-/// Starts `dem-client connect` for run `run` with the scene copy at `scene`.
+/// Starts `dem-client connect` for run `run` with the scene copy at `scene`, `--verbose` where
+/// `verbose`.
 ///
 /// The DEM gets a process group of its own, so a terminal's Ctrl-C reaches only lbm-server, which
 /// then ends the run in order (STOP in its next reply) instead of racing the DEM's own handler.
-pub fn spawn_dem_client(exe: &Path, run: &str, scene: &Path, timeout_s: f64) -> std::io::Result<Child> {
+pub fn spawn_dem_client(
+    exe: &Path,
+    run: &str,
+    scene: &Path,
+    timeout_s: f64,
+    verbose: bool,
+) -> std::io::Result<Child> {
     use std::os::unix::process::CommandExt;
     Command::new(exe)
         .process_group(0)
@@ -119,6 +126,7 @@ pub fn spawn_dem_client(exe: &Path, run: &str, scene: &Path, timeout_s: f64) -> 
         .arg(scene)
         .arg("--timeout")
         .arg(timeout_s.to_string())
+        .args(verbose.then_some("--verbose"))
         .stdin(Stdio::null())
         .spawn()
 }

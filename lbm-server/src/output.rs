@@ -1,12 +1,12 @@
-//! What a run leaves behind: OUT/particles.csv (and the .vtp series), the lattice as the summaries
-//! report it, and progress on the terminal. A coupled run's summary.json is `run/summary.rs`'s.
+//! What a run leaves behind: OUT/particles.csv (and the .vtp series) and the lattice as the
+//! summaries report it. A coupled run's summary.json is `run/summary.rs`'s; what it says on the
+//! terminal is `terminal.rs`'s.
 
 use protocol::{ParticleReply, ParticleState};
 use scene::row_file::RowFile;
 use serde::Serialize;
-use std::io::{IsTerminal, Write};
+use std::io::Write;
 use std::path::Path;
-use std::time::{Duration, Instant};
 
 /// The particles of a coupled run at its output steps, SI units: particles.csv (one row per
 /// particle per output step, header row first; each step's rows written whole, at once, so a crash
@@ -103,78 +103,17 @@ pub struct LatticeSummary {
 
 impl LatticeSummary {
     pub fn of(u: &scene::lattice::LatticeUnits) -> Self {
-        let trt = u.operator == "trt";
+        let trt = u.operator == scene::lattice::CollisionOperator::Trt;
         Self {
             cells: u.n,
             dx_m: u.dx,
             dt_s: u.dt,
             tau: u.tau,
             mach: u.mach,
-            operator: u.operator.clone(),
+            operator: u.operator.to_string(),
             magic: trt.then_some(u.magic),
             tau_minus: trt.then(|| crate::lbm::geometry::tau_minus(u.magic, u.tau)),
-            ramp_time_s: u.ramp_steps * u.dt,
-        }
-    }
-}
-
-/// A progress bar on a terminal, plain periodic log lines otherwise.
-pub struct Progress {
-    bar: Option<indicatif::ProgressBar>,
-    total: u64,
-    start: Instant,
-    last_log: Instant,
-}
-
-/// Seconds between two plain log lines.
-const LOG_EVERY: Duration = Duration::from_secs(2);
-
-impl Progress {
-    pub fn new(total: u64) -> Self {
-        let bar = std::io::stderr().is_terminal().then(|| {
-            let bar = indicatif::ProgressBar::new(total);
-            let style = indicatif::ProgressStyle::with_template(
-                "{bar:40} {pos}/{len} steps  {per_sec}  ETA {eta}  {msg}",
-            )
-            .expect("valid template");
-            bar.set_style(style);
-            bar
-        });
-        let now = Instant::now();
-        Self {
-            bar,
-            total,
-            start: now,
-            last_log: now,
-        }
-    }
-
-    /// Records that `done` steps have completed.
-    pub fn update(&mut self, done: u64) {
-        if let Some(bar) = &self.bar {
-            bar.set_position(done);
-        } else if self.last_log.elapsed() >= LOG_EVERY || done == self.total {
-            self.last_log = Instant::now();
-            let rate = done as f64 / self.start.elapsed().as_secs_f64().max(1e-9);
-            let eta = (self.total - done) as f64 / rate.max(1e-9);
-            protocol::say!(
-                "lbm-server: step {done}/{} ({:.0}%), {rate:.0} steps/s, ETA {eta:.1} s",
-                self.total,
-                100.0 * done as f64 / self.total as f64
-            );
-        }
-    }
-
-    pub fn finish(&self) {
-        if let Some(bar) = &self.bar {
-            bar.finish();
-        }
-    }
-
-    /// Leaves the bar at the step where a run stopped early (`finish`, or dropping it, fills it).
-    pub fn abandon(&self) {
-        if let Some(bar) = &self.bar {
-            bar.abandon();
+            ramp_time_s: u.seconds(u.ramp_steps),
         }
     }
 }

@@ -22,7 +22,7 @@ mod summary;
 mod welcome;
 
 use crate::launch::{self, DemStart};
-use crate::output::Progress;
+use crate::terminal::Progress;
 use exchange::SiStates;
 use prepare::prepare;
 use protocol::transport::new_run_name;
@@ -60,6 +60,12 @@ pub struct RunArgs {
     /// Longest wait for the DEM side to connect [s] (default: 30 when spawned, unlimited when external).
     #[arg(long)]
     connect_timeout: Option<f64>,
+    /// Say everything: each warning in full (what was measured and what to change), the run's
+    /// settings, the DEM's step limits and figures, each trial's times, each health check's
+    /// dropped covers. Without it a run says a short header, its progress, a line per warning
+    /// and its last line.
+    #[arg(long, short)]
+    verbose: bool,
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -90,6 +96,7 @@ pub fn main(args: RunArgs) -> ExitCode {
     if let Err(e) = ctrlc::set_handler(move || on_ctrl_c(&flag)) {
         protocol::say!("lbm-server: warning: cannot install the Ctrl-C handler: {e}");
     }
+    crate::terminal::set_verbose(args.verbose);
     let prepared = match prepare(&args) {
         Ok(p) => p,
         Err(e) => {
@@ -203,6 +210,10 @@ impl Session {
         si.keep_for_output(&received, end.output);
         drop(received);
         let reply = StepHeader::new(step, header.time, count, end.flags(last));
+        if reply.flags != 0 {
+            // The reply ends the run: the bar leaves the terminal before the DEM's last line.
+            progress.finish();
+        }
         self.reply(reply, si.units, replies)?;
         self.counters.completed(step, count);
         self.counters.lap_exchange();

@@ -5,7 +5,13 @@ use crate::numbers::{fail, finite3, non_negative, positive, vec3};
 use crate::{Scene, SceneError};
 use serde::Deserialize;
 
+mod conversions;
 mod faces;
+mod operator;
+mod storage;
+
+pub use operator::{mach_limit, CollisionOperator};
+pub use storage::Storage;
 
 /// `[lattice]` (SI units).
 #[derive(Debug, Clone, Deserialize)]
@@ -15,7 +21,8 @@ pub struct LatticeSection {
     pub dx: Option<f64>,
     /// Cells along x; give this or `dx`.
     pub resolution: Option<u64>,
-    /// Collision operator: "bgk", "trt" (default) or "mrt".
+    /// Collision operator: "bgk", "trt" (default) or "mrt", as written ([`LatticeUnits::operator`]
+    /// is the one parsed).
     #[serde(default = "default_operator")]
     pub operator: String,
     /// Relaxation time (above 1/2 + [`TAU_MARGIN`]); when given, it sets dt. Otherwise dt
@@ -59,7 +66,8 @@ pub struct LatticeSection {
     pub ramp_time: f64,
     /// How the populations are stored on the device: "fp32" (default), "fp16s" (IEEE half) or
     /// "fp16c" (16 bits with one more mantissa bit for the small deviations); the arithmetic is
-    /// f32 either way (docs/lbm.md, "Storage").
+    /// f32 either way (docs/lbm.md, "Storage"); as written ([`LatticeUnits::storage`] is the one
+    /// parsed).
     #[serde(default = "default_storage")]
     pub storage: String,
 }
@@ -203,7 +211,7 @@ pub struct LatticeUnits {
     pub nu: f64,
     /// Mach number of the velocity scale: u_lattice / c_s.
     pub mach: f64,
-    pub operator: String,
+    pub operator: CollisionOperator,
     /// TRT's magic parameter as used: `lattice.magic`, lowered by `lattice.max_tau_minus`.
     pub magic: f64,
     pub mrt: MrtRates,
@@ -215,26 +223,14 @@ pub struct LatticeUnits {
     pub check_interval: u64,
     /// Steps over which the face velocities rise from rest (`lattice.ramp_time` / dt).
     pub ramp_steps: f64,
-    /// The populations' storage: "fp32", "fp16s" or "fp16c".
-    pub storage: String,
+    /// The populations' storage.
+    pub storage: Storage,
 }
-
-/// The populations' storages `lattice.storage` accepts.
-pub const STORAGES: [&str; 3] = ["fp32", "fp16s", "fp16c"];
 
 /// Smallest tau - 1/2 accepted, for every operator. BGK was refused below 0.51 until BGK held a
 /// sphere's wake to tau 0.5024 (validation/lbm/REPORT.md, "Stability near tau = 1/2"); near
 /// there lbm-server warns with what was measured.
 pub const TAU_MARGIN: f64 = 0.0005;
-
-/// Largest Mach number each operator accepts.
-pub fn mach_limit(operator: &str) -> f64 {
-    match operator {
-        "bgk" => 0.3,
-        "trt" => 0.35,
-        _ => 0.4,
-    }
-}
 
 /// The time step [s] and tau of the lattice of cell size `dx`: from `lattice.tau` where given,
 /// else from the Mach number of `lattice.velocity_scale`; refused where tau lies too near 1/2.
@@ -277,7 +273,13 @@ fn time_step(scene: &Scene, lattice: &LatticeSection, dx: f64, file: &str) -> Re
 }
 
 /// The lattice Mach number of `lattice.velocity_scale`, refused above operator `op`'s limit.
-fn lattice_mach(lattice: &LatticeSection, op: &str, dx: f64, dt: f64, file: &str) -> Result<f64, SceneError> {
+fn lattice_mach(
+    lattice: &LatticeSection,
+    op: CollisionOperator,
+    dx: f64,
+    dt: f64,
+    file: &str,
+) -> Result<f64, SceneError> {
     let mach = lattice.velocity_scale * dt / dx * 3f64.sqrt();
     if mach > mach_limit(op) {
         return Err(fail(
@@ -295,18 +297,22 @@ fn lattice_mach(lattice: &LatticeSection, op: &str, dx: f64, dt: f64, file: &str
 
 /// TRT's magic parameter at `tau`: `lattice.magic`, or less where `lattice.max_tau_minus` bounds
 /// tau- = 1/2 + magic / (tau - 1/2).
-fn trt_magic(lattice: &LatticeSection, tau: f64, file: &str) -> Result<f64, SceneError> {
+fn trt_magic(
+    lattice: &LatticeSection,
+    op: CollisionOperator,
+    tau: f64,
+    file: &str,
+) -> Result<f64, SceneError> {
     positive(file, "lattice.magic", lattice.magic, "")?;
     let Some(max) = lattice.max_tau_minus else {
         return Ok(lattice.magic);
     };
-    if lattice.operator != "trt" {
-        let op = &lattice.operator;
+    if op != CollisionOperator::Trt {
         return Err(fail(
             file,
             "lattice.max_tau_minus",
             max,
-            format!("applies to TRT only, not {op:?}"),
+            format!("applies to TRT only, not {:?}", op.name()),
         ));
     }
     if !(max.is_finite() && max > 0.5) {
@@ -336,27 +342,25 @@ impl LatticeUnits {
     ) -> Result<(LatticeUnits, Vec<String>), SceneError> {
         let dx = cell_size(scene, lattice, file)?;
         let n = cell_counts(scene, lattice, dx, file)?;
-        let op = lattice.operator.as_str();
-        if !["bgk", "trt", "mrt"].contains(&op) {
+        let Some(op) = CollisionOperator::named(&lattice.operator) else {
             return Err(fail(
                 file,
                 "lattice.operator",
-                format!("{op:?}"),
+                format!("{:?}", lattice.operator),
                 "expected \"bgk\", \"trt\" or \"mrt\"",
             ));
-        }
-        let storage = lattice.storage.as_str();
-        if !STORAGES.contains(&storage) {
+        };
+        let Some(storage) = Storage::named(&lattice.storage) else {
             return Err(fail(
                 file,
                 "lattice.storage",
-                format!("{storage:?}"),
+                format!("{:?}", lattice.storage),
                 "expected \"fp32\", \"fp16s\" or \"fp16c\"",
             ));
-        }
+        };
         let (dt, tau) = time_step(scene, lattice, dx, file)?;
         let mach = lattice_mach(lattice, op, dx, dt, file)?;
-        let faces = faces::lattice_faces(scene, lattice, dx, dt, file)?;
+        let faces = faces::lattice_faces(scene, lattice, op, [dx, dt], file)?;
         let (solid, warnings) = solid_cells(scene, lattice, n, dx, file)?;
         check_steps_rates_and_forces(lattice, file)?;
         let force = lattice.body_acceleration.map(|a| a * dt * dt / dx);
@@ -367,22 +371,17 @@ impl LatticeUnits {
             tau,
             nu: (tau - 0.5) / 3.0,
             mach,
-            operator: op.to_string(),
-            magic: trt_magic(lattice, tau, file)?,
+            operator: op,
+            magic: trt_magic(lattice, op, tau, file)?,
             mrt: lattice.mrt,
             force,
             faces,
             solid,
             check_interval: lattice.check_interval,
             ramp_steps: lattice.ramp_time / dt,
-            storage: storage.to_string(),
+            storage,
         };
         Ok((units, warnings))
-    }
-
-    /// Lattice velocity of an SI velocity.
-    pub fn velocity(&self, u: [f64; 3]) -> [f64; 3] {
-        u.map(|v| v * self.dt / self.dx)
     }
 }
 
@@ -566,10 +565,10 @@ mod tests {
     /// the field.
     #[test]
     fn the_storage_is_one_of_three() {
-        assert_eq!(with_lattice("").expect("scene").storage, "fp32");
-        for name in super::STORAGES {
+        assert_eq!(with_lattice("").expect("scene").storage.name(), "fp32");
+        for name in super::Storage::ALL.map(super::Storage::name) {
             let units = with_lattice(&format!("storage = {name:?}")).expect("scene");
-            assert_eq!(units.storage, name);
+            assert_eq!(units.storage.name(), name);
         }
         let err = with_lattice("storage = \"fp8\"").expect_err("fp8").to_string();
         assert!(err.contains("lattice.storage") && err.contains("fp8"), "{err}");

@@ -40,7 +40,8 @@ pub struct Scene {
     #[serde(default)]
     pub dem: dem::Dem,
     /// What the checks found odd but harmless (a box that does nothing), each as
-    /// `FILE: FIELD = VALUE: PROBLEM`; [`Scene::load`] writes them to stderr.
+    /// `FILE: FIELD = VALUE: PROBLEM`; the program that loaded the scene says them, once per run
+    /// (lbm-server for a coupled run, not the dem-client it starts).
     #[serde(skip)]
     pub warnings: Vec<String>,
 }
@@ -370,8 +371,7 @@ pub const MAX_PARTICLES: u64 = 50_000_000;
 pub const MAX_INITIAL_OVERLAP: f64 = 0.01;
 
 impl Scene {
-    /// Reads and validates a scene file, and writes its warnings to stderr, each a line
-    /// `PROGRAM: warning: FILE: FIELD = VALUE: PROBLEM`.
+    /// Reads and validates a scene file; its warnings are kept in [`Scene::warnings`].
     pub fn load(path: &Path) -> Result<Scene, SceneError> {
         let file = path.display().to_string();
         let text = std::fs::read_to_string(path).map_err(|e| SceneError {
@@ -380,21 +380,7 @@ impl Scene {
             value: String::new(),
             problem: format!("cannot read the scene file: {e}"),
         })?;
-        let scene = Scene::parse(&text, &file)?;
-        let program = std::env::args_os()
-            .next()
-            .and_then(|p| {
-                Path::new(&p)
-                    .file_name()
-                    .map(|n| n.to_string_lossy().into_owned())
-            })
-            .unwrap_or_default();
-        for warning in &scene.warnings {
-            use std::io::Write;
-            // One write per line, as `protocol::say!` writes.
-            let _ = std::io::stderr().write_all(format!("{program}: warning: {warning}\n").as_bytes());
-        }
-        Ok(scene)
+        Scene::parse(&text, &file)
     }
 
     /// The built-in default scene.

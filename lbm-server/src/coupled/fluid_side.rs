@@ -18,6 +18,7 @@ use crate::fluid::{health_of, setup_of};
 use crate::lbm::gpu::{Gpu, GpuLattice};
 use crate::lbm::imb::{ImbOptions, SolidCollision};
 use crate::lubrication::HeldLubrication;
+use crate::terminal::Warning;
 use crate::trials::WayTrials;
 use protocol::{ParticleReply, ParticleState, Physics};
 use scene::lattice::LatticeUnits;
@@ -54,6 +55,10 @@ pub struct FluidSide {
     pub(super) lines_every: u64,
     /// Steps of the run (its last gets a snapshot and the lines).
     pub(super) run_steps: u64,
+    /// What the scene's settings are warned of (`warnings.rs`), said after the run's header.
+    warnings: Vec<Warning>,
+    /// Whether the run said that covers were dropped (`health.rs`).
+    pub(super) said_dropped: bool,
 }
 
 impl FluidSide {
@@ -66,8 +71,11 @@ impl FluidSide {
             ));
         };
         // The scene's coupling settings are checked before the device is opened.
-        let deficit_product =
-            radius_deficit_product(&scene.coupling.radius_correction, &units.operator, units.tau)?;
+        let deficit_product = radius_deficit_product(
+            &scene.coupling.radius_correction,
+            units.operator.name(),
+            units.tau,
+        )?;
         let gpu = Arc::new(Gpu::new()?);
         let radii: Vec<f64> = scene.initial_particles().iter().map(|p| p.radius).collect();
         let options = imb_options(scene, &units, &radii)?;
@@ -77,9 +85,7 @@ impl FluidSide {
             .coupling
             .lubrication
             .then(|| HeldLubrication::for_lattice(scene, &units));
-        for warning in lattice_warnings(scene, &units, &radii) {
-            protocol::say!("lbm-server: warning: {warning}");
-        }
+        let warnings = lattice_warnings(scene, &units, &radii);
         let fields = FieldOutput::new(scene, &units, out)?;
         Ok(FluidSide {
             lattice,
@@ -97,6 +103,8 @@ impl FluidSide {
             fields_every: scene.output.fields_interval,
             lines_every: scene.output.interval,
             run_steps: steps,
+            warnings,
+            said_dropped: false,
         })
     }
 
@@ -115,7 +123,29 @@ impl FluidSide {
         self.lubrication = None;
     }
 
-    /// How the fluid is described in logs.
+    /// Says what the scene's settings are warned of.
+    pub fn say_warnings(&self) {
+        for warning in &self.warnings {
+            warning.say();
+        }
+    }
+
+    /// The fluid in the run's short header: the lattice, its operator and tau, the coupling.
+    pub fn brief(&self) -> String {
+        let u = &self.units;
+        format!(
+            "lattice {}x{}x{} ({}, tau {:.3}), immersed moving boundary",
+            u.n[0], u.n[1], u.n[2], u.operator, u.tau
+        )
+    }
+
+    /// The device the lattice runs on.
+    pub fn device(&self) -> &str {
+        self.lattice.adapter()
+    }
+
+    /// The fluid as `--verbose` describes it: the lattice's scales, the device, the way the
+    /// covered cells are treated, the lubrication and the radius correction.
     pub fn describe(&self) -> String {
         let u = &self.units;
         format!(
@@ -179,20 +209,19 @@ impl FluidSide {
     /// not carry. Whether a load is not finite (found by the pass that converts the loads: no
     /// pass of its own).
     fn loads(&mut self, states: &[ParticleState], out: &mut Vec<ParticleReply>) -> Result<bool, String> {
-        let (dx, dt) = (self.units.dx, self.units.dt);
+        let units = &self.units;
         let lattice_states = LatticeStates {
             states,
             origin: self.origin,
-            dx,
-            dt,
+            units,
             deficit_product: self.deficit_product,
         };
-        let force_unit = self.fluid_density * dx.powi(4) / (dt * dt);
-        let torque_unit = force_unit * dx;
+        let force_unit = units.force_unit(self.fluid_density);
+        let torque_unit = units.torque_unit(self.fluid_density);
         // What the lattice does not carry: the hydrostatic gradient (buoyancy) and the mean
         // pressure gradient that the body acceleration stands for, as -grad p / rho_f.
         let pressure_acceleration: [f64; 3] =
-            std::array::from_fn(|a| self.units.force[a] * dx / (dt * dt) - self.gravity[a]);
+            std::array::from_fn(|a| units.si_acceleration(units.force[a]) - self.gravity[a]);
         let fluid_density = self.fluid_density;
         let not_finite = AtomicBool::new(false);
         self.lattice.step_coupled_with(&lattice_states, out, |j, l| {

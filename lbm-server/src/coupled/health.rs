@@ -4,6 +4,7 @@
 use super::FluidSide;
 use crate::fluid::health_of;
 use crate::lbm::gpu::Unhealthy;
+use crate::terminal;
 use protocol::ParticleReply;
 
 impl FluidSide {
@@ -18,7 +19,8 @@ impl FluidSide {
     }
 
     /// The health check of the lattice (a pass keeps its fields on the device for
-    /// last_good.vti), and a warning when cells had more particles than slots.
+    /// last_good.vti), and a warning when cells had more particles than slots: the first time,
+    /// with `--verbose` at every check.
     pub(super) fn check(&mut self) -> Result<(), String> {
         if let Some(bad) = self.lattice.health() {
             return Err(self.unstable(bad));
@@ -36,12 +38,20 @@ impl FluidSide {
                 self.lattice.covered_cell_capacity()
             ));
         }
-        if dropped > 0 {
-            protocol::say!(
+        if dropped > 0 && (terminal::verbose() || !self.said_dropped) {
+            let line = format!(
                 "lbm-server: warning: by step {}, {dropped} particle-cell covers did not fit coupling.slots = {}",
                 self.steps,
                 self.lattice.slots()
             );
+            terminal::say_either(
+                &format!(
+                    "{line}: a cell covered by more particles keeps those that cover most of it \
+                     (docs/imb.md, \"One coupled step\"); later checks' counts with --verbose"
+                ),
+                &line,
+            );
+            self.said_dropped = true;
         }
         Ok(())
     }

@@ -4,14 +4,14 @@
 use super::radius_correction::drawn_larger_by;
 use crate::lbm::imb::{SolidParticle, SolidParticles};
 use protocol::ParticleState;
+use scene::lattice::LatticeUnits;
 
 /// The DEM's states (SI) as the lattice reads them: each converted to lattice units where the
 /// coupled step reads it.
 pub(super) struct LatticeStates<'a> {
     pub(super) states: &'a [ParticleState],
     pub(super) origin: [f64; 3],
-    pub(super) dx: f64,
-    pub(super) dt: f64,
+    pub(super) units: &'a LatticeUnits,
     /// Each radius of r cells is drawn r + this / max(r, 2) (`coupling.radius_correction`).
     pub(super) deficit_product: f64,
 }
@@ -20,7 +20,7 @@ impl LatticeStates<'_> {
     /// The radius particle j is drawn with (cells): below 2 cells, where nothing was measured,
     /// the deficit of 2 cells.
     fn drawn_radius(&self, j: usize) -> f64 {
-        let r = self.states[j].radius / self.dx;
+        let r = self.units.cells(self.states[j].radius);
         r + drawn_larger_by(self.deficit_product, r)
     }
 }
@@ -31,12 +31,12 @@ impl SolidParticles for LatticeStates<'_> {
     }
 
     fn particle(&self, j: usize) -> SolidParticle {
-        let (s, dx) = (&self.states[j], self.dx);
+        let (s, u) = (&self.states[j], self.units);
         SolidParticle {
-            position: std::array::from_fn(|a| (s.position[a] - self.origin[a]) / dx),
+            position: u.lattice_position(s.position, self.origin),
             radius: self.drawn_radius(j),
-            velocity: s.velocity.map(|v| v * self.dt / dx),
-            angular_velocity: s.angular_velocity.map(|w| w * self.dt),
+            velocity: u.velocity(s.velocity),
+            angular_velocity: u.angular_velocity(s.angular_velocity),
         }
     }
 
@@ -55,11 +55,15 @@ mod tests {
             radius,
             ..Default::default()
         });
+        let units = LatticeUnits {
+            dx: 0.001,
+            dt: 1e-3,
+            ..scene::Scene::default_scene().lattice_units.expect("a lattice")
+        };
         let lattice = LatticeStates {
             states: &states,
             origin: [0.0; 3],
-            dx: 0.001,
-            dt: 1e-3,
+            units: &units,
             deficit_product: 0.75,
         };
         assert_eq!(lattice.particle(0).radius, 3.25, "3 cells + 0.75 / 3");

@@ -7,18 +7,19 @@ use super::accuracy::{
     SMALL_SPHERE_DRAG_CALIBRATED,
 };
 use crate::fluid::stability_warning;
-use scene::lattice::LatticeUnits;
+use crate::terminal::Warning;
+use scene::lattice::{CollisionOperator, LatticeUnits};
 use scene::Scene;
 
 /// The warnings of a coupled lattice for the scene's initial particles (`radii` in m), in the
 /// order they are said: its tau (or, with the radius correction, the correction's boundary
 /// layer), the boundary layer of its largest sphere, its smallest spheres, its stability.
-pub(super) fn lattice_warnings(scene: &Scene, units: &LatticeUnits, radii: &[f64]) -> Vec<String> {
+pub(super) fn lattice_warnings(scene: &Scene, units: &LatticeUnits, radii: &[f64]) -> Vec<Warning> {
     let correction = scene.coupling.radius_correction.as_str();
     let diameter = 2.0 * radii.iter().fold(0.0, |a, &r| r.max(a));
     let smallest = 2.0 * radii.iter().fold(f64::INFINITY, |a, &r| r.min(a));
     let warning = if correction == "none" {
-        tau_warning(&units.operator, units.tau)
+        tau_warning(units.operator.name(), units.tau)
     } else {
         correction_warning(units, diameter)
     };
@@ -41,14 +42,14 @@ const SMALL_SPHERE_RESOLVED: f64 = 6.0;
 /// measured for their diameter (`diameter` in m), drawn at their radius or, with TRT and
 /// `calibrated`, larger by the radius correction; warned of where it is off by more than
 /// [`DRAG_ERROR_WARN`] at the measured tau nearer the lattice's.
-fn small_sphere_warning(units: &LatticeUnits, diameter: f64, calibrated: bool) -> Option<String> {
-    let k = operator_index(&units.operator)?;
-    let cells = diameter / units.dx;
+fn small_sphere_warning(units: &LatticeUnits, diameter: f64, calibrated: bool) -> Option<Warning> {
+    let k = operator_index(units.operator.name())?;
+    let cells = units.cells(diameter);
     if cells >= SMALL_SPHERE_RESOLVED {
         return None;
     }
     let plain: Vec<(f64, [f64; 2])> = SMALL_SPHERE_DRAG.iter().map(|&(d, e)| (d, e[k])).collect();
-    let trt = units.operator == "trt";
+    let trt = units.operator == CollisionOperator::Trt;
     let corrected = at_diameter(&SMALL_SPHERE_DRAG_CALIBRATED, cells);
     let error = if calibrated && trt {
         corrected
@@ -71,25 +72,30 @@ fn small_sphere_warning(units: &LatticeUnits, diameter: f64, calibrated: bool) -
     } else {
         String::new()
     };
-    Some(format!(
+    let refined = diameter / SMALL_SPHERE_RESOLVED;
+    let brief = format!(
+        "the smallest particles are {cells:.1} cells across: in Stokes flow a sphere of this size{} \
+         measured {:+.0}% at tau 0.6 and {:+.0}% at tau 1; refine lattice.dx to {refined:.3e} m",
+        if calibrated && trt { ", drawn larger," } else { "" },
+        error[0],
+        error[1],
+    );
+    let full = format!(
         "the smallest particles are {cells:.1} cells across (diameter {diameter:e} m / lattice.dx): \
          the immersed boundary under-resolves spheres of a few cells: in Stokes flow a sphere of this \
          size{drawn} measured {:+.0}% at tau 0.6 and {:+.0}% at tau 1 ({}; this lattice's tau \
          {:.3}){hint}; at a cell or less one that sits on a cell corner covers no cell's centre and \
          feels no drag (validation/lbm/REPORT.md, \"spheres of a few cells and less\"). A particle \
          with too little drag settles too fast, with too much too slowly. Refine lattice.dx to \
-         {:.3e} m ({SMALL_SPHERE_RESOLVED} cells per diameter) or less",
-        error[0],
-        error[1],
-        units.operator,
-        units.tau,
-        diameter / SMALL_SPHERE_RESOLVED,
-    ))
+         {refined:.3e} m ({SMALL_SPHERE_RESOLVED} cells per diameter) or less",
+        error[0], error[1], units.operator, units.tau,
+    );
+    Some(Warning { brief, full })
 }
 
 /// The warning for a coupled lattice whose tau makes the immersed boundary's drag measurably
 /// low (more than [`DRAG_ERROR_WARN`] at 5 cells radius, or beyond the measured taus), if it does.
-fn tau_warning(operator: &str, tau: f64) -> Option<String> {
+fn tau_warning(operator: &str, tau: f64) -> Option<Warning> {
     let error = drag_error_at(operator, tau);
     if error.is_some_and(|e| e.abs() <= DRAG_ERROR_WARN) {
         return None;
@@ -107,13 +113,18 @@ fn tau_warning(operator: &str, tau: f64) -> Option<String> {
             DRAG_AGAINST_TAU[DRAG_AGAINST_TAU.len() - 1].0
         ),
     };
-    Some(format!(
+    let brief = format!(
+        "lattice tau = {tau:.3} ({operator}): the immersed boundary's drag falls as tau grows: \
+         measured {measured}; {operator} at tau {best_tau} measured {best:+.1}%"
+    );
+    let full = format!(
         "lattice tau = {tau:.3} ({operator}): the immersed boundary's drag falls as tau grows: a sphere \
          of 5 cells radius in the Zick-Homsy array measured {measured}, about half of it at 7.4 cells \
          (validation/lbm/REPORT.md, \"drag against tau\"); a settling sphere falls about that much too \
          fast. Lower lattice.mach (or raise lattice.velocity_scale) or set lattice.tau: {operator} at tau \
          {best_tau} measured {best:+.1}%; or coupling.radius_correction = \"calibrated\" (docs/imb.md)"
-    ))
+    );
+    Some(Warning { brief, full })
 }
 
 /// The boundary-layer cells (cells per diameter / sqrt(particle Reynolds number)) below which a
@@ -125,10 +136,16 @@ const CORRECTION_BOUNDARY_LAYER_CELLS: f64 = 2.0;
 /// The warning for a calibrated radius correction where a moving sphere's boundary layer is
 /// resolved by fewer than [`CORRECTION_BOUNDARY_LAYER_CELLS`] cells with TRT: the particle
 /// Reynolds number of the lattice's velocity scale and the largest sphere (`diameter`, m).
-fn correction_warning(units: &LatticeUnits, diameter: f64) -> Option<String> {
+fn correction_warning(units: &LatticeUnits, diameter: f64) -> Option<Warning> {
     let (reynolds, cells, layer) = boundary_layer(units, diameter);
-    (units.operator == "trt" && layer < CORRECTION_BOUNDARY_LAYER_CELLS).then(|| {
-        format!(
+    let refined = (CORRECTION_BOUNDARY_LAYER_CELLS * reynolds.sqrt()).ceil();
+    (units.operator == CollisionOperator::Trt && layer < CORRECTION_BOUNDARY_LAYER_CELLS).then(|| Warning {
+        brief: format!(
+            "coupling.radius_correction = \"calibrated\" with TRT at particle Reynolds number \
+             {reynolds:.1}: the boundary layer spans {layer:.2} cells, too few for the correction \
+             of a moving sphere; refine to {refined:.0} cells per diameter, or use bgk or mrt"
+        ),
+        full: format!(
             "coupling.radius_correction = \"calibrated\" with TRT at particle Reynolds number \
              {reynolds:.1} (lattice.velocity_scale x the largest diameter / viscosity) and {cells:.1} \
              cells per diameter: the sphere's boundary layer (about d / sqrt(Re)) spans {layer:.2} \
@@ -140,8 +157,8 @@ fn correction_warning(units: &LatticeUnits, diameter: f64) -> Option<String> {
              radius. For moving spheres compare with coupling.radius_correction = \"none\", refine \
              to {:.0} cells per diameter, or use lattice.operator = \"bgk\" or \"mrt\" (held and \
              towed within 2%; E4 at 6 cells settled -2.6% corrected with BGK, -2.2% with MRT)",
-            (CORRECTION_BOUNDARY_LAYER_CELLS * reynolds.sqrt()).ceil()
-        )
+            refined
+        ),
     })
 }
 
@@ -155,7 +172,7 @@ const DRAG_BOUNDARY_LAYER_CELLS: f64 = 1.0;
 /// with its cells per diameter and boundary-layer cells (d / sqrt(Re), in cells).
 fn boundary_layer(units: &LatticeUnits, diameter: f64) -> (f64, f64, f64) {
     let speed = units.mach / 3f64.sqrt();
-    let cells = diameter / units.dx;
+    let cells = units.cells(diameter);
     let reynolds = speed * cells / units.nu;
     (reynolds, cells, cells / reynolds.sqrt())
 }
@@ -163,10 +180,16 @@ fn boundary_layer(units: &LatticeUnits, diameter: f64) -> (f64, f64, f64) {
 /// The warning for spheres whose boundary layer spans fewer than [`DRAG_BOUNDARY_LAYER_CELLS`]
 /// cells at the particle Reynolds number of the lattice's velocity scale and the largest sphere
 /// (`diameter`, m): their drag comes out too high on such a grid, whatever the operator or tau.
-fn resolution_warning(units: &LatticeUnits, diameter: f64) -> Option<String> {
+fn resolution_warning(units: &LatticeUnits, diameter: f64) -> Option<Warning> {
     let (reynolds, cells, layer) = boundary_layer(units, diameter);
-    (layer < DRAG_BOUNDARY_LAYER_CELLS).then(|| {
-        format!(
+    let refined = (DRAG_BOUNDARY_LAYER_CELLS * reynolds.sqrt()).ceil();
+    (layer < DRAG_BOUNDARY_LAYER_CELLS).then(|| Warning {
+        brief: format!(
+            "particle Reynolds number {reynolds:.0} at {cells:.1} cells per diameter: the sphere's \
+             boundary layer spans {layer:.2} cells, and the drag comes out too high; refine to \
+             {refined:.0} cells per diameter"
+        ),
+        full: format!(
             "particle Reynolds number {reynolds:.0} (lattice.velocity_scale x the largest diameter / \
              viscosity) at {cells:.1} cells per diameter: the sphere's boundary layer (about d / \
              sqrt(Re)) spans {layer:.2} cells, and the drag comes out too high. A sphere held in a \
@@ -175,9 +198,8 @@ fn resolution_warning(units: &LatticeUnits, diameter: f64) -> Option<String> {
              operator; a random array at solid fraction 0.24 carried its weight at 1.5-1.7 times \
              Tenneti et al.'s drag at 6 to 18 cells per diameter, and solid cells instead of the \
              immersed boundary drag more still (validation/lbm/REPORT.md; docs/imb.md, \
-             \"Stability near tau = 1/2\"). Refine to {:.0} cells per diameter for one cell",
-            (DRAG_BOUNDARY_LAYER_CELLS * reynolds.sqrt()).ceil()
-        )
+             \"Stability near tau = 1/2\"). Refine to {refined:.0} cells per diameter for one cell"
+        ),
     })
 }
 
@@ -210,7 +232,9 @@ mod tests {
             "E1: Re 1.5, 6 cells per diameter: 4.9 cells"
         );
         let e4 = ten_cate_e4();
-        let warning = correction_warning(&units(&e4), 0.015).expect("E4: Re 32, 6 cells: 1.06");
+        let warning = correction_warning(&units(&e4), 0.015)
+            .expect("E4: Re 32, 6 cells: 1.06")
+            .full;
         assert!(
             warning.contains("Reynolds number 31.8")
                 && warning.contains("spans 1.06 cells")
@@ -238,7 +262,7 @@ mod tests {
     fn particles_of_a_few_cells_are_warned_of_too_little_drag() {
         let e1 = units(TEN_CATE_E1);
         assert_eq!(small_sphere_warning(&e1, 0.015, false), None, "6 cells");
-        let four = small_sphere_warning(&e1, 0.010, false).expect("4 cells");
+        let four = small_sphere_warning(&e1, 0.010, false).expect("4 cells").full;
         assert!(
             four.contains("are 4.0 cells across")
                 && four.contains("measured -16% at tau 0.6 and -22% at tau 1 (trt")
@@ -246,7 +270,7 @@ mod tests {
                 && four.contains("\"calibrated\": +2% and +13%"),
             "{four}"
         );
-        let two = small_sphere_warning(&e1, 0.005, false).expect("2 cells");
+        let two = small_sphere_warning(&e1, 0.005, false).expect("2 cells").full;
         assert!(
             two.contains("measured -45% at tau 0.6 and -57% at tau 1"),
             "{two}"
@@ -267,7 +291,9 @@ mod tests {
         );
         // Drawn larger by the radius correction (TRT): over-corrected at tau 1.2 and 4 cells
         // (+13%), within 2% at tau 0.6; the correction is not measured at this size with MRT.
-        let four_drawn = small_sphere_warning(&e1, 0.010, true).expect("TRT, tau 1.2, 4 cells");
+        let four_drawn = small_sphere_warning(&e1, 0.010, true)
+            .expect("TRT, tau 1.2, 4 cells")
+            .full;
         assert!(
             four_drawn.contains("drawn larger by coupling.radius_correction = \"calibrated\", measured +2% at tau 0.6 and +13% at tau 1"),
             "{four_drawn}"
@@ -279,7 +305,7 @@ mod tests {
             "TRT, tau 0.6, 4 cells: +1.7%"
         );
         assert!(small_sphere_warning(&mrt, 0.010, true)
-            .is_some_and(|w| w.contains("not measured at this size but with trt")));
+            .is_some_and(|w| w.full.contains("not measured at this size but with trt")));
     }
 
     #[test]
@@ -298,7 +324,9 @@ mod tests {
             .replace("dynamic_viscosity = 0.058", "dynamic_viscosity = 0.001")
             .replace("velocity_scale = 0.128", "velocity_scale = 0.1")
             .replace("dx = 0.0025", "dx = 0.0005");
-        let warning = resolution_warning(&units(&bed), 0.003).expect("Re 300, 6 cells: 0.35");
+        let warning = resolution_warning(&units(&bed), 0.003)
+            .expect("Re 300, 6 cells: 0.35")
+            .full;
         assert!(
             warning.contains("Reynolds number 300")
                 && warning.contains("spans 0.35 cells")
@@ -329,7 +357,9 @@ mod tests {
 
     #[test]
     fn a_lattice_warns_near_tau_one_half_where_its_operator_blew_up() {
-        let particles = stability_warning(&e1_at(0.505, "trt", ""), true).expect("0.505 with particles");
+        let particles = stability_warning(&e1_at(0.505, "trt", ""), true)
+            .expect("0.505 with particles")
+            .full;
         assert!(
             particles.contains("tau = 0.5050")
                 && particles.contains("= 38.0")
@@ -346,7 +376,9 @@ mod tests {
             None,
             "no particles, no inlet"
         );
-        let with_inlet = stability_warning(&e1_at(0.525, "trt", INLET), false).expect("0.525 with an inlet");
+        let with_inlet = stability_warning(&e1_at(0.525, "trt", INLET), false)
+            .expect("0.525 with an inlet")
+            .full;
         assert!(with_inlet.contains("velocity inlet"), "{with_inlet}");
         assert_eq!(
             stability_warning(&e1_at(0.54, "trt", INLET), true),
@@ -359,7 +391,9 @@ mod tests {
             "MRT held"
         );
         assert_eq!(stability_warning(&e1_at(0.511, "bgk", INLET), true), None, "BGK");
-        let bgk = stability_warning(&e1_at(0.505, "bgk", INLET), false).expect("BGK at 0.505");
+        let bgk = stability_warning(&e1_at(0.505, "bgk", INLET), false)
+            .expect("BGK at 0.505")
+            .full;
         assert!(
             bgk.contains("with BGK") && bgk.contains("where it blew up at 0.5024"),
             "{bgk}"
@@ -382,7 +416,9 @@ mod tests {
             u.magic = scene::lattice::bounded_magic(u.magic, tau, 1.0);
             u
         };
-        let trt = stability_warning(&bounded(0.505, ""), true).expect("bounded TRT at 0.505");
+        let trt = stability_warning(&bounded(0.505, ""), true)
+            .expect("bounded TRT at 0.505")
+            .full;
         assert!(
             trt.contains("TRT with tau- = 1.00") && trt.contains("tau- <= 1 held to tau 0.5048"),
             "{trt}"
@@ -398,14 +434,14 @@ mod tests {
     fn a_lattice_warns_where_the_drag_falls_more_than_the_limit() {
         assert!(tau_warning("trt", 0.6).is_none());
         assert!(tau_warning("mrt", 0.9).is_none(), "MRT -5.5% at 0.9");
-        let trt = tau_warning("trt", 1.2).expect("TRT at 1.2: -12.9%");
+        let trt = tau_warning("trt", 1.2).expect("TRT at 1.2: -12.9%").full;
         assert!(
             trt.contains("-12.9% at this tau") && trt.contains("trt at tau 0.55 measured -4.0%"),
             "{trt}"
         );
-        let bgk = tau_warning("bgk", 0.9).expect("BGK at 0.9: -9.0%");
+        let bgk = tau_warning("bgk", 0.9).expect("BGK at 0.9: -9.0%").full;
         assert!(bgk.contains("bgk at tau 0.6 measured +0.1%"), "{bgk}");
-        let far = tau_warning("trt", 2.25).expect("beyond the table");
+        let far = tau_warning("trt", 2.25).expect("beyond the table").full;
         assert!(
             far.contains("beyond the measured taus (-20.7% at tau 2)"),
             "{far}"

@@ -4,6 +4,7 @@
 use super::FluidSide;
 use crate::lbm::gpu::Gpu;
 use crate::lbm::imb::{covered_fraction, CoveredCells};
+use crate::terminal::{self, MORE};
 use crate::trials::{WayTrials, AUTO_MIN_SECONDS};
 use scene::lattice::LatticeUnits;
 use scene::Scene;
@@ -25,7 +26,7 @@ pub(super) fn covered_cells(
             scene.coupling.covered_cells
         )
     })?;
-    let radii = radii.iter().map(|r| r / units.dx);
+    let radii = radii.iter().map(|&r| units.cells(r));
     let cells = units.n.iter().product();
     Ok(mode.for_scene(covered_fraction(radii, cells)))
 }
@@ -61,7 +62,13 @@ impl FluidSide {
         };
         let way = trials.way_for(self.steps, self.made.elapsed().as_secs_f64());
         if let Some(report) = trials.take_report() {
-            protocol::say!("lbm-server: {report}");
+            terminal::say_either(
+                &format!(
+                    "lbm-server: covered cells timed on the run's steps: {} kept {MORE}",
+                    trials.kept().name()
+                ),
+                &format!("lbm-server: {report}"),
+            );
         }
         if let Err(e) = self.lattice.set_covered_cells(way) {
             protocol::say!("lbm-server: warning: {e}; the run times the other ways without it");

@@ -4,48 +4,29 @@
 //! shaders/storage_fp32.wgsl and shaders/storage_fp16.wgsl (with fp16s.wgsl or fp16c.wgsl); the
 //! same conversions here serve the upload and the readback.
 
-/// The storage of the populations (f_i - w_i).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum Storage {
-    #[default]
-    Fp32,
-    /// IEEE 754 half: 10 mantissa bits, 5 exponent bits.
-    Fp16s,
-    /// 11 mantissa bits, 4 exponent bits, |value| < 2 (FluidX3D's FP16C idea).
-    Fp16c,
+pub use scene::lattice::Storage;
+
+/// What the device does with a storage (`lattice.storage`, scene's [`Storage`]): its buffers,
+/// shaders and the conversions of the upload and the readback.
+pub trait StorageOnDevice: Copy {
+    fn buffer_bytes(self, cells: usize) -> u64;
+    fn shader(self) -> String;
+    #[cfg(test)]
+    fn rounding_bound(self, x: f64) -> f64;
+    fn encode(self, values: &[f32]) -> Vec<u8>;
+    fn decode(self, bytes: &[u8], cells: usize) -> Vec<f32>;
+    #[cfg(test)]
+    fn round(self, x: f32) -> f32;
 }
 
-impl Storage {
-    pub const ALL: [Storage; 3] = [Storage::Fp32, Storage::Fp16s, Storage::Fp16c];
-
-    /// The name in scenes and on the command line.
-    pub fn name(self) -> &'static str {
-        match self {
-            Storage::Fp32 => "fp32",
-            Storage::Fp16s => "fp16s",
-            Storage::Fp16c => "fp16c",
-        }
-    }
-
-    pub fn named(name: &str) -> Option<Storage> {
-        Storage::ALL.into_iter().find(|s| s.name() == name)
-    }
-
-    /// Bytes of one population.
-    pub fn bytes(self) -> usize {
-        match self {
-            Storage::Fp32 => 4,
-            _ => 2,
-        }
-    }
-
+impl StorageOnDevice for Storage {
     /// Bytes of a direction's buffer for `cells` cells (whole u32 words, rounded up to 16 bytes).
-    pub fn buffer_bytes(self, cells: usize) -> u64 {
+    fn buffer_bytes(self, cells: usize) -> u64 {
         ((cells * self.bytes()) as u64).div_ceil(16) * 16
     }
 
     /// The shader source of the storage's buffers and load/store pair.
-    pub fn shader(self) -> String {
+    fn shader(self) -> String {
         const FP32: &str = include_str!("../../../shaders/storage_fp32.wgsl");
         const FP16: &str = include_str!("../../../shaders/storage_fp16.wgsl");
         const FP16S: &str = include_str!("../../../shaders/fp16s.wgsl");
@@ -61,7 +42,7 @@ impl Storage {
     /// Bound on the rounding error of one stored value x: relative 2^-(p+1) for p mantissa bits,
     /// and half the subnormal step near zero (round to nearest).
     #[cfg(test)]
-    pub fn rounding_bound(self, x: f64) -> f64 {
+    fn rounding_bound(self, x: f64) -> f64 {
         match self {
             Storage::Fp32 => 0.0,
             Storage::Fp16s => (x.abs() * 2f64.powi(-11)).max(2f64.powi(-25)),
@@ -70,48 +51,50 @@ impl Storage {
     }
 
     /// The buffer of one direction's populations, from f32 values in cell order.
-    pub fn encode(self, values: &[f32]) -> Vec<u8> {
+    fn encode(self, values: &[f32]) -> Vec<u8> {
         match self {
             Storage::Fp32 => bytemuck::cast_slice(values).to_vec(),
             _ => {
-                let halves: Vec<u16> = values.iter().map(|&v| self.encode16(v)).collect();
+                let halves: Vec<u16> = values.iter().map(|&v| encode16(self, v)).collect();
                 bytemuck::cast_slice(&halves).to_vec()
             }
         }
     }
 
     /// f32 values in cell order (the first `cells`) from one direction's buffer.
-    pub fn decode(self, bytes: &[u8], cells: usize) -> Vec<f32> {
+    fn decode(self, bytes: &[u8], cells: usize) -> Vec<f32> {
         match self {
             Storage::Fp32 => bytemuck::cast_slice::<u8, f32>(bytes)[..cells].to_vec(),
             _ => bytes[..cells * 2]
                 .chunks_exact(2)
-                .map(|b| self.decode16(u16::from_le_bytes([b[0], b[1]])))
+                .map(|b| decode16(self, u16::from_le_bytes([b[0], b[1]])))
                 .collect(),
         }
     }
 
     /// The value as stored, in f32: what a store followed by a load gives.
     #[cfg(test)]
-    pub fn round(self, x: f32) -> f32 {
+    fn round(self, x: f32) -> f32 {
         match self {
             Storage::Fp32 => x,
-            _ => self.decode16(self.encode16(x)),
+            _ => decode16(self, encode16(self, x)),
         }
     }
+}
 
-    fn encode16(self, x: f32) -> u16 {
-        match self {
-            Storage::Fp16c => fp16c_encode(x),
-            _ => half::f16::from_f32(x).to_bits(),
-        }
+/// One value's 16 bits in `storage` (FP16S or FP16C).
+fn encode16(storage: Storage, x: f32) -> u16 {
+    match storage {
+        Storage::Fp16c => fp16c_encode(x),
+        _ => half::f16::from_f32(x).to_bits(),
     }
+}
 
-    fn decode16(self, h: u16) -> f32 {
-        match self {
-            Storage::Fp16c => fp16c_decode(h),
-            _ => half::f16::from_bits(h).to_f32(),
-        }
+/// The value of 16 bits in `storage` (FP16S or FP16C).
+fn decode16(storage: Storage, h: u16) -> f32 {
+    match storage {
+        Storage::Fp16c => fp16c_decode(h),
+        _ => half::f16::from_bits(h).to_f32(),
     }
 }
 

@@ -9,7 +9,7 @@ use super::gpu::{GpuLattice, Health};
 use super::imb::{CoveredCells, ImbOptions};
 use super::random::random_populations;
 use super::reference;
-use super::storage::Storage;
+use super::storage::{Storage, StorageOnDevice};
 use super::tests::immersed_boundary::{trt_under_a_moving_lid, two_particles};
 use super::tests::{bgk_periodic_with_force, gpu, mrt_inlet_outlet_and_solids, trt_walls_and_solids};
 

@@ -3,7 +3,7 @@
 
 use super::session::Session;
 use super::Ending;
-use crate::output::Progress;
+use crate::terminal::Progress;
 use protocol::{StepFlags, StepHeader};
 use std::sync::atomic::Ordering;
 

@@ -33,6 +33,9 @@ pub(super) fn prepare(args: &RunArgs) -> Result<Prepared, String> {
             scene::DEFAULT_SCENE.to_string(),
         ),
     };
+    for warning in &scene.warnings {
+        protocol::say!("lbm-server: warning: {warning}");
+    }
     require_lattice(&scene, &scene_file)?;
     let steps = match args.duration {
         Some(duration) => scene.steps_covering(duration, "--duration")?,

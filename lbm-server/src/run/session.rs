@@ -10,6 +10,7 @@ use super::{Ending, EXIT_BAD_INPUT, EXIT_FAILURE, EXIT_INTERRUPTED};
 use crate::coupled::FluidSide;
 use crate::launch::{self, DemStart};
 use crate::output::ParticleOutput;
+use crate::terminal;
 use protocol::transport::LinkOptions;
 use protocol::{FluidLink, Hello, LinkError, Physics};
 use std::process::Child;
@@ -90,23 +91,40 @@ impl Session {
         if yielded(&hello) != 0 {
             self.fluid.leave_lubrication();
         }
-        let fluid = self.fluid.describe();
         self.peer = Some(PeerInfo {
             software: protocol::handshake::field_text(&hello.software),
             pid: hello.pid,
             protocol_version: hello.version,
             physics: Physics::names(hello.physics),
         });
-        protocol::say!(
-            "lbm-server: scene '{}', {} steps ({:.4e} s), DEM: {} (pid {}); {fluid}",
-            scene.name,
-            steps,
-            steps as f64 * scene.time.dt,
-            protocol::handshake::field_text(&hello.software),
-            hello.pid
-        );
+        terminal::say(&self.header(&hello));
+        self.fluid.say_warnings();
         self.hello = Some(hello);
         Ok(())
+    }
+
+    /// The run's first line: the scene, its particles, lattice, steps and simulated time and the
+    /// device; with `--verbose` the lattice's scales, the DEM and the coupling's settings.
+    fn header(&self, hello: &Hello) -> String {
+        let (scene, steps) = (&self.p.scene, self.p.steps);
+        let time = steps as f64 * scene.time.dt;
+        if terminal::verbose() {
+            return format!(
+                "lbm-server: scene '{}', {steps} steps ({time:.4e} s), DEM: {} (pid {}); {}",
+                scene.name,
+                protocol::handshake::field_text(&hello.software),
+                hello.pid,
+                self.fluid.describe()
+            );
+        }
+        format!(
+            "lbm-server: scene '{}': {} particles, {}; {steps} steps = {} s; {}",
+            scene.name,
+            hello.initial_count,
+            self.fluid.brief(),
+            terminal::seconds(time),
+            self.fluid.device()
+        )
     }
 
     /// Starts dem-client or the DEM's command (its pid) or prints the service name for an
@@ -125,9 +143,9 @@ impl Session {
             DemStart::Builtin => {
                 let exe = launch::find_dem_client()
                     .ok_or("cannot find dem-client next to lbm-server or on PATH (build it: cargo build)")?;
-                let child =
-                    launch::spawn_dem_client(&exe, &run, &self.p.scene_copy, self.p.scene.coupling.timeout)
-                        .map_err(|e| format!("cannot start {}: {e}", exe.display()))?;
+                let (scene, timeout) = (&self.p.scene_copy, self.p.scene.coupling.timeout);
+                let child = launch::spawn_dem_client(&exe, &run, scene, timeout, terminal::verbose())
+                    .map_err(|e| format!("cannot start {}: {e}", exe.display()))?;
                 let pid = child.id();
                 self.child = Some(child);
                 Ok(Some(pid))
@@ -199,13 +217,17 @@ impl Session {
             );
         }
         if code == 0 {
+            let split = if terminal::verbose() {
+                format!("{}; ", summary.time_s.describe(summary.wall_time_s))
+            } else {
+                String::new()
+            };
             protocol::say!(
-                "lbm-server: {} steps in {:.2} s ({:.0} steps/s; {}; the fluid's step at {:.1} \
+                "lbm-server: {} steps in {:.2} s ({:.0} steps/s; {split}the fluid's step at {:.1} \
                  MLUPS); output in {}",
                 summary.steps_completed,
                 summary.wall_time_s,
                 summary.steps_per_second,
-                summary.time_s.describe(summary.wall_time_s),
                 summary.fluid_mlups,
                 self.p.out.display()
             );

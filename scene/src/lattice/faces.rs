@@ -2,22 +2,22 @@
 //! numbers (a finite velocity below the operator's Mach limit, a finite pressure above -rho c_s^2)
 //! and of the periodic pairs.
 
-use super::{mach_limit, FaceSpec, FaceTable, LatticeFace, LatticeSection};
+use super::{mach_limit, CollisionOperator, FaceSpec, FaceTable, LatticeFace, LatticeSection};
 use crate::numbers::{fail, finite3};
 use crate::{Scene, SceneError};
 
 pub(super) fn lattice_faces(
     scene: &Scene,
     lattice: &LatticeSection,
-    dx: f64,
-    dt: f64,
+    operator: CollisionOperator,
+    [dx, dt]: [f64; 2],
     file: &str,
 ) -> Result<[LatticeFace; 6], SceneError> {
     let mut out = [LatticeFace::Wall; 6];
     for (k, (name, spec)) in lattice.faces.all().into_iter().enumerate() {
         out[k] = lattice_face(scene, spec, [dx, dt], &format!("lattice.faces.{name}"), file)?;
     }
-    check_face_speeds(lattice, &out, [dx, dt], file)?;
+    check_face_speeds(lattice, operator, &out, [dx, dt], file)?;
     check_periodic_pairs(&out, file)?;
     Ok(out)
 }
@@ -106,11 +106,12 @@ fn check_face_numbers(
 /// Refuses a moving wall or inlet faster than the operator's lattice Mach limit.
 fn check_face_speeds(
     lattice: &LatticeSection,
+    operator: CollisionOperator,
     faces: &[LatticeFace; 6],
     [dx, dt]: [f64; 2],
     file: &str,
 ) -> Result<(), SceneError> {
-    let limit = mach_limit(&lattice.operator);
+    let limit = mach_limit(operator);
     for (k, (name, _)) in lattice.faces.all().into_iter().enumerate() {
         if let LatticeFace::MovingWall(u) | LatticeFace::VelocityInlet(u) = faces[k] {
             let mach = u.iter().map(|v| v * v).sum::<f64>().sqrt() * 3f64.sqrt();
@@ -120,10 +121,7 @@ fn check_face_speeds(
                     file,
                     format!("lattice.faces.{name}.velocity"),
                     format!("[{}, {}, {}] m/s", si[0], si[1], si[2]),
-                    format!(
-                        "is lattice Mach {mach:.3}, above {limit} for {}",
-                        lattice.operator
-                    ),
+                    format!("is lattice Mach {mach:.3}, above {limit} for {operator}"),
                 ));
             }
         }

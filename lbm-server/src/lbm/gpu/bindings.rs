@@ -6,6 +6,7 @@ use super::params::mrt_matrices;
 use super::state::GpuLattice;
 use crate::lbm::geometry::Setup;
 use crate::lbm::imb::Coupling;
+use crate::lbm::storage::StorageOnDevice;
 use wgpu::util::DeviceExt;
 
 /// Bindings before the 19 population buffers.

@@ -8,7 +8,7 @@ use super::way::{shader_module, Way};
 use crate::lbm::d3q19::{opposite, C, W};
 use crate::lbm::geometry::{Cell, Link, Setup};
 use crate::lbm::imb::{Coupling, CoveredCells, ImbOptions};
-use crate::lbm::storage::Storage;
+use crate::lbm::storage::{Storage, StorageOnDevice};
 
 /// A lattice living on the GPU.
 pub struct GpuLattice {

@@ -8,7 +8,7 @@ use super::device::Gpu;
 use super::params::{params, Params};
 use super::state::GpuLattice;
 use crate::lbm::imb::{Coupling, CoveredCells, Passes, SolidCollision};
-use crate::lbm::storage::Storage;
+use crate::lbm::storage::{Storage, StorageOnDevice};
 use wgpu::util::DeviceExt;
 
 /// The kernels' source, kept in their own files: the lattice and the immersed moving boundary.
