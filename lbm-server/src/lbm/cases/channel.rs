@@ -4,6 +4,7 @@
 use super::relaxation_steps;
 use crate::lbm::geometry::{Face, Operator, Setup};
 use crate::lbm::gpu::{equilibrium_field, Gpu, GpuLattice, Health};
+use crate::lbm::storage::Storage;
 use std::sync::Arc;
 
 /// Result of a steady channel flow: L2 error of u_x against the analytic profile, relative to max.
@@ -13,11 +14,25 @@ pub struct Channel {
     pub tau: f64,
     pub l2_error: f64,
     pub steps: u64,
+    /// The mean u_x over the channel's cross-section (the flux over its area).
+    pub mean_speed: f64,
 }
 
 /// Poiseuille flow between plates at y = -1/2 and y = n - 1/2 (half-way bounce-back), driven by a
 /// body force chosen for a centre-line speed `u_max`.
 pub fn poiseuille_plates(gpu: &Arc<Gpu>, n: usize, tau: f64, operator: Operator, u_max: f64) -> Channel {
+    poiseuille_plates_stored(gpu, n, tau, operator, u_max, Storage::Fp32)
+}
+
+/// [`poiseuille_plates`] with the populations in `storage`.
+pub fn poiseuille_plates_stored(
+    gpu: &Arc<Gpu>,
+    n: usize,
+    tau: f64,
+    operator: Operator,
+    u_max: f64,
+    storage: Storage,
+) -> Channel {
     let faces = [
         Face::Periodic,
         Face::Periodic,
@@ -27,6 +42,7 @@ pub fn poiseuille_plates(gpu: &Arc<Gpu>, n: usize, tau: f64, operator: Operator,
         Face::Periodic,
     ];
     let mut setup = Setup::new([1, n, 1], faces, tau, operator);
+    setup.storage = storage;
     let nu = setup.viscosity();
     let h = n as f64;
     setup.force = [8.0 * nu * u_max / (h * h), 0.0, 0.0];
@@ -42,11 +58,24 @@ pub fn poiseuille_plates(gpu: &Arc<Gpu>, n: usize, tau: f64, operator: Operator,
         tau,
         l2_error: error,
         steps,
+        mean_speed: mean_speed(&fields),
     }
 }
 
 /// Flow through a square duct of n x n cells (walls on y and z), against the series solution.
 pub fn poiseuille_duct(gpu: &Arc<Gpu>, n: usize, tau: f64, operator: Operator, u_max: f64) -> Channel {
+    poiseuille_duct_stored(gpu, n, tau, operator, u_max, Storage::Fp32)
+}
+
+/// [`poiseuille_duct`] with the populations in `storage`.
+pub fn poiseuille_duct_stored(
+    gpu: &Arc<Gpu>,
+    n: usize,
+    tau: f64,
+    operator: Operator,
+    u_max: f64,
+    storage: Storage,
+) -> Channel {
     let faces = [
         Face::Periodic,
         Face::Periodic,
@@ -56,6 +85,7 @@ pub fn poiseuille_duct(gpu: &Arc<Gpu>, n: usize, tau: f64, operator: Operator, u
         Face::Wall,
     ];
     let mut setup = Setup::new([1, n, n], faces, tau, operator);
+    setup.storage = storage;
     let nu = setup.viscosity();
     let a = n as f64;
     // Series solution for unit forcing, scaled so that the centre speed is u_max.
@@ -71,6 +101,7 @@ pub fn poiseuille_duct(gpu: &Arc<Gpu>, n: usize, tau: f64, operator: Operator, u
         tau,
         l2_error: error,
         steps,
+        mean_speed: mean_speed(&fields),
     }
 }
 
@@ -99,6 +130,11 @@ fn run_steady(
     let (fields, bad) = lattice.fields();
     assert!(bad.is_none(), "unhealthy: {bad:?}");
     (fields, steps)
+}
+
+/// The mean u_x of `fields`.
+fn mean_speed(fields: &[[f32; 4]]) -> f64 {
+    fields.iter().map(|f| f[1] as f64).sum::<f64>() / fields.len() as f64
 }
 
 fn l2_relative(pairs: impl Iterator<Item = (f64, f64)>) -> f64 {
