@@ -34,7 +34,9 @@ pub fn storage_warning(units: &LatticeUnits) -> Option<String> {
         "fp16c" => (1, "\"fp32\""),
         _ => return None,
     };
-    let failed = ARRAY.iter().position(|(_, change)| change[k].abs() > CHANGE_WARN)?;
+    let failed = ARRAY
+        .iter()
+        .position(|(_, change)| change[k].abs() > CHANGE_WARN)?;
     let held = ARRAY[..failed].last().map_or(f64::INFINITY, |&(u, _)| u);
     let speed = units.mach / 3f64.sqrt();
     if speed >= held {
@@ -64,7 +66,10 @@ mod tests {
     fn e1(storage: &str, mach: f64) -> LatticeUnits {
         let text = include_str!("../../validation/scenes/ten-cate-e1.toml")
             .replace("mach = 0.1", &format!("mach = {mach}"))
-            .replace("operator = \"trt\"", &format!("operator = \"trt\"\nstorage = \"{storage}\""));
+            .replace(
+                "operator = \"trt\"",
+                &format!("operator = \"trt\"\nstorage = \"{storage}\""),
+            );
         let scene = scene::Scene::parse(&text, "e1.toml").expect("scene");
         scene.lattice_units.expect("lattice")
     }

@@ -137,7 +137,16 @@ fn sixteen_bit_tiny_flows_match_fp32() {
     const PLATES_BOUND: f64 = 5e-3;
     const VORTEX_BOUND: f64 = 1e-3;
     let g = gpu();
-    let plates = |s| cases::poiseuille_plates_stored(&g, 16, 0.6, Operator::Bgk, 0.02, s).mean_speed;
+    let plates = |storage| {
+        let flow = cases::Flow {
+            n: 16,
+            tau: 0.6,
+            operator: Operator::Bgk,
+            u_max: 0.02,
+            storage,
+        };
+        cases::poiseuille_plates_stored(&g, flow).mean_speed
+    };
     let trt = Operator::Trt { magic: 3.0 / 16.0 };
     let vortex = |s| cases::taylor_green_stored(&g, 16, 0.6, trt, 0.02, 200, s).nu_measured;
     let (plates32, vortex32) = (plates(Storage::Fp32), vortex(Storage::Fp32));

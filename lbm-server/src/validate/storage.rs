@@ -95,7 +95,9 @@ pub(super) fn section(gpu: &Arc<Gpu>, out: &Path) -> String {
         mass: &mass,
     };
     let json = serde_json::to_string(&record).expect("JSON") + "\n";
-    if let Err(e) = std::fs::create_dir_all(out).and_then(|()| std::fs::write(out.join("storage_lattice.json"), json)) {
+    if let Err(e) =
+        std::fs::create_dir_all(out).and_then(|()| std::fs::write(out.join("storage_lattice.json"), json))
+    {
         protocol::say!("lbm-server: error: {}: {e}", out.display());
     }
     let table = |rows: &[Measured]| HEADER.to_string() + &rows.iter().map(Measured::row).collect::<String>();
@@ -121,7 +123,11 @@ pub(super) fn section(gpu: &Arc<Gpu>, out: &Path) -> String {
         table(&low_mach)
     );
     for d in &mass {
-        let _ = writeln!(t, "| {} | {:.3e} | {:.3e} | {:.3e} |", d.steps, d.fp32, d.fp16s, d.fp16c);
+        let _ = writeln!(
+            t,
+            "| {} | {:.3e} | {:.3e} | {:.3e} |",
+            d.steps, d.fp32, d.fp16s, d.fp16c
+        );
     }
     t
 }
@@ -129,25 +135,56 @@ pub(super) fn section(gpu: &Arc<Gpu>, out: &Path) -> String {
 /// The channels, the vortex and the array at the speeds of their own sections.
 fn usual_speeds(gpu: &Arc<Gpu>) -> Vec<Measured> {
     let plates = |s| {
-        let c = cases::poiseuille_plates_stored(gpu, 16, 0.6, Operator::Bgk, 0.02, s);
+        let c = cases::poiseuille_plates_stored(gpu, flow(0.6, Operator::Bgk, 0.02, s));
         (c.mean_speed, 0.02)
     };
     let duct = |s| {
-        let c = cases::poiseuille_duct_stored(gpu, 16, 0.8, Operator::Bgk, 0.02, s);
+        let c = cases::poiseuille_duct_stored(gpu, flow(0.8, Operator::Bgk, 0.02, s));
         (c.mean_speed, 0.02)
     };
-    let vortex = |op| move |s| (cases::taylor_green_stored(gpu, 32, 0.8, op, 0.02, 1000, s).nu_measured, 0.02);
+    let vortex = |op| {
+        move |s| {
+            (
+                cases::taylor_green_stored(gpu, 32, 0.8, op, 0.02, 1000, s).nu_measured,
+                0.02,
+            )
+        }
+    };
     let (phi, _) = cases::ZICK_HOMSY[1];
     let array = |s| {
-        let d = cases::zick_homsy_stored(gpu, 16, cases::radius_for(phi, 16), 1.0, TRT, cases::STOKES_FORCE, s);
+        let d = cases::zick_homsy_stored(
+            gpu,
+            16,
+            cases::radius_for(phi, 16),
+            1.0,
+            TRT,
+            cases::STOKES_FORCE,
+            s,
+        );
         (d.k, d.speed)
     };
     vec![
-        Measured::new("Poiseuille between plates, 16 cells, BGK, tau 0.6".into(), "mean speed", plates),
-        Measured::new("Poiseuille in a square duct, 16 cells, BGK, tau 0.8".into(), "mean speed", duct),
-        Measured::new("Taylor-Green, 32 x 32, BGK, tau 0.8".into(), "nu", vortex(Operator::Bgk)),
+        Measured::new(
+            "Poiseuille between plates, 16 cells, BGK, tau 0.6".into(),
+            "mean speed",
+            plates,
+        ),
+        Measured::new(
+            "Poiseuille in a square duct, 16 cells, BGK, tau 0.8".into(),
+            "mean speed",
+            duct,
+        ),
+        Measured::new(
+            "Taylor-Green, 32 x 32, BGK, tau 0.8".into(),
+            "nu",
+            vortex(Operator::Bgk),
+        ),
         Measured::new("Taylor-Green, 32 x 32, TRT, tau 0.8".into(), "nu", vortex(TRT)),
-        Measured::new("Zick-Homsy array 0.125, box 16, TRT, tau 1, force 1e-6".into(), "K", array),
+        Measured::new(
+            "Zick-Homsy array 0.125, box 16, TRT, tau 1, force 1e-6".into(),
+            "K",
+            array,
+        ),
     ]
 }
 
@@ -155,7 +192,12 @@ fn usual_speeds(gpu: &Arc<Gpu>) -> Vec<Measured> {
 fn low_mach(gpu: &Arc<Gpu>) -> Vec<Measured> {
     let mut rows = Vec::new();
     for u in PLATE_SPEEDS {
-        let plates = |s| (cases::poiseuille_plates_stored(gpu, 16, 0.6, TRT, u, s).mean_speed, u);
+        let plates = |s| {
+            (
+                cases::poiseuille_plates_stored(gpu, flow(0.6, TRT, u, s)).mean_speed,
+                u,
+            )
+        };
         rows.push(Measured::new(
             format!("Poiseuille between plates, centre speed {u}"),
             "mean speed",
@@ -168,9 +210,24 @@ fn low_mach(gpu: &Arc<Gpu>) -> Vec<Measured> {
             let d = cases::zick_homsy_stored(gpu, 16, cases::radius_for(phi, 16), 1.0, TRT, f, s);
             (d.k, d.speed)
         };
-        rows.push(Measured::new(format!("Zick-Homsy array, force {f:e}"), "K", array));
+        rows.push(Measured::new(
+            format!("Zick-Homsy array, force {f:e}"),
+            "K",
+            array,
+        ));
     }
     rows
+}
+
+/// A channel of 16 cells across.
+fn flow(tau: f64, operator: Operator, u_max: f64, storage: Storage) -> cases::Flow {
+    cases::Flow {
+        n: 16,
+        tau,
+        operator,
+        u_max,
+        storage,
+    }
 }
 
 /// The closed box's relative mass drift after each of [`MASS_STEPS`], in each storage.

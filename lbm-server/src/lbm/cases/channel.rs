@@ -18,31 +18,47 @@ pub struct Channel {
     pub mean_speed: f64,
 }
 
+/// A channel flow's lattice: cells across, tau, operator, centre-line speed, storage.
+#[derive(Debug, Clone, Copy)]
+pub struct Flow {
+    pub n: usize,
+    pub tau: f64,
+    pub operator: Operator,
+    pub u_max: f64,
+    pub storage: Storage,
+}
+
+impl Flow {
+    fn fp32(n: usize, tau: f64, operator: Operator, u_max: f64) -> Flow {
+        Flow {
+            n,
+            tau,
+            operator,
+            u_max,
+            storage: Storage::Fp32,
+        }
+    }
+
+    /// The channel's lattice along x of `cells`, walls on y (and on z where `duct`).
+    fn setup(&self, cells: [usize; 3], duct: bool) -> Setup {
+        let z = if duct { Face::Wall } else { Face::Periodic };
+        let faces = [Face::Periodic, Face::Periodic, Face::Wall, Face::Wall, z, z];
+        let mut setup = Setup::new(cells, faces, self.tau, self.operator);
+        setup.storage = self.storage;
+        setup
+    }
+}
+
 /// Poiseuille flow between plates at y = -1/2 and y = n - 1/2 (half-way bounce-back), driven by a
 /// body force chosen for a centre-line speed `u_max`.
 pub fn poiseuille_plates(gpu: &Arc<Gpu>, n: usize, tau: f64, operator: Operator, u_max: f64) -> Channel {
-    poiseuille_plates_stored(gpu, n, tau, operator, u_max, Storage::Fp32)
+    poiseuille_plates_stored(gpu, Flow::fp32(n, tau, operator, u_max))
 }
 
-/// [`poiseuille_plates`] with the populations in `storage`.
-pub fn poiseuille_plates_stored(
-    gpu: &Arc<Gpu>,
-    n: usize,
-    tau: f64,
-    operator: Operator,
-    u_max: f64,
-    storage: Storage,
-) -> Channel {
-    let faces = [
-        Face::Periodic,
-        Face::Periodic,
-        Face::Wall,
-        Face::Wall,
-        Face::Periodic,
-        Face::Periodic,
-    ];
-    let mut setup = Setup::new([1, n, 1], faces, tau, operator);
-    setup.storage = storage;
+/// [`poiseuille_plates`] of `flow`, its populations in `flow.storage`.
+pub fn poiseuille_plates_stored(gpu: &Arc<Gpu>, flow: Flow) -> Channel {
+    let Flow { n, tau, u_max, .. } = flow;
+    let mut setup = flow.setup([1, n, 1], false);
     let nu = setup.viscosity();
     let h = n as f64;
     setup.force = [8.0 * nu * u_max / (h * h), 0.0, 0.0];
@@ -64,28 +80,13 @@ pub fn poiseuille_plates_stored(
 
 /// Flow through a square duct of n x n cells (walls on y and z), against the series solution.
 pub fn poiseuille_duct(gpu: &Arc<Gpu>, n: usize, tau: f64, operator: Operator, u_max: f64) -> Channel {
-    poiseuille_duct_stored(gpu, n, tau, operator, u_max, Storage::Fp32)
+    poiseuille_duct_stored(gpu, Flow::fp32(n, tau, operator, u_max))
 }
 
-/// [`poiseuille_duct`] with the populations in `storage`.
-pub fn poiseuille_duct_stored(
-    gpu: &Arc<Gpu>,
-    n: usize,
-    tau: f64,
-    operator: Operator,
-    u_max: f64,
-    storage: Storage,
-) -> Channel {
-    let faces = [
-        Face::Periodic,
-        Face::Periodic,
-        Face::Wall,
-        Face::Wall,
-        Face::Wall,
-        Face::Wall,
-    ];
-    let mut setup = Setup::new([1, n, n], faces, tau, operator);
-    setup.storage = storage;
+/// [`poiseuille_duct`] of `flow`, its populations in `flow.storage`.
+pub fn poiseuille_duct_stored(gpu: &Arc<Gpu>, flow: Flow) -> Channel {
+    let Flow { n, tau, u_max, .. } = flow;
+    let mut setup = flow.setup([1, n, n], true);
     let nu = setup.viscosity();
     let a = n as f64;
     // Series solution for unit forcing, scaled so that the centre speed is u_max.
