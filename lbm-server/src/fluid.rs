@@ -214,7 +214,7 @@ pub fn run(scene: &Scene, scene_file: &str, steps: u64, out: &Path, interrupted:
 }
 
 /// The device and the scene's lattice on it, the run's first line said once it is ready to step
-/// (and a warning where its tau is near 1/2).
+/// (and a warning where its tau is near 1/2, or its storage was measured to fail).
 fn start_lattice(scene: &Scene, units: &LatticeUnits) -> Result<(Arc<Gpu>, GpuLattice), String> {
     let gpu = Arc::new(Gpu::new()?);
     let lattice = GpuLattice::new(gpu.clone(), setup_of(units), health_of(units), None)?;
@@ -232,7 +232,8 @@ fn start_lattice(scene: &Scene, units: &LatticeUnits) -> Result<(Arc<Gpu>, GpuLa
         units.operator,
         gpu.adapter.name
     );
-    if let Some(warning) = stability_warning(units, false) {
+    let storage = crate::storage_accuracy::storage_warning(units);
+    for warning in stability_warning(units, false).into_iter().chain(storage) {
         warning.say();
     }
     Ok((gpu, lattice))

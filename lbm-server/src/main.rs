@@ -10,6 +10,7 @@ mod lbm;
 mod lubrication;
 mod output;
 mod run;
+mod storage_accuracy;
 mod terminal;
 mod trials;
 mod validate;

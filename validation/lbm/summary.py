@@ -216,8 +216,36 @@ def unresolved_drag(t):
     return out
 
 
-# The sections by the start of their heading: the name `lbm-server validate --only` runs them by, and
-# the rows of the summary their tables give.
+def storage(t):
+    """The 16-bit storages against FP32: each case at its usual speed, the slowest lattice speed of each
+    low-Mach series where both stay within 0.5% of FP32, and the mass drift of the longest run."""
+    out = [("%s, FP16S and FP16C" % r["case"], "FP32: %s %s" % (r["quantity"], r["FP32"]),
+            "FP16S %s, FP16C %s" % (r["FP16S"], r["FP16C"]),
+            "%s, %s" % (r["FP16S against FP32"], r["FP16C against FP32"])) for r in t[0]]
+    for series, rows in groups(t[1], "quantity"):
+        for column in ("FP16S", "FP16C"):
+            held = [r for r in rows if abs(num(r[column + " against FP32"])) <= 0.5]
+            failed = [r for r in rows if abs(num(r[column + " against FP32"])) > 0.5]
+            slowest = min(held, key=lambda r: num(r["lattice speed"])) if held else None
+            out.append(("%s, %s, low Mach: the slowest lattice speed within 0.5%% of FP32" % (
+                rows[0]["case"].split(",")[0], column), "FP32", "lattice speed %s" % (
+                slowest["lattice speed"] if slowest else "none"),
+                "%s at %s" % (failed[0][column + " against FP32"], failed[0]["lattice speed"]) if failed else "-"))
+    r = t[2][-1]
+    out.append(("closed 16^3 box, moving lid, TRT, %s steps, FP16S and FP16C" % r["steps"],
+                "FP32 drift %s" % r["FP32 relative drift"], "drift %s, %s" % (
+                    r["FP16S relative drift"], r["FP16C relative drift"]), "-"))
+    return out
+
+
+def storage_ten_cate(t):
+    return [("Ten Cate E3, 9 cells per d, %s: terminal speed" % r["storage"], "FP32 run",
+             "%s m/s" % r["terminal speed (m/s)"], r["terminal against FP32"])
+            for r in t[0] if r["storage"] != "fp32"]
+
+
+# The sections by the start of their heading: the name `lbm-server validate --only` runs them by (or
+# the command that writes the section), and the rows of the summary their tables give.
 SECTIONS = [
     ("## Poiseuille flow", "channel", channel),
     ("## Wall location", "wall", wall),
@@ -240,6 +268,8 @@ SECTIONS = [
     ("## Immersed moving boundary: a random array", "random-drag", random_drag),
     ("## Immersed moving boundary: the solid collision term", "array-drag-solid-collision", solid_collision),
     ("## Immersed moving boundary: spheres of a few cells", "unresolved-drag", unresolved_drag),
+    ("## Storage of the populations: FP16S and FP16C", "storage", storage),
+    ("## Storage of the populations: a settling sphere", "python3 validation/lbm/storage.py run", storage_ten_cate),
 ]
 
 
@@ -252,7 +282,8 @@ def summary(text):
         if spec is None:
             continue
         for row in spec[2](tables(body)):
-            lines.append("| %s | %s | %s | %s | `lbm-server validate --only %s` |" % (*row, spec[1]))
+            command = spec[1] if " " in spec[1] else "lbm-server validate --only " + spec[1]
+            lines.append("| %s | %s | %s | %s | `%s` |" % (*row, command))
     return "\n".join(lines) + "\n"
 
 

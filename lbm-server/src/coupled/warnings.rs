@@ -13,7 +13,8 @@ use scene::Scene;
 
 /// The warnings of a coupled lattice for the scene's initial particles (`radii` in m), in the
 /// order they are said: its tau (or, with the radius correction, the correction's boundary
-/// layer), the boundary layer of its largest sphere, its smallest spheres, its stability.
+/// layer), the boundary layer of its largest sphere, its smallest spheres, its stability, its
+/// storage.
 pub(super) fn lattice_warnings(scene: &Scene, units: &LatticeUnits, radii: &[f64]) -> Vec<Warning> {
     let correction = scene.coupling.radius_correction.as_str();
     let diameter = 2.0 * radii.iter().fold(0.0, |a, &r| r.max(a));
@@ -28,6 +29,7 @@ pub(super) fn lattice_warnings(scene: &Scene, units: &LatticeUnits, radii: &[f64
         resolution_warning(units, diameter),
         small_sphere_warning(units, smallest, correction == "calibrated"),
         stability_warning(units, true),
+        crate::storage_accuracy::storage_warning(units),
     ];
     warnings.into_iter().flatten().collect()
 }

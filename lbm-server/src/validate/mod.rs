@@ -5,7 +5,7 @@
 
 use crate::lbm::geometry::Operator;
 use crate::lbm::gpu::Gpu;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::sync::Arc;
 
@@ -17,6 +17,7 @@ mod moving_boundary;
 mod report;
 mod sphere_drag;
 mod stability;
+mod storage;
 mod wake_drag;
 
 #[cfg(test)]
@@ -30,14 +31,17 @@ pub struct ValidateArgs {
     /// Run only these sections (channel, wall, taylor-green, mass, array-drag,
     /// array-drag-solid-collision, unresolved-drag, drag-tau, radius-deficit, sphere-drag, sphere-correction,
     /// moving-boundary, stability, wake-drag, wake-drag-superposition, bed-drag, random-drag,
-    /// random-drag-staircase, momentum; wake-drag-fine and random-drag-fine, a GPU's grids, only
-    /// when named), print them and replace them in an existing REPORT.md (the other sections are
+    /// random-drag-staircase, momentum, storage; wake-drag-fine and random-drag-fine, a GPU's
+    /// grids, only when named), print them and replace them in an existing REPORT.md (the other sections are
     /// kept as they are).
     #[arg(long, value_delimiter = ',')]
     only: Vec<String>,
 }
 
 type Section = fn(&Arc<Gpu>) -> String;
+
+/// A section that also writes its figures as JSON into the report's folder.
+type Recorded = fn(&Arc<Gpu>, &Path) -> String;
 
 const SECTIONS: [(&str, Section); 21] = [
     ("channel", channels::channel_convergence),
@@ -66,6 +70,8 @@ const SECTIONS: [(&str, Section); 21] = [
     ("momentum", conservation::momentum),
 ];
 
+const RECORDED: [(&str, Recorded); 1] = [("storage", storage::section)];
+
 /// Sections run only when named with --only: grids for a GPU (hours on lavapipe).
 const GPU_ONLY: [&str; 2] = ["wake-drag-fine", "random-drag-fine"];
 
@@ -79,12 +85,12 @@ pub fn main(args: ValidateArgs) -> ExitCode {
             return ExitCode::FAILURE;
         }
     };
-    if let Some(bad) = args
-        .only
+    let names: Vec<&str> = SECTIONS
         .iter()
-        .find(|o| !SECTIONS.iter().any(|(name, _)| name == *o))
-    {
-        let names: Vec<&str> = SECTIONS.iter().map(|(name, _)| *name).collect();
+        .map(|(name, _)| *name)
+        .chain(RECORDED.iter().map(|(name, _)| *name))
+        .collect();
+    if let Some(bad) = args.only.iter().find(|o| !names.contains(&o.as_str())) {
         protocol::say!(
             "lbm-server: error: --only {bad}: no such section (one of {})",
             names.join(", ")
@@ -93,12 +99,21 @@ pub fn main(args: ValidateArgs) -> ExitCode {
     }
     let path = args.out.join("REPORT.md");
     let mut report = report::start(&path, !args.only.is_empty(), &gpu);
+    let chosen = |name: &str| {
+        args.only.iter().any(|o| o == name) || (args.only.is_empty() && !GPU_ONLY.contains(&name))
+    };
+    let run = |report: String, text: String| {
+        print!("{text}");
+        report::replace_section(&report, &text)
+    };
     for (name, section) in SECTIONS {
-        let chosen = args.only.iter().any(|o| o == name);
-        if chosen || (args.only.is_empty() && !GPU_ONLY.contains(&name)) {
-            let text = section(&gpu);
-            print!("{text}");
-            report = report::replace_section(&report, &text);
+        if chosen(name) {
+            report = run(report, section(&gpu));
+        }
+    }
+    for (name, section) in RECORDED {
+        if chosen(name) {
+            report = run(report, section(&gpu, &args.out));
         }
     }
     if let Err(e) = std::fs::create_dir_all(&args.out).and_then(|()| std::fs::write(&path, &report)) {

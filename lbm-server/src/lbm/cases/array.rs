@@ -5,6 +5,7 @@ use super::{coupled_lattice, plane_flux, relaxation_steps};
 use crate::lbm::geometry::{Face, Operator, Setup};
 use crate::lbm::gpu::Gpu;
 use crate::lbm::imb::{ImbOptions, SolidParticle};
+use crate::lbm::storage::Storage;
 use std::sync::Arc;
 
 /// Drag on a fixed sphere in a periodic cube (a simple cubic array), against Zick & Homsy (1982).
@@ -16,6 +17,8 @@ pub struct ArrayDrag {
     /// The same from the driving alone: F = f n^3 (the force balance of the unit cell).
     pub k_balance: f64,
     pub steps: u64,
+    /// U: the mean velocity of the fluid relative to the sphere.
+    pub speed: f64,
 }
 
 /// Stokes flow through a simple cubic array: one sphere of radius r (lattice units) fixed in a
@@ -100,17 +103,53 @@ fn array_drag(
 pub fn moving_array_drag(
     gpu: &Arc<Gpu>,
     n: usize,
-    [drawn, radius]: [f64; 2],
+    radii: [f64; 2],
     tau: f64,
     operator: Operator,
     options: ImbOptions,
     velocity: f64,
 ) -> ArrayDrag {
+    let setup = array_setup(n, tau, operator, STOKES_FORCE, Storage::Fp32);
+    drag_in(gpu, &setup, radii, options, velocity)
+}
+
+/// A force small enough for Stokes flow (Re << 1) in the arrays' boxes.
+pub const STOKES_FORCE: f64 = 1e-6;
+
+/// [`zick_homsy`] driven by the body force `force` (the flow's speed scales with it), with the
+/// populations in `storage`.
+pub fn zick_homsy_stored(
+    gpu: &Arc<Gpu>,
+    n: usize,
+    radius: f64,
+    tau: f64,
+    operator: Operator,
+    force: f64,
+    storage: Storage,
+) -> ArrayDrag {
+    let setup = array_setup(n, tau, operator, force, storage);
+    drag_in(gpu, &setup, [radius, radius], ImbOptions::default(), 0.0)
+}
+
+/// The periodic n^3 box of the arrays, driven along x by `force`.
+fn array_setup(n: usize, tau: f64, operator: Operator, force: f64, storage: Storage) -> Setup {
     let mut setup = Setup::new([n, n, n], [Face::Periodic; 6], tau, operator);
+    setup.force = [force, 0.0, 0.0];
+    setup.storage = storage;
+    setup
+}
+
+/// The array of [`moving_array_drag`] on the lattice `setup` (its box, force and storage).
+fn drag_in(
+    gpu: &Arc<Gpu>,
+    setup: &Setup,
+    [drawn, radius]: [f64; 2],
+    options: ImbOptions,
+    velocity: f64,
+) -> ArrayDrag {
+    let n = setup.n[0];
     let nu = setup.viscosity();
-    // A force small enough for Stokes flow (Re << 1).
-    let f = 1e-6;
-    setup.force = [f, 0.0, 0.0];
+    let f = setup.force[0];
     let centre = n as f64 / 2.0;
     let sphere_at = |step: u64| SolidParticle {
         position: [
@@ -122,7 +161,7 @@ pub fn moving_array_drag(
         velocity: [velocity, 0.0, 0.0],
         ..Default::default()
     };
-    let mut lattice = coupled_lattice(gpu, &setup, options);
+    let mut lattice = coupled_lattice(gpu, setup, options);
     let steps = relaxation_steps(n as f64, nu, 12.0);
     // The last 4 cells of travel, the flux sampled 16 times over them (at rest: the last step).
     let (window, samples) = if velocity == 0.0 {
@@ -153,6 +192,7 @@ pub fn moving_array_drag(
         k: (exchange + f * sphere_volume) / stokes,
         k_balance: f * (n * n * n) as f64 / stokes,
         steps,
+        speed: relative,
     }
 }
 

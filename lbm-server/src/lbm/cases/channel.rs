@@ -4,6 +4,7 @@
 use super::relaxation_steps;
 use crate::lbm::geometry::{Face, Operator, Setup};
 use crate::lbm::gpu::{equilibrium_field, Gpu, GpuLattice, Health};
+use crate::lbm::storage::Storage;
 use std::sync::Arc;
 
 /// Result of a steady channel flow: L2 error of u_x against the analytic profile, relative to max.
@@ -13,20 +14,51 @@ pub struct Channel {
     pub tau: f64,
     pub l2_error: f64,
     pub steps: u64,
+    /// The mean u_x over the channel's cross-section (the flux over its area).
+    pub mean_speed: f64,
+}
+
+/// A channel flow's lattice: cells across, tau, operator, centre-line speed, storage.
+#[derive(Debug, Clone, Copy)]
+pub struct Flow {
+    pub n: usize,
+    pub tau: f64,
+    pub operator: Operator,
+    pub u_max: f64,
+    pub storage: Storage,
+}
+
+impl Flow {
+    fn fp32(n: usize, tau: f64, operator: Operator, u_max: f64) -> Flow {
+        Flow {
+            n,
+            tau,
+            operator,
+            u_max,
+            storage: Storage::Fp32,
+        }
+    }
+
+    /// The channel's lattice along x of `cells`, walls on y (and on z where `duct`).
+    fn setup(&self, cells: [usize; 3], duct: bool) -> Setup {
+        let z = if duct { Face::Wall } else { Face::Periodic };
+        let faces = [Face::Periodic, Face::Periodic, Face::Wall, Face::Wall, z, z];
+        let mut setup = Setup::new(cells, faces, self.tau, self.operator);
+        setup.storage = self.storage;
+        setup
+    }
 }
 
 /// Poiseuille flow between plates at y = -1/2 and y = n - 1/2 (half-way bounce-back), driven by a
 /// body force chosen for a centre-line speed `u_max`.
 pub fn poiseuille_plates(gpu: &Arc<Gpu>, n: usize, tau: f64, operator: Operator, u_max: f64) -> Channel {
-    let faces = [
-        Face::Periodic,
-        Face::Periodic,
-        Face::Wall,
-        Face::Wall,
-        Face::Periodic,
-        Face::Periodic,
-    ];
-    let mut setup = Setup::new([1, n, 1], faces, tau, operator);
+    poiseuille_plates_stored(gpu, Flow::fp32(n, tau, operator, u_max))
+}
+
+/// [`poiseuille_plates`] of `flow`, its populations in `flow.storage`.
+pub fn poiseuille_plates_stored(gpu: &Arc<Gpu>, flow: Flow) -> Channel {
+    let Flow { n, tau, u_max, .. } = flow;
+    let mut setup = flow.setup([1, n, 1], false);
     let nu = setup.viscosity();
     let h = n as f64;
     setup.force = [8.0 * nu * u_max / (h * h), 0.0, 0.0];
@@ -42,20 +74,19 @@ pub fn poiseuille_plates(gpu: &Arc<Gpu>, n: usize, tau: f64, operator: Operator,
         tau,
         l2_error: error,
         steps,
+        mean_speed: mean_speed(&fields),
     }
 }
 
 /// Flow through a square duct of n x n cells (walls on y and z), against the series solution.
 pub fn poiseuille_duct(gpu: &Arc<Gpu>, n: usize, tau: f64, operator: Operator, u_max: f64) -> Channel {
-    let faces = [
-        Face::Periodic,
-        Face::Periodic,
-        Face::Wall,
-        Face::Wall,
-        Face::Wall,
-        Face::Wall,
-    ];
-    let mut setup = Setup::new([1, n, n], faces, tau, operator);
+    poiseuille_duct_stored(gpu, Flow::fp32(n, tau, operator, u_max))
+}
+
+/// [`poiseuille_duct`] of `flow`, its populations in `flow.storage`.
+pub fn poiseuille_duct_stored(gpu: &Arc<Gpu>, flow: Flow) -> Channel {
+    let Flow { n, tau, u_max, .. } = flow;
+    let mut setup = flow.setup([1, n, n], true);
     let nu = setup.viscosity();
     let a = n as f64;
     // Series solution for unit forcing, scaled so that the centre speed is u_max.
@@ -71,6 +102,7 @@ pub fn poiseuille_duct(gpu: &Arc<Gpu>, n: usize, tau: f64, operator: Operator, u
         tau,
         l2_error: error,
         steps,
+        mean_speed: mean_speed(&fields),
     }
 }
 
@@ -99,6 +131,11 @@ fn run_steady(
     let (fields, bad) = lattice.fields();
     assert!(bad.is_none(), "unhealthy: {bad:?}");
     (fields, steps)
+}
+
+/// The mean u_x of `fields`.
+fn mean_speed(fields: &[[f32; 4]]) -> f64 {
+    fields.iter().map(|f| f[1] as f64).sum::<f64>() / fields.len() as f64
 }
 
 fn l2_relative(pairs: impl Iterator<Item = (f64, f64)>) -> f64 {

@@ -5,6 +5,7 @@ use super::coupled_lattice;
 use crate::lbm::geometry::{Face, Operator, Setup};
 use crate::lbm::gpu::{equilibrium_field, total_mass, Gpu, GpuLattice, Health};
 use crate::lbm::imb::{ImbOptions, SolidParticle};
+use crate::lbm::storage::Storage;
 use std::sync::Arc;
 
 /// Mass in a closed box with a moving lid, before and after `steps` steps.
@@ -16,20 +17,40 @@ pub struct Mass {
 }
 
 pub fn closed_box_mass(gpu: &Arc<Gpu>, n: usize, steps: u64, operator: Operator) -> Mass {
+    closed_box_mass_stored(gpu, n, &[steps], operator, Storage::Fp32)[0]
+}
+
+/// [`closed_box_mass`] with the populations in `storage`, the mass after each of `steps` (rising
+/// step counts of one run).
+pub fn closed_box_mass_stored(
+    gpu: &Arc<Gpu>,
+    n: usize,
+    steps: &[u64],
+    operator: Operator,
+    storage: Storage,
+) -> Vec<Mass> {
     let mut faces = [Face::Wall; 6];
     faces[5] = Face::MovingWall([0.05, 0.0, 0.0]);
-    let setup = Setup::new([n, n, n], faces, 0.6, operator);
+    let mut setup = Setup::new([n, n, n], faces, 0.6, operator);
+    setup.storage = storage;
     let mut lattice = GpuLattice::new(gpu.clone(), setup.clone(), Health::default(), None).expect("lattice");
     let start = crate::lbm::random::random_populations(&setup, 7);
     lattice.set_populations(&start);
     let before = total_mass(&setup, &lattice.populations());
-    lattice.step(steps);
-    let after = total_mass(&setup, &lattice.populations());
-    Mass {
-        before,
-        after,
-        relative_drift: (after - before).abs() / before,
-    }
+    let mut done = 0;
+    steps
+        .iter()
+        .map(|&s| {
+            lattice.step(s - done);
+            done = s;
+            let after = total_mass(&setup, &lattice.populations());
+            Mass {
+                before,
+                after,
+                relative_drift: (after - before).abs() / before,
+            }
+        })
+        .collect()
 }
 
 /// Total momentum (fluid + particle) in a closed periodic box with one free particle.

@@ -2,6 +2,7 @@
 
 use crate::lbm::geometry::{Face, Operator, Setup};
 use crate::lbm::gpu::{equilibrium_field, Gpu, GpuLattice, Health};
+use crate::lbm::storage::Storage;
 use std::sync::Arc;
 
 /// Taylor-Green vortex decay: the measured viscosity against the one set by tau.
@@ -14,7 +15,21 @@ pub struct Decay {
 
 /// A 2D Taylor-Green vortex in an n x n periodic box: kinetic energy decays as exp(-4 nu k^2 t).
 pub fn taylor_green(gpu: &Arc<Gpu>, n: usize, tau: f64, operator: Operator, u0: f64, steps: u64) -> Decay {
-    let setup = Setup::new([n, n, 1], [Face::Periodic; 6], tau, operator);
+    taylor_green_stored(gpu, n, tau, operator, u0, steps, Storage::Fp32)
+}
+
+/// [`taylor_green`] with the populations in `storage`.
+pub fn taylor_green_stored(
+    gpu: &Arc<Gpu>,
+    n: usize,
+    tau: f64,
+    operator: Operator,
+    u0: f64,
+    steps: u64,
+    storage: Storage,
+) -> Decay {
+    let mut setup = Setup::new([n, n, 1], [Face::Periodic; 6], tau, operator);
+    setup.storage = storage;
     let k = 2.0 * std::f64::consts::PI / n as f64;
     let state = |p: [usize; 3]| {
         let (x, y) = (p[0] as f64 + 0.5, p[1] as f64 + 0.5);
