@@ -2,6 +2,7 @@
 //! collision operator. Everything in lattice units.
 
 use super::mrt;
+use super::kernel::Kernel;
 use super::storage::Storage;
 
 /// Boundary type of a domain face (the wall lies half-way between the last cell and the outside).
@@ -88,6 +89,8 @@ pub struct Setup {
     pub ramp_steps: f64,
     /// How the populations are stored on the device (`lattice.storage`).
     pub storage: Storage,
+    /// The fluid kernels a lattice starts with (`lattice.kernel`).
+    pub kernel: Kernel,
 }
 
 /// TRT's antisymmetric relaxation time tau- = 1/2 + Lambda / (tau - 1/2) of magic parameter
@@ -119,6 +122,7 @@ impl Setup {
             force: [0.0; 3],
             ramp_steps: 0.0,
             storage: Storage::Fp32,
+            kernel: Kernel::Quads,
         }
     }
 
