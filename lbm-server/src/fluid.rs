@@ -3,7 +3,6 @@
 
 use crate::fields::FieldOutput;
 use crate::lbm::geometry::{tau_minus, Face, Operator, Setup};
-use crate::lbm::imb::CoveredCells;
 use crate::lbm::kernel::Kernel;
 use crate::lbm::gpu::{Gpu, GpuLattice, Health, Unhealthy};
 use crate::lbm::mrt::Rates;
@@ -158,7 +157,7 @@ enum Stop {
 /// Runs a fluid-only scene; returns the exit code.
 pub fn run(scene: &Scene, scene_file: &str, steps: u64, out: &Path, interrupted: Arc<AtomicBool>) -> u8 {
     let units = scene.lattice_units.as_ref().expect("fluid scenes have a lattice");
-    let trial = Trial::new(kernels_of(&units.kernel), vec![CoveredCells::Redo], steps);
+    let trial = Trial::new(kernels_of(&units.kernel), Vec::new(), steps);
     let (gpu, mut lattice) = match start_lattice(scene, units, &trial) {
         Ok(started) => started,
         Err(e) => {

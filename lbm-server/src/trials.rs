@@ -98,13 +98,14 @@ pub struct Trial {
 
 impl Trial {
     /// The trial of a run of `steps` steps over `kernels` and `ways` (the first of each is the
-    /// one the run starts with and keeps where it does not time them).
+    /// one the run starts with and keeps where it does not time them; no way for a run without
+    /// particles).
     pub fn new(kernels: Vec<Kernel>, ways: Vec<CoveredCells>, steps: u64) -> Trial {
         let ways: Vec<CoveredCells> = ways.into_iter().map(CoveredCells::definite).collect();
         Trial {
             kept: Choice {
                 kernel: kernels[0],
-                way: ways[0],
+                way: ways.first().copied().unwrap_or(CoveredCells::Redo),
             },
             kernels,
             ways,
@@ -275,6 +276,7 @@ impl Trial {
             })
             .collect();
         let what = match stage {
+            Stage::Kernels if self.ways.is_empty() => "kernels timed".to_string(),
             Stage::Kernels => format!("kernels timed with the covered cells {}", self.kept.way.name()),
             Stage::Ways => format!("covered cells timed with the {} kernels", self.kept.kernel.name()),
         };

@@ -592,7 +592,7 @@ mod tests {
     #[test]
     fn the_kernel_is_auto_quads_or_cells() {
         assert_eq!(with_lattice("").expect("scene").kernel, "auto");
-        for name in KERNELS {
+        for name in super::KERNELS {
             let units = with_lattice(&format!("kernel = {name:?}")).expect("scene");
             assert_eq!(units.kernel, name);
         }

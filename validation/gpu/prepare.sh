@@ -35,9 +35,9 @@ else
     cp validation/scenes/suspension.toml .gpu/
 fi
 sed 's/^free_flight = true/free_flight = false/' .gpu/suspension.toml > .gpu/suspension_substeps.toml
-# The same suspension timing the three ways of treating the covered cells on its steps ("auto"
-# does so only with 10 s of steps ahead), and with each way held throughout.
-for way in timed redo skip fused; do
+# The same suspension timing the kernels and the three ways of treating the covered cells on its
+# first steps ("auto", the default, named), and with each way held throughout.
+for way in auto redo skip fused; do
     sed "s/^\[coupling\]/[coupling]\ncovered_cells = \"$way\"/" .gpu/suspension.toml > .gpu/suspension_$way.toml
 done
 # The seed's sedimentation (section 3.2: 41^3 spheres on 288 x 288 x 576 cells); for --small a

@@ -79,6 +79,7 @@ impl FluidKernels {
 impl GpuLattice {
     /// Makes the steps from the next on give the covered cells their solid term the way `mode`
     /// says (`Auto` taken as the redo), with the fluid kernels they take now.
+    #[cfg(test)]
     pub fn set_covered_cells(&mut self, mode: CoveredCells) -> Result<(), String> {
         self.set_way(self.kernel(), mode)
     }
