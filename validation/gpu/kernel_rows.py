@@ -32,7 +32,7 @@ def number(pattern, text):
 def rows(path):
     """The table's rows of one bench output (none when it has no per-cell figure)."""
     text = path.read_text(errors="replace")
-    adapter = re.search(r"^adapter:\s+(.*?) \(", text, re.M)
+    adapter = re.search(r"^adapter:\s+(.*) \(\w+, \w+\)\s*$", text, re.M)
     grid = re.search(r"^grid:\s+(\S+) .*operator (\w+)", text, re.M)
     if not adapter or not grid:
         return []

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Prepares the GPU batch (validation/gpu/run.sh) on the development machine, which has no GPU: the
 # Vulkan loader packages in .gl/, the stripped release binaries and the Ten Cate scenes in .gpu/
-# (both kept out of git through .git/info/exclude, carried to the device machine with
+# (both kept out of git by .gitignore, carried to the device machine with
 # carry [".gl", ".gpu"]: about 20 MB of the 64 MiB allowed).
 #
 #     bash validation/gpu/prepare.sh           # the full batch (H100/H200-class GPU)
@@ -10,9 +10,6 @@ set -euo pipefail
 cd "$(dirname "$0")/../.."
 small=false
 [ "${1:-}" = "--small" ] && small=true
-for d in /.gl/ /.gpu/; do
-    grep -qxF "$d" .git/info/exclude 2>/dev/null || echo "$d" >> .git/info/exclude
-done
 if ! ls .gl/*.deb >/dev/null 2>&1; then
     mkdir -p .gl /tmp/amd64/partial
     o='-oAPT::Architecture=amd64 -oAPT::Architectures=amd64 -oDir::State::Lists=/tmp/amd64'
