@@ -3,7 +3,7 @@
 // (in place, the even step in the cell's own slots, the odd step at the neighbours). Each
 // invocation reads its cell's flags word: solid cells return; cells none of whose links leaves
 // the fluid or wraps (the bulk) read and write at fixed index offsets; the others (walls, periodic
-// faces, beside solids) take the general path of `stream_collide`. A warp diverges only where it
+// faces, beside solids) take the general path of `stream_collide` (`update_cell`). A warp diverges only where it
 // holds such a cell. The arithmetic is `moments`, `collide` and `solid_term`, as in the other
 // kernels: every kernel leaves the same populations, bit for bit, whatever the storage or the way
 // of the covered cells (the fused solid term, the redo's, or the skip's `skipped`).
@@ -23,32 +23,11 @@ fn stream_collide_cells(
     let flag = flags[k];
     if (flag & SOLID) != 0u || skipped(k) { return; }
     if (flag & (WRAPS | 0x7ffffu)) != 0u {
-        let p = coords(k);
-        let f = read_populations(k, p, flag);
-        let m = moments(f);
-        write_populations(k, p, flag, solid_term(k, f, m, collide(f, m)), m);
+        update_cell(k, flag);
         return;
     }
-    var f: array<f32, 19>;
     let odd = params.n.w == 1u;
-    if odd {
-        //#for i
-        f[{i}] = load{i.o}(u32(i32(k) - offset(vec3<i32>({i.cx}, {i.cy}, {i.cz}))));
-        //#end
-    } else {
-        //#for i
-        f[{i}] = load{i}(k);
-        //#end
-    }
+    let f = read_bulk(k, odd);
     let m = moments(f);
-    let post = solid_term(k, f, m, collide(f, m));
-    if odd {
-        //#for i
-        store{i}(u32(i32(k) + offset(vec3<i32>({i.cx}, {i.cy}, {i.cz}))), post[{i}]);
-        //#end
-    } else {
-        //#for i
-        store{i.o}(k, post[{i}]);
-        //#end
-    }
+    store_bulk(k, odd, solid_term(k, f, m, collide(f, m)));
 }

@@ -995,27 +995,17 @@ pub(in crate::lbm) mod immersed_boundary {
             CoveredCells::Fused,
         ];
         let f0 = random_populations(&setup, 24);
+        let options = ImbOptions {
+            covered_cells: ways[0],
+            ..ImbOptions::default()
+        };
         let run = |change: bool| {
-            let options = ImbOptions {
-                covered_cells: ways[0],
-                ..ImbOptions::default()
-            };
-            let mut lattice =
-                GpuLattice::new(gpu(), setup.clone(), Health::default(), Some(options)).unwrap();
-            lattice.set_populations(&f0);
-            let loads: Vec<Vec<Load>> = shifts
-                .iter()
-                .zip(ways)
-                .map(|(&shift, way)| {
-                    if change {
-                        lattice.set_covered_cells(way).unwrap();
-                        assert_eq!(lattice.covered_cells(), way);
-                    }
-                    lattice.step_coupled(&many_particles(shift)).unwrap()
-                })
-                .collect();
-            assert_eq!(lattice.cover_words_left(), 0, "covers left after the last step");
-            (loads, lattice.populations())
+            run_shifted(&setup, options, &f0, &shifts, &|lattice, step| {
+                if change {
+                    lattice.set_covered_cells(ways[step]).unwrap();
+                    assert_eq!(lattice.covered_cells(), ways[step]);
+                }
+            })
         };
         let (kept, changed) = (run(false), run(true));
         assert!(kept.0.iter().all(|l| l.iter().any(|l| l.force != [0.0; 3])));
@@ -1045,27 +1035,13 @@ pub(in crate::lbm) mod immersed_boundary {
         ];
         let f0 = random_populations(&setup, 26);
         let run = |change: bool| {
-            let mut lattice = GpuLattice::new(
-                gpu(),
-                setup.clone(),
-                Health::default(),
-                Some(ImbOptions::default()),
-            )
-            .unwrap();
-            lattice.set_populations(&f0);
-            let loads: Vec<Vec<Load>> = shifts
-                .iter()
-                .zip(ways)
-                .map(|(&shift, (kernel, way))| {
-                    if change {
-                        lattice.set_way(kernel, way).unwrap();
-                        assert_eq!((lattice.kernel(), lattice.covered_cells()), (kernel, way));
-                    }
-                    lattice.step_coupled(&many_particles(shift)).unwrap()
-                })
-                .collect();
-            assert_eq!(lattice.cover_words_left(), 0, "covers left after the last step");
-            (loads, lattice.populations())
+            run_shifted(&setup, ImbOptions::default(), &f0, &shifts, &|lattice, step| {
+                if change {
+                    let (kernel, way) = ways[step];
+                    lattice.set_way(kernel, way).unwrap();
+                    assert_eq!((lattice.kernel(), lattice.covered_cells()), (kernel, way));
+                }
+            })
         };
         let (kept, changed) = (run(false), run(true));
         assert!(kept.0.iter().all(|l| l.iter().any(|l| l.force != [0.0; 3])));
@@ -1073,6 +1049,30 @@ pub(in crate::lbm) mod immersed_boundary {
             assert_eq!(a, b, "step {step} ({:?}): loads differ", ways[step]);
         }
         assert!(kept.1 == changed.1, "populations differ");
+    }
+
+    /// The loads of each step and the last populations of a lattice of `setup` with `options`,
+    /// from `f0`, stepped with `many_particles(shift)` for each of `shifts`, `before(lattice,
+    /// step)` called before each step; no cover left after the last.
+    fn run_shifted(
+        setup: &Setup,
+        options: ImbOptions,
+        f0: &[Cell],
+        shifts: &[f64],
+        before: &dyn Fn(&mut GpuLattice, usize),
+    ) -> (Vec<Vec<Load>>, Vec<Cell>) {
+        let mut lattice = GpuLattice::new(gpu(), setup.clone(), Health::default(), Some(options)).unwrap();
+        lattice.set_populations(f0);
+        let loads: Vec<Vec<Load>> = shifts
+            .iter()
+            .enumerate()
+            .map(|(step, &shift)| {
+                before(&mut lattice, step);
+                lattice.step_coupled(&many_particles(shift)).unwrap()
+            })
+            .collect();
+        assert_eq!(lattice.cover_words_left(), 0, "covers left after the last step");
+        (loads, lattice.populations())
     }
 
     /// A way whose kernels the device refuses (here a constant they do not declare, as a driver's

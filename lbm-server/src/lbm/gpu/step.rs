@@ -133,14 +133,6 @@ mod quad_tests {
     /// a moving wall, solids, a body force, periodic faces, and each storage.
     #[test]
     fn the_per_cell_kernel_gives_the_quads_bits() {
-        let faces = [
-            Face::Periodic,
-            Face::Periodic,
-            Face::Wall,
-            Face::MovingWall([0.02, 0.0, 0.01]),
-            Face::Periodic,
-            Face::Periodic,
-        ];
         let operators = [
             Operator::Bgk,
             Operator::Trt { magic: 3.0 / 16.0 },
@@ -149,12 +141,7 @@ mod quad_tests {
             },
         ];
         for (o, operator) in operators.into_iter().enumerate() {
-            let mut setup = Setup::new([12, 7, 6], faces, 0.7, operator);
-            setup.force = [1e-4, -2e-4, 3e-5];
-            let mut r = Random::new(40 + o as u64);
-            for s in setup.solid.iter_mut() {
-                *s = r.next() > 0.95;
-            }
+            let setup = walls_solids_force(operator, 40 + o as u64);
             for storage in Storage::ALL {
                 let setup = Setup { storage, ..setup.clone() };
                 let quads = four_steps(&setup, Kernel::Quads, 41);
@@ -196,8 +183,9 @@ mod quad_tests {
         check(setup, 11);
     }
 
-    #[test]
-    fn mrt_walls_solids_force_quads_match_reference() {
+    /// 12 x 7 x 6 cells at tau 0.7, periodic along x and z, a wall and a moving wall along y, a
+    /// body force, and solid cells drawn from `seed` (one in twenty).
+    fn walls_solids_force(operator: Operator, seed: u64) -> Setup {
         let faces = [
             Face::Periodic,
             Face::Periodic,
@@ -206,13 +194,19 @@ mod quad_tests {
             Face::Periodic,
             Face::Periodic,
         ];
-        let rates = Rates::dhumieres(1.0 / 0.7);
-        let mut setup = Setup::new([12, 7, 6], faces, 0.7, Operator::Mrt { rates });
+        let mut setup = Setup::new([12, 7, 6], faces, 0.7, operator);
         setup.force = [1e-4, -2e-4, 3e-5];
-        let mut r = Random::new(12);
+        let mut r = Random::new(seed);
         for s in setup.solid.iter_mut() {
             *s = r.next() > 0.95;
         }
+        setup
+    }
+
+    #[test]
+    fn mrt_walls_solids_force_quads_match_reference() {
+        let rates = Rates::dhumieres(1.0 / 0.7);
+        let setup = walls_solids_force(Operator::Mrt { rates }, 12);
         check(setup, 13);
     }
 
