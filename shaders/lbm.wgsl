@@ -326,7 +326,12 @@ fn stream_collide(
     if j >= params.ranges.z { return; }
     let k = cell_list[params.ranges.x + params.ranges.y + j];
     if skipped(k) { return; }
-    let flag = flags[k];
+    update_cell(k, flags[k]);
+}
+
+// The step of fluid cell k (flags `flag`), either parity, whatever its links: read, collide (with
+// the solid term), and send, with the boundaries of links that leave the fluid.
+fn update_cell(k: u32, flag: u32) {
     let p = coords(k);
     let f = read_populations(k, p, flag);
     let m = moments(f);
@@ -390,32 +395,50 @@ fn stream_collide_fluid(
     if skipped(k) { return; }
     let p = coords(k);
     var f: array<f32, 19>;
-    if KIND == 0u {
+    if KIND == 2u {
         //#for i
-        f[{i}] = load{i}(k);
+        f[{i}] = load{i.o}(wrapped(p - vec3<i32>({i.cx}, {i.cy}, {i.cz})));
         //#end
-    } else if KIND == 1u {
+    } else {
+        f = read_bulk(k, KIND == 1u);
+    }
+    let m = moments(f);
+    let post = solid_term(k, f, m, collide(f, m));
+    if KIND == 2u {
+        //#for i
+        store{i}(wrapped(p + vec3<i32>({i.cx}, {i.cy}, {i.cz})), post[{i}]);
+        //#end
+    } else {
+        store_bulk(k, KIND == 1u, post);
+    }
+}
+
+// The pre-collision populations of cell k, none of whose links leaves the fluid or wraps: its own
+// slots in the even step, its neighbours' at fixed index offsets in the odd step.
+fn read_bulk(k: u32, odd: bool) -> array<f32, 19> {
+    var f: array<f32, 19>;
+    if odd {
         //#for i
         f[{i}] = load{i.o}(u32(i32(k) - offset(vec3<i32>({i.cx}, {i.cy}, {i.cz}))));
         //#end
     } else {
         //#for i
-        f[{i}] = load{i.o}(wrapped(p - vec3<i32>({i.cx}, {i.cy}, {i.cz})));
+        f[{i}] = load{i}(k);
         //#end
     }
-    let m = moments(f);
-    let post = solid_term(k, f, m, collide(f, m));
-    if KIND == 0u {
-        //#for i
-        store{i.o}(k, post[{i}]);
-        //#end
-    } else if KIND == 1u {
+    return f;
+}
+
+// Stores the post-collision populations of cell k (as `read_bulk`'s) where the next step reads
+// them: the cell's own slots reversed in the even step, the neighbours' in the odd step.
+fn store_bulk(k: u32, odd: bool, post: array<f32, 19>) {
+    if odd {
         //#for i
         store{i}(u32(i32(k) + offset(vec3<i32>({i.cx}, {i.cy}, {i.cz}))), post[{i}]);
         //#end
     } else {
         //#for i
-        store{i}(wrapped(p + vec3<i32>({i.cx}, {i.cy}, {i.cz})), post[{i}]);
+        store{i.o}(k, post[{i}]);
         //#end
     }
 }

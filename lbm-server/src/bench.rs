@@ -6,6 +6,7 @@ mod storage;
 
 use crate::lbm::geometry::{Face, Operator, Setup};
 use crate::lbm::gpu::{Gpu, GpuLattice, Health};
+use crate::lbm::kernel::Kernel;
 use crate::lbm::mrt::Rates;
 use coupled::Sweep;
 use naive::Naive;
@@ -50,12 +51,14 @@ pub struct BenchArgs {
     /// as a settling sphere's or a bed's: the cells beside the walls take the general kernel).
     #[arg(long, default_value = "periodic")]
     faces: String,
-    /// Also time the LBM-only step with every cell on its own, without the four-cell quads (a
-    /// thread per cell, as the naive kernel: what the quads gain or cost on this device).
+    /// Also time the LBM-only step with the per-cell kernel (`lattice.kernel = "cells"`: a thread
+    /// per cell, one dispatch, no cell list, as the naive kernel) against the quads' kernels of
+    /// the same run; with --storage, each storage with both kernels.
     #[arg(long)]
     per_cell: bool,
     /// Also time the same grid with each of these storages of the populations (fp32, fp16s,
-    /// fp16c: `lattice.storage`), in rounds alternating between them, with the bytes per cell.
+    /// fp16c: `lattice.storage`), in rounds alternating between them, with the bytes per cell
+    /// (with --per-cell, each with the quads' and the per-cell kernel).
     #[arg(long, value_delimiter = ',')]
     storage: Vec<String>,
     /// Timed rounds, ours and the naive kernel alternating (best round reported).
@@ -130,8 +133,8 @@ fn run(args: &BenchArgs) -> Result<(), String> {
     if kernels.ours {
         print_roofline(&rounds.ours, bandwidth);
         print_health_check(&gpu, &lattice);
-        if args.per_cell {
-            print_per_cell(&gpu, &setup, args)?;
+        if args.per_cell && storages.is_empty() {
+            print_per_cell(&gpu, &setup, args, &rounds.ours)?;
         }
         if !storages.is_empty() {
             storage::print_storages(&gpu, &setup, &storages, args, bandwidth)?;
@@ -266,9 +269,14 @@ fn print_health_check(gpu: &Gpu, lattice: &GpuLattice) {
     );
 }
 
-/// `--per-cell`: our kernels without the four-cell quads, a thread per cell.
-fn print_per_cell(gpu: &Arc<Gpu>, setup: &Setup, args: &BenchArgs) -> Result<(), String> {
-    let mut per_cell = GpuLattice::per_cell(gpu.clone(), setup.clone(), Health::default())?;
+/// `--per-cell`: the per-cell kernel (a thread per cell, one dispatch), its rounds after ours
+/// (`quads`, the quads' rounds of this run), and the ratio of the best rounds.
+fn print_per_cell(gpu: &Arc<Gpu>, setup: &Setup, args: &BenchArgs, quads: &[f64]) -> Result<(), String> {
+    let setup = Setup {
+        kernel: Kernel::Cells,
+        ..setup.clone()
+    };
+    let mut per_cell = GpuLattice::new(gpu.clone(), setup.clone(), Health::default(), None)?;
     per_cell.step(20);
     gpu.wait();
     let cells = setup.cells() as f64;
@@ -281,9 +289,10 @@ fn print_per_cell(gpu: &Arc<Gpu>, setup: &Setup, args: &BenchArgs) -> Result<(),
         })
         .collect();
     println!(
-        "per cell:       {:.1} MLUPS (best round; rounds: {}; our kernels without the four-cell quads)",
+        "per cell:       {:.1} MLUPS (best round; rounds: {}; the per-cell kernel, lattice.kernel = \"cells\"), {:.2}x the quads' kernels",
         best(&rounds),
-        list(&rounds)
+        list(&rounds),
+        best(&rounds) / best(quads)
     );
     Ok(())
 }

@@ -4,9 +4,11 @@
 use crate::fields::FieldOutput;
 use crate::lbm::geometry::{tau_minus, Face, Operator, Setup};
 use crate::lbm::gpu::{Gpu, GpuLattice, Health, Unhealthy};
+use crate::lbm::kernel::Kernel;
 use crate::lbm::mrt::Rates;
 use crate::output::LatticeSummary;
 use crate::terminal::{Progress, Warning};
+use crate::trials::{kernels_of, Trial};
 use scene::lattice::{mach_limit, CollisionOperator, LatticeFace, LatticeUnits};
 use scene::Scene;
 use serde::Serialize;
@@ -46,6 +48,7 @@ pub fn setup_of(units: &LatticeUnits) -> Setup {
     setup.force = units.force;
     setup.ramp_steps = units.ramp_steps;
     setup.storage = units.storage;
+    setup.kernel = Kernel::named(&units.kernel).unwrap_or_default();
     setup
 }
 
@@ -147,6 +150,10 @@ struct FluidSummary {
     steps_completed: u64,
     wall_time_s: f64,
     mlups: f64,
+    /// The fluid kernels ("quads" or "cells"; with `lattice.kernel = "auto"`, those the start-up
+    /// trial kept) and what the trial measured (empty where it did not run).
+    kernel: &'static str,
+    trial: Vec<String>,
     exit_reason: String,
     exit_code: u8,
 }
@@ -160,7 +167,8 @@ enum Stop {
 /// Runs a fluid-only scene; returns the exit code.
 pub fn run(scene: &Scene, scene_file: &str, steps: u64, out: &Path, interrupted: Arc<AtomicBool>) -> u8 {
     let units = scene.lattice_units.as_ref().expect("fluid scenes have a lattice");
-    let (gpu, mut lattice) = match start_lattice(scene, units) {
+    let trial = Trial::new(kernels_of(&units.kernel), Vec::new(), steps);
+    let (gpu, mut lattice) = match start_lattice(scene, units, &trial) {
         Ok(started) => started,
         Err(e) => {
             protocol::say!("lbm-server: error: {e}");
@@ -168,8 +176,10 @@ pub fn run(scene: &Scene, scene_file: &str, steps: u64, out: &Path, interrupted:
         }
     };
     let started = Instant::now();
-    let result =
-        FluidRun::new(scene, units, out).and_then(|mut r| r.steps(&mut lattice, steps, &interrupted));
+    let (result, trial) = match FluidRun::new(scene, units, out, trial.clone()) {
+        Ok(mut run) => (run.steps(&mut lattice, steps, &interrupted), run.trial),
+        Err(e) => (Err(e), trial),
+    };
     let wall = started.elapsed().as_secs_f64();
     let (reason, code) = match &result {
         Ok(()) => ("completed".to_string(), 0),
@@ -195,6 +205,8 @@ pub fn run(scene: &Scene, scene_file: &str, steps: u64, out: &Path, interrupted:
         steps_completed: lattice.time,
         wall_time_s: wall,
         mlups: cells * lattice.time as f64 / wall.max(1e-9) / 1e6,
+        kernel: trial.kept().kernel.name(),
+        trial: trial.lines.clone(),
         exit_reason: reason,
         exit_code: code,
     };
@@ -215,12 +227,20 @@ pub fn run(scene: &Scene, scene_file: &str, steps: u64, out: &Path, interrupted:
 
 /// The device and the scene's lattice on it, the run's first line said once it is ready to step
 /// (and a warning where its tau is near 1/2, or its storage was measured to fail).
-fn start_lattice(scene: &Scene, units: &LatticeUnits) -> Result<(Arc<Gpu>, GpuLattice), String> {
+fn start_lattice(
+    scene: &Scene,
+    units: &LatticeUnits,
+    trial: &Trial,
+) -> Result<(Arc<Gpu>, GpuLattice), String> {
     let gpu = Arc::new(Gpu::new()?);
-    let lattice = GpuLattice::new(gpu.clone(), setup_of(units), health_of(units), None)?;
+    let setup = Setup {
+        kernel: trial.kept().kernel,
+        ..setup_of(units)
+    };
+    let lattice = GpuLattice::new(gpu.clone(), setup, health_of(units), None)?;
     crate::run::started();
     protocol::say!(
-        "lbm-server: scene '{}': {}x{}x{} cells, dx {:e} m, dt {:e} s, tau {:.4}, Mach {:.3}, {} on {}",
+        "lbm-server: scene '{}': {}x{}x{} cells, dx {:e} m, dt {:e} s, tau {:.4}, Mach {:.3}, {} on {}, {}{}",
         scene.name,
         units.n[0],
         units.n[1],
@@ -230,7 +250,12 @@ fn start_lattice(scene: &Scene, units: &LatticeUnits) -> Result<(Arc<Gpu>, GpuLa
         units.tau,
         units.mach,
         units.operator,
-        gpu.adapter.name
+        gpu.adapter.name,
+        lattice.kernel().describe(),
+        match trial.open() {
+            true => format!("; {}", trial.describe()),
+            false => String::new(),
+        }
     );
     let storage = crate::storage_accuracy::storage_warning(units);
     for warning in stability_warning(units, false).into_iter().chain(storage) {
@@ -252,16 +277,38 @@ struct FluidRun<'a> {
     fields: FieldOutput,
     /// The step of the last check that passed (its fields kept on the device).
     last_good: Option<u64>,
+    /// The start-up trial of the kernels (trials.rs) and its clock.
+    trial: Trial,
+    made: Instant,
 }
 
 impl<'a> FluidRun<'a> {
-    fn new(scene: &'a Scene, units: &'a LatticeUnits, out: &'a Path) -> Result<Self, Stop> {
+    fn new(scene: &'a Scene, units: &'a LatticeUnits, out: &'a Path, trial: Trial) -> Result<Self, Stop> {
         Ok(Self {
             scene,
             units,
             fields: FieldOutput::new(scene, units, out).map_err(Stop::Failed)?,
             last_good: None,
+            trial,
+            made: Instant::now(),
         })
+    }
+
+    /// While the trial is under way: the kernels of the step `lattice` takes next (the trial's
+    /// lines in the log); a kernel the device does not build is left out.
+    fn take_kernel(&mut self, lattice: &mut GpuLattice) {
+        let choice = self
+            .trial
+            .choice_for(lattice.time, self.made.elapsed().as_secs_f64());
+        for line in self.trial.take_report() {
+            protocol::say!("lbm-server: {line}");
+        }
+        if choice.kernel != lattice.kernel() {
+            if let Err(e) = lattice.set_kernel(choice.kernel) {
+                protocol::say!("lbm-server: warning: {e}; the run times the others without it");
+                self.trial.refuse();
+            }
+        }
     }
 
     fn steps(&mut self, lattice: &mut GpuLattice, steps: u64, interrupted: &AtomicBool) -> Result<(), Stop> {
@@ -272,11 +319,17 @@ impl<'a> FluidRun<'a> {
         let mut progress = Progress::new(steps);
         while lattice.time < steps {
             let now = lattice.time;
+            // The trial times one step at a time (each followed by the health check's readback).
+            let trial = self.trial.under_way();
+            if trial {
+                self.take_kernel(lattice);
+            }
             let next = [check, lines_every, fields_every]
                 .iter()
                 .filter(|e| **e > 0)
                 .map(|e| (now / e + 1) * e)
                 .chain([steps])
+                .chain(trial.then_some(now + 1))
                 .min()
                 .expect("steps");
             lattice.step(next - now);

@@ -1,202 +1,330 @@
-//! `coupling.covered_cells = "timed"` (and "auto" on a GPU): the ways of giving the covered cells
-//! their solid term (redo, skip, fused: docs/imb.md "Speed") leave the same populations and loads
-//! bit for bit, so a run times each on its own steps, in the lockstep with its DEM, and keeps the
-//! fastest. Which is fastest depends on the device (a GPU or a CPU driver), the grid, the
-//! particles (how many cells they cover: a suspension settling into a bed changes it) and how
-//! long the DEM's step is (the redo and skip run the fluid kernels while the DEM steps): timed,
-//! not guessed.
+//! The start-up trial: the fluid kernels (`lattice.kernel`: the quads' or the per-cell kernel)
+//! and the ways of giving the covered cells their solid term (`coupling.covered_cells`: redo,
+//! skip, fused) leave the same populations and loads bit for bit, so a run times the choices its
+//! scene leaves open ("auto") on its own first steps, on its device, and keeps the fastest for the
+//! rest of the run. Which is fastest depends on the device (a GPU or a CPU driver such as
+//! lavapipe, which runs both sides of every branch), the grid and the particles: timed, not
+//! guessed.
 //!
-//! A trial runs each way for [`BLOCK`] steps, [`ROUNDS`] times, the order turned by one each
-//! round; a block's first step is not timed (its wait includes the previous way's last fluid
-//! kernels, and it builds the way the first time). A step's time is from its start to the next
-//! step's, the DEM's step included. The way whose median step is the quickest is kept until the
-//! next trial, [`EVERY`] steps after this one began. A trial starts only where the run has room
-//! for [`ROOM`] trials' length after it and, with `auto`, where the steps left would take
-//! [`AUTO_MIN_SECONDS`] at the pace so far; before the first (the first [`FIRST`] steps, with the
-//! face ramp and the first allocations) and in shorter runs the run keeps the way `auto` takes by
-//! the covered fraction (`CoveredCells::for_scene`).
+//! Two stages, from step [`FIRST`] (before it the face ramp and the first allocations): the
+//! kernels with the way the run starts with, then the ways with the kernel kept (a stage with one
+//! choice is left out). A stage runs each choice for [`BLOCK`] steps, [`ROUNDS`] times, the order
+//! turned by one each round; a block's first step is not timed (its wait includes the previous
+//! choice's last kernels, and it builds the choice's kernels the first time). A step's time is
+//! from its start to the next step's (in a coupled run the DEM's step included). After the first
+//! round a choice whose median step takes more than [`DROP`] times the best's is dropped, so that
+//! a kernel many times slower on this device costs one block. The choice of the lowest median step
+//! is kept. The trial runs only where the run has [`ROOM`] times the trial's longest length of
+//! steps from [`FIRST`]; in shorter runs "auto" takes the quads' kernels and the redo.
 
 use crate::lbm::imb::CoveredCells;
+use crate::lbm::kernel::Kernel;
 
-/// The ways a trial times, in the order of its first round.
-pub const WAYS: [CoveredCells; 3] = [CoveredCells::Redo, CoveredCells::Skip, CoveredCells::Fused];
-/// Steps per way and round; the first of them is not timed.
-pub const BLOCK: u64 = 6;
-/// Rounds of a trial.
+/// Steps per choice and round; the first of them is not timed.
+pub const BLOCK: u64 = 5;
+/// Rounds of a stage.
 pub const ROUNDS: u64 = 3;
-/// The step at which the first trial starts.
+/// The step at which the trial starts.
 pub const FIRST: u64 = 10;
-/// Steps from the start of one trial to the start of the next (more than a trial's length).
-pub const EVERY: u64 = 2000;
-/// A trial starts only where the steps from its start hold this many trials' length.
-pub const ROOM: u64 = 4;
-/// With `auto` a trial starts only where the steps left would take this long at the speed of the
-/// steps so far: building the two other ways' kernels costs a run about 1 s each on lavapipe (on
-/// a GPU not yet measured), which a shorter run does not win back.
-pub const AUTO_MIN_SECONDS: f64 = 10.0;
+/// A trial runs only where the steps from [`FIRST`] hold this many trials' longest length.
+pub const ROOM: u64 = 3;
+/// After a stage's first round, a choice whose median step is more than this many times the
+/// best's is not timed again.
+pub const DROP: f64 = 1.5;
 
-/// Steps one trial takes.
-pub const fn trial_steps() -> u64 {
-    WAYS.len() as u64 * BLOCK * ROUNDS
+/// The kernels `lattice.kernel` leaves open: both with "auto" (the quads' first: the kernels a
+/// run starts with), else the one it names.
+pub fn kernels_of(name: &str) -> Vec<Kernel> {
+    match Kernel::named(name) {
+        Some(kernel) => vec![kernel],
+        None => Kernel::ALL.to_vec(),
+    }
 }
 
-/// The trials of a run: which way each step takes, from the times at which the steps start.
+/// What a step takes: the fluid kernels and the way of the covered cells.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Choice {
+    pub kernel: Kernel,
+    pub way: CoveredCells,
+}
+
+impl Choice {
+    fn name(self, stage: Stage) -> &'static str {
+        match stage {
+            Stage::Kernels => self.kernel.name(),
+            Stage::Ways => self.way.name(),
+        }
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Stage {
+    Kernels,
+    Ways,
+}
+
+/// The run's start-up trial: which choice each step takes, from the times at which the steps
+/// start.
 #[derive(Debug, Clone)]
-pub struct WayTrials {
-    /// The way kept outside the trials.
-    kept: CoveredCells,
+pub struct Trial {
+    /// The kernels and ways the scene leaves open (one where it pins it).
+    kernels: Vec<Kernel>,
+    ways: Vec<CoveredCells>,
+    /// The choice kept outside the trial (so far).
+    kept: Choice,
+    /// Whether the trial runs (decided at [`FIRST`]); None before.
+    runs: Option<bool>,
+    /// The stage under way, its choices and its first step; None when done.
+    stage: Option<Stage>,
+    choices: Vec<Choice>,
+    /// The rest of this round's blocks (indices in `choices`, next last), the round, and the
+    /// steps taken in the current block (`BLOCK` when the next step starts a block).
+    queue: Vec<usize>,
+    round: u64,
+    in_block: u64,
+    current: usize,
+    /// Timed steps' seconds of each choice; dropped after the first round; not built.
+    times: Vec<Vec<f64>>,
+    dropped: Vec<bool>,
+    refused: Vec<bool>,
+    /// The last step if it is timed: its choice and when it started.
+    timing: Option<(usize, f64)>,
     /// Steps of the run.
     steps: u64,
-    /// A trial starts only where the steps left would take this long (seconds).
-    min_seconds: f64,
-    /// When step 1 started: the run's pace from there (step 0 builds and uploads).
-    step_one: Option<f64>,
-    /// The step at which the current or next trial starts.
-    start: u64,
-    /// The timed steps' seconds of each way (index in [`WAYS`]) so far in the trial.
-    times: [Vec<f64>; WAYS.len()],
-    /// The last step if the trial times it: its way (index in [`WAYS`]) and when it started.
-    timing: Option<(usize, f64)>,
-    /// What the last finished trial measured, for the run's log (taken once).
-    report: Option<String>,
-    /// The ways the device did not build (index in [`WAYS`]): left out of the trials.
-    refused: [bool; WAYS.len()],
+    /// What each finished stage measured, for the run's log (taken once), and for summary.json.
+    report: Vec<String>,
+    pub lines: Vec<String>,
 }
 
-impl WayTrials {
-    /// Trials for a run of `steps` steps that starts with the way `kept`, each where the steps
-    /// left would take at least `min_seconds` at the pace of the steps so far.
-    pub fn new(kept: CoveredCells, steps: u64, min_seconds: f64) -> WayTrials {
-        WayTrials {
-            kept: kept.definite(),
-            steps,
-            min_seconds,
-            step_one: None,
-            start: FIRST,
-            times: Default::default(),
+impl Trial {
+    /// The trial of a run of `steps` steps over `kernels` and `ways` (the first of each is the
+    /// one the run starts with and keeps where it does not time them; no way for a run without
+    /// particles).
+    pub fn new(kernels: Vec<Kernel>, ways: Vec<CoveredCells>, steps: u64) -> Trial {
+        let ways: Vec<CoveredCells> = ways.into_iter().map(CoveredCells::definite).collect();
+        Trial {
+            kept: Choice {
+                kernel: kernels[0],
+                way: ways.first().copied().unwrap_or(CoveredCells::Redo),
+            },
+            kernels,
+            ways,
+            runs: None,
+            stage: None,
+            choices: Vec::new(),
+            queue: Vec::new(),
+            round: 0,
+            in_block: 0,
+            current: 0,
+            times: Vec::new(),
+            dropped: Vec::new(),
+            refused: Vec::new(),
             timing: None,
-            report: None,
-            refused: [false; WAYS.len()],
+            steps,
+            report: Vec::new(),
+            lines: Vec::new(),
         }
     }
 
-    /// The way the run keeps between trials now.
-    pub fn kept(&self) -> CoveredCells {
+    /// The choice the run keeps between and after the stages (so far).
+    pub fn kept(&self) -> Choice {
         self.kept
     }
 
-    /// The way step `step` (0 for the first; called for every step in order) takes, told that
+    /// Steps of the trial at most: every choice of both stages for every round.
+    pub fn longest(&self) -> u64 {
+        let stage = |n: usize| if n > 1 { n as u64 * BLOCK * ROUNDS } else { 0 };
+        stage(self.kernels.len()) + stage(self.ways.len())
+    }
+
+    /// Whether the scene leaves anything to time.
+    pub fn open(&self) -> bool {
+        self.longest() > 0
+    }
+
+    /// The choice step `step` (0 for the first; called for every step in order) takes, told that
     /// it starts at `now` (seconds on a clock that only goes forward).
-    pub fn way_for(&mut self, step: u64, now: f64) -> CoveredCells {
-        if step == 1 {
-            self.step_one = Some(now);
-        }
-        // The step before, timed, lasted until now.
+    pub fn choice_for(&mut self, step: u64, now: f64) -> Choice {
         if let Some((k, from)) = self.timing.take() {
             self.times[k].push(now - from);
         }
-        if step.wrapping_sub(self.start) == trial_steps() {
-            self.decide();
-            self.start += EVERY;
-        }
-        let at = step.wrapping_sub(self.start);
-        if at == 0 && !self.worth_a_trial(step, now) {
-            self.start += EVERY;
+        if step < FIRST {
             return self.kept;
         }
-        if at >= trial_steps() {
+        if self.runs.is_none() {
+            let runs = self.open() && FIRST + ROOM * self.longest() <= self.steps;
+            self.runs = Some(runs);
+            if runs {
+                self.begin(if self.kernels.len() > 1 {
+                    Stage::Kernels
+                } else {
+                    Stage::Ways
+                });
+            }
+        }
+        if self.stage.is_none() {
             return self.kept;
         }
-        let way = self.way_of_block(at / BLOCK);
-        let k = index(way);
-        if self.refused[k] {
+        if self.in_block == BLOCK && !self.next_block() {
             return self.kept;
         }
-        if !at.is_multiple_of(BLOCK) {
+        let k = self.current;
+        if self.in_block > 0 {
             self.timing = Some((k, now));
         }
-        way
+        self.in_block += 1;
+        self.choices[k]
     }
 
-    /// Leaves `way` out of this trial and every later one (the device did not build it): the step
-    /// that asked for it is not timed.
-    pub fn refuse(&mut self, way: CoveredCells) {
-        self.refused[index(way)] = true;
+    /// Whether the trial is under way at the step last asked for (the run then steps one by one).
+    pub fn under_way(&self) -> bool {
+        self.runs.is_none() || self.stage.is_some()
+    }
+
+    /// Leaves the choice just asked for out of the trial (the device did not build it): the step
+    /// that asked for it is not timed, and the next step starts the next block.
+    pub fn refuse(&mut self) {
+        self.refused[self.current] = true;
         self.timing = None;
+        self.in_block = BLOCK;
     }
 
-    /// Whether a trial starting at `step` (at `now`) fits the run: [`ROOM`] trials' length of
-    /// steps ahead, and the steps left taking at least `min_seconds` at the pace since step 1.
-    fn worth_a_trial(&self, step: u64, now: f64) -> bool {
-        if step + ROOM * trial_steps() > self.steps {
-            return false;
-        }
-        let pace = match self.step_one {
-            Some(one) if step > 1 => (now - one) / (step - 1) as f64,
-            _ => f64::INFINITY,
+    /// Starts `stage` over its choices (the kept choice with each kernel, or each way).
+    fn begin(&mut self, stage: Stage) {
+        let kept = self.kept;
+        self.choices = match stage {
+            Stage::Kernels => self
+                .kernels
+                .iter()
+                .map(|&kernel| Choice { kernel, ..kept })
+                .collect(),
+            Stage::Ways => self.ways.iter().map(|&way| Choice { way, ..kept }).collect(),
         };
-        (self.steps - step) as f64 * pace >= self.min_seconds
+        let n = self.choices.len();
+        self.stage = Some(stage);
+        self.times = vec![Vec::new(); n];
+        self.dropped = vec![false; n];
+        self.refused = vec![false; n];
+        self.round = 0;
+        self.queue = (0..n).rev().collect();
+        self.in_block = BLOCK;
     }
 
-    /// The way of a trial's block: round r takes the ways turned by r.
-    fn way_of_block(&self, block: u64) -> CoveredCells {
-        let n = WAYS.len() as u64;
-        let (round, k) = (block / n, block % n);
-        WAYS[((k + round) % n) as usize]
+    /// Moves to the next block (the next round's first where this round is done, the next stage
+    /// where this stage is); false when the trial is done.
+    fn next_block(&mut self) -> bool {
+        loop {
+            if let Some(k) = self.queue.pop() {
+                if self.dropped[k] || self.refused[k] {
+                    continue;
+                }
+                self.current = k;
+                self.in_block = 0;
+                return true;
+            }
+            self.round += 1;
+            if self.round == 1 {
+                self.drop_slow();
+            }
+            let left: Vec<usize> = (0..self.choices.len())
+                .filter(|&k| !self.dropped[k] && !self.refused[k])
+                .collect();
+            if self.round < ROUNDS && left.len() > 1 {
+                // Round r takes the choices left turned by r.
+                let r = self.round as usize % left.len();
+                self.queue = left[r..].iter().chain(&left[..r]).rev().copied().collect();
+                continue;
+            }
+            self.decide();
+            match self.stage {
+                Some(Stage::Kernels) if self.ways.len() > 1 => self.begin(Stage::Ways),
+                _ => {
+                    self.stage = None;
+                    return false;
+                }
+            }
+        }
     }
 
-    /// Keeps the way of the lowest median step and clears the times for the next trial. A median,
-    /// not a mean: a step that also wrote particles.csv, checked the lattice's health or waited
-    /// for a DEM's neighbour-list build is a few of each way's, not its typical step.
+    /// After the first round: drops the choices whose median step is more than [`DROP`] times
+    /// the best's.
+    fn drop_slow(&mut self) {
+        let best = self.medians().into_iter().fold(f64::INFINITY, f64::min);
+        for (k, m) in self.medians().into_iter().enumerate() {
+            if m > DROP * best {
+                self.dropped[k] = true;
+            }
+        }
+    }
+
+    fn medians(&self) -> Vec<f64> {
+        self.times.iter().map(|t| median(t)).collect()
+    }
+
+    /// Keeps the choice of the lowest median step (a median, not a mean: a step that also wrote
+    /// particles.csv or checked the lattice's health is a few of each choice's, not its typical
+    /// step) and says what the stage measured.
     fn decide(&mut self) {
-        let medians: Vec<f64> = self.times.iter().map(|t| median(t)).collect();
-        let best = (0..WAYS.len())
+        let medians = self.medians();
+        let best = (0..self.choices.len())
             .filter(|&k| medians[k].is_finite())
             .min_by(|&a, &b| medians[a].total_cmp(&medians[b]));
         if let Some(best) = best {
-            self.kept = WAYS[best];
+            self.kept = self.choices[best];
         }
-        let each: Vec<String> = WAYS
-            .iter()
-            .zip(&medians)
-            .zip(self.refused)
-            .map(|((w, m), refused)| match refused {
-                true => format!("{} not built", w.name()),
-                false => format!("{} {:.3} ms", w.name(), m * 1e3),
+        let stage = self.stage.expect("a stage under way");
+        let each: Vec<String> = (0..self.choices.len())
+            .map(|k| {
+                let name = self.choices[k].name(stage);
+                match (self.refused[k], self.dropped[k]) {
+                    (true, _) => format!("{name} not built"),
+                    (_, true) => format!("{name} {:.3} ms (dropped after a round)", medians[k] * 1e3),
+                    _ => format!("{name} {:.3} ms", medians[k] * 1e3),
+                }
             })
             .collect();
-        self.report = Some(format!(
-            "covered cells timed at steps {}-{} (median of {} steps each): {} per step: {} kept",
-            self.start,
-            self.start + trial_steps() - 1,
-            (BLOCK - 1) * ROUNDS,
+        let what = match stage {
+            Stage::Kernels if self.ways.is_empty() => "kernels timed".to_string(),
+            Stage::Kernels => format!("kernels timed with the covered cells {}", self.kept.way.name()),
+            Stage::Ways => format!("covered cells timed with the {} kernels", self.kept.kernel.name()),
+        };
+        let line = format!(
+            "{what} (median step of {} rounds of {} steps, the first of each not timed): {}: {} kept",
+            ROUNDS,
+            BLOCK,
             each.join(", "),
-            self.kept.name()
-        ));
-        self.times = Default::default();
+            self.kept.name(stage)
+        );
+        self.report.push(line.clone());
+        self.lines.push(line);
     }
 
-    /// The run's first line's words for the trials.
+    /// The run's first line's words for the trial.
     pub fn describe(&self) -> String {
-        if self.min_seconds > 0.0 {
-            format!(
-                "the ways timed on the run's steps where {} s of them are left, the fastest kept",
-                self.min_seconds
-            )
-        } else {
-            "the ways timed on the run's steps, the fastest kept".into()
+        let open: Vec<&str> = [
+            (self.kernels.len() > 1, "the kernels"),
+            (self.ways.len() > 1, "the ways of the covered cells"),
+        ]
+        .into_iter()
+        .filter_map(|(open, what)| open.then_some(what))
+        .collect();
+        match self.open() && FIRST + ROOM * self.longest() <= self.steps {
+            true => format!(
+                "{} timed on the run's first steps, the fastest kept",
+                open.join(" and ")
+            ),
+            false => format!(
+                "{} not timed (a run of {} steps or more times them)",
+                open.join(" and "),
+                FIRST + ROOM * self.longest()
+            ),
         }
     }
 
-    /// What the last trial measured and kept, once.
-    pub fn take_report(&mut self) -> Option<String> {
-        self.report.take()
+    /// What the stages finished since the last call measured and kept.
+    pub fn take_report(&mut self) -> Vec<String> {
+        std::mem::take(&mut self.report)
     }
-}
-
-/// The index of a trial's way in [`WAYS`].
-fn index(way: CoveredCells) -> usize {
-    WAYS.iter().position(|&w| w == way).expect("a trial's way")
 }
 
 /// The median of `values` (NaN when empty).
@@ -213,169 +341,240 @@ fn median(values: &[f64]) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use CoveredCells::{Fused, Redo, Skip};
+    use Kernel::{Cells, Quads};
 
-    /// Runs `steps` steps of trials started with `kept`, each step lasting `cost(step, way)`
-    /// seconds plus `switch` seconds when its way differs from the previous step's; the ways taken
-    /// and the trials' reports.
-    fn run(
-        kept: CoveredCells,
-        steps: u64,
-        cost: impl Fn(u64, CoveredCells) -> f64,
-        switch: f64,
-    ) -> (Vec<CoveredCells>, Vec<String>) {
-        run_for(kept, steps, cost, switch, 0.0)
+    fn ms(c: Choice, kernel: [f64; 2], way: [f64; 3]) -> f64 {
+        let k = match c.kernel {
+            Quads => kernel[0],
+            Cells => kernel[1],
+        };
+        let w = match c.way {
+            Redo => way[0],
+            Skip => way[1],
+            _ => way[2],
+        };
+        1e-3 * k * w
     }
 
-    /// `run` with trials only where the steps left take `min_seconds`.
-    fn run_for(
-        kept: CoveredCells,
+    /// Runs `steps` steps of a trial, each step lasting `cost(step, choice)` seconds plus
+    /// `switch` seconds when its choice differs from the previous step's; the choices taken and
+    /// the trial's report lines.
+    fn run(
+        mut trial: Trial,
         steps: u64,
-        cost: impl Fn(u64, CoveredCells) -> f64,
+        cost: impl Fn(u64, Choice) -> f64,
         switch: f64,
-        min_seconds: f64,
-    ) -> (Vec<CoveredCells>, Vec<String>) {
-        let mut trials = WayTrials::new(kept, steps, min_seconds);
-        let (mut now, mut ways, mut reports) = (0.0, Vec::new(), Vec::new());
+    ) -> (Vec<Choice>, Vec<String>) {
+        let (mut now, mut taken, mut reports) = (0.0, Vec::<Choice>::new(), Vec::new());
         for step in 0..steps {
-            let way = trials.way_for(step, now);
-            reports.extend(trials.take_report());
-            if ways.last().is_some_and(|&last| last != way) {
+            let c = trial.choice_for(step, now);
+            reports.extend(trial.take_report());
+            if taken.last().is_some_and(|&last| last != c) {
                 now += switch;
             }
-            now += cost(step, way);
-            ways.push(way);
+            now += cost(step, c);
+            taken.push(c);
         }
-        (ways, reports)
+        (taken, reports)
     }
 
-    fn ms(way: CoveredCells, redo: f64, skip: f64, fused: f64) -> f64 {
-        1e-3 * match way {
-            CoveredCells::Skip => skip,
-            CoveredCells::Fused => fused,
-            _ => redo,
-        }
+    fn open() -> Trial {
+        Trial::new(vec![Quads, Cells], vec![Redo, Skip, Fused], 1000)
     }
 
-    /// The first trial starts at step FIRST, takes each way BLOCK steps a round in turned order,
-    /// and keeps the fastest (skip here) from its end; the first step of each block, slowed by
-    /// the change of way, is not what decides.
+    /// The first stage times the kernels with the starting way, BLOCK steps a choice a round in
+    /// turned order; the second the ways with the kernel kept; the fastest of each is kept from
+    /// the trial's end; the first step of each block, slowed by the change, does not decide.
     #[test]
-    fn a_trial_keeps_the_fastest_way() {
-        let (ways, reports) = run(CoveredCells::Redo, 600, |_, w| ms(w, 2.0, 1.5, 3.0), 0.05);
-        let (redo, skip, fused) = (CoveredCells::Redo, CoveredCells::Skip, CoveredCells::Fused);
-        assert!(ways[..FIRST as usize].iter().all(|&w| w == redo));
-        let blocks: Vec<CoveredCells> = (0..9).map(|b| ways[(FIRST + b * BLOCK) as usize]).collect();
-        assert_eq!(blocks, [redo, skip, fused, skip, fused, redo, fused, redo, skip]);
-        for b in 0..9 {
-            let block = &ways[(FIRST + b * BLOCK) as usize..(FIRST + (b + 1) * BLOCK) as usize];
-            assert!(block.iter().all(|&w| w == blocks[b as usize]), "block {b}");
+    fn a_trial_keeps_the_fastest_kernel_and_way() {
+        let cost = |_, c| ms(c, [1.0, 1.2], [2.0, 1.5, 2.2]);
+        let (taken, reports) = run(open(), 1000, cost, 0.05);
+        assert!(taken[..FIRST as usize].iter().all(|&c| c
+            == Choice {
+                kernel: Quads,
+                way: Redo
+            }));
+        let block = |b: u64| taken[(FIRST + b * BLOCK) as usize];
+        let kernels: Vec<Kernel> = (0..6).map(|b| block(b).kernel).collect();
+        assert_eq!(kernels, [Quads, Cells, Cells, Quads, Quads, Cells]);
+        assert!((0..6).all(|b| block(b).way == Redo));
+        let ways: Vec<CoveredCells> = (6..15).map(|b| block(b).way).collect();
+        assert_eq!(ways, [Redo, Skip, Fused, Skip, Fused, Redo, Fused, Redo, Skip]);
+        assert!((6..15).all(|b| block(b).kernel == Quads));
+        for b in 0..15 {
+            let steps = &taken[(FIRST + b * BLOCK) as usize..(FIRST + (b + 1) * BLOCK) as usize];
+            assert!(steps.iter().all(|&c| c == block(b)), "block {b}");
         }
-        let after = (FIRST + trial_steps()) as usize;
+        let after = (FIRST + 15 * BLOCK) as usize;
+        assert!(taken[after..].iter().all(|&c| c
+            == Choice {
+                kernel: Quads,
+                way: Skip
+            }));
+        assert_eq!(reports.len(), 2, "{reports:?}");
         assert!(
-            ways[after..].iter().all(|&w| w == skip),
-            "skip kept after the trial"
+            reports[0].contains("quads 2.000 ms, cells 2.400 ms") && reports[0].ends_with("quads kept"),
+            "{reports:?}"
         );
-        assert_eq!(reports.len(), 1, "{reports:?}");
-        let r = &reports[0];
         assert!(
-            r.contains("redo 2.000 ms, skip 1.500 ms, fused 3.000 ms") && r.ends_with("skip kept"),
-            "{r}"
+            reports[1].contains("redo 2.000 ms, skip 1.500 ms, fused 2.200 ms")
+                && reports[1].ends_with("skip kept"),
+            "{reports:?}"
         );
     }
 
-    /// A change of way that costs more than the ways differ by does not decide either: the
-    /// block's first step is left out.
+    /// A kernel many times slower (the per-cell kernel on a CPU driver) is dropped after the
+    /// first round: it takes one block; the ways are then timed with the other.
     #[test]
-    fn the_cost_of_changing_ways_is_left_out() {
-        let (ways, _) = run(CoveredCells::Skip, 600, |_, w| ms(w, 1.0, 1.2, 1.1), 10.0);
-        assert_eq!(ways[599], CoveredCells::Redo);
-    }
-
-    /// Later trials follow the particles: the fastest way changes at step 1000, the trial at
-    /// FIRST + EVERY finds it.
-    #[test]
-    fn a_later_trial_follows_a_change() {
-        let cost = |step: u64, w| {
-            if step < 1000 {
-                ms(w, 1.0, 2.0, 3.0)
-            } else {
-                ms(w, 3.0, 2.0, 1.0)
+    fn a_slow_choice_takes_one_block() {
+        let cost = |_, c| ms(c, [1.0, 16.0], [1.0, 2.0, 3.0]);
+        let (taken, reports) = run(open(), 1000, cost, 0.0);
+        assert_eq!(taken.iter().filter(|c| c.kernel == Cells).count(), BLOCK as usize);
+        assert!(
+            reports[0].contains("cells 16.000 ms (dropped after a round)"),
+            "{reports:?}"
+        );
+        assert_eq!(
+            taken[999],
+            Choice {
+                kernel: Quads,
+                way: Redo
             }
-        };
-        let (ways, reports) = run(CoveredCells::Skip, 5000, cost, 0.0);
-        let second = (FIRST + EVERY) as usize;
-        assert_eq!(ways[second - 1], CoveredCells::Redo);
-        assert_eq!(ways[second + trial_steps() as usize], CoveredCells::Fused);
-        assert_eq!(
-            reports.len(),
-            3,
-            "trials at FIRST, FIRST + EVERY, FIRST + 2 EVERY"
         );
     }
 
-    /// A run too short for a trial and the room after it keeps its way throughout; so does one
-    /// whose second trial would not fit.
+    /// The per-cell kernel faster (a GPU): kept, and the ways timed with it.
     #[test]
-    fn a_short_run_keeps_its_way() {
-        let steps = FIRST + ROOM * trial_steps() - 1;
-        let (ways, reports) = run(CoveredCells::Fused, steps, |_, w| ms(w, 1.0, 2.0, 3.0), 0.0);
-        assert!(ways.iter().all(|&w| w == CoveredCells::Fused) && reports.is_empty());
-        let steps = FIRST + EVERY + ROOM * trial_steps() - 1;
-        let (ways, reports) = run(CoveredCells::Fused, steps, |_, w| ms(w, 1.0, 2.0, 3.0), 0.0);
+    fn the_ways_are_timed_with_the_kernel_kept() {
+        let cost = |_, c| ms(c, [1.3, 1.0], [2.0, 1.5, 1.4]);
+        let (taken, reports) = run(open(), 1000, cost, 0.0);
+        assert_eq!(
+            taken[999],
+            Choice {
+                kernel: Cells,
+                way: Fused
+            }
+        );
+        assert!(
+            reports[1].starts_with("covered cells timed with the cells kernels"),
+            "{reports:?}"
+        );
+    }
+
+    /// A change of choice that costs more than the choices differ by does not decide either.
+    #[test]
+    fn the_cost_of_changing_is_left_out() {
+        let cost = |_, c| ms(c, [1.0, 1.1], [1.0, 1.2, 1.1]);
+        let (taken, _) = run(open(), 1000, cost, 10.0);
+        assert_eq!(
+            taken[999],
+            Choice {
+                kernel: Quads,
+                way: Redo
+            }
+        );
+    }
+
+    /// A run too short for the trial and the room after it keeps its choice throughout and says
+    /// how long a run must be; a scene that pins both has nothing to time.
+    #[test]
+    fn a_short_run_keeps_its_choice() {
+        let steps = FIRST + ROOM * open().longest() - 1;
+        let trial = Trial::new(vec![Quads, Cells], vec![Fused, Redo, Skip], steps);
+        assert!(trial.describe().contains("not timed"), "{}", trial.describe());
+        let (taken, reports) = run(trial, steps, |_, c| ms(c, [2.0, 1.0], [1.0, 2.0, 3.0]), 0.0);
+        assert!(
+            taken.iter().all(|&c| c
+                == Choice {
+                    kernel: Quads,
+                    way: Fused
+                })
+                && reports.is_empty()
+        );
+        let pinned = Trial::new(vec![Cells], vec![Skip], 100_000);
+        assert!(!pinned.open());
+        let (taken, reports) = run(pinned, 1000, |_, c| ms(c, [2.0, 1.0], [1.0, 2.0, 3.0]), 0.0);
+        assert!(
+            taken.iter().all(|&c| c
+                == Choice {
+                    kernel: Cells,
+                    way: Skip
+                })
+                && reports.is_empty()
+        );
+    }
+
+    /// A scene that pins the kernel has only the ways timed, from FIRST; one that pins the way
+    /// (or a run without particles) only the kernels.
+    #[test]
+    fn a_pinned_kernel_or_way_is_not_timed() {
+        let trial = Trial::new(vec![Cells], vec![Redo, Skip, Fused], 1000);
+        let (taken, reports) = run(trial, 1000, |_, c| ms(c, [1.0, 1.0], [2.0, 1.5, 3.0]), 0.0);
         assert_eq!(reports.len(), 1);
-        let after = (FIRST + trial_steps()) as usize;
-        assert!(ways[after..].iter().all(|&w| w == CoveredCells::Redo));
-    }
-
-    /// With a minimum run time (auto), a run whose steps left take less at its pace has no trial,
-    /// and one that takes longer has.
-    #[test]
-    fn a_quick_run_has_no_trial_with_a_minimum_time() {
-        let cost = |_, w| ms(w, 2.0, 1.0, 3.0);
-        let (ways, reports) = run_for(CoveredCells::Redo, 4000, cost, 0.0, 10.0);
-        assert!(ways.iter().all(|&w| w == CoveredCells::Redo) && reports.is_empty());
-        let (ways, reports) = run_for(CoveredCells::Redo, 6000, cost, 0.0, 10.0);
+        assert_eq!(taken[FIRST as usize + BLOCK as usize].way, Skip);
         assert_eq!(
-            reports.len(),
-            1,
-            "only the first trial has 10 s ahead: {reports:?}"
+            taken[999],
+            Choice {
+                kernel: Cells,
+                way: Skip
+            }
         );
-        assert_eq!(ways[5999], CoveredCells::Skip);
+        let trial = Trial::new(vec![Quads, Cells], vec![Redo], 1000);
+        let (taken, reports) = run(trial, 1000, |_, c| ms(c, [1.2, 1.0], [1.0, 1.0, 1.0]), 0.0);
+        assert_eq!(reports.len(), 1);
+        assert_eq!(
+            taken[999],
+            Choice {
+                kernel: Cells,
+                way: Redo
+            }
+        );
     }
 
     /// A slow step now and then (particles.csv written every 10 steps, 25 times a step's time)
-    /// does not decide: each way's median step does.
+    /// does not decide: each choice's median step does.
     #[test]
     fn an_occasional_slow_step_does_not_decide() {
-        let cost = |step: u64, w| ms(w, 2.0, 1.8, 3.0) + if step.is_multiple_of(10) { 0.05 } else { 0.0 };
-        let (ways, reports) = run(CoveredCells::Redo, 600, cost, 0.0);
-        assert_eq!(ways[599], CoveredCells::Skip, "{reports:?}");
+        let trial = Trial::new(vec![Quads], vec![Redo, Skip, Fused], 1000);
+        let cost = |step: u64, c| {
+            ms(c, [1.0, 1.0], [2.0, 1.8, 3.0]) + if step.is_multiple_of(10) { 0.05 } else { 0.0 }
+        };
+        let (taken, reports) = run(trial, 1000, cost, 0.0);
+        assert_eq!(taken[999].way, Skip, "{reports:?}");
         assert!(
             reports[0].contains("redo 2.000 ms, skip 1.800 ms, fused 3.000 ms"),
             "{reports:?}"
         );
     }
 
-    /// A way the device does not build is refused at its first block: it is not asked for again,
-    /// its steps take the kept way untimed, the others decide, and the report says so.
+    /// A choice the device does not build is refused at its first block: it is not asked for
+    /// again, the others decide, and the report says so.
     #[test]
-    fn a_way_not_built_is_left_out() {
-        let mut trials = WayTrials::new(CoveredCells::Redo, 600, 0.0);
+    fn a_choice_not_built_is_left_out() {
+        let mut trial = Trial::new(vec![Quads], vec![Redo, Skip, Fused], 1000);
         let (mut now, mut asked, mut reports) = (0.0, Vec::new(), Vec::new());
-        let mut current = CoveredCells::Redo;
-        for step in 0..600 {
-            let way = trials.way_for(step, now);
-            reports.extend(trials.take_report());
-            asked.push(way);
-            if way == CoveredCells::Fused {
-                trials.refuse(way);
+        let mut current = Redo;
+        for step in 0..1000 {
+            let c = trial.choice_for(step, now);
+            reports.extend(trial.take_report());
+            asked.push(c.way);
+            if c.way == Fused {
+                trial.refuse();
             } else {
-                current = way;
+                current = c.way;
             }
-            now += ms(current, 2.0, 1.5, 0.5);
+            now += ms(
+                Choice {
+                    kernel: Quads,
+                    way: current,
+                },
+                [1.0, 1.0],
+                [2.0, 1.5, 0.5],
+            );
         }
-        assert_eq!(asked.iter().filter(|&&w| w == CoveredCells::Fused).count(), 1);
-        assert_eq!(asked[599], CoveredCells::Skip);
+        assert_eq!(asked.iter().filter(|&&w| w == Fused).count(), 1);
+        assert_eq!(asked[999], Skip);
         assert!(
             reports.len() == 1 && reports[0].contains("skip 1.500 ms, fused not built"),
             "{reports:?}"

@@ -55,6 +55,7 @@ velocity = [0.0, 0.0, 0.0]
 dx = 0.001
 operator = "trt"
 storage = "fp32"
+kernel = "auto"
 tau = 0.8
 velocity_scale = 0.01
 mach = 0.1

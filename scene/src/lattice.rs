@@ -70,6 +70,12 @@ pub struct LatticeSection {
     /// parsed).
     #[serde(default = "default_storage")]
     pub storage: String,
+    /// The fluid kernels: "quads" (by cell class, four-cell quads: built for CPU drivers such as
+    /// lavapipe), "cells" (a thread per cell: built for GPUs) or "auto" (default: the run times
+    /// both on its first steps and keeps the faster; docs/lbm.md, "Kernels"). The same results
+    /// bit for bit.
+    #[serde(default = "default_kernel")]
+    pub kernel: String,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
@@ -175,6 +181,10 @@ pub struct SolidBox {
 fn default_operator() -> String {
     "trt".into()
 }
+fn default_kernel() -> String {
+    "auto".into()
+}
+
 fn default_storage() -> String {
     "fp32".into()
 }
@@ -225,7 +235,12 @@ pub struct LatticeUnits {
     pub ramp_steps: f64,
     /// The populations' storage.
     pub storage: Storage,
+    /// The fluid kernels: "auto", "quads" or "cells".
+    pub kernel: String,
 }
+
+/// The fluid kernels `lattice.kernel` accepts.
+pub const KERNELS: [&str; 3] = ["auto", "quads", "cells"];
 
 /// Smallest tau - 1/2 accepted, for every operator. BGK was refused below 0.51 until BGK held a
 /// sphere's wake to tau 0.5024 (validation/lbm/REPORT.md, "Stability near tau = 1/2"); near
@@ -358,6 +373,15 @@ impl LatticeUnits {
                 "expected \"fp32\", \"fp16s\" or \"fp16c\"",
             ));
         };
+        let kernel = lattice.kernel.as_str();
+        if !KERNELS.contains(&kernel) {
+            return Err(fail(
+                file,
+                "lattice.kernel",
+                format!("{kernel:?}"),
+                "expected \"auto\", \"quads\" or \"cells\"",
+            ));
+        }
         let (dt, tau) = time_step(scene, lattice, dx, file)?;
         let mach = lattice_mach(lattice, op, dx, dt, file)?;
         let faces = faces::lattice_faces(scene, lattice, op, [dx, dt], file)?;
@@ -380,6 +404,7 @@ impl LatticeUnits {
             check_interval: lattice.check_interval,
             ramp_steps: lattice.ramp_time / dt,
             storage,
+            kernel: kernel.to_string(),
         };
         Ok((units, warnings))
     }
@@ -559,6 +584,19 @@ mod tests {
         };
         let text = scene.replace("check_interval = 100", &format!("check_interval = 100\n{lines}"));
         Scene::parse(&text, "tau_minus.toml").map(|s| s.lattice_units.expect("lattice"))
+    }
+
+    /// lattice.kernel takes auto (by default), quads and cells, and refuses another, naming the
+    /// field and the value.
+    #[test]
+    fn the_kernel_is_auto_quads_or_cells() {
+        assert_eq!(with_lattice("").expect("scene").kernel, "auto");
+        for name in super::KERNELS {
+            let units = with_lattice(&format!("kernel = {name:?}")).expect("scene");
+            assert_eq!(units.kernel, name);
+        }
+        let err = with_lattice("kernel = \"quad\"").expect_err("quad").to_string();
+        assert!(err.contains("lattice.kernel") && err.contains("quad"), "{err}");
     }
 
     /// lattice.storage takes the three storages (fp32 by default) and refuses another, naming

@@ -190,15 +190,12 @@ pub struct Coupling {
     #[serde(default = "default_free_flight")]
     pub free_flight: bool,
     /// With a `[lattice]`: where the covered cells get their solid term (docs/imb.md, "Speed"):
-    /// "fused" in the fluid kernels (each cell tests one bit; suits dense beds), "redo" collided
-    /// before them and stored over their result (the fluid kernels stay branch-free and run while
-    /// the DEM takes its step; suits sparse particles), "skip" collided in place before them, which
-    /// skip them (one bit per cell; built for a GPU). All three give the same run bit for bit.
-    /// "timed": the run times the three on its own steps (6 steps each, 3 rounds, from step 10 and
-    /// every 2000 steps; in runs of 226 steps or more) and keeps the fastest. "auto"
-    /// (default): timed on a GPU where the steps left would take 10 s or more; on a CPU driver
-    /// such as lavapipe (where building the other two ways' kernels costs seconds), and until a
-    /// trial, redo unless the initial particles cover 20% of the cells or more, fused from there.
+    /// "fused" in the fluid kernels (each cell tests one bit), "redo" collided before them and
+    /// stored over their result (the fluid kernels stay branch-free and run while the DEM takes
+    /// its step), "skip" collided in place before them, which skip them (one bit per cell). All
+    /// three give the same run bit for bit. "auto" (default): the run times the three on its first
+    /// steps, on its device, and keeps the fastest (with `lattice.kernel`: lbm-server/src/trials.rs;
+    /// in runs of a few hundred steps or more, the redo in shorter ones).
     #[serde(default = "default_covered_cells")]
     pub covered_cells: String,
     /// With a `[lattice]`: "none" (default) draws each sphere on the lattice at its radius;

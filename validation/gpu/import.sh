@@ -3,7 +3,9 @@
 # into out/gpu_import/gpu/, imports its Ten Cate runs, its runs of E1 in the experiment's box and its
 # beds into the work folders validation/imb/work/{ten_cate,experiment,fluidized_bed}/ and their records
 # into validation/imb/results/*.json (the reports rebuilt), renders the seed's sedimentation into
-# validation/sedimentation/sedimentation-41.{png,json} (with its summary.json), and lists what goes by hand into BENCHMARKS.md
+# validation/sedimentation/sedimentation-41.{png,json} (with its summary.json), folds the kernels'
+# rows (bench_kernels.txt, bench_{trt,mrt}.txt: validation/gpu/kernel_rows.py) into BENCHMARKS.md,
+# and lists what goes by hand into BENCHMARKS.md
 # (bench_*.txt, coupled_*.txt, suspension*/summary.json, dem_bench_*.txt) and into
 # validation/lbm/REPORT.md (the "finer grids" sections of validate/ and validate_wake/REPORT.md).
 #
@@ -40,6 +42,10 @@ if [ -d "$g/sedimentation" ]; then
     python3 validation/sedimentation/render.py "$g/sedimentation" --png "validation/sedimentation/$name.png" \
         --json "validation/sedimentation/$name.json" ||
         echo "render.py failed (pip install -r validation/sedimentation/requirements.txt)" >&2
+fi
+if [ -f "$g/bench_kernels.txt" ]; then
+    echo "== the kernels: per-cell against quads, each storage, into BENCHMARKS.md"
+    python3 validation/gpu/kernel_rows.py "$g"
 fi
 echo "== by hand: BENCHMARKS.md and validation/lbm/REPORT.md from"
 find "$g" -maxdepth 2 \( -name 'bench_*.txt' -o -name 'coupled_*.txt' -o -name 'dem_bench_*.txt' \

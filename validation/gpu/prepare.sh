@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Prepares the GPU batch (validation/gpu/run.sh) on the development machine, which has no GPU: the
 # Vulkan loader packages in .gl/, the stripped release binaries and the Ten Cate scenes in .gpu/
-# (both kept out of git through .git/info/exclude, carried to the device machine with
+# (both kept out of git by .gitignore, carried to the device machine with
 # carry [".gl", ".gpu"]: about 20 MB of the 64 MiB allowed).
 #
 #     bash validation/gpu/prepare.sh           # the full batch (H100/H200-class GPU)
@@ -10,9 +10,6 @@ set -euo pipefail
 cd "$(dirname "$0")/../.."
 small=false
 [ "${1:-}" = "--small" ] && small=true
-for d in /.gl/ /.gpu/; do
-    grep -qxF "$d" .git/info/exclude 2>/dev/null || echo "$d" >> .git/info/exclude
-done
 if ! ls .gl/*.deb >/dev/null 2>&1; then
     mkdir -p .gl /tmp/amd64/partial
     o='-oAPT::Architecture=amd64 -oAPT::Architectures=amd64 -oDir::State::Lists=/tmp/amd64'
@@ -35,9 +32,9 @@ else
     cp validation/scenes/suspension.toml .gpu/
 fi
 sed 's/^free_flight = true/free_flight = false/' .gpu/suspension.toml > .gpu/suspension_substeps.toml
-# The same suspension timing the three ways of treating the covered cells on its steps ("auto"
-# does so only with 10 s of steps ahead), and with each way held throughout.
-for way in timed redo skip fused; do
+# The same suspension timing the kernels and the three ways of treating the covered cells on its
+# first steps ("auto", the default, named), and with each way held throughout.
+for way in auto redo skip fused; do
     sed "s/^\[coupling\]/[coupling]\ncovered_cells = \"$way\"/" .gpu/suspension.toml > .gpu/suspension_$way.toml
 done
 # The seed's sedimentation (section 3.2: 41^3 spheres on 288 x 288 x 576 cells); for --small a

@@ -9,9 +9,9 @@
 # into $OUT/gpu.tgz.aa, .ab, ... (pieces of 15 MiB: the device tool returns at most 8 files of 16
 # MiB, none deeper than two folders) beside $OUT/batch.log; back here,
 # `bash validation/gpu/import.sh FILES_AT` unpacks them and imports the runs. Inside: batch.log,
-# system.txt, bench_<op>.txt (LBM-only, 256^3, with the copy bandwidth and the naive kernel; TRT
-# also per cell, without the four-cell quads), bench_storage.txt (256^3, BGK, the populations in
-# fp32, fp16s and fp16c: MLUPS and bytes per cell), bench_walls.txt and bench_periodic.txt (the Ten Cate
+# system.txt, bench_kernels.txt (LBM-only, 256^3, BGK: the per-cell kernel and the quads', each
+# with the populations in fp32, fp16s and fp16c, beside the copy bandwidth and the naive kernel),
+# bench_{trt,mrt}.txt (the same in FP32, both kernels), bench_walls.txt and bench_periodic.txt (the Ten Cate
 # grid at 16 cells, 224 x 224 x 256, closed and periodic, one sphere, both ways of treating the
 # covered cells, each pass timed: what a closed box costs), coupled_trt.txt (256 x 256 x 512, 1 to
 # 32^3 particles, ratio to LBM-only, time per pass, the covered cells fused, redone and skipped),
@@ -21,13 +21,18 @@
 # suspension_substeps/ (32^3 beads settling, the whole program, free flight on and off:
 # summary.json), sedimentation/ (the seed's 41^3 spheres settling, bounded: summary.json and a compact
 # particles.csv), dem_bench_{suspension,bed,bed_skin}.txt (the DEM side alone on this machine's
-# cores, 32^3 beads dilute and in a bed, the bed also with a thinner skin), suspension_timed/ (the three ways of treating the covered cells timed
-# on the run's steps) and suspension_{redo,skip,fused}/ (each held throughout), tencate/<run>/ and
+# cores, 32^3 beads dilute and in a bed, the bed also with a thinner skin), suspension_auto/ (the
+# kernels and the three ways of treating the covered cells timed on the run's first steps) and suspension_{redo,skip,fused}/ (each held throughout), tencate/<run>/ and
 # bed/<run>/ (the scenes of .gpu/plan.txt: Ten Cate and the fluidized bed, held and free),
 # validate/REPORT.md (random arrays at 18 and 24 cells) and
 # validate_wake/REPORT.md (a held sphere at Re 200 and 300 at 24 and 32): their sections go into
 # validation/lbm/REPORT.md. The steps run in order of priority; a step that would start with less
-# time left than it needs is skipped and named in batch.log.
+# time left than it needs is skipped and named in batch.log. Estimated from the H200 run of commit
+# c641298 (LBM-only at 256^3 18,500 MLUPS, the coupled sweep at 500 steps filling 300 s): the
+# coupled sweep at 100 steps 150-200 s (its limit 200), bench_kernels 30-60 s (eight lattices of
+# 256^3 set up on the host, 2 rounds of 300 steps each well under a second; limit 90),
+# bench_{trt,mrt} 15-30 s each (limit 60): the kernels' rows are in by about 6 minutes of the
+# 9-minute call (run.sh 540, timeout_s 600), the rest as the budget allows.
 set -u
 cd "$(dirname "$0")/../.."
 budget=${1:-540}
@@ -102,24 +107,27 @@ mode=$(cat .gpu/mode 2>/dev/null || echo full)
 
 if [ "$mode" = small ]; then
     cube=32x32x32 tencate=32x32x32 coupled=32x32x64 counts=1,8,64 dense=512 dense_dem=64 steps=30
+    # lavapipe runs the per-cell kernel at a tenth of the quads' speed or less
+    kernel_steps=5
 else
     cube=256x256x256 tencate=224x224x256 coupled=256x256x512 counts=1,8,64,512,4096,32768 dense=262144 dense_dem=32768 steps=300
+    kernel_steps=$steps
 fi
 # Coupled, the seed's Fig. 5 sweep (issue 5's target: 90% of LBM-only at 32^3 particles; its own
 # LBM-only row on the same grid): first, as the batch's most wanted figure (2026-12-05: skip with
 # the four-cell quads, never run on a GPU).
 step coupled_trt 90 200 $bin/lbm-server bench --grid $coupled --operator trt --particles $counts \
     --steps $((steps / 3)) --rounds 1 --kernel ours --passes --covered-cells all
-# The populations' storages (issue 40: FP16S >= 1.5x FP32 on a GPU), same grid, alternating rounds,
-# with the bytes per cell.
-step bench_storage 30 60 $bin/lbm-server bench --grid $cube --operator bgk --steps $steps --rounds 2 \
-    --kernel ours --storage fp32,fp16s,fp16c
-# LBM-only against the copy bandwidth and the naive kernel (issue 3's target: 85% of the copy
-# bandwidth); TRT also per cell (2026-12-04 on an H200: ours 0.79x the naive kernel).
-for op in bgk trt mrt; do
-    extra=""
-    [ $op = trt ] && extra=--per-cell
-    step bench_$op 30 60 $bin/lbm-server bench --grid $cube --operator $op --steps $steps --rounds 2 $extra
+# The kernels (issue 40): the per-cell kernel against the quads' kernels, each with the populations
+# in fp32, fp16s and fp16c (FP16S >= 1.5x FP32 on a GPU), BGK, rounds alternating, beside the
+# naive two-lattice kernel and the copy bandwidth of the same run (issue 3's target: 85% of it;
+# on the H200 ours ran 0.79x the naive kernel), with the bytes per cell. import.sh folds its rows
+# into BENCHMARKS.md.
+step bench_kernels 40 90 $bin/lbm-server bench --grid $cube --operator bgk --steps $kernel_steps --rounds 2 \
+    --per-cell --storage fp32,fp16s,fp16c
+# TRT and MRT the same way in FP32, the per-cell kernel beside the quads'.
+for op in trt mrt; do
+    step bench_$op 30 60 $bin/lbm-server bench --grid $cube --operator $op --steps $kernel_steps --rounds 2 --per-cell
 done
 # A closed box against a periodic one on the Ten Cate grid at 16 cells, one sphere, both ways of
 # treating the covered cells, by pass (2026-12-04: the whole program's fluid step ran at 2200
@@ -163,11 +171,12 @@ compact "$OUT/sedimentation" 2
 step dem_bench_suspension 20 60 $bin/dem-client bench .gpu/suspension.toml --steps 40 --free-flight both
 step dem_bench_bed 20 90 $bin/dem-client bench .gpu/bed.toml --steps 12 --free-flight both
 step dem_bench_bed_skin 15 60 $bin/dem-client bench .gpu/bed_skin.toml --steps 12 --free-flight on
-# The suspension timing the three ways of treating the covered cells on its steps and keeping the
-# fastest (its log's "covered cells timed" line), and with each held throughout: the whole
-# program's answer, the DEM's step included, to which way a GPU should take, and what a trial
-# costs (the ways' kernels built during the run).
-for way in timed redo skip fused; do
+# The suspension with its start-up trial of the kernels and of the three ways of treating the
+# covered cells (its log's "kernels timed" and "covered cells timed" lines, and summary.json's
+# trial), and with each way held throughout (the kernels still timed): the whole program's
+# answer, the DEM's step included, to which kernel and way a GPU should take, and what a trial
+# costs (the kernels built during the run).
+for way in auto redo skip fused; do
     step suspension_$way/log 30 60 $bin/lbm-server run .gpu/suspension_$way.toml --out "$OUT/suspension_$way"
     rm -f "$OUT/suspension_$way/particles.csv" "$OUT/suspension_$way"/particles_*.vtp "$OUT/suspension_$way/particles.pvd"
 done

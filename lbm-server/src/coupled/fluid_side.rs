@@ -12,14 +12,15 @@ use super::health::finite_load;
 use super::radius_correction::radius_deficit_product;
 use super::states::LatticeStates;
 use super::warnings::lattice_warnings;
-use super::ways::{covered_cells, way_trials};
+use super::ways::trial;
 use crate::fields::FieldOutput;
 use crate::fluid::{health_of, setup_of};
+use crate::lbm::geometry::Setup;
 use crate::lbm::gpu::{Gpu, GpuLattice};
-use crate::lbm::imb::{ImbOptions, SolidCollision};
+use crate::lbm::imb::{covered_fraction, ImbOptions, SolidCollision};
 use crate::lubrication::HeldLubrication;
 use crate::terminal::Warning;
-use crate::trials::WayTrials;
+use crate::trials::Trial;
 use protocol::{ParticleReply, ParticleState, Physics};
 use scene::lattice::LatticeUnits;
 use scene::Scene;
@@ -40,10 +41,11 @@ pub struct FluidSide {
     /// without it).
     deficit_product: f64,
     pub(super) steps: u64,
-    /// With `coupling.covered_cells = "timed"`, and "auto" on a GPU: the ways timed on the run's
-    /// steps (trials.rs).
-    pub(super) trials: Option<WayTrials>,
-    /// When the fluid side was made: the trials' clock.
+    /// The start-up trial of the kernels and ways the scene leaves open (trials.rs).
+    pub(super) trial: Trial,
+    /// The fraction of the cells the initial particles cover (`covered_fraction`), for the log.
+    covered: f64,
+    /// When the fluid side was made: the trial's clock.
     pub(super) made: std::time::Instant,
     /// The run's field outputs: those the scene asks for (`output.fields_interval` above 0,
     /// `output.line`), and last_good.vti where the fluid blows up.
@@ -78,9 +80,17 @@ impl FluidSide {
         )?;
         let gpu = Arc::new(Gpu::new()?);
         let radii: Vec<f64> = scene.initial_particles().iter().map(|p| p.radius).collect();
-        let options = imb_options(scene, &units, &radii)?;
-        let trials = way_trials(scene, &gpu).map(|least| WayTrials::new(options.covered_cells, steps, least));
-        let lattice = GpuLattice::new(gpu, setup_of(&units), health_of(&units), Some(options))?;
+        let trial = trial(scene, &units.kernel, steps)?;
+        let covered = covered_fraction(radii.iter().map(|&r| units.cells(r)), units.n.iter().product());
+        let options = ImbOptions {
+            covered_cells: trial.kept().way,
+            ..imb_options(scene)?
+        };
+        let setup = Setup {
+            kernel: trial.kept().kernel,
+            ..setup_of(&units)
+        };
+        let lattice = GpuLattice::new(gpu, setup, health_of(&units), Some(options))?;
         let lubrication = scene
             .coupling
             .lubrication
@@ -96,7 +106,8 @@ impl FluidSide {
             lubrication,
             deficit_product,
             steps: 0,
-            trials,
+            trial,
+            covered,
             made: std::time::Instant::now(),
             fields,
             last_good: None,
@@ -149,8 +160,8 @@ impl FluidSide {
     pub fn describe(&self) -> String {
         let u = &self.units;
         format!(
-            "lattice {}x{}x{} ({}, tau {:.4}, dx {:e} m, dt {:e} s) on {}, immersed moving boundary \
-             ({}{}){}{}",
+            "lattice {}x{}x{} ({}, tau {:.4}, dx {:e} m, dt {:e} s) on {}, {}, immersed moving \
+             boundary ({}, {:.1}% of the cells covered at the start{}){}{}",
             u.n[0],
             u.n[1],
             u.n[2],
@@ -159,10 +170,13 @@ impl FluidSide {
             u.dx,
             u.dt,
             self.lattice.adapter(),
+            self.lattice.kernel().describe(),
             self.lattice.covered_cells().describe(),
-            self.trials
-                .as_ref()
-                .map_or(String::new(), |t| format!("; {}", t.describe())),
+            100.0 * self.covered,
+            match self.trial.open() {
+                true => format!("; {}", self.trial.describe()),
+                false => String::new(),
+            },
             if self.lubrication.is_some() {
                 ", lubrication"
             } else {
@@ -243,9 +257,9 @@ impl FluidSide {
     }
 }
 
-/// The immersed boundary's options of a scene (`coupling.*`; `radii` of its initial particles,
-/// m): its slots, its weighting, its solid collision and the way its covered cells start with.
-fn imb_options(scene: &Scene, units: &LatticeUnits, radii: &[f64]) -> Result<ImbOptions, String> {
+/// The immersed boundary's options of a scene (`coupling.*`): its slots, its weighting and its
+/// solid collision (the way of its covered cells is the trial's).
+fn imb_options(scene: &Scene) -> Result<ImbOptions, String> {
     let collision = &scene.coupling.solid_collision;
     Ok(ImbOptions {
         slots: scene.coupling.slots,
@@ -253,6 +267,6 @@ fn imb_options(scene: &Scene, units: &LatticeUnits, radii: &[f64]) -> Result<Imb
         solid_collision: SolidCollision::from_name(collision).ok_or_else(|| {
             format!("coupling.solid_collision = {collision:?}: expected \"noble-torczynski\" or \"superposition\"")
         })?,
-        covered_cells: covered_cells(scene, units, radii)?,
+        ..ImbOptions::default()
     })
 }

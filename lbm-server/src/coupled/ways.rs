@@ -1,78 +1,75 @@
-//! The ways a coupled run's covered cells take their solid term (`coupling.covered_cells`): the
-//! one it starts with, and, where it times them (trials.rs), the one each step takes.
+//! The fluid kernels and the way of the covered cells a coupled run takes (`lattice.kernel`,
+//! `coupling.covered_cells`): those its scene pins, and where it leaves them to "auto", those its
+//! start-up trial keeps (trials.rs).
 
 use super::FluidSide;
-use crate::lbm::gpu::Gpu;
-use crate::lbm::imb::{covered_fraction, CoveredCells};
+use crate::lbm::imb::CoveredCells;
+use crate::lbm::kernel::Kernel;
 use crate::terminal::{self, MORE};
-use crate::trials::{WayTrials, AUTO_MIN_SECONDS};
-use scene::lattice::LatticeUnits;
+use crate::trials::{kernels_of, Trial};
 use scene::Scene;
 
-/// The scene's `coupling.covered_cells`, "auto" and "timed" made definite for the scene's initial
-/// particles (their covered fraction of the lattice; `radii` in m): the way the run starts with.
-pub(super) fn covered_cells(
-    scene: &Scene,
-    units: &LatticeUnits,
-    radii: &[f64],
-) -> Result<CoveredCells, String> {
-    let name = match scene.coupling.covered_cells.as_str() {
-        "timed" => "auto",
-        name => name,
-    };
-    let mode = CoveredCells::from_name(name).ok_or_else(|| {
-        format!(
-            "coupling.covered_cells = {:?}: expected \"auto\", \"timed\", \"fused\", \"redo\" or \"skip\"",
-            scene.coupling.covered_cells
-        )
-    })?;
-    let radii = radii.iter().map(|&r| units.cells(r));
-    let cells = units.n.iter().product();
-    Ok(mode.for_scene(covered_fraction(radii, cells)))
+/// The ways of the covered cells the scene's `coupling.covered_cells` leaves open: the three
+/// with "auto" (the redo first: the way the run starts with), else the one it names.
+pub(super) fn covered_cells_of(scene: &Scene) -> Result<Vec<CoveredCells>, String> {
+    let name = scene.coupling.covered_cells.as_str();
+    match CoveredCells::from_name(name) {
+        Some(CoveredCells::Auto) => Ok(vec![CoveredCells::Redo, CoveredCells::Skip, CoveredCells::Fused]),
+        Some(mode) => Ok(vec![mode]),
+        None => Err(format!(
+            "coupling.covered_cells = {name:?}: expected \"auto\", \"fused\", \"redo\" or \"skip\""
+        )),
+    }
 }
 
-/// Whether the run times its ways of treating the covered cells (trials.rs), and how long the
-/// steps left must take for a trial to start: "timed" on every device, always; "auto" on all but
-/// CPU drivers, where building the other two ways' kernels costs more than a short run gains
-/// (lavapipe, 2 cores: about 1 s each, against a default scene of 4.5 s) and
-/// `CoveredCells::for_scene`'s rule was measured, and only with [`AUTO_MIN_SECONDS`] ahead.
-pub(super) fn way_trials(scene: &Scene, gpu: &Gpu) -> Option<f64> {
-    match scene.coupling.covered_cells.as_str() {
-        "timed" => Some(0.0),
-        "auto" if gpu.adapter.device_type != wgpu::DeviceType::Cpu => Some(AUTO_MIN_SECONDS),
-        _ => None,
-    }
+/// The start-up trial of a coupled run of `steps` steps over what the scene leaves open.
+pub(super) fn trial(scene: &Scene, kernel: &str, steps: u64) -> Result<Trial, String> {
+    Ok(Trial::new(kernels_of(kernel), covered_cells_of(scene)?, steps))
 }
 
 impl FluidSide {
-    /// The way the covered cells take their solid term (when timed: the one the last trial kept),
-    /// for summary.json.
+    /// The way the covered cells take their solid term (after the trial: the one it kept), for
+    /// summary.json.
     pub fn covered_cells(&self) -> CoveredCells {
-        self.trials
-            .as_ref()
-            .map_or(self.lattice.covered_cells(), WayTrials::kept)
+        self.trial.kept().way
     }
 
-    /// When the run times its ways: the one this step takes (and the last trial's line in the
-    /// log); a way the device does not build is left out of the trials (this step keeps the
-    /// lattice's way).
+    /// The fluid kernels the run takes (after the trial: those it kept), for summary.json.
+    pub fn kernel(&self) -> Kernel {
+        self.trial.kept().kernel
+    }
+
+    /// What the trial measured and kept, for summary.json.
+    pub fn trial_lines(&self) -> &[String] {
+        &self.trial.lines
+    }
+
+    /// The kernels and way this step takes (the trial's; its stages' lines in the log); a choice
+    /// the device does not build is left out of the trial (this step keeps the lattice's).
     pub(super) fn take_way(&mut self) {
-        let Some(trials) = &mut self.trials else {
-            return;
-        };
-        let way = trials.way_for(self.steps, self.made.elapsed().as_secs_f64());
-        if let Some(report) = trials.take_report() {
+        let choice = self
+            .trial
+            .choice_for(self.steps, self.made.elapsed().as_secs_f64());
+        for line in self.trial.take_report() {
             terminal::say_either(
-                &format!(
-                    "lbm-server: covered cells timed on the run's steps: {} kept {MORE}",
-                    trials.kept().name()
-                ),
-                &format!("lbm-server: {report}"),
+                &format!("lbm-server: {} {MORE}", brief_trial_line(&line)),
+                &format!("lbm-server: {line}"),
             );
         }
-        if let Err(e) = self.lattice.set_covered_cells(way) {
-            protocol::say!("lbm-server: warning: {e}; the run times the other ways without it");
-            trials.refuse(way);
+        if (choice.kernel, choice.way) == (self.lattice.kernel(), self.lattice.covered_cells()) {
+            return;
+        }
+        if let Err(e) = self.lattice.set_way(choice.kernel, choice.way) {
+            protocol::say!("lbm-server: warning: {e}; the run times the others without it");
+            self.trial.refuse();
         }
     }
+}
+
+/// A trial's line in brief: what it timed and what it kept, without the times ("kernels timed with
+/// the covered cells redo: quads kept").
+fn brief_trial_line(line: &str) -> String {
+    let what = line.split(" (").next().unwrap_or(line);
+    let kept = line.rsplit(": ").next().unwrap_or("");
+    format!("{what}: {kept}")
 }

@@ -1,6 +1,7 @@
 //! What the lattice looks like: size, the boundary type of each domain face, solid cells, and the
 //! collision operator. Everything in lattice units.
 
+use super::kernel::Kernel;
 use super::mrt;
 use super::storage::Storage;
 
@@ -88,6 +89,8 @@ pub struct Setup {
     pub ramp_steps: f64,
     /// How the populations are stored on the device (`lattice.storage`).
     pub storage: Storage,
+    /// The fluid kernels a lattice starts with (`lattice.kernel`).
+    pub kernel: Kernel,
 }
 
 /// TRT's antisymmetric relaxation time tau- = 1/2 + Lambda / (tau - 1/2) of magic parameter
@@ -119,6 +122,7 @@ impl Setup {
             force: [0.0; 3],
             ramp_steps: 0.0,
             storage: Storage::Fp32,
+            kernel: Kernel::Quads,
         }
     }
 

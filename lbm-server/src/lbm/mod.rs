@@ -5,6 +5,7 @@ pub mod d3q19;
 pub mod geometry;
 pub mod gpu;
 pub mod imb;
+pub mod kernel;
 pub mod mrt;
 pub mod random;
 #[cfg(test)]

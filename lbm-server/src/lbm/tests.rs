@@ -453,6 +453,7 @@ mod validation_cases {
 
 pub(in crate::lbm) mod immersed_boundary {
     use super::super::imb::{CoveredCells, ImbOptions, Load, SolidCollision, SolidParticle, CHUNK};
+    use super::super::kernel::Kernel;
     use super::*;
 
     /// Two overlapping moving, spinning spheres, moved by `shift` cells between steps.
@@ -994,27 +995,17 @@ pub(in crate::lbm) mod immersed_boundary {
             CoveredCells::Fused,
         ];
         let f0 = random_populations(&setup, 24);
+        let options = ImbOptions {
+            covered_cells: ways[0],
+            ..ImbOptions::default()
+        };
         let run = |change: bool| {
-            let options = ImbOptions {
-                covered_cells: ways[0],
-                ..ImbOptions::default()
-            };
-            let mut lattice =
-                GpuLattice::new(gpu(), setup.clone(), Health::default(), Some(options)).unwrap();
-            lattice.set_populations(&f0);
-            let loads: Vec<Vec<Load>> = shifts
-                .iter()
-                .zip(ways)
-                .map(|(&shift, way)| {
-                    if change {
-                        lattice.set_covered_cells(way).unwrap();
-                        assert_eq!(lattice.covered_cells(), way);
-                    }
-                    lattice.step_coupled(&many_particles(shift)).unwrap()
-                })
-                .collect();
-            assert_eq!(lattice.cover_words_left(), 0, "covers left after the last step");
-            (loads, lattice.populations())
+            run_shifted(&setup, options, &f0, &shifts, &|lattice, step| {
+                if change {
+                    lattice.set_covered_cells(ways[step]).unwrap();
+                    assert_eq!(lattice.covered_cells(), ways[step]);
+                }
+            })
         };
         let (kept, changed) = (run(false), run(true));
         assert!(kept.0.iter().all(|l| l.iter().any(|l| l.force != [0.0; 3])));
@@ -1022,6 +1013,66 @@ pub(in crate::lbm) mod immersed_boundary {
             assert_eq!(a, b, "step {step} ({:?}): loads differ", ways[step]);
         }
         assert!(kept.1 == changed.1, "populations differ");
+    }
+
+    /// A lattice that changes its fluid kernels (the quads' and the per-cell kernel) and its way
+    /// of treating the covered cells between steps gives the loads and populations of a lattice
+    /// that keeps the quads' kernels and the redo, bit for bit: what lets a run's start-up trial
+    /// time the kernels on its own steps (`trials::Trial`).
+    #[test]
+    fn changing_kernels_between_steps_gives_the_same_run() {
+        let setup = many_particles_setup();
+        let shifts = [0.0, 0.3, 0.45, 0.7, 0.8, 1.1, 1.3];
+        let (quads, cells) = (Kernel::Quads, Kernel::Cells);
+        let ways = [
+            (cells, CoveredCells::Redo),
+            (cells, CoveredCells::Fused),
+            (quads, CoveredCells::Skip),
+            (cells, CoveredCells::Skip),
+            (quads, CoveredCells::Redo),
+            (cells, CoveredCells::Fused),
+            (quads, CoveredCells::Fused),
+        ];
+        let f0 = random_populations(&setup, 26);
+        let run = |change: bool| {
+            run_shifted(&setup, ImbOptions::default(), &f0, &shifts, &|lattice, step| {
+                if change {
+                    let (kernel, way) = ways[step];
+                    lattice.set_way(kernel, way).unwrap();
+                    assert_eq!((lattice.kernel(), lattice.covered_cells()), (kernel, way));
+                }
+            })
+        };
+        let (kept, changed) = (run(false), run(true));
+        assert!(kept.0.iter().all(|l| l.iter().any(|l| l.force != [0.0; 3])));
+        for (step, (a, b)) in kept.0.iter().zip(&changed.0).enumerate() {
+            assert_eq!(a, b, "step {step} ({:?}): loads differ", ways[step]);
+        }
+        assert!(kept.1 == changed.1, "populations differ");
+    }
+
+    /// The loads of each step and the last populations of a lattice of `setup` with `options`,
+    /// from `f0`, stepped with `many_particles(shift)` for each of `shifts`, `before(lattice,
+    /// step)` called before each step; no cover left after the last.
+    fn run_shifted(
+        setup: &Setup,
+        options: ImbOptions,
+        f0: &[Cell],
+        shifts: &[f64],
+        before: &dyn Fn(&mut GpuLattice, usize),
+    ) -> (Vec<Vec<Load>>, Vec<Cell>) {
+        let mut lattice = GpuLattice::new(gpu(), setup.clone(), Health::default(), Some(options)).unwrap();
+        lattice.set_populations(f0);
+        let loads: Vec<Vec<Load>> = shifts
+            .iter()
+            .enumerate()
+            .map(|(step, &shift)| {
+                before(&mut lattice, step);
+                lattice.step_coupled(&many_particles(shift)).unwrap()
+            })
+            .collect();
+        assert_eq!(lattice.cover_words_left(), 0, "covers left after the last step");
+        (loads, lattice.populations())
     }
 
     /// A way whose kernels the device refuses (here a constant they do not declare, as a driver's

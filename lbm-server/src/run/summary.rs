@@ -40,10 +40,14 @@ pub(super) struct Summary {
     pub steps_per_second: f64,
     pub particle_steps_per_second: f64,
     pub fluid_physics: Vec<&'static str>,
-    /// Where the covered cells took their solid term ("redo", "skip" or "fused"; in a run that
-    /// times them, `coupling.covered_cells = "timed"` or "auto" on a GPU, the way its last trial
-    /// kept).
+    /// Where the covered cells took their solid term ("redo", "skip" or "fused"; with
+    /// `coupling.covered_cells = "auto"`, the way the start-up trial kept).
     pub covered_cells: &'static str,
+    /// The fluid kernels ("quads" or "cells"; with `lattice.kernel = "auto"`, those the start-up
+    /// trial kept).
+    pub kernel: &'static str,
+    /// What the start-up trial measured and kept, a line per stage (empty where it did not run).
+    pub trial: Vec<String>,
     /// The fluid's discretisation.
     pub lattice: LatticeSummary,
     pub peer: Option<PeerInfo>,
@@ -85,6 +89,8 @@ impl Session {
             particle_steps_per_second: c.particle_steps as f64 / wall.max(1e-9),
             fluid_physics: Physics::names(self.fluid.physics()),
             covered_cells: self.fluid.covered_cells().name(),
+            kernel: self.fluid.kernel().name(),
+            trial: self.fluid.trial_lines().to_vec(),
             lattice: LatticeSummary::of(self.fluid.units()),
             peer: self.peer.clone(),
             exit_reason,

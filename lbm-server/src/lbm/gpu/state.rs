@@ -8,7 +8,7 @@ use super::way::{shader_module, Way};
 use crate::lbm::d3q19::{opposite, C, W};
 use crate::lbm::geometry::{Cell, Link, Setup};
 use crate::lbm::imb::{Coupling, CoveredCells, ImbOptions};
-use crate::lbm::storage::{Storage, StorageOnDevice};
+use crate::lbm::storage::StorageOnDevice;
 
 /// A lattice living on the GPU.
 pub struct GpuLattice {
@@ -26,8 +26,6 @@ pub struct GpuLattice {
     pub(super) health: Health,
     /// The coupling's settings (None: a lattice without particles).
     pub(super) options: Option<ImbOptions>,
-    /// Whether the fluid kernels may take four-cell quads (not with `GpuLattice::per_cell`).
-    pub(super) quads: bool,
     /// Particle coupling (immersed moving boundary), when the scene has particles.
     pub(in crate::lbm) imb: Option<Coupling>,
     /// The ways built so far ([`GpuLattice::set_covered_cells`]), and the one the steps take.
@@ -47,28 +45,13 @@ pub struct GpuLattice {
 }
 
 impl GpuLattice {
-    /// Allocates the lattice, at rest (rho = 1, u = 0), with particle coupling when `imb` is given.
+    /// Allocates the lattice, at rest (rho = 1, u = 0), with particle coupling when `imb` is given,
+    /// stepped by the setup's fluid kernels.
     pub fn new(
         gpu: std::sync::Arc<Gpu>,
         setup: Setup,
         health: Health,
         imb: Option<ImbOptions>,
-    ) -> Result<GpuLattice, String> {
-        Self::build(gpu, setup, health, imb, true)
-    }
-
-    /// A lattice without coupling whose fluid kernels take every cell on its own, without the
-    /// four-cell quads (`lbm-server bench --per-cell`: what the quads gain on this device).
-    pub fn per_cell(gpu: std::sync::Arc<Gpu>, setup: Setup, health: Health) -> Result<GpuLattice, String> {
-        Self::build(gpu, setup, health, None, false)
-    }
-
-    fn build(
-        gpu: std::sync::Arc<Gpu>,
-        setup: Setup,
-        health: Health,
-        imb: Option<ImbOptions>,
-        quads: bool,
     ) -> Result<GpuLattice, String> {
         fits_device(&gpu.limits, setup.n)?;
         let d = &gpu.device;
@@ -102,8 +85,6 @@ impl GpuLattice {
             pipeline_layout,
             health,
             options: imb,
-            // The quads' vector accesses move four f32 populations: FP32 only.
-            quads: quads && storage == Storage::Fp32,
             imb: Some(coupling),
             ways: Vec::new(),
             active: 0,
@@ -114,7 +95,7 @@ impl GpuLattice {
             spoil_next_way: false,
         };
         let mode = imb.map_or(CoveredCells::Redo, |o| o.covered_cells);
-        lattice.set_covered_cells(mode)?;
+        lattice.set_way(lattice.setup.kernel, mode)?;
         Ok(lattice)
     }
 

@@ -2,6 +2,7 @@
 //! submissions, in the AA pattern's alternating phases.
 
 use super::state::GpuLattice;
+use super::way::FluidKernels;
 
 /// Invocations per workgroup (must match `@workgroup_size` in the shader).
 const WORKGROUP: u32 = 64;
@@ -65,31 +66,40 @@ impl GpuLattice {
         pass.dispatch_workgroups(x, groups.div_ceil(x), 1);
     }
 
-    /// Adds one stream-collide step to `encoder`: the fluid cells by class (one or two dispatches),
-    /// then the boundary cells.
+    /// Adds one stream-collide step to `encoder`: the per-cell kernel over every cell, or the
+    /// fluid cells by class (one or two dispatches), then the boundary cells.
     pub(in crate::lbm) fn encode_step(&mut self, encoder: &mut wgpu::CommandEncoder) {
         let parity = self.time % 2;
-        let way = self.way();
-        let c = &way.classes;
-        let [interior, wrapping, boundary] = c.sizes;
-        let groups = |cells: u32| cells.div_ceil(WORKGROUP);
-        let fluid = &way.stream_collide_fluid;
-        if parity == 0 {
-            if let Some(quads) = &way.stream_collide_quads {
-                self.dispatch_groups(encoder, quads, parity, groups(c.quads));
+        match &self.way().fluid {
+            FluidKernels::Cells(cells) => self.dispatch(encoder, cells, parity),
+            FluidKernels::Quads {
+                stream_collide,
+                stream_collide_fluid,
+                stream_collide_quads,
+                stream_collide_quads_odd,
+            } => {
+                let c = &self.way().classes;
+                let [interior, wrapping, boundary] = c.sizes;
+                let groups = |cells: u32| cells.div_ceil(WORKGROUP);
+                let fluid = stream_collide_fluid;
+                if parity == 0 {
+                    if let Some(quads) = stream_collide_quads {
+                        self.dispatch_groups(encoder, quads, parity, groups(c.quads));
+                    }
+                    let rest = interior + wrapping - c.in_quads[0] - c.in_quads[1];
+                    self.dispatch_groups(encoder, &fluid[0], parity, groups(rest));
+                } else {
+                    if let Some(quads) = stream_collide_quads_odd {
+                        self.dispatch_groups(encoder, quads, parity, groups(c.interior_quads));
+                    }
+                    if c.interior_quads == 0 {
+                        self.dispatch_groups(encoder, &fluid[1], parity, groups(interior));
+                    }
+                    self.dispatch_groups(encoder, &fluid[2], parity, groups(c.wrapped().1));
+                }
+                self.dispatch_groups(encoder, stream_collide, parity, groups(boundary));
             }
-            let rest = interior + wrapping - c.in_quads[0] - c.in_quads[1];
-            self.dispatch_groups(encoder, &fluid[0], parity, groups(rest));
-        } else {
-            if let Some(quads) = &way.stream_collide_quads_odd {
-                self.dispatch_groups(encoder, quads, parity, groups(c.interior_quads));
-            }
-            if c.interior_quads == 0 {
-                self.dispatch_groups(encoder, &fluid[1], parity, groups(interior));
-            }
-            self.dispatch_groups(encoder, &fluid[2], parity, groups(c.wrapped().1));
         }
-        self.dispatch_groups(encoder, &way.stream_collide, parity, groups(boundary));
         self.time += 1;
     }
 }
@@ -100,9 +110,51 @@ impl GpuLattice {
 mod quad_tests {
     use super::super::{CellList, Gpu, GpuLattice, Health};
     use crate::lbm::geometry::{Face, Operator, Setup};
+    use crate::lbm::kernel::Kernel;
     use crate::lbm::mrt::Rates;
     use crate::lbm::random::{random_populations, Random};
     use crate::lbm::reference;
+    use crate::lbm::storage::Storage;
+
+    /// Populations after 4 steps of `setup` with `kernel` from random populations of `seed`.
+    fn four_steps(setup: &Setup, kernel: Kernel, seed: u64) -> Vec<crate::lbm::geometry::Cell> {
+        let gpu = std::sync::Arc::new(Gpu::new().expect("a wgpu adapter (lavapipe in CI)"));
+        let setup = Setup {
+            kernel,
+            ..setup.clone()
+        };
+        let mut lattice = GpuLattice::new(gpu, setup.clone(), Health::default(), None).unwrap();
+        lattice.set_populations(&random_populations(&setup, seed));
+        lattice.step(4);
+        lattice.populations()
+    }
+
+    /// The per-cell kernel leaves the quads' populations bit for bit, with every operator, walls,
+    /// a moving wall, solids, a body force, periodic faces, and each storage.
+    #[test]
+    fn the_per_cell_kernel_gives_the_quads_bits() {
+        let operators = [
+            Operator::Bgk,
+            Operator::Trt { magic: 3.0 / 16.0 },
+            Operator::Mrt {
+                rates: Rates::dhumieres(1.0 / 0.7),
+            },
+        ];
+        for (o, operator) in operators.into_iter().enumerate() {
+            let setup = walls_solids_force(operator, 40 + o as u64);
+            for storage in Storage::ALL {
+                let setup = Setup {
+                    storage,
+                    ..setup.clone()
+                };
+                let quads = four_steps(&setup, Kernel::Quads, 41);
+                assert!(
+                    four_steps(&setup, Kernel::Cells, 41) == quads,
+                    "operator {o}, {storage:?}: the kernels differ"
+                );
+            }
+        }
+    }
 
     fn check(setup: Setup, seed: u64) {
         let classes = CellList::new(&setup, true);
@@ -134,8 +186,9 @@ mod quad_tests {
         check(setup, 11);
     }
 
-    #[test]
-    fn mrt_walls_solids_force_quads_match_reference() {
+    /// 12 x 7 x 6 cells at tau 0.7, periodic along x and z, a wall and a moving wall along y, a
+    /// body force, and solid cells drawn from `seed` (one in twenty).
+    fn walls_solids_force(operator: Operator, seed: u64) -> Setup {
         let faces = [
             Face::Periodic,
             Face::Periodic,
@@ -144,13 +197,19 @@ mod quad_tests {
             Face::Periodic,
             Face::Periodic,
         ];
-        let rates = Rates::dhumieres(1.0 / 0.7);
-        let mut setup = Setup::new([12, 7, 6], faces, 0.7, Operator::Mrt { rates });
+        let mut setup = Setup::new([12, 7, 6], faces, 0.7, operator);
         setup.force = [1e-4, -2e-4, 3e-5];
-        let mut r = Random::new(12);
+        let mut r = Random::new(seed);
         for s in setup.solid.iter_mut() {
             *s = r.next() > 0.95;
         }
+        setup
+    }
+
+    #[test]
+    fn mrt_walls_solids_force_quads_match_reference() {
+        let rates = Rates::dhumieres(1.0 / 0.7);
+        let setup = walls_solids_force(Operator::Mrt { rates }, 12);
         check(setup, 13);
     }
 

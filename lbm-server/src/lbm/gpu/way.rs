@@ -1,6 +1,6 @@
-//! The ways of giving the covered cells their solid term ([`CoveredCells`]): each way's kernels,
-//! compiled from lbm.wgsl and imb.wgsl with its constants, its cell list and parameters, and its
-//! bind groups.
+//! The ways of stepping the lattice, each a fluid kernel ([`Kernel`]) and a way of giving the
+//! covered cells their solid term ([`CoveredCells`]): each way's kernels, compiled from lbm.wgsl,
+//! cells.wgsl and imb.wgsl with its constants, its cell list and parameters, and its bind groups.
 
 use super::bindings::{make_bind_group, storage_buffer};
 use super::cell_list::CellList;
@@ -8,51 +8,107 @@ use super::device::Gpu;
 use super::params::{params, Params};
 use super::state::GpuLattice;
 use crate::lbm::imb::{Coupling, CoveredCells, Passes, SolidCollision};
+use crate::lbm::kernel::Kernel;
 use crate::lbm::storage::{Storage, StorageOnDevice};
 use wgpu::util::DeviceExt;
 
 /// The kernels' source, kept in their own files: the lattice and the immersed moving boundary.
 pub const SHADER: &str = include_str!("../../../../shaders/lbm.wgsl");
 pub const IMB_SHADER: &str = include_str!("../../../../shaders/imb.wgsl");
+/// The per-cell kernel (`Kernel::Cells`).
+const CELLS_SHADER: &str = include_str!("../../../../shaders/cells.wgsl");
 /// The redo's list of covered cells with one atomic per subgroup, and with one per cell.
 const LIST_SUBGROUP: &str = include_str!("../../../../shaders/list_subgroup.wgsl");
 const LIST_ATOMIC: &str = include_str!("../../../../shaders/list_atomic.wgsl");
 
-/// One way of giving the covered cells their solid term ([`CoveredCells`]): the
-/// fluid kernels with its constants and the cell classes they take (four-cell quads or one cell
-/// at a time), their list and parameters, the coupling's passes, and the bind groups over the
-/// lattice's buffers. Every way leaves the same populations after a step (bit for bit), so a
-/// lattice may change ways between steps.
+/// One way of stepping the lattice: the fluid kernels ([`Kernel`]) and the way of giving the
+/// covered cells their solid term ([`CoveredCells`]), compiled with their constants, with the
+/// cell classes the kernels take, their list and parameters, the coupling's passes, and the bind
+/// groups over the lattice's buffers. Every way leaves the same populations after a step (bit for
+/// bit), so a lattice may change ways between steps.
 pub(in crate::lbm) struct Way {
     pub(in crate::lbm) mode: CoveredCells,
+    pub(in crate::lbm) kernel: Kernel,
     /// The classes of the cell list (see `CellList`).
     pub(super) classes: CellList,
     pub(super) cell_list: wgpu::Buffer,
     pub(super) params: Vec<wgpu::Buffer>,
     pub(in crate::lbm) bind_groups: [wgpu::BindGroup; 2],
-    /// The boundary cells, either parity.
-    pub(super) stream_collide: wgpu::ComputePipeline,
-    /// The other fluid cells: even step of all, odd step of the interior, odd step of the wrapping.
-    pub(super) stream_collide_fluid: [wgpu::ComputePipeline; 3],
-    /// The even step of quads (four consecutive cells) of interior or wrapping cells.
-    pub(super) stream_collide_quads: Option<wgpu::ComputePipeline>,
-    /// The odd step of quads of interior cells.
-    pub(super) stream_collide_quads_odd: Option<wgpu::ComputePipeline>,
+    /// The fluid kernels.
+    pub(super) fluid: FluidKernels,
     pub(super) macroscopic: wgpu::ComputePipeline,
     /// The coupling's passes, when the lattice has particles.
     pub(in crate::lbm) passes: Option<Passes>,
 }
 
+/// The pipelines of a [`Kernel`].
+pub(super) enum FluidKernels {
+    Quads {
+        /// The boundary cells, either parity.
+        stream_collide: wgpu::ComputePipeline,
+        /// The other fluid cells: even step of all, odd step of the interior, odd step of the
+        /// wrapping.
+        stream_collide_fluid: [wgpu::ComputePipeline; 3],
+        /// The even step of quads (four consecutive cells) of interior or wrapping cells.
+        stream_collide_quads: Option<wgpu::ComputePipeline>,
+        /// The odd step of quads of interior cells.
+        stream_collide_quads_odd: Option<wgpu::ComputePipeline>,
+    },
+    /// Every cell, either parity.
+    Cells(wgpu::ComputePipeline),
+}
+
+impl FluidKernels {
+    fn pipelines(&self) -> Vec<&wgpu::ComputePipeline> {
+        match self {
+            FluidKernels::Quads {
+                stream_collide,
+                stream_collide_fluid,
+                stream_collide_quads,
+                stream_collide_quads_odd,
+            } => std::iter::once(stream_collide)
+                .chain(stream_collide_fluid)
+                .chain(stream_collide_quads)
+                .chain(stream_collide_quads_odd)
+                .collect(),
+            FluidKernels::Cells(cells) => vec![cells],
+        }
+    }
+}
+
 impl GpuLattice {
     /// Makes the steps from the next on give the covered cells their solid term the way `mode`
-    /// says (`Auto` taken as the redo), building that way's kernels the first time it is asked
-    /// for. Every way leaves the same populations bit for bit (the reference tests run each), so
-    /// a run may change ways between any two steps (`trials::WayTrials`). A way whose kernels the
-    /// device does not build (a validation, internal or out-of-memory error: a driver's compiler
-    /// refusing a kernel) leaves the lattice as it was and says why.
+    /// says (`Auto` taken as the redo), with the fluid kernels they take now.
+    #[cfg(test)]
     pub fn set_covered_cells(&mut self, mode: CoveredCells) -> Result<(), String> {
+        self.set_way(self.kernel(), mode)
+    }
+
+    /// Makes the steps from the next on take the fluid kernels `kernel`, with the way of the
+    /// covered cells they take now.
+    pub fn set_kernel(&mut self, kernel: Kernel) -> Result<(), String> {
+        self.set_way(kernel, self.covered_cells())
+    }
+
+    /// The fluid kernels the steps take now.
+    pub fn kernel(&self) -> Kernel {
+        self.way().kernel
+    }
+
+    /// Makes the steps from the next on take the fluid kernels `kernel` and give the covered
+    /// cells their solid term the way `mode` says (`Auto` taken as the redo), building that way's
+    /// kernels the first time it is asked for. Every way leaves the same populations bit for bit
+    /// (the reference tests run each), so a run may change ways between any two steps
+    /// (`trials::Trial`). A way whose kernels the device does not build (a validation, internal
+    /// or out-of-memory error: a driver's compiler refusing a kernel) leaves the lattice as it
+    /// was and says why.
+    pub fn set_way(&mut self, kernel: Kernel, mode: CoveredCells) -> Result<(), String> {
         let mode = mode.definite();
-        if let Some(k) = self.ways.iter().position(|w| w.mode == mode) {
+        if let Some(k) = self
+            .ways
+            .iter()
+            .position(|w| w.mode == mode && w.kernel == kernel)
+        {
             self.active = k;
             return Ok(());
         }
@@ -63,7 +119,7 @@ impl GpuLattice {
             wgpu::ErrorFilter::Validation,
         ]
         .map(|filter| d.push_error_scope(filter));
-        let way = self.build_way(mode);
+        let way = self.build_way(kernel, mode);
         self.compile_kernels(&way);
         let errors: Vec<String> = scopes
             .into_iter()
@@ -73,9 +129,10 @@ impl GpuLattice {
             .collect();
         if !errors.is_empty() {
             return Err(format!(
-                "the covered cells' {} kernels could not be built on {}: {}",
+                "the covered cells' {} kernels could not be built on {} (with the {} fluid kernels): {}",
                 mode.name(),
                 self.gpu.adapter.name,
+                kernel.name(),
                 errors.join("; ")
             ));
         }
@@ -90,19 +147,22 @@ impl GpuLattice {
     }
 
     /// The kernels, cell classes, parameters and bind groups of one way.
-    fn build_way(&self, mode: CoveredCells) -> Way {
+    fn build_way(&self, kernel: Kernel, mode: CoveredCells) -> Way {
         let d = &self.gpu.device;
-        // Fused, the fluid kernels give the covered cells their solid term one cell at a time,
+        // Fused, the quads' kernels give the covered cells their solid term one cell at a time,
         // without the four-cell quads (the term would be compiled into them four times); skip's
-        // quads leave their covered cells as they are (`skipped_lanes`).
-        let classes = CellList::new(&self.setup, self.quads && !mode.fuses());
+        // quads leave their covered cells as they are (`skipped_lanes`). The quads' vector
+        // accesses move four f32 populations: FP32 only.
+        let quads = kernel == Kernel::Quads && self.setup.storage == Storage::Fp32 && !mode.fuses();
+        let classes = CellList::new(&self.setup, quads);
+        // The per-cell kernel reads no cell list.
+        let list: &[u32] = match kernel {
+            Kernel::Quads if !classes.list.is_empty() => &classes.list,
+            _ => &[0u32],
+        };
         let cell_list = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("cell list"),
-            contents: bytemuck::cast_slice(if classes.list.is_empty() {
-                &[0u32]
-            } else {
-                &classes.list
-            }),
+            contents: bytemuck::cast_slice(list),
             usage: wgpu::BufferUsages::STORAGE,
         });
         let params: Vec<wgpu::Buffer> = (0..2)
@@ -119,13 +179,20 @@ impl GpuLattice {
         let pipeline_kind = |entry: &str, kind: u32| self.pipeline(entry, &constants, kind);
         let pipeline = |entry: &str| pipeline_kind(entry, 0);
         let bind_groups = [0, 1].map(|parity| self.bind_group(&params[parity], &cell_list));
+        let fluid = match kernel {
+            Kernel::Quads => FluidKernels::Quads {
+                stream_collide: pipeline("stream_collide"),
+                stream_collide_fluid: [0, 1, 2].map(|kind| pipeline_kind("stream_collide_fluid", kind)),
+                stream_collide_quads: (classes.quads > 0).then(|| pipeline("stream_collide_quads")),
+                stream_collide_quads_odd: (classes.interior_quads > 0)
+                    .then(|| pipeline("stream_collide_quads_odd")),
+            },
+            Kernel::Cells => FluidKernels::Cells(pipeline("stream_collide_cells")),
+        };
         Way {
             mode,
-            stream_collide: pipeline("stream_collide"),
-            stream_collide_fluid: [0, 1, 2].map(|kind| pipeline_kind("stream_collide_fluid", kind)),
-            stream_collide_quads: (classes.quads > 0).then(|| pipeline("stream_collide_quads")),
-            stream_collide_quads_odd: (classes.interior_quads > 0)
-                .then(|| pipeline("stream_collide_quads_odd")),
+            kernel,
+            fluid,
             macroscopic: pipeline("macroscopic"),
             passes: self.options.is_some().then(|| Passes::new(mode, &pipeline_kind)),
             classes,
@@ -205,13 +272,8 @@ impl GpuLattice {
             &Coupling::new(d, None, 0),
             &way.cell_list,
         );
-        let mut kernels = vec![&way.stream_collide, &way.macroscopic];
-        kernels.extend(&way.stream_collide_fluid);
-        kernels.extend(
-            way.stream_collide_quads
-                .iter()
-                .chain(&way.stream_collide_quads_odd),
-        );
+        let mut kernels = way.fluid.pipelines();
+        kernels.push(&way.macroscopic);
         kernels.extend(way.passes.iter().flat_map(|p| p.kernels()));
         let mut encoder = d.create_command_encoder(&Default::default());
         for kernel in kernels {
@@ -225,7 +287,7 @@ impl GpuLattice {
     }
 }
 
-/// lbm.wgsl and imb.wgsl with the list's join for this device (subgroups or one atomic per cell)
+/// lbm.wgsl, cells.wgsl and imb.wgsl with the list's join for this device (subgroups or one atomic per cell)
 /// and the populations' `storage` (its buffers and load/store pair; the quads with FP32), unrolled
 /// and compiled once.
 pub(super) fn shader_module(gpu: &Gpu, storage: Storage) -> wgpu::ShaderModule {
@@ -235,7 +297,7 @@ pub(super) fn shader_module(gpu: &Gpu, storage: Storage) -> wgpu::ShaderModule {
         LIST_ATOMIC
     };
     let storage = storage.shader();
-    let source = format!("{SHADER}\n{IMB_SHADER}\n{list}\n{storage}");
+    let source = format!("{SHADER}\n{CELLS_SHADER}\n{IMB_SHADER}\n{list}\n{storage}");
     gpu.device.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some("lbm.wgsl + imb.wgsl"),
         source: wgpu::ShaderSource::Wgsl(crate::lbm::unroll::unroll(&source).into()),

@@ -55,7 +55,8 @@ impl SolidCollision {
 /// populations and loads (tested bit for bit); they differ in cost.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum CoveredCells {
-    /// Redo for sparse particles, fused from [`FUSED_FROM`] of the cells covered, on every device.
+    /// The three timed on the run's first steps, the fastest kept (trials.rs); the redo until
+    /// then, and in runs too short for the trial.
     #[default]
     Auto,
     /// In the fluid kernels: every cell tests one bit of a cover mask, and a covered cell takes
@@ -90,8 +91,7 @@ impl CoveredCells {
         }
     }
 
-    /// Whether the solid term goes in the fluid kernels (`Auto` taken as sparse particles; see
-    /// [`CoveredCells::for_scene`]).
+    /// Whether the solid term goes in the fluid kernels (`Auto` taken as the redo it starts with).
     pub fn fused(self) -> bool {
         self == CoveredCells::Fused
     }
@@ -126,40 +126,19 @@ impl CoveredCells {
             _ => "covered cells redone",
         }
     }
-
-    /// `Auto` made definite for particles that cover `covered_fraction` of the cells: redo for
-    /// sparse particles, fused from [`FUSED_FROM`] on.
-    pub fn for_scene(self, covered_fraction: f64) -> CoveredCells {
-        match self {
-            CoveredCells::Auto if covered_fraction >= FUSED_FROM => CoveredCells::Fused,
-            mode => mode.definite(),
-        }
-    }
 }
-
-/// The covered fraction of the cells from which the coupled step runs faster with the solid term
-/// fused (BENCHMARKS.md): `auto`'s way on a CPU driver, and the way a timed run starts with
-/// (trials.rs). Lavapipe, 64 x 64 x 128, TRT, spheres of 4 cells: the redo runs at 94 /
-/// 64 / 44 / 30 / 26% of LBM-only at 1 / 512 / 1728 / 2744 / 4096 spheres (0.01 / 6 / 21 / 33 /
-/// 49% of the cells covered by [`covered_fraction`]), fused at 57 / 53 / 43 / 39 / 37%. NVIDIA
-/// H200, 256 x 256 x 512: the redo faster from 1 to 4096 spheres (up to 0.7% covered; 71-57%
-/// against 62-54%), fused faster with half the cells covered (44% against 18%), before the redo
-/// let the fluid kernels run during the host's part of the step; the crossover between is not
-/// measured there.
-pub const FUSED_FROM: f64 = 0.2;
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
+    /// Auto takes the redo until the trial (trials.rs) times the three; a definite way stays.
     #[test]
-    fn auto_fuses_only_for_dense_beds() {
+    fn auto_is_the_redo_until_timed() {
         let auto = CoveredCells::Auto;
-        assert_eq!(auto.for_scene(0.0), CoveredCells::Redo);
-        assert_eq!(auto.for_scene(0.05), CoveredCells::Redo);
-        assert_eq!(auto.for_scene(0.3), CoveredCells::Fused);
+        assert_eq!(auto.definite(), CoveredCells::Redo);
         assert!(!auto.fused());
-        assert_eq!(CoveredCells::Redo.for_scene(0.9), CoveredCells::Redo);
-        assert_eq!(CoveredCells::Fused.for_scene(0.0), CoveredCells::Fused);
+        assert_eq!(CoveredCells::Redo.definite(), CoveredCells::Redo);
+        assert_eq!(CoveredCells::Fused.definite(), CoveredCells::Fused);
     }
 }
