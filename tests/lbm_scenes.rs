@@ -624,11 +624,64 @@ fn crowded_cells_give_the_same_run_every_time() {
     );
 }
 
-    let (code, redo_err, redo) = run_verbose("timed_redo", &scene("redo", "quads"));
-    assert_eq!(code, Some(0), "{redo_err}");
-    assert!(!redo_err.contains("covered cells timed"), "{redo_err}");
-    assert!(!redo_err.contains("kernels timed"), "{redo_err}");
-    let (code, err, timed) = run_verbose("timed", &scene("auto", "auto"));
+/// Without `--verbose` a run says a short header (scene, particles, lattice, steps and simulated
+/// time, device), a line per warning pointing at `--verbose`, the dropped covers once, the DEM's
+/// step and its end in a line each, its progress and its last line; with it each warning in full
+/// and the dropped covers at every check. Three beads of 4 cells at tau 1.06 (two warnings), one
+/// slot per cell (covers dropped by the checks of steps 20 and 30, none by step 10).
+#[test]
+fn a_run_says_a_short_header_and_a_line_per_warning() {
+    let beads = beads_in_a_row(&[3.7, 7.9, 12.1]);
+    let scene = format!(
+        "name = \"brief\"\ngravity = [0.0, 0.0, -9.81]\n[domain]\nmin = [0.0, 0.0, 0.0]\n\
+         max = [0.016, 0.012, 0.016]\n[fluid]\ndensity = 1235.0\ndynamic_viscosity = 0.2\n\
+         [time]\nsteps = 30\n[lattice]\ndx = 0.001\noperator = \"trt\"\nvelocity_scale = 0.05\n\
+         mach = 0.1\ncheck_interval = 10\n[output]\ninterval = 10\n[coupling]\nslots = 1\n\
+         [particles]\ndensity = 2500.0\n{beads}"
+    );
+    let (code, err, _) = run("brief", &scene);
+    assert_eq!(code, Some(0), "{err}");
+    let said: Vec<&str> = err
+        .lines()
+        .filter(|l| !l.starts_with("lbm-server: step "))
+        .collect();
+    let header = "lbm-server: scene 'brief': 3 particles, lattice 16x12x16 (trt, tau 1.061), immersed \
+                  moving boundary; 30 steps = 0.035 s; ";
+    let more = "(--verbose says more)";
+    let expected = [
+        header,
+        "lbm-server: warning: lattice tau = 1.061 (trt): the immersed boundary's drag falls as tau grows",
+        "lbm-server: warning: the smallest particles are 4.0 cells across",
+        "lbm-server: warning: by step 20, ",
+        "dem-client: DEM step ",
+        "dem-client: finished after 30 steps (",
+        "lbm-server: 30 steps in ",
+    ];
+    for start in expected {
+        assert!(said.iter().any(|l| l.starts_with(start)), "{start:?} in {err}");
+    }
+    assert_eq!(said.len(), expected.len(), "a line each: {err}");
+    let warnings = said.iter().filter(|l| l.contains(": warning: "));
+    assert!(
+        warnings.take(2).all(|l| l.ends_with(more)) && err.contains("(--verbose: what limits it)"),
+        "{err}"
+    );
+    let (code, err, _) = run_verbose("brief_verbose", &scene);
+    assert_eq!(code, Some(0), "{err}");
+    assert!(
+        !err.contains(more) && err.contains("(validation/lbm/REPORT.md, \"drag against tau\")"),
+        "the warnings in full: {err}"
+    );
+    assert_eq!(err.matches("did not fit coupling.slots = 1").count(), 2, "{err}");
+    assert!(err.contains("lubrication below"), "the DEM's step limits: {err}");
+}
+
+/// `coupling.covered_cells = "auto"` and `lattice.kernel = "auto"`: the run times the quads' and
+/// the per-cell kernels, then redo, skip and fused, on its own first steps (from step 10, each 5
+/// steps a round, 3 rounds), says what it measured and kept, and writes the same particles.csv as
+/// a run that takes the quads' kernels and redoes the covered cells throughout (the kernels and
+/// ways agree bit for bit, so changing between them changes nothing but the speed); summary.json
+/// names the kernels and the way kept and holds the trial's lines.
 #[test]
 fn a_timed_run_changes_ways_and_not_its_particles() {
     let beads = beads_in_a_row(&[3.7, 7.9, 12.1]);
@@ -676,7 +729,11 @@ fn a_timed_run_changes_ways_and_not_its_particles() {
         serde_json::from_str(&std::fs::read_to_string(timed.join("summary.json")).unwrap()).unwrap();
     assert_eq!(summary["covered_cells"], kept, "summary.json names the way kept");
     assert_eq!(summary["kernel"], kernel, "summary.json names the kernels kept");
-    assert_eq!(summary["trial"].as_array().map(Vec::len), Some(2), "the trial's lines");
+    assert_eq!(
+        summary["trial"].as_array().map(Vec::len),
+        Some(2),
+        "the trial's lines"
+    );
     let particles = |out: &Path| std::fs::read_to_string(out.join("particles.csv")).unwrap();
     assert_eq!(
         particles(&timed).lines().count(),
