@@ -3,10 +3,11 @@
 
 use crate::fields::FieldOutput;
 use crate::lbm::geometry::{tau_minus, Face, Operator, Setup};
-use crate::lbm::gpu::{Gpu, GpuLattice, Health, Unhealthy};
+use crate::lbm::gpu::{Gpu, Health};
 use crate::lbm::mrt::Rates;
 use crate::lbm::storage::Storage;
 use crate::output::{LatticeSummary, Progress};
+use crate::parallel::{BlockLattice, Communicator, Decomposition, RankUnhealthy};
 use scene::lattice::{mach_limit, LatticeFace, LatticeUnits};
 use scene::Scene;
 use serde::Serialize;
@@ -133,6 +134,7 @@ struct FluidSummary {
     scene_file: String,
     adapter: String,
     lattice: LatticeSummary,
+    parallel: ParallelSummary,
     steps_requested: u64,
     steps_completed: u64,
     wall_time_s: f64,
@@ -141,35 +143,83 @@ struct FluidSummary {
     exit_code: u8,
 }
 
+/// How the run was spread over ranks: their count, the blocks along x, y and z, and each rank's
+/// host and device (rank order).
+#[derive(Debug, Serialize)]
+pub struct ParallelSummary {
+    pub ranks: usize,
+    pub blocks: [usize; 3],
+    pub devices: Vec<String>,
+    /// Bytes each rank's halo sent per step (rank order), and the share of the wall time its
+    /// exchange took.
+    pub halo_bytes_per_step: Vec<usize>,
+    pub halo_share: Vec<f64>,
+}
+
+impl ParallelSummary {
+    /// Gathered from every rank at rank 0 (elsewhere: this rank's alone).
+    pub fn gather(comm: &dyn Communicator, lattice: &BlockLattice, device: &str, wall: f64) -> ParallelSummary {
+        let (bytes, time) = lattice.halo_cost();
+        let mine = format!("{}\t{}\t{bytes}\t{}", comm.host(), device, time / wall.max(1e-9));
+        let rows: Vec<Vec<String>> = comm
+            .gather(mine.as_bytes())
+            .iter()
+            .map(|r| String::from_utf8_lossy(r).split('\t').map(String::from).collect())
+            .collect();
+        ParallelSummary {
+            ranks: comm.size(),
+            blocks: lattice.decomposition.blocks,
+            devices: rows.iter().map(|r| format!("{}: {}", r[0], r[1])).collect(),
+            halo_bytes_per_step: rows.iter().map(|r| r[2].parse().unwrap_or(0)).collect(),
+            halo_share: rows.iter().map(|r| r[3].parse().unwrap_or(0.0)).collect(),
+        }
+    }
+}
+
 /// What stopped a run early.
 enum Stop {
     Interrupted,
     Failed(String),
 }
 
-/// Runs a fluid-only scene; returns the exit code.
-pub fn run(scene: &Scene, scene_file: &str, steps: u64, out: &Path, interrupted: Arc<AtomicBool>) -> u8 {
+/// Runs a fluid-only scene on the ranks of `comm`, cut into `blocks`; returns the exit code
+/// (the same on every rank). Rank 0 writes the outputs and says how the run went.
+pub fn run(
+    scene: &Scene,
+    scene_file: &str,
+    steps: u64,
+    out: &Path,
+    interrupted: Arc<AtomicBool>,
+    comm: &dyn Communicator,
+    blocks: [usize; 3],
+) -> u8 {
     let units = scene.lattice_units.as_ref().expect("fluid scenes have a lattice");
-    let (gpu, mut lattice) = match start_lattice(scene, units) {
-        Ok(started) => started,
-        Err(e) => {
-            protocol::say!("lbm-server: error: {e}");
-            return 1;
+    let root = comm.rank() == 0;
+    let started = start_lattice(scene, units, comm, blocks);
+    if !crate::parallel::all(comm, started.is_ok()) {
+        if let Err(e) = &started {
+            protocol::say!("lbm-server: error: rank {}: {e}", comm.rank());
         }
-    };
+        return 1;
+    }
+    let (gpu, mut lattice) = started.expect("started on every rank");
     let started = Instant::now();
-    let result =
-        FluidRun::new(scene, units, out).and_then(|mut r| r.steps(&mut lattice, steps, &interrupted));
+    let result = FluidRun::new(scene, units, out, comm)
+        .and_then(|mut r| r.steps(&mut lattice, steps, &interrupted));
     let wall = started.elapsed().as_secs_f64();
     let (reason, code) = match &result {
         Ok(()) => ("completed".to_string(), 0),
         Err(Stop::Interrupted) => ("interrupted".to_string(), 130),
         Err(Stop::Failed(e)) => (format!("error: {e}"), 1),
     };
+    let parallel = ParallelSummary::gather(comm, &lattice, &gpu.adapter.name, wall);
+    if !root {
+        return code;
+    }
     match &result {
         Err(Stop::Failed(e)) => protocol::say!("lbm-server: error: {e}"),
         Err(Stop::Interrupted) => {
-            protocol::say!("lbm-server: interrupted after {} of {steps} steps", lattice.time)
+            protocol::say!("lbm-server: interrupted after {} of {steps} steps", lattice.time())
         }
         Ok(()) => {}
     }
@@ -181,10 +231,11 @@ pub fn run(scene: &Scene, scene_file: &str, steps: u64, out: &Path, interrupted:
         scene_file: scene_file.to_string(),
         adapter: gpu.adapter.name.clone(),
         lattice: LatticeSummary::of(units),
+        parallel,
         steps_requested: steps,
-        steps_completed: lattice.time,
+        steps_completed: lattice.time(),
         wall_time_s: wall,
-        mlups: cells * lattice.time as f64 / wall.max(1e-9) / 1e6,
+        mlups: cells * lattice.time() as f64 / wall.max(1e-9) / 1e6,
         exit_reason: reason,
         exit_code: code,
     };
@@ -195,7 +246,7 @@ pub fn run(scene: &Scene, scene_file: &str, steps: u64, out: &Path, interrupted:
     if code == 0 {
         protocol::say!(
             "lbm-server: {} steps in {wall:.2} s ({:.2} MLUPS); output in {}",
-            lattice.time,
+            lattice.time(),
             summary.mlups,
             out.display()
         );
@@ -203,14 +254,35 @@ pub fn run(scene: &Scene, scene_file: &str, steps: u64, out: &Path, interrupted:
     code
 }
 
-/// The device and the scene's lattice on it, the run's first line said once it is ready to step
-/// (and a warning where its tau is near 1/2).
-fn start_lattice(scene: &Scene, units: &LatticeUnits) -> Result<(Arc<Gpu>, GpuLattice), String> {
-    let gpu = Arc::new(Gpu::new()?);
-    let lattice = GpuLattice::new(gpu.clone(), setup_of(units), health_of(units), None)?;
+/// This rank's device and block of the scene's lattice on it, the run's first line said (by rank
+/// 0) once it is ready to step (and a warning where its tau is near 1/2).
+fn start_lattice(
+    scene: &Scene,
+    units: &LatticeUnits,
+    comm: &dyn Communicator,
+    blocks: [usize; 3],
+) -> Result<(Arc<Gpu>, BlockLattice), String> {
+    let gpu = Arc::new(Gpu::for_local_rank(comm.local_rank())?);
+    let d = Decomposition::new(units.n, scene.periodic_axes(), blocks, comm.rank());
+    let lattice = BlockLattice::new(gpu.clone(), setup_of(units), health_of(units), d)?;
     crate::run::started();
+    if comm.rank() != 0 {
+        return Ok((gpu, lattice));
+    }
+    let on = if comm.size() > 1 {
+        format!(
+            "{} ranks in {}x{}x{} blocks, rank 0 on {}",
+            comm.size(),
+            blocks[0],
+            blocks[1],
+            blocks[2],
+            gpu.adapter.name
+        )
+    } else {
+        gpu.adapter.name.clone()
+    };
     protocol::say!(
-        "lbm-server: scene '{}': {}x{}x{} cells, dx {:e} m, dt {:e} s, tau {:.4}, Mach {:.3}, {} on {}",
+        "lbm-server: scene '{}': {}x{}x{} cells, dx {:e} m, dt {:e} s, tau {:.4}, Mach {:.3}, {} on {on}",
         scene.name,
         units.n[0],
         units.n[1],
@@ -220,7 +292,6 @@ fn start_lattice(scene: &Scene, units: &LatticeUnits) -> Result<(Arc<Gpu>, GpuLa
         units.tau,
         units.mach,
         units.operator,
-        gpu.adapter.name
     );
     if let Some(warning) = stability_warning(units, false) {
         protocol::say!("lbm-server: warning: {warning}");
@@ -234,33 +305,49 @@ fn write_summary(summary: &FluidSummary, out: &Path) -> std::io::Result<()> {
     std::fs::write(out.join("summary.json"), text + "\n")
 }
 
-/// The outputs of one fluid run.
+/// The outputs of one fluid run (rank 0's; the other ranks step and send their fields).
 struct FluidRun<'a> {
     scene: &'a Scene,
     units: &'a LatticeUnits,
-    fields: FieldOutput,
+    comm: &'a dyn Communicator,
+    fields: Option<FieldOutput>,
     /// The step of the last check that passed (its fields kept on the device).
     last_good: Option<u64>,
 }
 
 impl<'a> FluidRun<'a> {
-    fn new(scene: &'a Scene, units: &'a LatticeUnits, out: &'a Path) -> Result<Self, Stop> {
+    fn new(
+        scene: &'a Scene,
+        units: &'a LatticeUnits,
+        out: &'a Path,
+        comm: &'a dyn Communicator,
+    ) -> Result<Self, Stop> {
+        let fields = if comm.rank() == 0 {
+            FieldOutput::new(scene, units, out).map(Some)
+        } else {
+            Ok(None)
+        };
+        if !crate::parallel::all(comm, fields.is_ok()) {
+            return Err(Stop::Failed(fields.err().unwrap_or_else(|| "rank 0's outputs".into())));
+        }
         Ok(Self {
             scene,
             units,
-            fields: FieldOutput::new(scene, units, out).map_err(Stop::Failed)?,
+            comm,
+            fields: fields.expect("checked"),
             last_good: None,
         })
     }
 
-    fn steps(&mut self, lattice: &mut GpuLattice, steps: u64, interrupted: &AtomicBool) -> Result<(), Stop> {
+    fn steps(&mut self, lattice: &mut BlockLattice, steps: u64, interrupted: &AtomicBool) -> Result<(), Stop> {
         let check = self.units.check_interval;
         let lines_every = self.scene.output.interval;
         let fields_every = self.scene.output.fields_interval;
         let due = |s: u64, every: u64| every > 0 && s.is_multiple_of(every);
-        let mut progress = Progress::new(steps);
-        while lattice.time < steps {
-            let now = lattice.time;
+        // Rank 0's progress alone.
+        let mut progress = (self.comm.rank() == 0).then(|| Progress::new(steps));
+        while lattice.time() < steps {
+            let now = lattice.time();
             let next = [check, lines_every, fields_every]
                 .iter()
                 .filter(|e| **e > 0)
@@ -268,54 +355,77 @@ impl<'a> FluidRun<'a> {
                 .chain([steps])
                 .min()
                 .expect("steps");
-            lattice.step(next - now);
-            // Interrupted (Ctrl-C), the run ends here: this step gets a last step's outputs.
-            let stopping = interrupted.load(Ordering::SeqCst);
+            lattice.step(next - now, self.comm);
+            // Interrupted (Ctrl-C), the run ends here: this step gets a last step's outputs. The
+            // ranks agree, so that all stop at the same step.
+            let going = !interrupted.load(Ordering::SeqCst);
+            let stopping = !crate::parallel::all(self.comm, going);
             let last = next == steps || stopping;
             let (lines, snapshot) = (due(next, lines_every) || last, due(next, fields_every) || last);
             // The whole field crosses the bus only when something is written from it; a check
             // alone reads the status and, if it fails, one cell.
             if lines || snapshot {
-                let (fields, bad) = lattice.fields();
+                let (fields, bad) = lattice.fields(self.comm);
                 if let Some(bad) = bad {
                     return Err(self.blow_up(lattice, next, check, bad));
                 }
-                if lines {
-                    self.fields.write_lines(next, &fields).map_err(Stop::Failed)?;
-                }
-                if snapshot {
-                    self.fields.write_snapshot(next, &fields).map_err(Stop::Failed)?;
-                }
-            } else if let Some(bad) = lattice.health() {
+                self.write(next, &fields, lines, snapshot).map_err(Stop::Failed)?;
+            } else if let Some(bad) = lattice.health(self.comm) {
                 return Err(self.blow_up(lattice, next, check, bad));
             }
             lattice.keep_fields();
             self.last_good = Some(next);
-            progress.update(next);
+            progress.iter_mut().for_each(|p| p.update(next));
             if stopping {
-                progress.abandon();
-                self.fields.flush().map_err(Stop::Failed)?;
+                progress.iter().for_each(Progress::abandon);
+                self.flush().map_err(Stop::Failed)?;
                 return Err(Stop::Interrupted);
             }
         }
-        progress.finish();
-        self.fields.flush().map_err(Stop::Failed)
+        progress.iter().for_each(Progress::finish);
+        self.flush().map_err(Stop::Failed)
     }
 
-    /// Describes the cell furthest out of bounds (`bad`, the first found, where none is further)
-    /// and writes the last good snapshot.
-    fn blow_up(&mut self, lattice: &GpuLattice, step: u64, check: u64, bad: Unhealthy) -> Stop {
-        let bad = lattice.furthest_unhealthy().unwrap_or(bad);
-        let (origin, dx) = (self.scene.domain.min, self.units.dx);
-        let mut msg = format!(
-            "the fluid became unstable between steps {} and {step}: furthest out of bounds, {}",
-            step.saturating_sub(check),
-            bad.describe(&health_of(self.units), origin, dx)
-        );
-        if let Some((good, fields)) = self.last_good.take().zip(lattice.kept_fields()) {
-            msg += &self.fields.write_last_good(good, &fields);
+    /// Rank 0 writes the probe lines and the snapshot of step `step`.
+    fn write(&mut self, step: u64, fields: &[[f32; 4]], lines: bool, snapshot: bool) -> Result<(), String> {
+        let Some(out) = &mut self.fields else {
+            return Ok(());
+        };
+        if lines {
+            out.write_lines(step, fields)?;
         }
-        let _ = self.fields.flush();
+        if snapshot {
+            out.write_snapshot(step, fields)?;
+        }
+        Ok(())
+    }
+
+    fn flush(&mut self) -> Result<(), String> {
+        self.fields.as_mut().map_or(Ok(()), FieldOutput::flush)
+    }
+
+    /// Describes the cell furthest out of bounds (`bad`, the first found, where none is further),
+    /// with the rank that holds it, and writes the last good snapshot (rank 0).
+    fn blow_up(&mut self, lattice: &BlockLattice, step: u64, check: u64, bad: RankUnhealthy) -> Stop {
+        let bad = lattice.furthest_unhealthy(self.comm).unwrap_or(bad);
+        let kept = lattice.kept_fields(self.comm);
+        let (origin, dx) = (self.scene.domain.min, self.units.dx);
+        let rank = if self.comm.size() > 1 {
+            format!("rank {}, ", bad.rank)
+        } else {
+            String::new()
+        };
+        let mut msg = format!(
+            "the fluid became unstable between steps {} and {step}: furthest out of bounds, {rank}{}",
+            step.saturating_sub(check),
+            bad.cell.describe(&health_of(self.units), origin, dx)
+        );
+        if let Some(out) = &mut self.fields {
+            if let Some((good, fields)) = self.last_good.take().zip(kept) {
+                msg += &out.write_last_good(good, &fields);
+            }
+            let _ = out.flush();
+        }
         Stop::Failed(msg)
     }
 }

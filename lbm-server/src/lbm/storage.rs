@@ -44,15 +44,25 @@ impl Storage {
         ((cells * self.bytes()) as u64).div_ceil(16) * 16
     }
 
-    /// The shader source of the storage's buffers and load/store pair.
+    /// The shader source of the storage's buffers and load/store pair (with the four-cell quads
+    /// for FP32).
     pub fn shader(self) -> String {
+        const QUADS: &str = include_str!("../../../shaders/quads.wgsl");
+        match self {
+            Storage::Fp32 => format!("{}\n{QUADS}", self.access_shader()),
+            _ => self.access_shader(),
+        }
+    }
+
+    /// The shader source of the storage's buffers and load/store pair alone (the halo kernels,
+    /// halo.wgsl).
+    pub fn access_shader(self) -> String {
         const FP32: &str = include_str!("../../../shaders/storage_fp32.wgsl");
         const FP16: &str = include_str!("../../../shaders/storage_fp16.wgsl");
         const FP16S: &str = include_str!("../../../shaders/fp16s.wgsl");
         const FP16C: &str = include_str!("../../../shaders/fp16c.wgsl");
-        const QUADS: &str = include_str!("../../../shaders/quads.wgsl");
         match self {
-            Storage::Fp32 => format!("{FP32}\n{QUADS}"),
+            Storage::Fp32 => FP32.to_string(),
             Storage::Fp16s => format!("{FP16}\n{FP16S}"),
             Storage::Fp16c => format!("{FP16}\n{FP16C}"),
         }
