@@ -95,9 +95,10 @@ fn outputs(out: &Path) -> Vec<(String, Vec<u8>)> {
         .collect()
 }
 
-/// The scene on one process, then on each of `ranks` ranks: the same outputs byte for byte, and
-/// the summary names the ranks and blocks. False where the runs cannot be made (said why).
-fn same_on_ranks(tag: &str, text_: &str, ranks: &[usize]) -> bool {
+/// The scene on one process, then on each of `runs`' ranks with its `[parallel]` section (or
+/// none): the same outputs byte for byte, and the summary names the ranks and blocks. False
+/// where the runs cannot be made (said why).
+fn same_on_ranks(tag: &str, text_: &str, runs: &[(usize, &str)]) -> bool {
     let Some(mpirun) = mpirun() else {
         eprintln!("skipped: mpirun is not installed (apt-get install openmpi-bin libopenmpi-dev)");
         return false;
@@ -108,8 +109,10 @@ fn same_on_ranks(tag: &str, text_: &str, ranks: &[usize]) -> bool {
     let o = server(&scene, &single, &[]).output().unwrap();
     assert_eq!(o.status.code(), Some(0), "{}", text(&o));
     let expected = outputs(&single);
-    for &n in ranks {
+    for &(n, parallel) in runs {
         let out = dir.join(format!("np{n}"));
+        let scene = dir.join(format!("np{n}.toml"));
+        std::fs::write(&scene, format!("{text_}\n{parallel}\n")).unwrap();
         let o = run_on(&mpirun, n, &scene, &out);
         if text(&o).contains("built without MPI") {
             eprintln!("skipped: lbm-server is built without MPI (cargo build -p lbm-server --features mpi)");
@@ -130,13 +133,13 @@ fn same_on_ranks(tag: &str, text_: &str, ranks: &[usize]) -> bool {
 
 #[test]
 fn a_walled_run_on_2_and_4_ranks_is_the_single_process_run_byte_for_byte() {
-    same_on_ranks("mpi-walled", &scene("walled", WALLED, SOLID), &[2, 4]);
+    same_on_ranks("mpi-walled", &scene("walled", WALLED, SOLID), &[(2, ""), (4, "")]);
 }
 
 #[test]
 fn a_periodic_run_cut_along_two_axes_is_the_single_process_run_byte_for_byte() {
     let blocks = "[parallel]\nblocks = [2, 1, 2]";
-    same_on_ranks("mpi-periodic", &scene("periodic", PERIODIC, blocks), &[4]);
+    same_on_ranks("mpi-periodic", &scene("periodic", PERIODIC, ""), &[(4, blocks)]);
 }
 
 /// Blocks that cannot be are refused before anything runs, naming the field and value: on one

@@ -19,7 +19,8 @@ mod mpi_world;
 mod tests;
 
 pub use block::{BlockLattice, RankUnhealthy};
-use communicator::{launched_ranks, OneRank};
+pub use communicator::launched_ranks;
+use communicator::OneRank;
 pub use communicator::{all, Communicator};
 pub use decomposition::{check_blocks, choose_blocks, Decomposition};
 
