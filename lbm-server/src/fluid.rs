@@ -7,7 +7,7 @@ use crate::lbm::gpu::{Gpu, Health};
 use crate::lbm::mrt::Rates;
 use crate::lbm::storage::Storage;
 use crate::output::{LatticeSummary, Progress};
-use crate::parallel::{BlockLattice, Communicator, Decomposition, RankUnhealthy};
+use crate::parallel::{BlockLattice, Communicator, Decomposition, ParallelSummary, RankUnhealthy};
 use scene::lattice::{mach_limit, LatticeFace, LatticeUnits};
 use scene::Scene;
 use serde::Serialize;
@@ -143,39 +143,6 @@ struct FluidSummary {
     exit_code: u8,
 }
 
-/// How the run was spread over ranks: their count, the blocks along x, y and z, and each rank's
-/// host and device (rank order).
-#[derive(Debug, Serialize)]
-pub struct ParallelSummary {
-    pub ranks: usize,
-    pub blocks: [usize; 3],
-    pub devices: Vec<String>,
-    /// Bytes each rank's halo sent per step (rank order), and the share of the wall time its
-    /// exchange took.
-    pub halo_bytes_per_step: Vec<usize>,
-    pub halo_share: Vec<f64>,
-}
-
-impl ParallelSummary {
-    /// Gathered from every rank at rank 0 (elsewhere: this rank's alone).
-    pub fn gather(comm: &dyn Communicator, lattice: &BlockLattice, device: &str, wall: f64) -> ParallelSummary {
-        let (bytes, time) = lattice.halo_cost();
-        let mine = format!("{}\t{}\t{bytes}\t{}", comm.host(), device, time / wall.max(1e-9));
-        let rows: Vec<Vec<String>> = comm
-            .gather(mine.as_bytes())
-            .iter()
-            .map(|r| String::from_utf8_lossy(r).split('\t').map(String::from).collect())
-            .collect();
-        ParallelSummary {
-            ranks: comm.size(),
-            blocks: lattice.decomposition.blocks,
-            devices: rows.iter().map(|r| format!("{}: {}", r[0], r[1])).collect(),
-            halo_bytes_per_step: rows.iter().map(|r| r[2].parse().unwrap_or(0)).collect(),
-            halo_share: rows.iter().map(|r| r[3].parse().unwrap_or(0.0)).collect(),
-        }
-    }
-}
-
 /// What stopped a run early.
 enum Stop {
     Interrupted,
@@ -198,7 +165,8 @@ pub fn run(
     let started = start_lattice(scene, units, comm, blocks);
     if !crate::parallel::all(comm, started.is_ok()) {
         if let Err(e) = &started {
-            protocol::say!("lbm-server: error: rank {}: {e}", comm.rank());
+            let rank = if comm.size() > 1 { format!("rank {}: ", comm.rank()) } else { String::new() };
+            protocol::say!("lbm-server: error: {rank}{e}");
         }
         return 1;
     }
@@ -216,42 +184,67 @@ pub fn run(
     if !root {
         return code;
     }
-    match &result {
-        Err(Stop::Failed(e)) => protocol::say!("lbm-server: error: {e}"),
+    let ended = Ended {
+        result,
+        reason,
+        code,
+        wall,
+        steps,
+        completed: lattice.time(),
+    };
+    report(scene, scene_file, out, &gpu.adapter.name, parallel, ended)
+}
+
+/// How a fluid run ended.
+struct Ended {
+    result: Result<(), Stop>,
+    reason: String,
+    code: u8,
+    wall: f64,
+    steps: u64,
+    completed: u64,
+}
+
+/// Rank 0 says how the run ended and writes summary.json; returns the exit code.
+fn report(scene: &Scene, scene_file: &str, out: &Path, adapter: &str, parallel: ParallelSummary, e: Ended) -> u8 {
+    let units = scene.lattice_units.as_ref().expect("fluid scenes have a lattice");
+    match &e.result {
+        Err(Stop::Failed(msg)) => protocol::say!("lbm-server: error: {msg}"),
         Err(Stop::Interrupted) => {
-            protocol::say!("lbm-server: interrupted after {} of {steps} steps", lattice.time())
+            protocol::say!("lbm-server: interrupted after {} of {} steps", e.completed, e.steps)
         }
         Ok(()) => {}
     }
     let cells = units.n.iter().product::<usize>() as f64;
+    let wall = e.wall;
     let summary = FluidSummary {
         software: crate::output::software(),
         written_unix_s: crate::output::unix_seconds(),
         scene: scene.name.clone(),
         scene_file: scene_file.to_string(),
-        adapter: gpu.adapter.name.clone(),
+        adapter: adapter.to_string(),
         lattice: LatticeSummary::of(units),
         parallel,
-        steps_requested: steps,
-        steps_completed: lattice.time(),
+        steps_requested: e.steps,
+        steps_completed: e.completed,
         wall_time_s: wall,
-        mlups: cells * lattice.time() as f64 / wall.max(1e-9) / 1e6,
-        exit_reason: reason,
-        exit_code: code,
+        mlups: cells * e.completed as f64 / wall.max(1e-9) / 1e6,
+        exit_reason: e.reason,
+        exit_code: e.code,
     };
-    if let Err(e) = write_summary(&summary, out) {
-        protocol::say!("lbm-server: error: summary.json: {e}");
+    if let Err(err) = write_summary(&summary, out) {
+        protocol::say!("lbm-server: error: summary.json: {err}");
         return 1;
     }
-    if code == 0 {
+    if e.code == 0 {
         protocol::say!(
             "lbm-server: {} steps in {wall:.2} s ({:.2} MLUPS); output in {}",
-            lattice.time(),
+            e.completed,
             summary.mlups,
             out.display()
         );
     }
-    code
+    e.code
 }
 
 /// This rank's device and block of the scene's lattice on it, the run's first line said (by rank
@@ -369,7 +362,11 @@ impl<'a> FluidRun<'a> {
                 if let Some(bad) = bad {
                     return Err(self.blow_up(lattice, next, check, bad));
                 }
-                self.write(next, &fields, lines, snapshot).map_err(Stop::Failed)?;
+                let written = self.write(next, &fields, lines, snapshot);
+                // Every rank stops where rank 0 could not write.
+                if !crate::parallel::all(self.comm, written.is_ok()) {
+                    return Err(Stop::Failed(written.err().unwrap_or_else(|| "rank 0's outputs".into())));
+                }
             } else if let Some(bad) = lattice.health(self.comm) {
                 return Err(self.blow_up(lattice, next, check, bad));
             }

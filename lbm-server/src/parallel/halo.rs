@@ -33,7 +33,7 @@ use std::time::{Duration, Instant};
 pub struct Halo {
     kernels: HaloKernels,
     faces: Vec<HaloFace>,
-    /// Bytes sent per step, and the time spent exchanging.
+    /// Bytes sent per step, and the time spent exchanging (from the step's end on the device).
     pub bytes_per_step: usize,
     pub time: Duration,
 }
@@ -85,6 +85,8 @@ impl Halo {
     /// next to each face into the neighbour's ghost layer, even (an odd step done) the ghost layer
     /// into the neighbour's cells.
     pub fn exchange(&mut self, lattice: &GpuLattice, comm: &dyn Communicator) {
+        // The step done first (the pack would wait for it): the time counted is the exchange's.
+        lattice.finish();
         let started = Instant::now();
         let after_even = lattice.time % 2 == 1;
         for axis in 0..3 {

@@ -6,6 +6,7 @@
 //! - `decomposition.rs`: the blocks, chosen or given by the scene, and one rank's block.
 //! - `halo.rs`: the exchange of the populations that cross the block faces, after every step.
 //! - `block.rs`: one rank's lattice, stepped, read and checked with the others ([`BlockLattice`]).
+//! - `summary.rs`: what summary.json says of the ranks.
 //!
 //! Every rank runs the same code, one rank included: a run on one rank is the single-process run.
 
@@ -13,6 +14,7 @@ mod block;
 mod communicator;
 mod decomposition;
 mod halo;
+mod summary;
 #[cfg(feature = "mpi")]
 mod mpi_world;
 #[cfg(test)]
@@ -23,6 +25,7 @@ pub use communicator::launched_ranks;
 use communicator::OneRank;
 pub use communicator::{all, Communicator};
 pub use decomposition::{check_blocks, choose_blocks, Decomposition};
+pub use summary::ParallelSummary;
 
 /// Whether this build runs on several ranks (`--features mpi`).
 pub const MPI_BUILD: bool = cfg!(feature = "mpi");

@@ -6,7 +6,6 @@ use super::{BlockLattice, Decomposition};
 use crate::lbm::geometry::{Face, Operator, Setup};
 use crate::lbm::gpu::{Gpu, GpuLattice, Health};
 use crate::lbm::mrt::Rates;
-use crate::lbm::random::Random;
 use std::collections::{HashMap, VecDeque};
 use std::sync::{Arc, Condvar, Mutex};
 
@@ -131,28 +130,15 @@ fn check(setup: Setup, blocks: [usize; 3], steps: u64) {
     }
 }
 
-/// Walls, a moving wall, solid cells on the cuts, a body force, MRT.
+/// Walls, a moving wall, solid cells (some on the cuts), a body force, TRT.
 fn walled() -> Setup {
-    let faces = [
-        Face::Periodic,
-        Face::Periodic,
-        Face::Wall,
-        Face::MovingWall([0.02, 0.0, 0.01]),
-        Face::Wall,
-        Face::MovingWall([0.03, 0.01, 0.0]),
-    ];
-    let rates = Rates::dhumieres(1.0 / 0.7);
-    let mut setup = Setup::new([8, 6, 8], faces, 0.7, Operator::Mrt { rates });
-    setup.force = [1e-4, -2e-4, 3e-5];
-    let mut r = Random::new(5);
-    for s in setup.solid.iter_mut() {
-        *s = r.next() > 0.9;
-    }
-    setup
+    crate::lbm::tests::trt_walls_and_solids([8, 6, 8])
 }
 
+/// Periodic, a body force, MRT.
 fn periodic() -> Setup {
-    let mut setup = Setup::new([8, 6, 8], [Face::Periodic; 6], 0.8, Operator::Trt { magic: 0.25 });
+    let rates = Rates::dhumieres(1.0 / 0.8);
+    let mut setup = Setup::new([8, 6, 8], [Face::Periodic; 6], 0.8, Operator::Mrt { rates });
     setup.force = [2e-4, 1e-4, -1e-4];
     setup
 }

@@ -2,7 +2,7 @@
 //! of cells packed into a flat buffer and read back, or written from one. Which populations, and
 //! where they go, is `crate::parallel::halo`'s business.
 
-use super::bindings::storage_buffer;
+use super::bindings::{storage_buffer, storage_entry};
 use super::state::GpuLattice;
 use wgpu::util::DeviceExt;
 
@@ -37,19 +37,9 @@ impl GpuLattice {
     /// Compiles the halo kernels for this lattice's storage.
     pub fn halo_kernels(&self) -> HaloKernels {
         let d = &self.gpu.device;
-        let entry = |binding: u32, read_only: bool| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: wgpu::ShaderStages::COMPUTE,
-            ty: wgpu::BindingType::Buffer {
-                ty: wgpu::BufferBindingType::Storage { read_only },
-                has_dynamic_offset: false,
-                min_binding_size: None,
-            },
-            count: None,
-        };
         let layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("halo"),
-            entries: &[entry(0, true), entry(1, false)],
+            entries: &[storage_entry(0, true), storage_entry(1, false)],
         });
         let pipeline_layout = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("halo"),
@@ -61,19 +51,22 @@ impl GpuLattice {
             label: Some("halo.wgsl"),
             source: wgpu::ShaderSource::Wgsl(crate::lbm::unroll::unroll(&source).into()),
         });
-        let pipeline = |entry: &str| {
+        let pipeline = |unpack: bool| {
             d.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(entry),
+                label: Some(if unpack { "halo unpack" } else { "halo pack" }),
                 layout: Some(&pipeline_layout),
                 module: &module,
-                entry_point: Some(entry),
-                compilation_options: Default::default(),
+                entry_point: Some("halo"),
+                compilation_options: wgpu::PipelineCompilationOptions {
+                    constants: &[("UNPACK", f64::from(u8::from(unpack)))],
+                    ..Default::default()
+                },
                 cache: None,
             })
         };
         HaloKernels {
-            pack: pipeline("pack"),
-            unpack: pipeline("unpack"),
+            pack: pipeline(false),
+            unpack: pipeline(true),
             layout,
         }
     }
