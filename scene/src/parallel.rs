@@ -68,3 +68,37 @@ impl Scene {
         Ok(())
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use crate::Scene;
+
+    /// A fluid-only scene of 8 x 8 x 4 cells with `parallel`.
+    fn parse(parallel: &str) -> Result<Scene, crate::SceneError> {
+        let text = format!(
+            "name = \"p\"\n[domain]\nmin = [0.0, 0.0, 0.0]\nmax = [0.008, 0.008, 0.004]\n[fluid]\n\
+             density = 1000.0\ndynamic_viscosity = 1.0e-3\n[time]\nsteps = 10\n[lattice]\ndx = 0.001\n\
+             tau = 0.8\nvelocity_scale = 5.0e-4\n{parallel}\n"
+        );
+        Scene::parse(&text, "p.toml")
+    }
+
+    #[test]
+    fn blocks_that_divide_the_lattice_are_taken() {
+        let scene = parse("[parallel]\nblocks = [2, 4, 2]").unwrap();
+        assert_eq!(scene.parallel.blocks(), Some([2, 4, 2]));
+        assert_eq!(parse("").unwrap().parallel.blocks(), None);
+    }
+
+    #[test]
+    fn blocks_that_cannot_be_are_refused_naming_the_field() {
+        let e = parse("[parallel]\nblocks = [3, 1, 1]").unwrap_err();
+        assert_eq!((e.field.as_str(), e.value.as_str()), ("parallel.blocks[0]", "3"), "{e}");
+        assert!(e.problem.contains("divide the lattice's 8 cells along x"), "{e}");
+        let e = parse("[parallel]\nblocks = [1, 1, 4]").unwrap_err();
+        assert_eq!(e.field, "parallel.blocks[2]", "{e}");
+        assert!(e.problem.contains("thinner than the halo"), "{e}");
+        let e = parse("[parallel]\nblocks = [1, 0, 1]").unwrap_err();
+        assert_eq!(e.field, "parallel.blocks[1]", "{e}");
+    }
+}
