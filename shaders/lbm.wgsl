@@ -53,7 +53,8 @@ override FORCE: bool = true;
 
 @group(0) @binding(0) var<uniform> params: Params;
 // One word per cell: bit i (0-18) set when link i leaves the fluid (a face that is not periodic,
-// or a solid cell), SOLID for a solid cell, WRAPS for a cell on a periodic face.
+// or a solid cell), SOLID for a solid cell, WRAPS for a cell on a periodic face, GHOST for a cell
+// of a ghost layer.
 @group(0) @binding(1) var<storage, read> flags: array<u32>;
 // MRT: A = M^-1 S M (361 values) then B = M^-1 (I - S/2) M (361 values), row-major, four to a
 // vec4. A uniform buffer: a load at a constant offset is one scalar load, where a storage load is
@@ -75,6 +76,9 @@ const SOLID_LINK: u32 = 6u;
 
 const SOLID: u32 = 0x80000u;
 const WRAPS: u32 = 0x100000u;
+// A cell of a ghost layer: a neighbouring rank's, its populations written by the halo exchange
+// (halo.wgsl); left out of the health check.
+const GHOST: u32 = 0x200000u;
 
 const PERIODIC: u32 = 0u;
 const WALL: u32 = 1u;
@@ -451,7 +455,7 @@ fn wrapped(q: vec3<i32>) -> u32 {
 
 // Density and velocity (seed eq. 5-6) of every cell, and the health check: the smallest index of
 // a cell with a non-finite value, a density deviation above relax.w or a speed above relax.z goes
-// to status[0].
+// to status[0] (a ghost cell's, another rank's to check, excepted).
 @compute @workgroup_size(64)
 fn macroscopic(
     @builtin(workgroup_id) wg: vec3<u32>,
@@ -470,7 +474,7 @@ fn macroscopic(
     let speed = length(m.u);
     // NaN fails every comparison: written so that NaN and infinity count as unhealthy.
     let healthy = abs(m.rho - 1.0) <= params.relax.w && speed <= params.relax.z;
-    if !healthy {
+    if !healthy && (flag & GHOST) == 0u {
         atomicMin(&status[0], k);
     }
 }

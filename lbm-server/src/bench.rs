@@ -2,6 +2,7 @@
 
 mod coupled;
 mod naive;
+mod ranks;
 mod storage;
 
 use crate::lbm::geometry::{Face, Operator, Setup};
@@ -99,7 +100,15 @@ pub fn parse_operator(name: &str, tau: f64) -> Result<Operator, String> {
 }
 
 pub fn main(args: BenchArgs) -> ExitCode {
-    match run(&args) {
+    // Under a launcher (mpirun, srun) the bench is the ranks', one rank included (the baseline of
+    // a scaling series).
+    let ranks = crate::parallel::start();
+    let result = match &ranks {
+        Ok(comm) if crate::parallel::launched_ranks().is_some() => ranks::run(&args, &**comm),
+        Ok(_) => run(&args),
+        Err(e) => Err(e.clone()),
+    };
+    match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             protocol::say!("lbm-server: error: {e}");

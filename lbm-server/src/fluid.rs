@@ -3,10 +3,11 @@
 
 use crate::fields::FieldOutput;
 use crate::lbm::geometry::{tau_minus, Face, Operator, Setup};
-use crate::lbm::gpu::{Gpu, GpuLattice, Health, Unhealthy};
+use crate::lbm::gpu::{Gpu, GpuLattice, Health};
 use crate::lbm::kernel::Kernel;
 use crate::lbm::mrt::Rates;
 use crate::output::LatticeSummary;
+use crate::parallel::{BlockLattice, Communicator, Decomposition, ParallelSummary, RankUnhealthy};
 use crate::terminal::{Progress, Warning};
 use crate::trials::{kernels_of, Trial};
 use scene::lattice::{mach_limit, CollisionOperator, LatticeFace, LatticeUnits};
@@ -146,6 +147,7 @@ struct FluidSummary {
     scene_file: String,
     adapter: String,
     lattice: LatticeSummary,
+    parallel: ParallelSummary,
     steps_requested: u64,
     steps_completed: u64,
     wall_time_s: f64,
@@ -164,19 +166,40 @@ enum Stop {
     Failed(String),
 }
 
-/// Runs a fluid-only scene; returns the exit code.
-pub fn run(scene: &Scene, scene_file: &str, steps: u64, out: &Path, interrupted: Arc<AtomicBool>) -> u8 {
+/// Runs a fluid-only scene on the ranks of `comm`, cut into `blocks`; returns the exit code
+/// (the same on every rank). Rank 0 writes the outputs and says how the run went.
+pub fn run(
+    scene: &Scene,
+    scene_file: &str,
+    steps: u64,
+    out: &Path,
+    interrupted: Arc<AtomicBool>,
+    comm: &dyn Communicator,
+    blocks: [usize; 3],
+) -> u8 {
     let units = scene.lattice_units.as_ref().expect("fluid scenes have a lattice");
-    let trial = Trial::new(kernels_of(&units.kernel), Vec::new(), steps);
-    let (gpu, mut lattice) = match start_lattice(scene, units, &trial) {
-        Ok(started) => started,
-        Err(e) => {
-            protocol::say!("lbm-server: error: {e}");
-            return 1;
+    let root = comm.rank() == 0;
+    // On several ranks every rank steps in lockstep: no trial, the first kernels open.
+    let mut kernels = kernels_of(&units.kernel);
+    if comm.size() > 1 {
+        kernels.truncate(1);
+    }
+    let trial = Trial::new(kernels, Vec::new(), steps);
+    let started = start_lattice(scene, units, comm, blocks, &trial);
+    if !crate::parallel::all(comm, started.is_ok()) {
+        if let Err(e) = &started {
+            let rank = if comm.size() > 1 {
+                format!("rank {}: ", comm.rank())
+            } else {
+                String::new()
+            };
+            protocol::say!("lbm-server: error: {rank}{e}");
         }
-    };
+        return 1;
+    }
+    let (gpu, mut lattice) = started.expect("started on every rank");
     let started = Instant::now();
-    let (result, trial) = match FluidRun::new(scene, units, out, trial.clone()) {
+    let (result, trial) = match FluidRun::new(scene, units, out, comm, trial.clone()) {
         Ok(mut run) => (run.steps(&mut lattice, steps, &interrupted), run.trial),
         Err(e) => (Err(e), trial),
     };
@@ -186,61 +209,124 @@ pub fn run(scene: &Scene, scene_file: &str, steps: u64, out: &Path, interrupted:
         Err(Stop::Interrupted) => ("interrupted".to_string(), 130),
         Err(Stop::Failed(e)) => (format!("error: {e}"), 1),
     };
-    match &result {
-        Err(Stop::Failed(e)) => protocol::say!("lbm-server: error: {e}"),
+    let parallel = ParallelSummary::gather(comm, &lattice, &gpu.adapter.name, wall);
+    if !root {
+        return code;
+    }
+    let ended = Ended {
+        result,
+        reason,
+        code,
+        wall,
+        steps,
+        completed: lattice.time(),
+        trial,
+    };
+    report(scene, scene_file, out, &gpu.adapter.name, parallel, ended)
+}
+
+/// How a fluid run ended.
+struct Ended {
+    result: Result<(), Stop>,
+    reason: String,
+    code: u8,
+    wall: f64,
+    steps: u64,
+    completed: u64,
+    /// The start-up trial of the kernels: what it measured and kept.
+    trial: Trial,
+}
+
+/// Rank 0 says how the run ended and writes summary.json; returns the exit code.
+fn report(
+    scene: &Scene,
+    scene_file: &str,
+    out: &Path,
+    adapter: &str,
+    parallel: ParallelSummary,
+    e: Ended,
+) -> u8 {
+    let units = scene.lattice_units.as_ref().expect("fluid scenes have a lattice");
+    match &e.result {
+        Err(Stop::Failed(msg)) => protocol::say!("lbm-server: error: {msg}"),
         Err(Stop::Interrupted) => {
-            protocol::say!("lbm-server: interrupted after {} of {steps} steps", lattice.time)
+            protocol::say!(
+                "lbm-server: interrupted after {} of {} steps",
+                e.completed,
+                e.steps
+            )
         }
         Ok(()) => {}
     }
     let cells = units.n.iter().product::<usize>() as f64;
+    let wall = e.wall;
     let summary = FluidSummary {
         software: crate::output::software(),
         written_unix_s: crate::output::unix_seconds(),
         scene: scene.name.clone(),
         scene_file: scene_file.to_string(),
-        adapter: gpu.adapter.name.clone(),
+        adapter: adapter.to_string(),
         lattice: LatticeSummary::of(units),
-        steps_requested: steps,
-        steps_completed: lattice.time,
+        parallel,
+        steps_requested: e.steps,
+        steps_completed: e.completed,
         wall_time_s: wall,
-        mlups: cells * lattice.time as f64 / wall.max(1e-9) / 1e6,
-        kernel: trial.kept().kernel.name(),
-        trial: trial.lines.clone(),
-        exit_reason: reason,
-        exit_code: code,
+        mlups: cells * e.completed as f64 / wall.max(1e-9) / 1e6,
+        kernel: e.trial.kept().kernel.name(),
+        trial: e.trial.lines.clone(),
+        exit_reason: e.reason,
+        exit_code: e.code,
     };
-    if let Err(e) = write_summary(&summary, out) {
-        protocol::say!("lbm-server: error: summary.json: {e}");
+    if let Err(err) = write_summary(&summary, out) {
+        protocol::say!("lbm-server: error: summary.json: {err}");
         return 1;
     }
-    if code == 0 {
+    if e.code == 0 {
         protocol::say!(
             "lbm-server: {} steps in {wall:.2} s ({:.2} MLUPS); output in {}",
-            lattice.time,
+            e.completed,
             summary.mlups,
             out.display()
         );
     }
-    code
+    e.code
 }
 
-/// The device and the scene's lattice on it, the run's first line said once it is ready to step
-/// (and a warning where its tau is near 1/2, or its storage was measured to fail).
+/// This rank's device and block of the scene's lattice on it, the run's first line said (by rank
+/// 0) once it is ready to step (and a warning where its tau is near 1/2, or its storage was
+/// measured to fail).
 fn start_lattice(
     scene: &Scene,
     units: &LatticeUnits,
+    comm: &dyn Communicator,
+    blocks: [usize; 3],
     trial: &Trial,
-) -> Result<(Arc<Gpu>, GpuLattice), String> {
-    let gpu = Arc::new(Gpu::new()?);
+) -> Result<(Arc<Gpu>, BlockLattice), String> {
+    let gpu = Arc::new(Gpu::for_local_rank(comm.local_rank())?);
+    let d = Decomposition::new(units.n, scene.periodic_axes(), blocks, comm.rank());
     let setup = Setup {
         kernel: trial.kept().kernel,
         ..setup_of(units)
     };
-    let lattice = GpuLattice::new(gpu.clone(), setup, health_of(units), None)?;
+    let lattice = BlockLattice::new(gpu.clone(), setup, health_of(units), d)?;
     crate::run::started();
+    if comm.rank() != 0 {
+        return Ok((gpu, lattice));
+    }
+    let on = if comm.size() > 1 {
+        format!(
+            "{} ranks in {}x{}x{} blocks, rank 0 on {}",
+            comm.size(),
+            blocks[0],
+            blocks[1],
+            blocks[2],
+            gpu.adapter.name
+        )
+    } else {
+        gpu.adapter.name.clone()
+    };
     protocol::say!(
-        "lbm-server: scene '{}': {}x{}x{} cells, dx {:e} m, dt {:e} s, tau {:.4}, Mach {:.3}, {} on {}, {}{}",
+        "lbm-server: scene '{}': {}x{}x{} cells, dx {:e} m, dt {:e} s, tau {:.4}, Mach {:.3}, {} on {on}, {}{}",
         scene.name,
         units.n[0],
         units.n[1],
@@ -250,8 +336,7 @@ fn start_lattice(
         units.tau,
         units.mach,
         units.operator,
-        gpu.adapter.name,
-        lattice.kernel().describe(),
+        lattice.lattice.kernel().describe(),
         match trial.open() {
             true => format!("; {}", trial.describe()),
             false => String::new(),
@@ -270,11 +355,12 @@ fn write_summary(summary: &FluidSummary, out: &Path) -> std::io::Result<()> {
     std::fs::write(out.join("summary.json"), text + "\n")
 }
 
-/// The outputs of one fluid run.
+/// The outputs of one fluid run (rank 0's; the other ranks step and send their fields).
 struct FluidRun<'a> {
     scene: &'a Scene,
     units: &'a LatticeUnits,
-    fields: FieldOutput,
+    comm: &'a dyn Communicator,
+    fields: Option<FieldOutput>,
     /// The step of the last check that passed (its fields kept on the device).
     last_good: Option<u64>,
     /// The start-up trial of the kernels (trials.rs) and its clock.
@@ -283,11 +369,28 @@ struct FluidRun<'a> {
 }
 
 impl<'a> FluidRun<'a> {
-    fn new(scene: &'a Scene, units: &'a LatticeUnits, out: &'a Path, trial: Trial) -> Result<Self, Stop> {
+    fn new(
+        scene: &'a Scene,
+        units: &'a LatticeUnits,
+        out: &'a Path,
+        comm: &'a dyn Communicator,
+        trial: Trial,
+    ) -> Result<Self, Stop> {
+        let fields = if comm.rank() == 0 {
+            FieldOutput::new(scene, units, out).map(Some)
+        } else {
+            Ok(None)
+        };
+        if !crate::parallel::all(comm, fields.is_ok()) {
+            return Err(Stop::Failed(
+                fields.err().unwrap_or_else(|| "rank 0's outputs".into()),
+            ));
+        }
         Ok(Self {
             scene,
             units,
-            fields: FieldOutput::new(scene, units, out).map_err(Stop::Failed)?,
+            comm,
+            fields: fields.expect("checked"),
             last_good: None,
             trial,
             made: Instant::now(),
@@ -311,18 +414,24 @@ impl<'a> FluidRun<'a> {
         }
     }
 
-    fn steps(&mut self, lattice: &mut GpuLattice, steps: u64, interrupted: &AtomicBool) -> Result<(), Stop> {
+    fn steps(
+        &mut self,
+        lattice: &mut BlockLattice,
+        steps: u64,
+        interrupted: &AtomicBool,
+    ) -> Result<(), Stop> {
         let check = self.units.check_interval;
         let lines_every = self.scene.output.interval;
         let fields_every = self.scene.output.fields_interval;
         let due = |s: u64, every: u64| every > 0 && s.is_multiple_of(every);
-        let mut progress = Progress::new(steps);
-        while lattice.time < steps {
-            let now = lattice.time;
+        // Rank 0's progress alone.
+        let mut progress = (self.comm.rank() == 0).then(|| Progress::new(steps));
+        while lattice.time() < steps {
+            let now = lattice.time();
             // The trial times one step at a time (each followed by the health check's readback).
             let trial = self.trial.under_way();
             if trial {
-                self.take_kernel(lattice);
+                self.take_kernel(&mut lattice.lattice);
             }
             let next = [check, lines_every, fields_every]
                 .iter()
@@ -332,54 +441,83 @@ impl<'a> FluidRun<'a> {
                 .chain(trial.then_some(now + 1))
                 .min()
                 .expect("steps");
-            lattice.step(next - now);
-            // Interrupted (Ctrl-C), the run ends here: this step gets a last step's outputs.
-            let stopping = interrupted.load(Ordering::SeqCst);
+            lattice.step(next - now, self.comm);
+            // Interrupted (Ctrl-C), the run ends here: this step gets a last step's outputs. The
+            // ranks agree, so that all stop at the same step.
+            let going = !interrupted.load(Ordering::SeqCst);
+            let stopping = !crate::parallel::all(self.comm, going);
             let last = next == steps || stopping;
             let (lines, snapshot) = (due(next, lines_every) || last, due(next, fields_every) || last);
             // The whole field crosses the bus only when something is written from it; a check
             // alone reads the status and, if it fails, one cell.
             if lines || snapshot {
-                let (fields, bad) = lattice.fields();
+                let (fields, bad) = lattice.fields(self.comm);
                 if let Some(bad) = bad {
                     return Err(self.blow_up(lattice, next, check, bad));
                 }
-                if lines {
-                    self.fields.write_lines(next, &fields).map_err(Stop::Failed)?;
+                let written = self.write(next, &fields, lines, snapshot);
+                // Every rank stops where rank 0 could not write.
+                if !crate::parallel::all(self.comm, written.is_ok()) {
+                    return Err(Stop::Failed(
+                        written.err().unwrap_or_else(|| "rank 0's outputs".into()),
+                    ));
                 }
-                if snapshot {
-                    self.fields.write_snapshot(next, &fields).map_err(Stop::Failed)?;
-                }
-            } else if let Some(bad) = lattice.health() {
+            } else if let Some(bad) = lattice.health(self.comm) {
                 return Err(self.blow_up(lattice, next, check, bad));
             }
             lattice.keep_fields();
             self.last_good = Some(next);
-            progress.update(next);
+            progress.iter_mut().for_each(|p| p.update(next));
             if stopping {
-                progress.abandon();
-                self.fields.flush().map_err(Stop::Failed)?;
+                progress.iter().for_each(Progress::abandon);
+                self.flush().map_err(Stop::Failed)?;
                 return Err(Stop::Interrupted);
             }
         }
-        progress.finish();
-        self.fields.flush().map_err(Stop::Failed)
+        progress.iter().for_each(Progress::finish);
+        self.flush().map_err(Stop::Failed)
     }
 
-    /// Describes the cell furthest out of bounds (`bad`, the first found, where none is further)
-    /// and writes the last good snapshot.
-    fn blow_up(&mut self, lattice: &GpuLattice, step: u64, check: u64, bad: Unhealthy) -> Stop {
-        let bad = lattice.furthest_unhealthy().unwrap_or(bad);
-        let (origin, dx) = (self.scene.domain.min, self.units.dx);
-        let mut msg = format!(
-            "the fluid became unstable between steps {} and {step}: furthest out of bounds, {}",
-            step.saturating_sub(check),
-            bad.describe(&health_of(self.units), origin, dx)
-        );
-        if let Some((good, fields)) = self.last_good.take().zip(lattice.kept_fields()) {
-            msg += &self.fields.write_last_good(good, &fields);
+    /// Rank 0 writes the probe lines and the snapshot of step `step`.
+    fn write(&mut self, step: u64, fields: &[[f32; 4]], lines: bool, snapshot: bool) -> Result<(), String> {
+        let Some(out) = &mut self.fields else {
+            return Ok(());
+        };
+        if lines {
+            out.write_lines(step, fields)?;
         }
-        let _ = self.fields.flush();
+        if snapshot {
+            out.write_snapshot(step, fields)?;
+        }
+        Ok(())
+    }
+
+    fn flush(&mut self) -> Result<(), String> {
+        self.fields.as_mut().map_or(Ok(()), FieldOutput::flush)
+    }
+
+    /// Describes the cell furthest out of bounds (`bad`, the first found, where none is further),
+    /// with the rank that holds it, and writes the last good snapshot (rank 0).
+    fn blow_up(&mut self, lattice: &BlockLattice, step: u64, check: u64, bad: RankUnhealthy) -> Stop {
+        let bad = lattice.furthest_unhealthy(self.comm).unwrap_or(bad);
+        let kept = lattice.kept_fields(self.comm);
+        let (origin, dx) = (self.scene.domain.min, self.units.dx);
+        let rank = if self.comm.size() > 1 {
+            format!("rank {}, ", bad.rank)
+        } else {
+            String::new()
+        };
+        let mut msg = format!(
+            "the fluid became unstable between steps {} and {step}: furthest out of bounds, {rank}{}",
+            step.saturating_sub(check),
+            bad.cell.describe(&health_of(self.units), origin, dx)
+        );
+        if let Some(out) = &mut self.fields {
+            if let Some((good, fields)) = self.last_good.take().zip(kept) {
+                msg += &out.write_last_good(good, &fields);
+            }
+            let _ = out.flush();
+        }
         Stop::Failed(msg)
     }
 }

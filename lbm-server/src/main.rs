@@ -9,6 +9,7 @@ mod launch;
 mod lbm;
 mod lubrication;
 mod output;
+mod parallel;
 mod run;
 mod storage_accuracy;
 mod terminal;

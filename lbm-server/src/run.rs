@@ -97,13 +97,22 @@ pub fn main(args: RunArgs) -> ExitCode {
         protocol::say!("lbm-server: warning: cannot install the Ctrl-C handler: {e}");
     }
     crate::terminal::set_verbose(args.verbose);
-    let prepared = match prepare(&args) {
-        Ok(p) => p,
+    let comm = match crate::parallel::start() {
+        Ok(comm) => comm,
         Err(e) => {
             protocol::say!("lbm-server: error: {e}");
             return ExitCode::from(EXIT_BAD_INPUT);
         }
     };
+    let prepared = prepare(&args, &*comm);
+    // Every rank checks the same scene; rank 0 alone says why it is refused.
+    if !crate::parallel::all(&*comm, prepared.is_ok()) {
+        if let (0, Err(e)) = (comm.rank(), &prepared) {
+            protocol::say!("lbm-server: error: {e}");
+        }
+        return ExitCode::from(EXIT_BAD_INPUT);
+    }
+    let prepared = prepared.expect("prepared on every rank");
     if prepared.scene.lattice.is_some() && prepared.scene.particle_count() == 0 {
         let p = &prepared;
         return ExitCode::from(crate::fluid::run(
@@ -112,6 +121,8 @@ pub fn main(args: RunArgs) -> ExitCode {
             p.steps,
             &p.out,
             interrupted,
+            &*comm,
+            p.blocks,
         ));
     }
     let dem = match dem_start(&args, &prepared) {

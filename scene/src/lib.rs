@@ -39,6 +39,9 @@ pub struct Scene {
     /// The DEM: materials, contact model, walls, insertion, DEM output (every field has a default).
     #[serde(default)]
     pub dem: dem::Dem,
+    /// How `lbm-server` cuts the lattice over MPI ranks (`[parallel]`, optional).
+    #[serde(default)]
+    pub parallel: parallel::Parallel,
     /// What the checks found odd but harmless (a box that does nothing), each as
     /// `FILE: FIELD = VALUE: PROBLEM`; the program that loaded the scene says them, once per run
     /// (lbm-server for a coupled run, not the dem-client it starts).
@@ -398,6 +401,7 @@ impl Scene {
         scene.resolve_steps(file)?;
         scene.dem.load(file)?;
         scene.validate(file)?;
+        scene.validate_parallel(file)?;
         dem::validate_placement(&scene, file)?;
         scene.warnings.extend(dem::idle_boxes(&scene, file));
         Ok(scene)
@@ -531,6 +535,7 @@ mod numbers;
 pub mod output_lock;
 pub mod outputs;
 pub mod overlap;
+pub mod parallel;
 pub mod row_file;
 mod times;
 pub mod vtp;

@@ -91,6 +91,11 @@ pub struct Setup {
     pub storage: Storage,
     /// The fluid kernels a lattice starts with (`lattice.kernel`).
     pub kernel: Kernel,
+    /// The faces (x_min, x_max, y_min, y_max, z_min, z_max) whose outermost layer of cells is a
+    /// ghost layer: a neighbouring rank's cells, whose populations the halo exchange writes
+    /// (`crate::parallel`). Their face is a wall that closes the ghost layer; the health check
+    /// leaves their cells out. None on a lattice held by one rank.
+    pub ghost_faces: [bool; 6],
 }
 
 /// TRT's antisymmetric relaxation time tau- = 1/2 + Lambda / (tau - 1/2) of magic parameter
@@ -123,6 +128,7 @@ impl Setup {
             ramp_steps: 0.0,
             storage: Storage::Fp32,
             kernel: Kernel::Quads,
+            ghost_faces: [false; 6],
         }
     }
 
@@ -140,6 +146,13 @@ impl Setup {
     /// Whether axis a (0 x, 1 y, 2 z) is periodic (its two faces come in a pair).
     pub fn periodic(&self, axis: usize) -> bool {
         self.faces[2 * axis] == Face::Periodic
+    }
+
+    /// Whether cell `x` lies in a ghost layer ([`Setup::ghost_faces`]).
+    pub fn is_ghost(&self, x: [usize; 3]) -> bool {
+        (0..3).any(|a| {
+            (x[a] == 0 && self.ghost_faces[2 * a]) || (x[a] + 1 == self.n[a] && self.ghost_faces[2 * a + 1])
+        })
     }
 
     pub fn cells(&self) -> usize {

@@ -14,5 +14,5 @@ pub mod storage;
 #[cfg(test)]
 mod storage_tests;
 #[cfg(test)]
-mod tests;
+pub(crate) mod tests;
 pub mod unroll;

@@ -31,9 +31,8 @@ impl StorageOnDevice for Storage {
         const FP16: &str = include_str!("../../../shaders/storage_fp16.wgsl");
         const FP16S: &str = include_str!("../../../shaders/fp16s.wgsl");
         const FP16C: &str = include_str!("../../../shaders/fp16c.wgsl");
-        const QUADS: &str = include_str!("../../../shaders/quads.wgsl");
         match self {
-            Storage::Fp32 => format!("{FP32}\n{QUADS}"),
+            Storage::Fp32 => FP32.to_string(),
             Storage::Fp16s => format!("{FP16}\n{FP16S}"),
             Storage::Fp16c => format!("{FP16}\n{FP16C}"),
         }

@@ -86,7 +86,7 @@ pub(super) fn bgk_periodic_with_force(n: [usize; 3]) -> Setup {
 }
 
 /// TRT between walls in y and z (one moving), periodic in x, a body force, solid cells.
-pub(super) fn trt_walls_and_solids(n: [usize; 3]) -> Setup {
+pub(crate) fn trt_walls_and_solids(n: [usize; 3]) -> Setup {
     let faces = [
         Face::Periodic,
         Face::Periodic,

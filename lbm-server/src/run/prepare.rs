@@ -3,6 +3,7 @@
 //! cleared of an earlier run's outputs.
 
 use super::{DemMode, RunArgs};
+use crate::parallel::{blocks_of, Communicator};
 use scene::output_lock::OutputLock;
 use scene::Scene;
 use std::path::PathBuf;
@@ -16,11 +17,15 @@ pub(super) struct Prepared {
     pub(super) out: PathBuf,
     pub(super) scene_copy: PathBuf,
     pub(super) connect_timeout: Duration,
-    /// The output folder's lock, held for the whole run.
-    pub(super) _lock: OutputLock,
+    /// The lattice's blocks along x, y and z, one per rank.
+    pub(super) blocks: [usize; 3],
+    /// The output folder's lock, held for the whole run (by rank 0, which writes the outputs).
+    pub(super) _lock: Option<OutputLock>,
 }
 
-pub(super) fn prepare(args: &RunArgs) -> Result<Prepared, String> {
+/// The scene of `args` ready to run on the ranks of `comm`: rank 0 alone makes and locks the
+/// output folder.
+pub(super) fn prepare(args: &RunArgs, comm: &dyn Communicator) -> Result<Prepared, String> {
     let (scene, scene_file, text) = match &args.scene {
         Some(path) => {
             let scene = Scene::load(path).map_err(|e| e.to_string())?;
@@ -53,19 +58,21 @@ pub(super) fn prepare(args: &RunArgs) -> Result<Prepared, String> {
     if connect_timeout.is_nan() || connect_timeout <= 0.0 {
         return Err(format!("--connect-timeout = {connect_timeout} s: must be > 0"));
     }
+    let blocks = blocks(&scene, comm.size())?;
     if let Some(units) = &scene.lattice_units {
-        fits_the_device(units.n)?;
+        let block: [usize; 3] = std::array::from_fn(|a| units.n[a] / blocks[a]);
+        fits_the_device(block)?;
     }
     let out = args
         .out
         .clone()
         .unwrap_or_else(|| PathBuf::from("out").join(&scene.name));
-    std::fs::create_dir_all(&out)
-        .map_err(|e| format!("cannot create the output folder {}: {e}", out.display()))?;
-    let lock = OutputLock::take(&out)?;
-    clear_earlier_outputs(&out)?;
     let scene_copy = out.join("scene.toml");
-    std::fs::write(&scene_copy, text).map_err(|e| format!("{}: {e}", scene_copy.display()))?;
+    let lock = if comm.rank() == 0 {
+        Some(output_folder(&out, &scene_copy, &text)?)
+    } else {
+        None
+    };
     Ok(Prepared {
         scene,
         scene_file,
@@ -73,8 +80,45 @@ pub(super) fn prepare(args: &RunArgs) -> Result<Prepared, String> {
         out,
         scene_copy,
         connect_timeout: Duration::try_from_secs_f64(connect_timeout).unwrap_or(Duration::MAX),
+        blocks,
         _lock: lock,
     })
+}
+
+/// The output folder `out` made, locked, cleared of an earlier run's outputs, with the scene's
+/// `text` copied to `scene_copy`.
+fn output_folder(
+    out: &std::path::Path,
+    scene_copy: &std::path::Path,
+    text: &str,
+) -> Result<OutputLock, String> {
+    std::fs::create_dir_all(out)
+        .map_err(|e| format!("cannot create the output folder {}: {e}", out.display()))?;
+    let lock = OutputLock::take(out)?;
+    clear_earlier_outputs(out)?;
+    std::fs::write(scene_copy, text).map_err(|e| format!("{}: {e}", scene_copy.display()))?;
+    Ok(lock)
+}
+
+/// The lattice's blocks on `ranks` ranks (`[parallel] blocks` or chosen); more than one rank
+/// runs a fluid-only scene alone (particles stay on one rank for now).
+fn blocks(scene: &Scene, ranks: usize) -> Result<[usize; 3], String> {
+    let given = scene.parallel.blocks();
+    let Some(units) = &scene.lattice_units else {
+        return match ranks {
+            1 => Ok([1, 1, 1]),
+            _ => Err(format!(
+                "{ranks} ranks: a scene without a [lattice] runs on one rank"
+            )),
+        };
+    };
+    let blocks = blocks_of(units.n, scene.periodic_axes(), given, ranks)?;
+    if ranks > 1 && scene.particle_count() > 0 {
+        return Err(format!(
+            "{ranks} ranks: a scene with particles runs on one rank (fluid-only scenes run on several)"
+        ));
+    }
+    Ok(blocks)
 }
 
 /// A lattice the device cannot hold is refused before the output folder is touched or the

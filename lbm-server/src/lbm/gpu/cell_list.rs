@@ -8,8 +8,10 @@ use crate::lbm::geometry::{Face, Link, Setup};
 const SOLID_FLAG: u32 = 1 << 19;
 /// The cell lies on a periodic face: its neighbours need wrapping.
 const WRAPS_FLAG: u32 = 1 << 20;
+/// The cell lies in a ghost layer (`Setup::ghost_faces`): left out of the health check.
+const GHOST_FLAG: u32 = 1 << 21;
 
-/// One word per cell: the links that leave the fluid, solid, and periodic-face bits.
+/// One word per cell: the links that leave the fluid, solid, periodic-face and ghost bits.
 pub fn cell_flags(setup: &Setup) -> Vec<u32> {
     (0..setup.cells())
         .map(|k| {
@@ -25,7 +27,8 @@ pub fn cell_flags(setup: &Setup) -> Vec<u32> {
                 (x[a] == 0 && setup.faces[2 * a] == Face::Periodic)
                     || (x[a] + 1 == setup.n[a] && setup.faces[2 * a + 1] == Face::Periodic)
             });
-            links | if on_periodic_face { WRAPS_FLAG } else { 0 }
+            let ghost = if setup.is_ghost(x) { GHOST_FLAG } else { 0 };
+            links | ghost | if on_periodic_face { WRAPS_FLAG } else { 0 }
         })
         .collect()
 }

@@ -54,7 +54,15 @@ impl AdapterOffer {
 /// lavapipe), and within each kind a Vulkan, Metal or DirectX 12 driver before OpenGL; the first
 /// listed of equals. None: an error that names every adapter found and what it lacks (where
 /// only OpenGL is found, as where Vulkan is not installed: its llvmpipe binds 16).
+#[cfg(test)]
 fn choose_adapter(found: &[AdapterOffer]) -> Result<usize, String> {
+    choose_adapter_for(found, 0)
+}
+
+/// The adapter of a rank that is `local`-th on its node ([`Gpu::for_local_rank`]): of the
+/// adapters of the kind [`choose_adapter`] picks, number `local` modulo their count, so that the
+/// ranks of a node spread over its GPUs; ranks on a CPU driver share it.
+fn choose_adapter_for(found: &[AdapterOffer], local: usize) -> Result<usize, String> {
     let rank = |a: &AdapterOffer| {
         let kind = match a.device_type {
             wgpu::DeviceType::DiscreteGpu => 0,
@@ -69,8 +77,18 @@ fn choose_adapter(found: &[AdapterOffer]) -> Result<usize, String> {
         .iter()
         .enumerate()
         .filter(|(_, a)| a.storage_buffers >= BINDINGS);
-    if let Some((i, _)) = usable.min_by_key(|(i, a)| (rank(a), *i)) {
-        return Ok(i);
+    if let Some(best) = usable.clone().map(|(_, a)| rank(a)).min() {
+        let equals: Vec<usize> = usable.filter(|(_, a)| rank(a) == best).map(|(i, _)| i).collect();
+        let kind = found[equals[0]].device_type;
+        let spread = matches!(
+            kind,
+            wgpu::DeviceType::DiscreteGpu | wgpu::DeviceType::IntegratedGpu
+        );
+        return Ok(if spread {
+            equals[local % equals.len()]
+        } else {
+            equals[0]
+        });
     }
     const INSTALL: &str = "on a machine without a GPU install Mesa lavapipe (Debian: apt-get install mesa-vulkan-drivers libvulkan1), on one with a GPU its Vulkan driver";
     if found.is_empty() {
@@ -93,7 +111,7 @@ fn choose_adapter(found: &[AdapterOffer]) -> Result<usize, String> {
 
 /// The adapter [`choose_adapter`] picks among those of the backends allowed by WGPU_BACKEND
 /// (default: all).
-fn chosen_adapter() -> Result<wgpu::Adapter, String> {
+fn chosen_adapter(local: usize) -> Result<wgpu::Adapter, String> {
     // WGPU_BACKEND (vulkan, metal, dx12, gl) and friends are honoured.
     let mut descriptor = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
     // wgpu checks each indirect dispatch's workgroup counts with a dispatch of its own and two
@@ -104,7 +122,7 @@ fn chosen_adapter() -> Result<wgpu::Adapter, String> {
     let instance = wgpu::Instance::new(descriptor);
     let adapters = pollster::block_on(instance.enumerate_adapters(backends));
     let found: Vec<AdapterOffer> = adapters.iter().map(AdapterOffer::of).collect();
-    let chosen = choose_adapter(&found)?;
+    let chosen = choose_adapter_for(&found, local)?;
     Ok(adapters
         .into_iter()
         .nth(chosen)
@@ -115,13 +133,20 @@ impl Gpu {
     /// The limits of the adapter [`Gpu::new`] opens, its device left closed: a lattice is checked
     /// against them before a run removes or allocates anything.
     pub fn adapter_limits() -> Result<wgpu::Limits, String> {
-        chosen_adapter().map(|adapter| adapter.limits())
+        chosen_adapter(0).map(|adapter| adapter.limits())
     }
 
     /// Opens the adapter [`choose_adapter`] picks among those of the backends allowed by
     /// WGPU_BACKEND (default: all).
     pub fn new() -> Result<Gpu, String> {
-        let adapter = chosen_adapter()?;
+        Gpu::for_local_rank(0)
+    }
+
+    /// Opens the adapter of a rank that is `local`-th of the ranks on its node: GPU number `local`
+    /// modulo the node's GPUs of the kind [`Gpu::new`] picks, or the CPU driver where there is
+    /// none.
+    pub fn for_local_rank(local: usize) -> Result<Gpu, String> {
+        let adapter = chosen_adapter(local)?;
         let limits = adapter.limits();
         // Timestamps between passes where the device has them (`bench --passes`: each pass's time
         // by the device's clock).
@@ -227,6 +252,17 @@ mod adapter_tests {
             Ok(1),
             "the first of equals"
         );
+    }
+
+    #[test]
+    fn ranks_of_a_node_spread_over_its_gpus_and_share_a_cpu_driver() {
+        let lavapipe = offer("llvmpipe", Backend::Vulkan, DeviceType::Cpu, 4096);
+        let gpu = offer("NVIDIA H200", Backend::Vulkan, DeviceType::DiscreteGpu, 4096);
+        let found = [lavapipe.clone(), gpu.clone(), gpu.clone()];
+        let chosen: Vec<usize> = (0..4).map(|l| choose_adapter_for(&found, l).unwrap()).collect();
+        assert_eq!(chosen, [1, 2, 1, 2]);
+        let cpu = [lavapipe.clone(), lavapipe];
+        assert_eq!(choose_adapter_for(&cpu, 1), Ok(0));
     }
 
     #[test]

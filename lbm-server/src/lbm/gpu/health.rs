@@ -127,6 +127,11 @@ impl GpuLattice {
         Some(self.unhealthy(cell, fields[cell]))
     }
 
+    /// The limits of the health check.
+    pub fn health_limits(&self) -> Health {
+        self.health
+    }
+
     fn unhealthy(&self, cell: usize, v: [f32; 4]) -> Unhealthy {
         Unhealthy {
             cell,

@@ -5,6 +5,7 @@
 mod bindings;
 mod cell_list;
 mod device;
+mod halo;
 mod health;
 mod params;
 mod state;
@@ -18,8 +19,7 @@ pub(in crate::lbm) use cell_list::CellList;
 pub use device::Gpu;
 #[cfg(test)]
 pub(in crate::lbm) use device::ListLayout;
-#[cfg(test)]
-pub(in crate::lbm) use health::furthest_out_of_bounds;
-pub use health::{Health, Unhealthy};
+pub use halo::{HaloKernels, HaloLayer};
+pub use health::{furthest_out_of_bounds, Health, Unhealthy};
 pub(in crate::lbm) use params::vec4;
 pub use state::{equilibrium_field, total_mass, GpuLattice};

@@ -99,6 +99,11 @@ impl GpuLattice {
         Ok(lattice)
     }
 
+    /// Waits until the device has done every step submitted.
+    pub fn finish(&self) {
+        self.gpu.wait();
+    }
+
     /// Name of the GPU adapter.
     pub fn adapter(&self) -> &str {
         &self.gpu.adapter.name

@@ -1,0 +1,172 @@
+//! The halo kernels of a lattice decomposed over ranks (halo.wgsl): the populations of one layer
+//! of cells packed into a flat buffer and read back, or written from one. Which populations, and
+//! where they go, is `crate::parallel::halo`'s business.
+
+use super::bindings::{storage_buffer, storage_entry};
+use super::state::GpuLattice;
+use crate::lbm::storage::StorageOnDevice;
+use wgpu::util::DeviceExt;
+
+const HALO_SHADER: &str = include_str!("../../../../shaders/halo.wgsl");
+/// Invocations per workgroup (`@workgroup_size` in halo.wgsl).
+const WORKGROUP: u32 = 64;
+
+/// The pack and unpack kernels of one lattice.
+pub struct HaloKernels {
+    layout: wgpu::BindGroupLayout,
+    pack: wgpu::ComputePipeline,
+    unpack: wgpu::ComputePipeline,
+}
+
+/// One layer's populations: their list of (cell, direction), the values on the device, and a
+/// buffer to read them back through.
+pub struct HaloLayer {
+    len: u32,
+    values: wgpu::Buffer,
+    readback: wgpu::Buffer,
+    bind_group: wgpu::BindGroup,
+}
+
+impl HaloLayer {
+    /// Populations in the layer.
+    pub fn len(&self) -> usize {
+        self.len as usize
+    }
+}
+
+impl GpuLattice {
+    /// Compiles the halo kernels for this lattice's storage.
+    pub fn halo_kernels(&self) -> HaloKernels {
+        let d = &self.gpu.device;
+        let layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("halo"),
+            entries: &[storage_entry(0, true), storage_entry(1, false)],
+        });
+        let pipeline_layout = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("halo"),
+            bind_group_layouts: &[Some(&self.layout), Some(&layout)],
+            immediate_size: 0,
+        });
+        let source = format!("{}\n{HALO_SHADER}", self.setup.storage.shader());
+        let module = d.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("halo.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(crate::lbm::unroll::unroll(&source).into()),
+        });
+        let pipeline = |unpack: bool| {
+            d.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(if unpack { "halo unpack" } else { "halo pack" }),
+                layout: Some(&pipeline_layout),
+                module: &module,
+                entry_point: Some("halo"),
+                compilation_options: wgpu::PipelineCompilationOptions {
+                    constants: &[("UNPACK", f64::from(u8::from(unpack)))],
+                    ..Default::default()
+                },
+                cache: None,
+            })
+        };
+        HaloKernels {
+            pack: pipeline(false),
+            unpack: pipeline(true),
+            layout,
+        }
+    }
+
+    /// A layer of the populations `entries` lists, each (cell, direction) in this lattice.
+    pub fn halo_layer(&self, kernels: &HaloKernels, entries: &[[u32; 2]]) -> HaloLayer {
+        let d = &self.gpu.device;
+        let list = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("halo list"),
+            contents: bytemuck::cast_slice(entries),
+            usage: wgpu::BufferUsages::STORAGE,
+        });
+        let bytes = (entries.len() * 4).max(4) as u64;
+        let values = storage_buffer(d, "halo values", bytes);
+        let readback = d.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("halo readback"),
+            size: bytes,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let bind_group = d.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("halo"),
+            layout: &kernels.layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: list.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: values.as_entire_binding(),
+                },
+            ],
+        });
+        HaloLayer {
+            len: entries.len() as u32,
+            values,
+            readback,
+            bind_group,
+        }
+    }
+
+    /// The populations of each layer, packed and read back (one submission, one wait).
+    pub fn pack_halo(&self, kernels: &HaloKernels, layers: &[&HaloLayer]) -> Vec<Vec<f32>> {
+        let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
+        for layer in layers {
+            self.dispatch_halo(&mut encoder, &kernels.pack, layer);
+            encoder.copy_buffer_to_buffer(&layer.values, 0, &layer.readback, 0, layer.readback.size());
+        }
+        self.gpu.queue.submit([encoder.finish()]);
+        for layer in layers {
+            layer.readback.slice(..).map_async(wgpu::MapMode::Read, |_| {});
+        }
+        self.gpu.wait();
+        layers
+            .iter()
+            .map(|layer| {
+                let slice = layer.readback.slice(..);
+                let values: Vec<f32> = {
+                    let bytes = slice.get_mapped_range().expect("mapped");
+                    bytemuck::cast_slice(&bytes)[..layer.len()].to_vec()
+                };
+                layer.readback.unmap();
+                values
+            })
+            .collect()
+    }
+
+    /// Writes `values` into each layer's populations (submitted, not waited for: the next step
+    /// or pack follows it in the queue).
+    pub fn unpack_halo(&self, kernels: &HaloKernels, layers: &[(&HaloLayer, &[f32])]) {
+        let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
+        for (layer, values) in layers {
+            assert_eq!(values.len(), layer.len(), "a halo message of the layer's length");
+            if !values.is_empty() {
+                self.gpu
+                    .queue
+                    .write_buffer(&layer.values, 0, bytemuck::cast_slice(values));
+            }
+            self.dispatch_halo(&mut encoder, &kernels.unpack, layer);
+        }
+        self.gpu.queue.submit([encoder.finish()]);
+    }
+
+    fn dispatch_halo(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        pipeline: &wgpu::ComputePipeline,
+        layer: &HaloLayer,
+    ) {
+        let groups = layer.len.div_ceil(WORKGROUP);
+        if groups == 0 {
+            return;
+        }
+        let x = groups.min(65_535);
+        let mut pass = encoder.begin_compute_pass(&Default::default());
+        pass.set_pipeline(pipeline);
+        pass.set_bind_group(0, &self.way().bind_groups[0], &[]);
+        pass.set_bind_group(1, &layer.bind_group, &[]);
+        pass.dispatch_workgroups(x, groups.div_ceil(x), 1);
+    }
+}

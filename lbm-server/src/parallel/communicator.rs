@@ -1,0 +1,107 @@
+//! What the ranks say to one another ([`Communicator`]): halo messages, results gathered on rank
+//! 0 in rank order, and agreement on a number. One process is a
+//! communicator of one rank ([`OneRank`]); MPI's world another (`mpi_world.rs`, `--features mpi`).
+
+/// A message of populations to the rank `peer`, tagged `tag` (read by MPI's world alone).
+#[cfg_attr(not(feature = "mpi"), allow(dead_code))]
+pub struct Message<'a> {
+    pub peer: usize,
+    pub tag: i32,
+    pub values: &'a [f32],
+}
+
+/// A message awaited from rank `peer`, tagged `tag`, of `len` values (read by MPI's world alone).
+#[cfg_attr(not(feature = "mpi"), allow(dead_code))]
+pub struct Expected {
+    pub peer: usize,
+    pub tag: i32,
+    pub len: usize,
+}
+
+/// The ranks of a run.
+pub trait Communicator {
+    fn rank(&self) -> usize;
+    fn size(&self) -> usize;
+    /// This rank's position among the ranks of its node (its GPU: `Gpu::for_local_rank`).
+    fn local_rank(&self) -> usize;
+    /// The name of this rank's host.
+    fn host(&self) -> String;
+    /// Sends `sends` and receives `expected`, all started at once (non-blocking), and waits for
+    /// all of them; the received values in the order of `expected`.
+    fn exchange(&self, sends: &[Message], expected: &[Expected]) -> Vec<Vec<f32>>;
+    /// Every rank's `bytes` at rank 0, in rank order (empty elsewhere).
+    fn gather(&self, bytes: &[u8]) -> Vec<Vec<u8>>;
+    /// The smallest of the ranks' `value`s, at every rank.
+    fn min(&self, value: u64) -> u64;
+}
+
+/// The ranks agree: true where every rank's `ok` is.
+pub fn all(comm: &dyn Communicator, ok: bool) -> bool {
+    comm.min(u64::from(ok)) == 1
+}
+
+/// A run in one process.
+pub struct OneRank;
+
+impl Communicator for OneRank {
+    fn rank(&self) -> usize {
+        0
+    }
+
+    fn size(&self) -> usize {
+        1
+    }
+
+    fn local_rank(&self) -> usize {
+        0
+    }
+
+    fn host(&self) -> String {
+        host_name()
+    }
+
+    fn exchange(&self, sends: &[Message], expected: &[Expected]) -> Vec<Vec<f32>> {
+        assert!(
+            sends.is_empty() && expected.is_empty(),
+            "one rank has no neighbour to exchange with"
+        );
+        Vec::new()
+    }
+
+    fn gather(&self, bytes: &[u8]) -> Vec<Vec<u8>> {
+        vec![bytes.to_vec()]
+    }
+
+    fn min(&self, value: u64) -> u64 {
+        value
+    }
+}
+
+/// This host's name (uname).
+pub fn host_name() -> String {
+    let mut name = [0u8; 256];
+    // SAFETY: gethostname writes at most `len` bytes into the buffer.
+    let ok = unsafe { libc::gethostname(name.as_mut_ptr().cast(), name.len()) } == 0;
+    let end = name.iter().position(|&b| b == 0).unwrap_or(name.len());
+    if ok {
+        String::from_utf8_lossy(&name[..end]).into_owned()
+    } else {
+        "unknown".into()
+    }
+}
+
+/// The ranks a launcher (mpirun, srun) started this process among, from its environment: Open
+/// MPI's OMPI_COMM_WORLD_SIZE, or the PMI_SIZE of MPICH, Intel MPI and Slurm's PMI.
+pub fn launched_ranks() -> Option<usize> {
+    ["OMPI_COMM_WORLD_SIZE", "PMI_SIZE"]
+        .iter()
+        .find_map(|v| std::env::var(v).ok()?.trim().parse().ok())
+}
+
+/// This process's position among the ranks of its node, from the launcher's environment.
+#[cfg(feature = "mpi")]
+pub fn launched_local_rank() -> Option<usize> {
+    ["OMPI_COMM_WORLD_LOCAL_RANK", "MPI_LOCALRANKID", "SLURM_LOCALID"]
+        .iter()
+        .find_map(|v| std::env::var(v).ok()?.trim().parse().ok())
+}

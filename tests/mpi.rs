@@ -1,0 +1,203 @@
+//! A fluid-only run decomposed over MPI ranks (`mpirun -np N lbm-server run`), against the same
+//! run in one process: the probe lines and every field snapshot byte for byte, walled and
+//! periodic, on 2 and 4 ranks; and the refusals of blocks that cannot be. The runs need mpirun
+//! and an lbm-server built with `--features mpi`; where either is missing they say so and pass.
+
+mod common;
+use common::*;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+/// A box of 8 x 8 x 8 cells (1 mm, tau 0.8) with a body force, run 12 steps with probe lines
+/// and snapshots every 6 steps; `faces` and `extra` (a solid box, `[parallel]`) as given.
+fn scene(name: &str, faces: &str, extra: &str) -> String {
+    format!(
+        r#"name = "{name}"
+[domain]
+min = [0.0, 0.0, 0.0]
+max = [0.008, 0.008, 0.008]
+[fluid]
+density = 1000.0
+dynamic_viscosity = 1.0e-3
+[time]
+steps = 12
+[lattice]
+dx = 0.001
+operator = "mrt"
+tau = 0.8
+velocity_scale = 5.0e-4
+body_acceleration = [1.0e-4, 2.0e-5, -1.0e-5]
+check_interval = 4
+[lattice.faces]
+{faces}
+[output]
+interval = 6
+fields_interval = 6
+[[output.line]]
+axis = "y"
+through = [0.0035, 0.004, 0.0045]
+[[output.line]]
+axis = "z"
+through = [0.0045, 0.0035, 0.004]
+{extra}
+"#
+    )
+}
+
+const WALLED: &str = "x_min = \"periodic\"\nx_max = \"periodic\"\ny_min = \"wall\"\ny_max = \"wall\"\n\
+                      z_min = \"wall\"\nz_max = { type = \"moving_wall\", velocity = [5.0e-4, 1.0e-4, 0.0] }";
+const PERIODIC: &str =
+    "x_min = \"periodic\"\nx_max = \"periodic\"\ny_min = \"periodic\"\ny_max = \"periodic\"\n\
+                        z_min = \"periodic\"\nz_max = \"periodic\"";
+/// Solid cells on both sides of the cuts of 2 and 4 blocks.
+const SOLID: &str = "[[lattice.solid_box]]\nmin = [0.002, 0.003, 0.003]\nmax = [0.005, 0.005, 0.005]";
+
+/// mpirun, where it is installed.
+fn mpirun() -> Option<PathBuf> {
+    let path = std::env::var_os("PATH")?;
+    std::env::split_paths(&path)
+        .map(|d| d.join("mpirun"))
+        .find(|p| p.is_file())
+}
+
+/// `mpirun -np N lbm-server run SCENE --out OUT` (as root too; more ranks than cores; one
+/// llvmpipe thread per rank).
+fn run_on(mpirun: &Path, ranks: usize, scene: &Path, out: &Path) -> Output {
+    Command::new(mpirun)
+        .args([
+            "--allow-run-as-root",
+            "--oversubscribe",
+            "-np",
+            &ranks.to_string(),
+        ])
+        .args(["-x", "LP_NUM_THREADS=1", "-x", "NODEVICE_SELECT=1"])
+        .arg(bin("lbm-server"))
+        .arg("run")
+        .arg(scene)
+        .arg("--out")
+        .arg(out)
+        .output()
+        .unwrap()
+}
+
+fn text(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned() + &String::from_utf8_lossy(&o.stdout)
+}
+
+/// The outputs of a fluid run that must not depend on the ranks: the probe lines and snapshots.
+fn outputs(out: &Path) -> Vec<(String, Vec<u8>)> {
+    let mut files = vec!["line0.csv".to_string(), "line1.csv".into(), "fields.pvd".into()];
+    files.extend(["6", "12"].map(|s| format!("fields/step{s:0>9}.vti")));
+    files
+        .into_iter()
+        .map(|f| {
+            let bytes = std::fs::read(out.join(&f)).unwrap_or_else(|e| panic!("{f}: {e}"));
+            (f, bytes)
+        })
+        .collect()
+}
+
+/// The scene on one process, then on each of `runs`' ranks with its `[parallel]` section (or
+/// none): the same outputs byte for byte, and the summary names the ranks and blocks. False
+/// where the runs cannot be made (said why).
+fn same_on_ranks(tag: &str, text_: &str, runs: &[(usize, &str)]) -> bool {
+    let Some(mpirun) = mpirun() else {
+        eprintln!("skipped: mpirun is not installed (apt-get install openmpi-bin libopenmpi-dev)");
+        return false;
+    };
+    let dir = temp_dir(tag);
+    let scene = write_scene(&dir, text_);
+    let single = dir.join("one");
+    let o = server(&scene, &single, &[]).output().unwrap();
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    let expected = outputs(&single);
+    for &(n, parallel) in runs {
+        let out = dir.join(format!("np{n}"));
+        let scene = dir.join(format!("np{n}.toml"));
+        std::fs::write(&scene, format!("{text_}\n{parallel}\n")).unwrap();
+        let o = run_on(&mpirun, n, &scene, &out);
+        if text(&o).contains("built without MPI") {
+            eprintln!("skipped: lbm-server is built without MPI (cargo build -p lbm-server --features mpi)");
+            return false;
+        }
+        assert_eq!(o.status.code(), Some(0), "{n} ranks: {}", text(&o));
+        for ((file, want), (_, have)) in expected.iter().zip(outputs(&out)) {
+            assert!(
+                *want == have,
+                "{n} ranks: {file} differs from the single process's"
+            );
+        }
+        let s = summary(&out);
+        assert_eq!(s["parallel"]["ranks"], n, "{s}");
+        let blocks: u64 = (0..3)
+            .map(|a| s["parallel"]["blocks"][a].as_u64().unwrap())
+            .product();
+        assert_eq!(blocks, n as u64, "{s}");
+        assert_eq!(s["parallel"]["devices"].as_array().unwrap().len(), n, "{s}");
+    }
+    true
+}
+
+#[test]
+fn a_walled_run_on_2_and_4_ranks_is_the_single_process_run_byte_for_byte() {
+    same_on_ranks("mpi-walled", &scene("walled", WALLED, SOLID), &[(2, ""), (4, "")]);
+}
+
+#[test]
+fn a_periodic_run_cut_along_two_axes_is_the_single_process_run_byte_for_byte() {
+    let blocks = "[parallel]\nblocks = [2, 1, 2]";
+    same_on_ranks("mpi-periodic", &scene("periodic", PERIODIC, ""), &[(4, blocks)]);
+}
+
+/// Blocks that cannot be are refused before anything runs, naming the field and value: on one
+/// process, more blocks than ranks (or, built without MPI, more than one block).
+#[test]
+fn blocks_that_cannot_be_are_refused_before_the_run() {
+    let dir = temp_dir("mpi-blocks");
+    let scene_file = write_scene(&dir, &scene("blocks", WALLED, "[parallel]\nblocks = [1, 1, 2]"));
+    let o = server(&scene_file, &dir.join("out"), &[]).output().unwrap();
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    let err = text(&o);
+    assert!(err.contains("parallel.blocks = [1, 1, 2]"), "{err}");
+    assert!(
+        err.contains("needs the MPI build") || err.contains("2 blocks, but the run has 1 rank"),
+        "{err}"
+    );
+    assert!(!dir.join("out").join("summary.json").exists(), "nothing ran");
+    let scene_file = write_scene(&dir, &scene("blocks", WALLED, "[parallel]\nblocks = [3, 1, 1]"));
+    let o = server(&scene_file, &dir.join("out"), &[]).output().unwrap();
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    assert!(
+        text(&o).contains("parallel.blocks[0] = 3: must divide the lattice's 8 cells along x"),
+        "{}",
+        text(&o)
+    );
+}
+
+/// Started as one of several ranks (as mpirun starts it) by a build without MPI, the run is
+/// refused: each rank would run the whole scene alone.
+#[test]
+fn a_build_without_mpi_refuses_to_run_as_one_of_several_ranks() {
+    let dir = temp_dir("mpi-without");
+    let scene_file = write_scene(&dir, &scene("without", PERIODIC, ""));
+    let probe = server(&scene_file, &dir.join("probe"), &["--steps", "1"])
+        .output()
+        .unwrap();
+    let blocks = write_scene(
+        &dir,
+        &scene("without", PERIODIC, "[parallel]\nblocks = [1, 1, 2]"),
+    );
+    let built = server(&blocks, &dir.join("probe2"), &[]).output().unwrap();
+    assert_eq!(probe.status.code(), Some(0), "{}", text(&probe));
+    if !text(&built).contains("needs the MPI build") {
+        eprintln!("skipped: lbm-server is built with MPI");
+        return;
+    }
+    let scene_file = write_scene(&dir, &scene("without", PERIODIC, ""));
+    let o = server(&scene_file, &dir.join("out"), &[])
+        .env("OMPI_COMM_WORLD_SIZE", "2")
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    assert!(text(&o).contains("built without MPI"), "{}", text(&o));
+}
