@@ -1,6 +1,7 @@
 //! A fluid-only scene (a `[lattice]` and no particles): the GPU lattice alone, with health checks,
 //! VTK snapshots, probe lines and a summary.
 
+use crate::checkpoint::{Checkpoints, Loaded, OutputPositions};
 use crate::fields::FieldOutput;
 use crate::lbm::geometry::{tau_minus, Face, Operator, Setup};
 use crate::lbm::gpu::{Gpu, GpuLattice, Health, Unhealthy};
@@ -147,10 +148,18 @@ enum Stop {
     Failed(String),
 }
 
-/// Runs a fluid-only scene; returns the exit code.
-pub fn run(scene: &Scene, scene_file: &str, steps: u64, out: &Path, interrupted: Arc<AtomicBool>) -> u8 {
+/// Runs a fluid-only scene (from its checkpoint where `checkpoints` resumes one); returns the
+/// exit code.
+pub fn run(
+    scene: &Scene,
+    scene_file: &str,
+    steps: u64,
+    out: &Path,
+    interrupted: Arc<AtomicBool>,
+    mut checkpoints: Checkpoints,
+) -> u8 {
     let units = scene.lattice_units.as_ref().expect("fluid scenes have a lattice");
-    let (gpu, mut lattice) = match start_lattice(scene, units) {
+    let (gpu, mut lattice) = match start_lattice(scene, units, checkpoints.resumed.as_ref()) {
         Ok(started) => started,
         Err(e) => {
             protocol::say!("lbm-server: error: {e}");
@@ -158,8 +167,11 @@ pub fn run(scene: &Scene, scene_file: &str, steps: u64, out: &Path, interrupted:
         }
     };
     let started = Instant::now();
-    let result =
-        FluidRun::new(scene, units, out).and_then(|mut r| r.steps(&mut lattice, steps, &interrupted));
+    let from = lattice.time;
+    let at = checkpoints.resumed.as_ref().map(|l| l.header.outputs.clone());
+    let result = FluidRun::new(scene, units, out, at.as_ref(), &mut checkpoints)
+        .and_then(|mut r| r.steps(&mut lattice, steps, &interrupted));
+    let result = result.and_then(|()| checkpoints.wait().map_err(Stop::Failed));
     let wall = started.elapsed().as_secs_f64();
     let (reason, code) = match &result {
         Ok(()) => ("completed".to_string(), 0),
@@ -169,6 +181,7 @@ pub fn run(scene: &Scene, scene_file: &str, steps: u64, out: &Path, interrupted:
     match &result {
         Err(Stop::Failed(e)) => protocol::say!("lbm-server: error: {e}"),
         Err(Stop::Interrupted) => {
+            let _ = checkpoints.wait();
             protocol::say!("lbm-server: interrupted after {} of {steps} steps", lattice.time)
         }
         Ok(()) => {}
@@ -184,7 +197,7 @@ pub fn run(scene: &Scene, scene_file: &str, steps: u64, out: &Path, interrupted:
         steps_requested: steps,
         steps_completed: lattice.time,
         wall_time_s: wall,
-        mlups: cells * lattice.time as f64 / wall.max(1e-9) / 1e6,
+        mlups: cells * (lattice.time - from) as f64 / wall.max(1e-9) / 1e6,
         exit_reason: reason,
         exit_code: code,
     };
@@ -195,7 +208,7 @@ pub fn run(scene: &Scene, scene_file: &str, steps: u64, out: &Path, interrupted:
     if code == 0 {
         protocol::say!(
             "lbm-server: {} steps in {wall:.2} s ({:.2} MLUPS); output in {}",
-            lattice.time,
+            lattice.time - from,
             summary.mlups,
             out.display()
         );
@@ -203,11 +216,18 @@ pub fn run(scene: &Scene, scene_file: &str, steps: u64, out: &Path, interrupted:
     code
 }
 
-/// The device and the scene's lattice on it, the run's first line said once it is ready to step
-/// (and a warning where its tau is near 1/2).
-fn start_lattice(scene: &Scene, units: &LatticeUnits) -> Result<(Arc<Gpu>, GpuLattice), String> {
+/// The device and the scene's lattice on it (its state the checkpoint's where `resumed`), the
+/// run's first line said once it is ready to step (and a warning where its tau is near 1/2).
+fn start_lattice(
+    scene: &Scene,
+    units: &LatticeUnits,
+    resumed: Option<&Loaded>,
+) -> Result<(Arc<Gpu>, GpuLattice), String> {
     let gpu = Arc::new(Gpu::new()?);
-    let lattice = GpuLattice::new(gpu.clone(), setup_of(units), health_of(units), None)?;
+    let mut lattice = GpuLattice::new(gpu.clone(), setup_of(units), health_of(units), None)?;
+    if let Some(loaded) = resumed {
+        lattice.restore_raw(&loaded.raw_state(lattice.population_bytes())?);
+    }
     crate::run::started();
     protocol::say!(
         "lbm-server: scene '{}': {}x{}x{} cells, dx {:e} m, dt {:e} s, tau {:.4}, Mach {:.3}, {} on {}",
@@ -239,29 +259,42 @@ struct FluidRun<'a> {
     scene: &'a Scene,
     units: &'a LatticeUnits,
     fields: FieldOutput,
+    checkpoints: &'a mut Checkpoints,
     /// The step of the last check that passed (its fields kept on the device).
     last_good: Option<u64>,
 }
 
 impl<'a> FluidRun<'a> {
-    fn new(scene: &'a Scene, units: &'a LatticeUnits, out: &'a Path) -> Result<Self, Stop> {
+    /// The outputs into `out`, resumed `at` a checkpoint's positions where given.
+    fn new(
+        scene: &'a Scene,
+        units: &'a LatticeUnits,
+        out: &'a Path,
+        at: Option<&OutputPositions>,
+        checkpoints: &'a mut Checkpoints,
+    ) -> Result<Self, Stop> {
         Ok(Self {
             scene,
             units,
-            fields: FieldOutput::new(scene, units, out).map_err(Stop::Failed)?,
+            fields: FieldOutput::new(scene, units, out, at).map_err(Stop::Failed)?,
+            checkpoints,
             last_good: None,
         })
     }
 
     fn steps(&mut self, lattice: &mut GpuLattice, steps: u64, interrupted: &AtomicBool) -> Result<(), Stop> {
         let check = self.units.check_interval;
-        let lines_every = self.scene.output.interval;
-        let fields_every = self.scene.output.fields_interval;
-        let due = |s: u64, every: u64| every > 0 && s.is_multiple_of(every);
+        let every = [
+            check,
+            self.scene.output.interval,
+            self.scene.output.fields_interval,
+            self.checkpoints.schedule.every(),
+        ];
         let mut progress = Progress::new(steps);
+        progress.update(lattice.time);
         while lattice.time < steps {
             let now = lattice.time;
-            let next = [check, lines_every, fields_every]
+            let next = every
                 .iter()
                 .filter(|e| **e > 0)
                 .map(|e| (now / e + 1) * e)
@@ -271,26 +304,7 @@ impl<'a> FluidRun<'a> {
             lattice.step(next - now);
             // Interrupted (Ctrl-C), the run ends here: this step gets a last step's outputs.
             let stopping = interrupted.load(Ordering::SeqCst);
-            let last = next == steps || stopping;
-            let (lines, snapshot) = (due(next, lines_every) || last, due(next, fields_every) || last);
-            // The whole field crosses the bus only when something is written from it; a check
-            // alone reads the status and, if it fails, one cell.
-            if lines || snapshot {
-                let (fields, bad) = lattice.fields();
-                if let Some(bad) = bad {
-                    return Err(self.blow_up(lattice, next, check, bad));
-                }
-                if lines {
-                    self.fields.write_lines(next, &fields).map_err(Stop::Failed)?;
-                }
-                if snapshot {
-                    self.fields.write_snapshot(next, &fields).map_err(Stop::Failed)?;
-                }
-            } else if let Some(bad) = lattice.health() {
-                return Err(self.blow_up(lattice, next, check, bad));
-            }
-            lattice.keep_fields();
-            self.last_good = Some(next);
+            self.outputs(lattice, next, next == steps || stopping)?;
             progress.update(next);
             if stopping {
                 progress.abandon();
@@ -302,9 +316,64 @@ impl<'a> FluidRun<'a> {
         self.fields.flush().map_err(Stop::Failed)
     }
 
+    /// The outputs after step `step` (the `last` of the run: all of them): the probe lines and
+    /// the snapshot where due, with the health check (or the check alone), and a checkpoint where
+    /// due; its outputs' positions are those before a last step's outputs that are not due
+    /// (a run resumed from it then writes what an uninterrupted one does).
+    fn outputs(&mut self, lattice: &mut GpuLattice, step: u64, last: bool) -> Result<(), Stop> {
+        let due = |every: u64| every > 0 && step.is_multiple_of(every);
+        let (lines, snapshot) = (
+            due(self.scene.output.interval),
+            due(self.scene.output.fields_interval),
+        );
+        let checkpoint = self.checkpoints.enabled() && (last || self.checkpoints.schedule.due(step));
+        // The whole field crosses the bus only when something is written from it; a check
+        // alone reads the status and, if it fails, one cell.
+        if lines || snapshot || last {
+            let (fields, bad) = lattice.fields();
+            if let Some(bad) = bad {
+                return Err(self.blow_up(lattice, step, bad));
+            }
+            self.write(step, &fields, lines, snapshot)?;
+            if checkpoint {
+                self.checkpoint(lattice)?;
+            }
+            self.write(step, &fields, last && !lines, last && !snapshot)?;
+        } else if let Some(bad) = lattice.health() {
+            return Err(self.blow_up(lattice, step, bad));
+        } else if checkpoint {
+            self.checkpoint(lattice)?;
+        }
+        lattice.keep_fields();
+        self.last_good = Some(step);
+        Ok(())
+    }
+
+    /// The probe lines and the snapshot of `step`, those asked for.
+    fn write(&mut self, step: u64, fields: &[[f32; 4]], lines: bool, snapshot: bool) -> Result<(), Stop> {
+        if lines {
+            self.fields.write_lines(step, fields).map_err(Stop::Failed)?;
+        }
+        if snapshot {
+            self.fields.write_snapshot(step, fields).map_err(Stop::Failed)?;
+        }
+        Ok(())
+    }
+
+    /// A checkpoint of the lattice as it is now, and of where the outputs stand.
+    fn checkpoint(&mut self, lattice: &GpuLattice) -> Result<(), Stop> {
+        let mut at = OutputPositions::default();
+        self.fields.positions(&mut at).map_err(Stop::Failed)?;
+        self.checkpoints.stage().map_err(Stop::Failed)?;
+        let time = lattice.time as f64 * self.units.dt;
+        self.checkpoints.take(lattice, time, 0, at, None);
+        Ok(())
+    }
+
     /// Describes the cell furthest out of bounds (`bad`, the first found, where none is further)
     /// and writes the last good snapshot.
-    fn blow_up(&mut self, lattice: &GpuLattice, step: u64, check: u64, bad: Unhealthy) -> Stop {
+    fn blow_up(&mut self, lattice: &GpuLattice, step: u64, bad: Unhealthy) -> Stop {
+        let check = self.units.check_interval;
         let bad = lattice.furthest_unhealthy().unwrap_or(bad);
         let (origin, dx) = (self.scene.domain.min, self.units.dx);
         let mut msg = format!(

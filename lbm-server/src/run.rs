@@ -17,6 +17,7 @@ mod counters;
 mod ending;
 mod exchange;
 mod prepare;
+mod resume;
 mod session;
 mod summary;
 mod welcome;
@@ -60,6 +61,14 @@ pub struct RunArgs {
     /// Longest wait for the DEM side to connect [s] (default: 30 when spawned, unlimited when external).
     #[arg(long)]
     connect_timeout: Option<f64>,
+    /// Steps between two checkpoints (OUT/checkpoint/; overrides `output.checkpoint_interval`;
+    /// 0: none by steps). docs/checkpoint.md.
+    #[arg(long, value_name = "N")]
+    checkpoint_interval: Option<u64>,
+    /// Goes on from the last checkpoint in OUT, with the scene of OUT/scene.toml, to its last
+    /// step or `--steps`, appending to the outputs there.
+    #[arg(long, value_name = "OUT", conflicts_with_all = ["scene", "out"])]
+    resume: Option<PathBuf>,
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -99,12 +108,14 @@ pub fn main(args: RunArgs) -> ExitCode {
     };
     if prepared.scene.lattice.is_some() && prepared.scene.particle_count() == 0 {
         let p = &prepared;
+        let checkpoints = p.checkpoints(args.checkpoint_interval);
         return ExitCode::from(crate::fluid::run(
             &p.scene,
             &p.scene_file,
             p.steps,
             &p.out,
             interrupted,
+            checkpoints,
         ));
     }
     let dem = match dem_start(&args, &prepared) {

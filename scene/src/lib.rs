@@ -558,6 +558,7 @@ fn block_centres(b: &Block) -> impl Iterator<Item = [f64; 3]> + '_ {
 }
 
 mod checks;
+pub mod checksum;
 pub mod dem;
 #[cfg(test)]
 mod every_field;

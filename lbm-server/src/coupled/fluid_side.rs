@@ -80,7 +80,7 @@ impl FluidSide {
         for warning in lattice_warnings(scene, &units, &radii) {
             protocol::say!("lbm-server: warning: {warning}");
         }
-        let fields = FieldOutput::new(scene, &units, out)?;
+        let fields = FieldOutput::new(scene, &units, out, None)?;
         Ok(FluidSide {
             lattice,
             units,

@@ -3,6 +3,7 @@
 //! cleared of an earlier run's outputs.
 
 use super::{DemMode, RunArgs};
+use crate::checkpoint::{Checkpoints, Loaded};
 use scene::output_lock::OutputLock;
 use scene::Scene;
 use std::path::PathBuf;
@@ -12,15 +13,22 @@ use std::time::Duration;
 pub(super) struct Prepared {
     pub(super) scene: Scene,
     pub(super) scene_file: String,
+    /// The scene file's text (its hash is a checkpoint's `scene_hash`).
+    pub(super) scene_text: String,
     pub(super) steps: u64,
     pub(super) out: PathBuf,
     pub(super) scene_copy: PathBuf,
     pub(super) connect_timeout: Duration,
+    /// The checkpoint a resumed run goes on from (`--resume`), found and checked.
+    pub(super) resumed: Option<Loaded>,
     /// The output folder's lock, held for the whole run.
     pub(super) _lock: OutputLock,
 }
 
 pub(super) fn prepare(args: &RunArgs) -> Result<Prepared, String> {
+    if let Some(out) = &args.resume {
+        return super::resume::prepare_resume(args, out);
+    }
     let (scene, scene_file, text) = match &args.scene {
         Some(path) => {
             let scene = Scene::load(path).map_err(|e| e.to_string())?;
@@ -34,22 +42,8 @@ pub(super) fn prepare(args: &RunArgs) -> Result<Prepared, String> {
         ),
     };
     require_lattice(&scene, &scene_file)?;
-    let steps = match args.duration {
-        Some(duration) => scene.steps_covering(duration, "--duration")?,
-        None => args.steps.unwrap_or(scene.time.steps),
-    };
-    if steps == 0 {
-        return Err("--steps = 0: must be at least 1".into());
-    }
-    let default_timeout = if args.dem == DemMode::External {
-        f64::INFINITY
-    } else {
-        30.0
-    };
-    let connect_timeout = args.connect_timeout.unwrap_or(default_timeout);
-    if connect_timeout.is_nan() || connect_timeout <= 0.0 {
-        return Err(format!("--connect-timeout = {connect_timeout} s: must be > 0"));
-    }
+    let steps = run_steps(args, &scene)?;
+    let connect_timeout = connect_timeout(args)?;
     if let Some(units) = &scene.lattice_units {
         fits_the_device(units.n)?;
     }
@@ -62,22 +56,58 @@ pub(super) fn prepare(args: &RunArgs) -> Result<Prepared, String> {
     let lock = OutputLock::take(&out)?;
     clear_earlier_outputs(&out)?;
     let scene_copy = out.join("scene.toml");
-    std::fs::write(&scene_copy, text).map_err(|e| format!("{}: {e}", scene_copy.display()))?;
+    std::fs::write(&scene_copy, &text).map_err(|e| format!("{}: {e}", scene_copy.display()))?;
     Ok(Prepared {
         scene,
         scene_file,
+        scene_text: text,
         steps,
         out,
         scene_copy,
-        connect_timeout: Duration::try_from_secs_f64(connect_timeout).unwrap_or(Duration::MAX),
+        connect_timeout,
+        resumed: None,
         _lock: lock,
     })
+}
+
+/// The run's steps: `--duration`'s, `--steps` or the scene's.
+pub(super) fn run_steps(args: &RunArgs, scene: &Scene) -> Result<u64, String> {
+    let steps = match args.duration {
+        Some(duration) => scene.steps_covering(duration, "--duration")?,
+        None => args.steps.unwrap_or(scene.time.steps),
+    };
+    if steps == 0 {
+        return Err("--steps = 0: must be at least 1".into());
+    }
+    Ok(steps)
+}
+
+/// The longest wait for the DEM to connect (`--connect-timeout`).
+pub(super) fn connect_timeout(args: &RunArgs) -> Result<Duration, String> {
+    let default_timeout = if args.dem == DemMode::External {
+        f64::INFINITY
+    } else {
+        30.0
+    };
+    let connect_timeout = args.connect_timeout.unwrap_or(default_timeout);
+    if connect_timeout.is_nan() || connect_timeout <= 0.0 {
+        return Err(format!("--connect-timeout = {connect_timeout} s: must be > 0"));
+    }
+    Ok(Duration::try_from_secs_f64(connect_timeout).unwrap_or(Duration::MAX))
+}
+
+impl Prepared {
+    /// The run's checkpoints: the scene's, every `steps` where given (`--checkpoint-interval`).
+    pub(super) fn checkpoints(&self, steps: Option<u64>) -> Checkpoints {
+        let resumed = self.resumed.clone();
+        Checkpoints::new(&self.out, &self.scene, &self.scene_text, steps, resumed)
+    }
 }
 
 /// A lattice the device cannot hold is refused before the output folder is touched or the
 /// lattice allocated: the limits of the adapter the run opens (where none is found, the run's
 /// start says why).
-fn fits_the_device(n: [usize; 3]) -> Result<(), String> {
+pub(super) fn fits_the_device(n: [usize; 3]) -> Result<(), String> {
     match crate::lbm::gpu::Gpu::adapter_limits() {
         Ok(limits) => crate::lbm::gpu::fits_device(&limits, n),
         Err(_) => Ok(()),
@@ -86,6 +116,12 @@ fn fits_the_device(n: [usize; 3]) -> Result<(), String> {
 
 /// Removes what an earlier run wrote into `out` under this run's output names, saying so.
 fn clear_earlier_outputs(out: &std::path::Path) -> Result<(), String> {
+    for dir in [crate::checkpoint::DIR, crate::checkpoint::OLD, crate::checkpoint::STAGING] {
+        let dir = out.join(dir);
+        if dir.is_dir() {
+            std::fs::remove_dir_all(&dir).map_err(|e| format!("cannot remove {}: {e}", dir.display()))?;
+        }
+    }
     let removed = scene::outputs::clear_earlier(out, scene::outputs::LBM_SERVER).map_err(|e| {
         format!(
             "cannot remove an earlier run's outputs from {}: {e}",

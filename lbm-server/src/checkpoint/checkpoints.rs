@@ -1,0 +1,84 @@
+//! A run's checkpoints ([`Checkpoints`]): when they are due, the header each gets, the lattice's
+//! state taken off the device and handed to the writer, and the checkpoint a resumed run started
+//! from.
+
+use super::header::{Header, OutputPositions, FORMAT, VERSION};
+use super::read::Loaded;
+use super::schedule::Schedule;
+use super::write::{Snapshot, Writer};
+use crate::lbm::gpu::GpuLattice;
+use std::path::{Path, PathBuf};
+
+/// The checkpoints of one run.
+pub struct Checkpoints {
+    pub schedule: Schedule,
+    writer: Writer,
+    scene_hash: String,
+    /// The checkpoint this run resumed from.
+    pub resumed: Option<Loaded>,
+}
+
+impl Checkpoints {
+    /// The checkpoints of a run of `scene` (its file's text `scene_text`) into `out`, every
+    /// `steps` where given (`--checkpoint-interval`), resumed from `resumed`.
+    pub fn new(
+        out: &Path,
+        scene: &scene::Scene,
+        scene_text: &str,
+        steps: Option<u64>,
+        resumed: Option<Loaded>,
+    ) -> Self {
+        Self {
+            schedule: Schedule::new(scene, steps),
+            writer: Writer::new(out),
+            scene_hash: super::scene_hash(scene_text),
+            resumed,
+        }
+    }
+
+    /// Whether the run writes checkpoints.
+    pub fn enabled(&self) -> bool {
+        self.schedule.enabled()
+    }
+
+    /// An empty staging folder for the next checkpoint (once the one being written is done).
+    pub fn stage(&mut self) -> Result<PathBuf, String> {
+        self.writer.stage()
+    }
+
+    /// The lattice's state, copied off the device, and its header, handed to the writer (which
+    /// writes them into the staging folder on a thread): `particles` at simulated time `time_s`,
+    /// the outputs standing `at`.
+    pub fn take(
+        &mut self,
+        lattice: &GpuLattice,
+        time_s: f64,
+        particles: u64,
+        at: OutputPositions,
+        covered_cells: Option<String>,
+    ) {
+        let state = lattice.raw_state();
+        let header = Header {
+            format: FORMAT.into(),
+            version: VERSION,
+            scene_hash: self.scene_hash.clone(),
+            lattice: lattice.setup.n,
+            storage: lattice.storage().name().into(),
+            step: state.time,
+            time_s,
+            particles,
+            aa_phase: state.time % 2,
+            face_scale: state.face_scale,
+            covered_cells,
+            outputs: at,
+            files: Vec::new(),
+        };
+        self.writer.commit(Snapshot { header, state });
+        self.schedule.written();
+    }
+
+    /// Waits for the checkpoint being written.
+    pub fn wait(&mut self) -> Result<(), String> {
+        self.writer.wait()
+    }
+}
