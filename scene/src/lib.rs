@@ -557,6 +557,7 @@ fn block_centres(b: &Block) -> impl Iterator<Item = [f64; 3]> + '_ {
     })
 }
 
+pub mod checkpoint;
 mod checks;
 pub mod checksum;
 pub mod dem;

@@ -2,10 +2,9 @@
 //! state taken off the device and handed to the writer, and the checkpoint a resumed run started
 //! from.
 
-use super::header::{Header, OutputPositions, FORMAT, VERSION};
 use super::read::Loaded;
-use super::schedule::Schedule;
 use super::write::{Snapshot, Writer};
+use scene::checkpoint::{Header, OutputPositions, Schedule, FORMAT, VERSION};
 use crate::lbm::gpu::GpuLattice;
 use std::path::{Path, PathBuf};
 
@@ -31,7 +30,7 @@ impl Checkpoints {
         Self {
             schedule: Schedule::new(scene, steps),
             writer: Writer::new(out),
-            scene_hash: super::scene_hash(scene_text),
+            scene_hash: scene::checkpoint::scene_hash(scene_text),
             resumed,
         }
     }

@@ -1,10 +1,9 @@
-//! A checkpoint read back for `--resume`: the newest complete one (OUT/checkpoint, or
-//! checkpoint.old where a crash came between the two renames), every file's size and checksum
-//! checked before anything is overwritten, and what it was written for compared with the run.
+//! A fluid checkpoint read back for `--resume`: the newest complete one, every file checked
+//! (`scene::checkpoint::open_newest`) before anything is overwritten, and what it was written for
+//! compared with the run.
 
-use super::header::{FileEntry, Header, FORMAT, VERSION};
-use super::{DIR, OLD};
 use crate::lbm::gpu::RawState;
+use scene::checkpoint::Header;
 use std::path::{Path, PathBuf};
 
 /// A checkpoint found and checked.
@@ -27,50 +26,8 @@ pub struct Expected<'a> {
 impl Loaded {
     /// The newest complete checkpoint in `out`, its header read and every file checked.
     pub fn open(out: &Path) -> Result<Loaded, String> {
-        let dir = [DIR, OLD]
-            .iter()
-            .map(|d| out.join(d))
-            .find(|d| d.join("header.json").is_file())
-            .ok_or_else(|| format!("no checkpoint in {} (no {DIR}/header.json)", out.display()))?;
-        let path = dir.join("header.json");
-        let text = std::fs::read_to_string(&path).map_err(|e| format!("{}: {e}", path.display()))?;
-        let header: Header = serde_json::from_str(&text)
-            .map_err(|e| format!("{}: not a checkpoint header: {e}", path.display()))?;
-        if header.format != FORMAT || header.version != VERSION {
-            return Err(format!(
-                "{}: format '{}' version {}, this lbm-server reads '{FORMAT}' version {VERSION}",
-                path.display(),
-                header.format,
-                header.version
-            ));
-        }
-        let loaded = Loaded { dir, header };
-        for entry in &loaded.header.files {
-            loaded.check_file(entry)?;
-        }
-        Ok(loaded)
-    }
-
-    /// A file's size and checksum as the header records them.
-    fn check_file(&self, entry: &FileEntry) -> Result<(), String> {
-        let path = self.dir.join(&entry.file);
-        let (checksum, bytes) =
-            scene::checksum::of_file(&path).map_err(|e| format!("checkpoint: {}: {e}", path.display()))?;
-        if bytes != entry.bytes {
-            return Err(format!(
-                "checkpoint: {} holds {bytes} bytes, its header says {} (truncated or corrupt)",
-                path.display(),
-                entry.bytes
-            ));
-        }
-        if checksum != entry.checksum {
-            return Err(format!(
-                "checkpoint: {} has checksum {checksum}, its header says {} (corrupt)",
-                path.display(),
-                entry.checksum
-            ));
-        }
-        Ok(())
+        let (dir, header) = scene::checkpoint::open_newest(out)?;
+        Ok(Loaded { dir, header })
     }
 
     /// The run and the checkpoint must agree on the scene, lattice, storage and particle count:
@@ -83,9 +40,13 @@ impl Loaded {
                 self.dir.display()
             ))
         };
-        let hash = super::scene_hash(run.scene_text);
+        let hash = scene::checkpoint::scene_hash(run.scene_text);
         if h.scene_hash != hash {
-            return differs("scene (scene.toml changed)", format!("hash {}", h.scene_hash), format!("hash {hash}"));
+            return differs(
+                "scene (scene.toml changed)",
+                format!("hash {}", h.scene_hash),
+                format!("hash {hash}"),
+            );
         }
         if h.lattice != run.lattice {
             return differs("lattice", format!("{:?} cells", h.lattice), format!("{:?}", run.lattice));

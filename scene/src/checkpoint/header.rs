@@ -16,9 +16,9 @@ pub struct Header {
     pub version: u32,
     /// FNV-1a 64 of the run's scene.toml ([`scene_hash`]).
     pub scene_hash: String,
-    /// Cells along x, y, z.
+    /// Cells along x, y, z ([0, 0, 0]: a granular run alone).
     pub lattice: [usize; 3],
-    /// `lattice.storage`: fp32, fp16s or fp16c.
+    /// `lattice.storage`: fp32, fp16s or fp16c ("none": a granular run alone).
     pub storage: String,
     /// Steps completed: the run goes on with this step.
     pub step: u64,
@@ -69,12 +69,12 @@ impl OutputPositions {
             .files
             .get(name)
             .ok_or_else(|| format!("the checkpoint does not record where {name} stood"))?;
-        let rows = scene::row_file::RowFile::resume(&out.join(name), kept).map_err(|e| e.to_string())?;
+        let rows = crate::row_file::RowFile::resume(&out.join(name), kept).map_err(|e| e.to_string())?;
         Ok(rows.into_file())
     }
 }
 
 /// The scene hash of a checkpoint: FNV-1a 64 of the scene file's text.
 pub fn scene_hash(text: &str) -> String {
-    scene::checksum::fnv1a64(text.as_bytes())
+    crate::checksum::fnv1a64(text.as_bytes())
 }

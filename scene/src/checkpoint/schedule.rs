@@ -2,7 +2,7 @@
 //! `--checkpoint-interval`), every `output.checkpoint_wall_interval` minutes of wall time, and,
 //! where either is set, at the run's end and on Ctrl-C.
 
-use scene::Scene;
+use crate::Scene;
 use std::time::{Duration, Instant};
 
 /// The checkpoints of a run.
