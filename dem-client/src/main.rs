@@ -4,8 +4,10 @@
 //! a running `lbm-server` as the DEM side of the co-simulation. See docs/dem.md.
 
 mod bench;
+mod checkpoint;
 mod connect;
 mod dem;
+mod lockstep;
 mod output;
 mod run;
 

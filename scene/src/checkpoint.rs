@@ -22,3 +22,5 @@ pub use schedule::Schedule;
 pub const DIR: &str = "checkpoint";
 pub const STAGING: &str = "checkpoint.staging";
 pub const OLD: &str = "checkpoint.old";
+/// The marker file a DEM writes last into the staging folder: its part is complete.
+pub const DEM_COMPLETE: &str = "dem.complete";

@@ -15,6 +15,8 @@ pub struct Checkpoints {
     scene_hash: String,
     /// The checkpoint this run resumed from.
     pub resumed: Option<Loaded>,
+    /// A checkpoint taken and waiting for the DEM's part (`hold`).
+    held: Option<Snapshot>,
 }
 
 impl Checkpoints {
@@ -32,6 +34,7 @@ impl Checkpoints {
             writer: Writer::new(out),
             scene_hash: scene::checkpoint::scene_hash(scene_text),
             resumed,
+            held: None,
         }
     }
 
@@ -56,6 +59,31 @@ impl Checkpoints {
         at: OutputPositions,
         covered_cells: Option<String>,
     ) {
+        self.hold(lattice, time_s, particles, at, covered_cells);
+        self.release();
+    }
+
+    /// Whether a checkpoint is held for the DEM's part.
+    pub fn holding(&self) -> bool {
+        self.held.is_some()
+    }
+
+    /// Hands the checkpoint held to the writer (the DEM's part, where it has one, is complete).
+    pub fn release(&mut self) {
+        if let Some(snapshot) = self.held.take() {
+            self.writer.commit(snapshot);
+        }
+    }
+
+    /// As `take`, but held until the DEM's part is complete (`release`).
+    pub fn hold(
+        &mut self,
+        lattice: &GpuLattice,
+        time_s: f64,
+        particles: u64,
+        at: OutputPositions,
+        covered_cells: Option<String>,
+    ) {
         let state = lattice.raw_state();
         let header = Header {
             format: FORMAT.into(),
@@ -72,7 +100,7 @@ impl Checkpoints {
             outputs: at,
             files: Vec::new(),
         };
-        self.writer.commit(Snapshot { header, state });
+        self.held = Some(Snapshot { header, state });
         self.schedule.written();
     }
 

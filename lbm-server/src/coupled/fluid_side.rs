@@ -13,6 +13,7 @@ use super::radius_correction::radius_deficit_product;
 use super::states::LatticeStates;
 use super::warnings::lattice_warnings;
 use super::ways::{covered_cells, way_trials};
+use crate::checkpoint::{Loaded, OutputPositions};
 use crate::fields::FieldOutput;
 use crate::fluid::{health_of, setup_of};
 use crate::lbm::gpu::{Gpu, GpuLattice};
@@ -54,11 +55,21 @@ pub struct FluidSide {
     pub(super) lines_every: u64,
     /// Steps of the run (its last gets a snapshot and the lines).
     pub(super) run_steps: u64,
+    /// Where the field outputs stood at the last step before those only a last step gets (a
+    /// checkpoint there records these: a run resumed from it writes what an uninterrupted one
+    /// does).
+    pub(super) before_last: Option<OutputPositions>,
 }
 
 impl FluidSide {
-    /// The fluid a scene asks for, for a run of `steps` steps writing its field outputs into `out`.
-    pub fn for_scene(scene: &Scene, steps: u64, out: &Path) -> Result<FluidSide, String> {
+    /// The fluid a scene asks for, for a run of `steps` steps writing its field outputs into `out`;
+    /// resumed, in the state of the checkpoint `resumed`.
+    pub fn for_scene(
+        scene: &Scene,
+        steps: u64,
+        out: &Path,
+        resumed: Option<&Loaded>,
+    ) -> Result<FluidSide, String> {
         let Some(units) = scene.lattice_units.clone() else {
             return Err(format!(
                 "scene '{}' has particles but no [lattice]: the fluid needs one",
@@ -72,7 +83,10 @@ impl FluidSide {
         let radii: Vec<f64> = scene.initial_particles().iter().map(|p| p.radius).collect();
         let options = imb_options(scene, &units, &radii)?;
         let trials = way_trials(scene, &gpu).map(|least| WayTrials::new(options.covered_cells, steps, least));
-        let lattice = GpuLattice::new(gpu, setup_of(&units), health_of(&units), Some(options))?;
+        let mut lattice = GpuLattice::new(gpu, setup_of(&units), health_of(&units), Some(options))?;
+        if let Some(loaded) = resumed {
+            lattice.restore_raw(&loaded.raw_state(lattice.population_bytes())?);
+        }
         let lubrication = scene
             .coupling
             .lubrication
@@ -80,7 +94,7 @@ impl FluidSide {
         for warning in lattice_warnings(scene, &units, &radii) {
             protocol::say!("lbm-server: warning: {warning}");
         }
-        let fields = FieldOutput::new(scene, &units, out, None)?;
+        let fields = FieldOutput::new(scene, &units, out, resumed.map(|l| &l.header.outputs))?;
         Ok(FluidSide {
             lattice,
             units,
@@ -89,7 +103,7 @@ impl FluidSide {
             gravity: scene.gravity,
             lubrication,
             deficit_product,
-            steps: 0,
+            steps: resumed.map_or(0, |l| l.header.step),
             trials,
             made: std::time::Instant::now(),
             fields,
@@ -97,6 +111,7 @@ impl FluidSide {
             fields_every: scene.output.fields_interval,
             lines_every: scene.output.interval,
             run_steps: steps,
+            before_last: None,
         })
     }
 

@@ -21,6 +21,8 @@ pub(super) struct Prepared {
     pub(super) connect_timeout: Duration,
     /// The checkpoint a resumed run goes on from (`--resume`), found and checked.
     pub(super) resumed: Option<Loaded>,
+    /// `--checkpoint-interval`.
+    pub(super) checkpoint_interval: Option<u64>,
     /// The output folder's lock, held for the whole run.
     pub(super) _lock: OutputLock,
 }
@@ -66,6 +68,7 @@ pub(super) fn prepare(args: &RunArgs) -> Result<Prepared, String> {
         scene_copy,
         connect_timeout,
         resumed: None,
+        checkpoint_interval: args.checkpoint_interval,
         _lock: lock,
     })
 }
@@ -97,10 +100,11 @@ pub(super) fn connect_timeout(args: &RunArgs) -> Result<Duration, String> {
 }
 
 impl Prepared {
-    /// The run's checkpoints: the scene's, every `steps` where given (`--checkpoint-interval`).
-    pub(super) fn checkpoints(&self, steps: Option<u64>) -> Checkpoints {
+    /// The run's checkpoints: the scene's, every `--checkpoint-interval` steps where given.
+    pub(super) fn checkpoints(&self) -> Checkpoints {
         let resumed = self.resumed.clone();
-        Checkpoints::new(&self.out, &self.scene, &self.scene_text, steps, resumed)
+        let every = self.checkpoint_interval;
+        Checkpoints::new(&self.out, &self.scene, &self.scene_text, every, resumed)
     }
 }
 

@@ -52,6 +52,7 @@ pub(super) fn prepare_resume(args: &RunArgs, out: &Path) -> Result<Prepared, Str
         scene_copy,
         connect_timeout,
         resumed: Some(loaded),
+        checkpoint_interval: args.checkpoint_interval,
         _lock: lock,
     })
 }
