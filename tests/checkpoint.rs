@@ -129,3 +129,68 @@ fn a_coupled_run_killed_and_resumed_writes_the_same_particles() {
     same_file(&full.join("checkpoint/populations.bin"), &part.join("checkpoint/populations.bin"));
     same_file(&full.join("checkpoint/dem.bin"), &part.join("checkpoint/dem.bin"));
 }
+
+/// A granular pour alone: 48 spheres settling in a box, rows every 10 steps, VTK on.
+const SETTLING: &str = r#"name = "settling"
+[domain]
+min = [0.0, 0.0, 0.0]
+max = [0.024, 0.024, 0.04]
+[fluid]
+density = 1.2
+dynamic_viscosity = 1.8e-5
+[time]
+dt = 2.0e-3
+steps = 50
+[output]
+interval = 10
+checkpoint_interval = 10
+[particles]
+density = 2500.0
+[[dem.material]]
+name = "steel"
+restitution = 0.6
+friction = 0.3
+[[dem.insert]]
+origin = [0.004, 0.004, 0.004]
+count = [4, 4, 3]
+spacing = 0.0048
+radius = [0.0016, 0.002]
+jitter = 0.0003
+[dem.output]
+vtk = true
+"#;
+
+fn dem_client(args: &[&std::ffi::OsStr]) -> std::process::Output {
+    std::process::Command::new(bin("dem-client"))
+        .arg("run")
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+#[test]
+fn a_granular_run_stopped_and_resumed_writes_the_same_bytes() {
+    let dir = temp_dir("ckpt-dem");
+    let scene = write_scene(&dir, SETTLING);
+    let (full, part) = (dir.join("full"), dir.join("part"));
+    let os = |s: &'static str| std::ffi::OsStr::new(s);
+    let ok = |run: std::process::Output| {
+        let err = String::from_utf8_lossy(&run.stderr).into_owned();
+        assert_eq!(run.status.code(), Some(0), "{err}");
+        err
+    };
+    ok(dem_client(&[scene.as_os_str(), os("--out"), full.as_os_str()]));
+    let err = ok(dem_client(&[scene.as_os_str(), os("--out"), part.as_os_str(), os("--steps"), os("23")]));
+    assert!(err.contains("checkpoint at step 23 written"), "{err}");
+    let err = ok(dem_client(&[os("--resume"), part.as_os_str()]));
+    assert!(err.contains("resumed at step 23"), "{err}");
+    for file in ["particles.csv", "energy.csv", "particles.pvd", "particles_000050.vtp", "checkpoint/dem.bin"] {
+        same_file(&full.join(file), &part.join(file));
+    }
+    let text = std::fs::read_to_string(part.join("scene.toml")).unwrap();
+    std::fs::write(part.join("scene.toml"), text.replace("count = [4, 4, 3]", "count = [4, 4, 2]")).unwrap();
+    let run = dem_client(&[os("--resume"), part.as_os_str(), os("--steps"), os("60")]);
+    let err = String::from_utf8_lossy(&run.stderr);
+    assert_eq!(run.status.code(), Some(2), "{err}");
+    assert!(err.contains("is of another scene"), "{err}");
+}

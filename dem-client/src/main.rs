@@ -10,6 +10,7 @@ mod dem;
 mod lockstep;
 mod output;
 mod run;
+mod run_checkpoint;
 
 use clap::{Parser, Subcommand};
 use std::path::PathBuf;
