@@ -16,7 +16,7 @@ const MAGIC: &[u8; 8] = b"LBDMDEM\0";
 const VERSION: u64 = 1;
 
 /// Where a fluid that starts the DEM names the staging folder to write into when asked, and the
-/// folder of the checkpoint a resumed run goes on from (PROTOCOL.md 8).
+/// folder of the checkpoint a resumed run goes on from (PROTOCOL.md 6.4).
 pub const CHECKPOINT_DIR_ENV: &str = "LBMDEM_CHECKPOINT_DIR";
 pub const RESUME_DIR_ENV: &str = "LBMDEM_RESUME_DIR";
 

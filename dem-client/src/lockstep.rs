@@ -1,7 +1,7 @@
 //! The DEM side of the lockstep loop (`dem-client connect`): states(n) out, forces(n) in, the
 //! particles advanced over the fluid step; from the Welcome's `first_step` (a resumed run's),
 //! and, where a reply carries CHECKPOINT, the particles' state for step n + 1 written into the
-//! checkpoint folder, its marker last, before states(n + 1) are sent (PROTOCOL.md 8).
+//! checkpoint folder, its marker last, before states(n + 1) are sent (PROTOCOL.md 6.4).
 
 use crate::connect::{CoupledParticles, Faults, Substeps};
 use protocol::{DemLink, LinkError, ParticleReply, ParticleState, StepFlags, StepHeader, Welcome};

@@ -17,7 +17,7 @@ pub const SCENE_ENV: &str = "LBMDEM_SCENE";
 /// Where the Python clients are found when lbm-server runs away from its source tree.
 pub const CLIENTS_ENV: &str = "LBMDEM_CLIENTS";
 /// The staging folder a DEM writes its part of a checkpoint into (OUT/checkpoint.staging,
-/// absolute), and the folder of the checkpoint a resumed run goes on from (PROTOCOL.md 8).
+/// absolute), and the folder of the checkpoint a resumed run goes on from (PROTOCOL.md 6.4).
 pub const CHECKPOINT_DIR_ENV: &str = "LBMDEM_CHECKPOINT_DIR";
 pub const RESUME_DIR_ENV: &str = "LBMDEM_RESUME_DIR";
 

@@ -7,7 +7,7 @@
 //! - here: the lockstep loop (`Session::step_loop`), each coupled step a list of named passes
 //!   (`Session::coupled_step`): `exchange.rs` receives the DEM's states and sends the replies,
 //!   `answer.rs` is the fluid's answer to the states, `ending.rs` how a step ends the run.
-//! - `checkpointing.rs`: the run's checkpoints, with the DEM's part (PROTOCOL.md 8); `resume.rs`:
+//! - `checkpointing.rs`: the run's checkpoints, with the DEM's part (PROTOCOL.md 6.4); `resume.rs`:
 //!   a run prepared to go on from one (`--resume`).
 //! - `counters.rs`: what the run counts, and where its wall time goes (summary.json's `time_s`).
 //! - `summary.rs`: summary.json.

@@ -5,7 +5,7 @@ use core::mem::size_of;
 
 /// Version of this protocol. Bump on any change of a message layout or of the step rules.
 /// Version 2: Hello's `capabilities`, Welcome's `first_step` and `cell_size`, the step flag
-/// `CHECKPOINT` (PROTOCOL.md 8).
+/// `CHECKPOINT` (PROTOCOL.md 6.4).
 pub const PROTOCOL_VERSION: u32 = 2;
 
 /// The oldest version this build still speaks: a fluid answers a version-1 Hello with a
@@ -161,7 +161,7 @@ pub struct Capabilities;
 impl Capabilities {
     /// It writes its whole state into the checkpoint folder when a reply carries
     /// `StepFlags::CHECKPOINT`, and goes on from such a state at `Welcome::first_step`
-    /// (PROTOCOL.md 8).
+    /// (PROTOCOL.md 6.4).
     pub const CHECKPOINT: u32 = 1 << 0;
 }
 

@@ -1,4 +1,4 @@
-//! A coupled run's checkpoints (docs/checkpoint.md, PROTOCOL.md 8): the reply of step n carries
+//! A coupled run's checkpoints (docs/checkpoint.md, PROTOCOL.md 6.4): the reply of step n carries
 //! CHECKPOINT where one is due after it; the DEM writes its state for step n + 1 into the staging
 //! folder, ends it with the marker file `dem.complete`, and sends states(n + 1); the fluid's own
 //! state, taken after step n, is held until then and handed to the writer. At the run's end (its
