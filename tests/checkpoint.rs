@@ -62,6 +62,10 @@ fn a_fluid_run_stopped_and_resumed_writes_the_same_bytes() {
     for file in ["line0.csv", "fields.pvd", "fields/step000000200.vti", "checkpoint/populations.bin"] {
         same_file(&full.join(file), &part.join(file));
     }
+    assert!(
+        !part.join("fields/step000000075.vti").exists(),
+        "the stopped run's last snapshot, after its checkpoint, is removed"
+    );
 }
 
 #[test]

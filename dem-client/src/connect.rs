@@ -66,6 +66,17 @@ pub(crate) struct Faults {
 }
 
 impl Faults {
+    /// The faults the testing arguments ask for.
+    fn of(args: &ConnectArgs) -> Faults {
+        Faults {
+            churn: args.churn,
+            skip_step: args.skip_step,
+            stall_at: args.stall_at,
+            stall_for: args.stall_for.map(Duration::from_secs_f64),
+            stall_busy: args.stall_busy,
+        }
+    }
+
     /// Stays silent at `stall_at`: asleep or spinning, for `stall_for` or for ever.
     pub fn stall(&self, step: u64) {
         if self.stall_at != Some(step) {
@@ -126,13 +137,7 @@ pub fn main(args: ConnectArgs) -> ExitCode {
         }
     };
     let mut last = None;
-    let faults = Faults {
-        churn: args.churn,
-        skip_step: args.skip_step,
-        stall_at: args.stall_at,
-        stall_for: args.stall_for.map(Duration::from_secs_f64),
-        stall_busy: args.stall_busy,
-    };
+    let faults = Faults::of(&args);
     let (sub, limits) = particles.couple(&scene, &welcome, setup.dt_max);
     protocol::say!(
         "dem-client: {}",

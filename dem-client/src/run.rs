@@ -212,8 +212,7 @@ fn simulate(p: Prepared, resumed: bool, every: Option<u64>, interrupted: &Atomic
     let mut done = 0;
     for step in first..=p.steps {
         let stop = interrupted.load(Ordering::SeqCst);
-        let due = checkpoints.schedule.due(step) || step == p.steps || stop;
-        if checkpoints.schedule.enabled() && step > first && due {
+        if step > first && (checkpoints.schedule.due(step) || step == p.steps || stop) {
             let outputs = Outputs {
                 csv: &csv,
                 energy: &mut energy,

@@ -34,8 +34,11 @@ impl RunCheckpoints {
     }
 
     /// Writes the checkpoint of `step` (the world's state at its start, the outputs before it),
-    /// and says so.
+    /// and says so; nothing where the run writes no checkpoints.
     pub fn write(&mut self, step: u64, world: &World, outputs: Outputs) -> Result<(), String> {
+        if !self.schedule.enabled() {
+            return Ok(());
+        }
         outputs.energy.commit().map_err(|e| e.to_string())?;
         let mut at = OutputPositions::default();
         at.files.insert("particles.csv".into(), outputs.csv.kept());
@@ -94,5 +97,7 @@ pub fn resume(out: &Path, scene_text: &str, world: &mut World) -> Result<(u64, O
     let path = dir.join(DEM_FILE);
     let bytes = std::fs::read(&path).map_err(|e| format!("{}: {e}", path.display()))?;
     decode(&bytes, header.step, world).map_err(|e| format!("{}: {e}", path.display()))?;
+    scene::checkpoint::remove_later_snapshots(out, &header.outputs)
+        .map_err(|e| format!("{}: {e}", out.display()))?;
     Ok((header.step, header.outputs))
 }

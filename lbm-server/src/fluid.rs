@@ -201,19 +201,25 @@ pub fn run(
         exit_reason: reason,
         exit_code: code,
     };
-    if let Err(e) = write_summary(&summary, out) {
+    finish(&summary, out, lattice.time - from)
+}
+
+/// summary.json written, and the run's last line where it completed; the exit code (1 where
+/// summary.json cannot be written).
+fn finish(summary: &FluidSummary, out: &Path, stepped: u64) -> u8 {
+    if let Err(e) = write_summary(summary, out) {
         protocol::say!("lbm-server: error: summary.json: {e}");
         return 1;
     }
-    if code == 0 {
+    if summary.exit_code == 0 {
         protocol::say!(
-            "lbm-server: {} steps in {wall:.2} s ({:.2} MLUPS); output in {}",
-            lattice.time - from,
+            "lbm-server: {stepped} steps in {:.2} s ({:.2} MLUPS); output in {}",
+            summary.wall_time_s,
             summary.mlups,
             out.display()
         );
     }
-    code
+    summary.exit_code
 }
 
 /// The device and the scene's lattice on it (its state the checkpoint's where `resumed`), the

@@ -84,7 +84,9 @@ impl Checkpoints {
         at: OutputPositions,
         covered_cells: Option<String>,
     ) {
+        let started = std::time::Instant::now();
         let state = lattice.raw_state();
+        let readback_s = started.elapsed().as_secs_f64();
         let header = Header {
             format: FORMAT.into(),
             version: VERSION,
@@ -100,7 +102,11 @@ impl Checkpoints {
             outputs: at,
             files: Vec::new(),
         };
-        self.held = Some(Snapshot { header, state });
+        self.held = Some(Snapshot {
+            header,
+            state,
+            readback_s,
+        });
         self.schedule.written();
     }
 

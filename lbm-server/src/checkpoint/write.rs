@@ -14,6 +14,8 @@ use std::time::Instant;
 pub struct Snapshot {
     pub header: Header,
     pub state: RawState,
+    /// Seconds the run waited for the state to come off the device (all it waits for).
+    pub readback_s: f64,
 }
 
 /// Writes a run's checkpoints, one at a time.
@@ -68,7 +70,11 @@ pub fn population_dtype(storage: Storage) -> &'static str {
 fn write_staged(out: &Path, snapshot: Snapshot) -> Result<(), String> {
     let started = Instant::now();
     let staging = out.join(scene::checkpoint::STAGING);
-    let Snapshot { mut header, state } = snapshot;
+    let Snapshot {
+        mut header,
+        state,
+        readback_s,
+    } = snapshot;
     let storage = Storage::named(&header.storage).expect("the lattice's storage");
     let [nx, ny, nz] = header.lattice;
     let populations: Vec<&[u8]> = state.populations.iter().map(|p| p.as_slice()).collect();
@@ -93,10 +99,12 @@ fn write_staged(out: &Path, snapshot: Snapshot) -> Result<(), String> {
     let bytes: u64 = header.files.iter().map(|f| f.bytes).sum();
     put_in_place(out, &header)?;
     protocol::say!(
-        "lbm-server: checkpoint at step {} written to {} ({:.1} MiB in {:.2} s)",
+        "lbm-server: checkpoint at step {} written to {} ({:.1} MiB: off the device in {:.3} s, \
+         then written in {:.2} s while the run went on)",
         header.step,
         out.join(DIR).display(),
         bytes as f64 / (1024.0 * 1024.0),
+        readback_s,
         started.elapsed().as_secs_f64()
     );
     Ok(())

@@ -23,7 +23,9 @@ pub(super) fn prepare_resume(args: &RunArgs, out: &Path) -> Result<Prepared, Str
     let connect_timeout = connect_timeout(args)?;
     fits_the_device(units.n)?;
     let lock = OutputLock::take(out)?;
+    let started = std::time::Instant::now();
     let loaded = Loaded::open(out)?;
+    let read_s = started.elapsed().as_secs_f64();
     let fluid_only = scene.particle_count() == 0;
     loaded.check_run(&Expected {
         scene_text: &text,
@@ -39,8 +41,11 @@ pub(super) fn prepare_resume(args: &RunArgs, out: &Path) -> Result<Prepared, Str
             loaded.dir.display()
         ));
     }
+    scene::checkpoint::remove_later_snapshots(out, &loaded.header.outputs)
+        .map_err(|e| format!("{}: {e}", out.display()))?;
     protocol::say!(
-        "lbm-server: resuming {} from its checkpoint at step {step} to step {steps}",
+        "lbm-server: resuming {} from its checkpoint at step {step} to step {steps} (read and \
+         checked in {read_s:.2} s)",
         out.display()
     );
     Ok(Prepared {

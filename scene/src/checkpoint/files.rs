@@ -138,3 +138,35 @@ fn check_file(dir: &Path, entry: &FileEntry) -> Result<(), String> {
     }
     Ok(())
 }
+
+/// Removes the snapshot files a run wrote after its checkpoint `at` (those of `fields/step*.vti`
+/// and `particles_*.vtp` that the checkpoint's .pvd entries do not list, from a later step than
+/// the last they list): a resumed run writes again those it is due to. Returns how many.
+pub fn remove_later_snapshots(out: &Path, at: &super::OutputPositions) -> std::io::Result<usize> {
+    let mut removed = 0;
+    for (folder, head, tail, listed) in [
+        ("fields", "step", ".vti", &at.fields_pvd),
+        ("", "particles_", ".vtp", &at.particles_pvd),
+    ] {
+        let step_of = |name: &str| name.strip_prefix(head)?.strip_suffix(tail)?.parse::<u64>().ok();
+        let last = listed
+            .iter()
+            .filter_map(|(_, f)| step_of(f.rsplit('/').next()?))
+            .max();
+        let entries = match std::fs::read_dir(out.join(folder)) {
+            Ok(entries) => entries,
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => continue,
+            Err(e) => return Err(e),
+        };
+        for entry in entries {
+            let entry = entry?;
+            let name = entry.file_name().to_string_lossy().into_owned();
+            let later = step_of(&name).is_some_and(|s| last.is_none_or(|l| s > l));
+            if later && entry.file_type()?.is_file() {
+                std::fs::remove_file(entry.path())?;
+                removed += 1;
+            }
+        }
+    }
+    Ok(removed)
+}
