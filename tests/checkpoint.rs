@@ -59,7 +59,12 @@ fn a_fluid_run_stopped_and_resumed_writes_the_same_bytes() {
     let err = String::from_utf8_lossy(&resumed.stderr);
     assert_eq!(resumed.status.code(), Some(0), "{err}");
     assert!(err.contains("resuming") && err.contains("at step 75"), "{err}");
-    for file in ["line0.csv", "fields.pvd", "fields/step000000200.vti", "checkpoint/populations.bin"] {
+    for file in [
+        "line0.csv",
+        "fields.pvd",
+        "fields/step000000200.vti",
+        "checkpoint/populations.bin",
+    ] {
         same_file(&full.join(file), &part.join(file));
     }
     assert!(
@@ -81,14 +86,21 @@ fn a_corrupt_truncated_or_mismatched_checkpoint_is_refused() {
         let result = resume(&out, &[]);
         let err = String::from_utf8_lossy(&result.stderr).into_owned();
         assert_eq!(result.status.code(), Some(2), "{what}: {err}");
-        assert_eq!(std::fs::read(out.join("line0.csv")).unwrap(), lines, "{what}: outputs kept");
+        assert_eq!(
+            std::fs::read(out.join("line0.csv")).unwrap(),
+            lines,
+            "{what}: outputs kept"
+        );
         err
     };
     let mut bad = good.clone();
     bad[100] ^= 1;
     std::fs::write(&populations, &bad).unwrap();
     let err = refused("a flipped bit");
-    assert!(err.contains("populations.bin has checksum") && err.contains("corrupt"), "{err}");
+    assert!(
+        err.contains("populations.bin has checksum") && err.contains("corrupt"),
+        "{err}"
+    );
     std::fs::write(&populations, &good[..good.len() - 8]).unwrap();
     let err = refused("a truncated file");
     assert!(err.contains("truncated"), "{err}");
@@ -106,7 +118,11 @@ fn a_corrupt_truncated_or_mismatched_checkpoint_is_refused() {
     std::fs::write(out.join("checkpoint/header.json"), header).unwrap();
     let result = resume(&out, &["--steps", "100"]);
     assert_eq!(result.status.code(), Some(2), "a checkpoint past the last step");
-    assert_eq!(resume(&out, &[]).status.code(), Some(0), "the good checkpoint resumes");
+    assert_eq!(
+        resume(&out, &[]).status.code(),
+        Some(0),
+        "the good checkpoint resumes"
+    );
 }
 
 /// A coupled scene of 8 spheres falling in a 16^3 box for `steps` steps, rows every 5 steps,
@@ -123,14 +139,21 @@ fn a_coupled_run_killed_and_resumed_writes_the_same_particles() {
     let (full, part) = (dir.join("full"), dir.join("part"));
     run_ok(server(&scene, &full, &[]));
     let mut server = start(server(&scene, &part, &[]));
-    Proc::wait_line(&server.stderr, "checkpoint at step 30 written", Duration::from_secs(60));
+    Proc::wait_line(
+        &server.stderr,
+        "checkpoint at step 30 written",
+        Duration::from_secs(60),
+    );
     signal(server.child.id(), libc::SIGKILL);
     let _ = server.wait_exit(Duration::from_secs(10));
     let resumed = resume(&part, &[]);
     let err = String::from_utf8_lossy(&resumed.stderr);
     assert_eq!(resumed.status.code(), Some(0), "{err}");
     same_file(&full.join("particles.csv"), &part.join("particles.csv"));
-    same_file(&full.join("checkpoint/populations.bin"), &part.join("checkpoint/populations.bin"));
+    same_file(
+        &full.join("checkpoint/populations.bin"),
+        &part.join("checkpoint/populations.bin"),
+    );
     same_file(&full.join("checkpoint/dem.bin"), &part.join("checkpoint/dem.bin"));
 }
 
@@ -184,15 +207,31 @@ fn a_granular_run_stopped_and_resumed_writes_the_same_bytes() {
         err
     };
     ok(dem_client(&[scene.as_os_str(), os("--out"), full.as_os_str()]));
-    let err = ok(dem_client(&[scene.as_os_str(), os("--out"), part.as_os_str(), os("--steps"), os("23")]));
+    let err = ok(dem_client(&[
+        scene.as_os_str(),
+        os("--out"),
+        part.as_os_str(),
+        os("--steps"),
+        os("23"),
+    ]));
     assert!(err.contains("checkpoint at step 23 written"), "{err}");
     let err = ok(dem_client(&[os("--resume"), part.as_os_str()]));
     assert!(err.contains("resumed at step 23"), "{err}");
-    for file in ["particles.csv", "energy.csv", "particles.pvd", "particles_000050.vtp", "checkpoint/dem.bin"] {
+    for file in [
+        "particles.csv",
+        "energy.csv",
+        "particles.pvd",
+        "particles_000050.vtp",
+        "checkpoint/dem.bin",
+    ] {
         same_file(&full.join(file), &part.join(file));
     }
     let text = std::fs::read_to_string(part.join("scene.toml")).unwrap();
-    std::fs::write(part.join("scene.toml"), text.replace("count = [4, 4, 3]", "count = [4, 4, 2]")).unwrap();
+    std::fs::write(
+        part.join("scene.toml"),
+        text.replace("count = [4, 4, 3]", "count = [4, 4, 2]"),
+    )
+    .unwrap();
     let run = dem_client(&[os("--resume"), part.as_os_str(), os("--steps"), os("60")]);
     let err = String::from_utf8_lossy(&run.stderr);
     assert_eq!(run.status.code(), Some(2), "{err}");

@@ -47,11 +47,15 @@ pub fn decode(bytes: &[u8], step: u64, world: &mut World) -> Result<Vec<u64>, St
     let mut d = Decoder::new(&bytes[8..]);
     let version = d.u64()?;
     if version != VERSION {
-        return Err(format!("dem.bin is of format version {version}, this dem-client reads {VERSION}"));
+        return Err(format!(
+            "dem.bin is of format version {version}, this dem-client reads {VERSION}"
+        ));
     }
     let saved = d.u64()?;
     if saved != step {
-        return Err(format!("dem.bin holds the state of step {saved}, the run resumes at step {step}"));
+        return Err(format!(
+            "dem.bin holds the state of step {saved}, the run resumes at step {step}"
+        ));
     }
     let _spheres = d.u64()?;
     world.restore(&mut d)?;

@@ -1,13 +1,15 @@
 //! `dem-client connect`: the DEM side of the lockstep loop.
 
+use crate::checkpoint;
 use crate::dem::lubrication::SqueezeFilm;
 use crate::dem::timestep::substeps;
 use crate::dem::world::{Body, World, CHUNK};
 use crate::dem::V3;
-use protocol::transport::LinkOptions;
-use crate::checkpoint;
 use crate::lockstep::Lockstep;
-use protocol::{Capabilities, DemLink, Hello, LinkError, ParticleReply, ParticleState, Physics, Units, Welcome};
+use protocol::transport::LinkOptions;
+use protocol::{
+    Capabilities, DemLink, Hello, LinkError, ParticleReply, ParticleState, Physics, Units, Welcome,
+};
 use rayon::prelude::*;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -515,7 +517,10 @@ impl CoupledParticles {
     /// The counters of a checkpoint (`counters`).
     pub fn set_counters(&mut self, c: &[u64]) -> Result<(), String> {
         let [next_id, dem_steps, free_steps, flown, spheres] = c else {
-            return Err(format!("dem.bin holds {} counters of a coupled run, not 5", c.len()));
+            return Err(format!(
+                "dem.bin holds {} counters of a coupled run, not 5",
+                c.len()
+            ));
         };
         (self.next_id, self.dem_steps, self.free_steps) = (*next_id, *dem_steps, *free_steps);
         (self.flown_sphere_steps, self.sphere_steps) = (*flown, *spheres);

@@ -134,7 +134,11 @@ fn fresh_outputs(out: &Path, text: &str) -> std::io::Result<()> {
     if removed > 0 {
         protocol::say!("dem-client: removed {removed} output files of an earlier run");
     }
-    for dir in [scene::checkpoint::DIR, scene::checkpoint::OLD, scene::checkpoint::STAGING] {
+    for dir in [
+        scene::checkpoint::DIR,
+        scene::checkpoint::OLD,
+        scene::checkpoint::STAGING,
+    ] {
         if out.join(dir).is_dir() {
             std::fs::remove_dir_all(out.join(dir))?;
         }
@@ -159,7 +163,9 @@ fn open_outputs(
         Some(at) => (
             ParticleCsv::resume(&csv_path, at).map_err(Failure::Output)?,
             EnergyCsv::resume(&energy_path, at).map_err(Failure::Output)?,
-            vtk.then(|| Vtk::resume(out, at)).transpose().map_err(Failure::Output)?,
+            vtk.then(|| Vtk::resume(out, at))
+                .transpose()
+                .map_err(Failure::Output)?,
         ),
     })
 }
@@ -187,7 +193,12 @@ fn first_step(
 }
 
 /// Runs the output steps (from the checkpoint's where `resumed`); Ok(false) when interrupted.
-fn simulate(p: Prepared, resumed: bool, every: Option<u64>, interrupted: &AtomicBool) -> Result<bool, Failure> {
+fn simulate(
+    p: Prepared,
+    resumed: bool,
+    every: Option<u64>,
+    interrupted: &AtomicBool,
+) -> Result<bool, Failure> {
     let crate::dem::SceneWorld {
         mut world,
         contact_time,
@@ -218,7 +229,9 @@ fn simulate(p: Prepared, resumed: bool, every: Option<u64>, interrupted: &Atomic
                 energy: &mut energy,
                 vtk: vtk.as_ref(),
             };
-            checkpoints.write(step, &world, outputs).map_err(Failure::Output)?;
+            checkpoints
+                .write(step, &world, outputs)
+                .map_err(Failure::Output)?;
         }
         energy.write(step, &world)?;
         if step % interval == 0 || step == p.steps {

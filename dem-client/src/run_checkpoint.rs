@@ -48,7 +48,13 @@ impl RunCheckpoints {
         }
         let staging = staging_folder(&self.out)?;
         let bytes = encode(step, world, &[]);
-        let dem = write_synced(&staging.join(DEM_FILE), "dem", "dem", vec![bytes.len()], &[&bytes])?;
+        let dem = write_synced(
+            &staging.join(DEM_FILE),
+            "dem",
+            "dem",
+            vec![bytes.len()],
+            &[&bytes],
+        )?;
         let header = Header {
             format: scene::checkpoint::FORMAT.into(),
             version: scene::checkpoint::VERSION,

@@ -142,7 +142,11 @@ impl FieldOutput {
     pub fn positions(&mut self, at: &mut OutputPositions) -> Result<(), String> {
         self.flush()?;
         for (i, (_, w)) in self.probes.iter().enumerate() {
-            let len = w.get_ref().metadata().map_err(|e| format!("line{i}.csv: {e}"))?.len();
+            let len = w
+                .get_ref()
+                .metadata()
+                .map_err(|e| format!("line{i}.csv: {e}"))?
+                .len();
             at.files.insert(format!("line{i}.csv"), len);
         }
         at.fields_pvd = self.series.entries().to_vec();

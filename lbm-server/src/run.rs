@@ -25,12 +25,12 @@ mod session;
 mod summary;
 mod welcome;
 
+use crate::checkpoint::OutputPositions;
 use crate::launch::{self, DemStart};
 use crate::output::Progress;
 use exchange::SiStates;
 use prepare::prepare;
 use protocol::transport::new_run_name;
-use crate::checkpoint::OutputPositions;
 use protocol::{ParticleReply, StepFlags, StepHeader};
 use session::Session;
 use std::path::PathBuf;
@@ -227,7 +227,11 @@ impl Session {
         si.keep_for_output(&received, end.output);
         drop(received);
         let flags = end.flags(last) | if checkpoint { StepFlags::CHECKPOINT } else { 0 };
-        self.reply(StepHeader::new(step, header.time, count, flags), si.units, replies)?;
+        self.reply(
+            StepHeader::new(step, header.time, count, flags),
+            si.units,
+            replies,
+        )?;
         self.counters.completed(step, count);
         self.counters.lap_exchange();
         let time = header.time * si.units.time_s;

@@ -3,7 +3,9 @@
 
 /// FNV-1a 64 of `bytes`, continuing from `hash` (start from [`FNV_OFFSET`]).
 pub fn fnv1a64_from(hash: u64, bytes: &[u8]) -> u64 {
-    bytes.iter().fold(hash, |h, &b| (h ^ b as u64).wrapping_mul(FNV_PRIME))
+    bytes
+        .iter()
+        .fold(hash, |h, &b| (h ^ b as u64).wrapping_mul(FNV_PRIME))
 }
 
 pub const FNV_OFFSET: u64 = 0xcbf2_9ce4_8422_2325;

@@ -81,7 +81,9 @@ impl<'a> Decoder<'a> {
     pub fn list<T>(&mut self, mut get: impl FnMut(&mut Self) -> Result<T, String>) -> Result<Vec<T>, String> {
         let n = self.u64()? as usize;
         if n > self.bytes.len() {
-            return Err(format!("dem.bin: a list of {n} elements is longer than the file (corrupt)"));
+            return Err(format!(
+                "dem.bin: a list of {n} elements is longer than the file (corrupt)"
+            ));
         }
         (0..n).map(|_| get(self)).collect()
     }

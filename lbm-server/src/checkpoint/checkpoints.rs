@@ -4,8 +4,8 @@
 
 use super::read::Loaded;
 use super::write::{Snapshot, Writer};
-use scene::checkpoint::{Header, OutputPositions, Schedule, FORMAT, VERSION};
 use crate::lbm::gpu::GpuLattice;
+use scene::checkpoint::{Header, OutputPositions, Schedule, FORMAT, VERSION};
 use std::path::{Path, PathBuf};
 
 /// The checkpoints of one run.

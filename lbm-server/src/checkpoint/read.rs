@@ -49,7 +49,11 @@ impl Loaded {
             );
         }
         if h.lattice != run.lattice {
-            return differs("lattice", format!("{:?} cells", h.lattice), format!("{:?}", run.lattice));
+            return differs(
+                "lattice",
+                format!("{:?} cells", h.lattice),
+                format!("{:?}", run.lattice),
+            );
         }
         if h.storage != run.storage {
             return differs("lattice.storage", h.storage.clone(), run.storage.to_string());

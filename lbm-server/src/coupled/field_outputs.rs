@@ -22,7 +22,11 @@ impl FluidSide {
         self.fields.positions(&mut at)?;
         self.before_last = Some(at);
         let left = |every: u64, written: bool| every > 0 && !written;
-        self.write_outputs(left(self.fields_every, snapshot), left(self.lines_every, lines), true)
+        self.write_outputs(
+            left(self.fields_every, snapshot),
+            left(self.lines_every, lines),
+            true,
+        )
     }
 
     /// Where the field outputs stand, into `at` (a checkpoint's): at the last step, before those

@@ -39,7 +39,10 @@ impl Session {
         }
         if let Some(loaded) = &self.p.resumed {
             if !loaded.header.files.iter().any(|f| f.file == DEM_COMPLETE) {
-                return Err(format!("cannot resume from {}: it holds no DEM state", loaded.dir.display()));
+                return Err(format!(
+                    "cannot resume from {}: it holds no DEM state",
+                    loaded.dir.display()
+                ));
             }
         }
         if self.checkpoints.enabled() && !can {

@@ -120,7 +120,11 @@ pub(super) fn fits_the_device(n: [usize; 3]) -> Result<(), String> {
 
 /// Removes what an earlier run wrote into `out` under this run's output names, saying so.
 fn clear_earlier_outputs(out: &std::path::Path) -> Result<(), String> {
-    for dir in [crate::checkpoint::DIR, crate::checkpoint::OLD, crate::checkpoint::STAGING] {
+    for dir in [
+        crate::checkpoint::DIR,
+        crate::checkpoint::OLD,
+        crate::checkpoint::STAGING,
+    ] {
         let dir = out.join(dir);
         if dir.is_dir() {
             std::fs::remove_dir_all(&dir).map_err(|e| format!("cannot remove {}: {e}", dir.display()))?;

@@ -13,7 +13,13 @@ pub(super) fn yielded(hello: &Hello) -> u64 {
 
 /// The fluid's answer to a DEM's Hello, in the DEM's units, for a run of `steps` steps from
 /// `first_step` (a resumed run's checkpoint's; else 0).
-pub(super) fn welcome_for(scene: &Scene, steps: u64, first_step: u64, hello: &Hello, physics: u64) -> Welcome {
+pub(super) fn welcome_for(
+    scene: &Scene,
+    steps: u64,
+    first_step: u64,
+    hello: &Hello,
+    physics: u64,
+) -> Welcome {
     let u = hello.units;
     let accel = u.length_m / (u.time_s * u.time_s);
     let mut w = Welcome::accepted(&format!(

@@ -22,7 +22,13 @@ pub fn staging_folder(out: &Path) -> Result<PathBuf, String> {
 
 /// Writes `parts` one after the other to `path` and syncs it to the disk; its entry in the header
 /// (`name`, numpy's `dtype` and C-order `shape`).
-pub fn write_synced(path: &Path, name: &str, dtype: &str, shape: Vec<usize>, parts: &[&[u8]]) -> Result<FileEntry, String> {
+pub fn write_synced(
+    path: &Path,
+    name: &str,
+    dtype: &str,
+    shape: Vec<usize>,
+    parts: &[&[u8]],
+) -> Result<FileEntry, String> {
     let io = |e: std::io::Error| format!("checkpoint: {}: {e}", path.display());
     let file = File::create(path).map_err(io)?;
     let mut w = BufWriter::with_capacity(1 << 20, file);
@@ -73,7 +79,13 @@ pub fn files_besides(staging: &Path, ours: &[FileEntry]) -> Result<Vec<FileEntry
 pub fn put_in_place(out: &Path, header: &Header) -> Result<(), String> {
     let (dir, old, staging) = (out.join(DIR), out.join(OLD), out.join(STAGING));
     let text = serde_json::to_string_pretty(header).expect("a header serializes");
-    write_synced(&staging.join("header.json"), "header", "json", vec![], &[text.as_bytes()])?;
+    write_synced(
+        &staging.join("header.json"),
+        "header",
+        "json",
+        vec![],
+        &[text.as_bytes()],
+    )?;
     let io = |e: std::io::Error| format!("checkpoint: {}: {e}", out.display());
     if dir.exists() {
         if old.exists() {
@@ -101,8 +113,8 @@ pub fn open_newest(out: &Path) -> Result<(PathBuf, Header), String> {
         .ok_or_else(|| format!("no checkpoint in {} (no {DIR}/header.json)", out.display()))?;
     let path = dir.join("header.json");
     let text = std::fs::read_to_string(&path).map_err(|e| format!("{}: {e}", path.display()))?;
-    let header: Header =
-        serde_json::from_str(&text).map_err(|e| format!("{}: not a checkpoint header: {e}", path.display()))?;
+    let header: Header = serde_json::from_str(&text)
+        .map_err(|e| format!("{}: not a checkpoint header: {e}", path.display()))?;
     if header.format != FORMAT || header.version != VERSION {
         return Err(format!(
             "{}: format '{}' version {}, this build reads '{FORMAT}' version {VERSION}",

@@ -39,7 +39,12 @@ impl World {
         e.list(&self.ids_at_build, |e, id| e.u64(*id));
         e.u64(self.stale as u64);
         e.f64(self.peak_drift2);
-        for count in [self.contacts as u64, self.builds, self.islands, self.dropped_islands] {
+        for count in [
+            self.contacts as u64,
+            self.builds,
+            self.islands,
+            self.dropped_islands,
+        ] {
             e.u64(count);
         }
     }
@@ -96,7 +101,12 @@ fn save_body(e: &mut Encoder, b: &Body) {
     }
     e.f64(b.drag);
     e.f64(b.spin_drag);
-    for v in [&b.f_ext_rate, &b.t_ext_rate, &b.contact_impulse, &b.contact_angular_impulse] {
+    for v in [
+        &b.f_ext_rate,
+        &b.t_ext_rate,
+        &b.contact_impulse,
+        &b.contact_angular_impulse,
+    ] {
         e.v3(v);
     }
 }
