@@ -157,35 +157,10 @@ fn a_coupled_run_killed_and_resumed_writes_the_same_particles() {
     same_file(&full.join("checkpoint/dem.bin"), &part.join("checkpoint/dem.bin"));
 }
 
-/// A granular pour alone: 48 spheres settling in a box, rows every 10 steps, VTK on.
-const SETTLING: &str = r#"name = "settling"
-[domain]
-min = [0.0, 0.0, 0.0]
-max = [0.024, 0.024, 0.04]
-[fluid]
-density = 1.2
-dynamic_viscosity = 1.8e-5
-[time]
-dt = 2.0e-3
-steps = 50
-[output]
-interval = 10
-checkpoint_interval = 10
-[particles]
-density = 2500.0
-[[dem.material]]
-name = "steel"
-restitution = 0.6
-friction = 0.3
-[[dem.insert]]
-origin = [0.004, 0.004, 0.004]
-count = [4, 4, 3]
-spacing = 0.0048
-radius = [0.0016, 0.002]
-jitter = 0.0003
-[dem.output]
-vtk = true
-"#;
+/// The pour of `POUR`, with checkpoints every 10 steps and VTK on.
+fn settling() -> String {
+    POUR.replace("interval = 25\n", "interval = 25\ncheckpoint_interval = 10\n") + "[dem.output]\nvtk = true\n"
+}
 
 fn dem_client(args: &[&std::ffi::OsStr]) -> std::process::Output {
     std::process::Command::new(bin("dem-client"))
@@ -198,7 +173,7 @@ fn dem_client(args: &[&std::ffi::OsStr]) -> std::process::Output {
 #[test]
 fn a_granular_run_stopped_and_resumed_writes_the_same_bytes() {
     let dir = temp_dir("ckpt-dem");
-    let scene = write_scene(&dir, SETTLING);
+    let scene = write_scene(&dir, &settling());
     let (full, part) = (dir.join("full"), dir.join("part"));
     let os = |s: &'static str| std::ffi::OsStr::new(s);
     let ok = |run: std::process::Output| {

@@ -372,7 +372,8 @@ impl<'a> FluidRun<'a> {
         self.fields.positions(&mut at).map_err(Stop::Failed)?;
         self.checkpoints.stage().map_err(Stop::Failed)?;
         let time = lattice.time as f64 * self.units.dt;
-        self.checkpoints.take(lattice, time, 0, at, None);
+        self.checkpoints.hold(lattice, time, 0, at, None);
+        self.checkpoints.release();
         Ok(())
     }
 

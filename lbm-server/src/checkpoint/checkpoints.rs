@@ -48,21 +48,6 @@ impl Checkpoints {
         self.writer.stage()
     }
 
-    /// The lattice's state, copied off the device, and its header, handed to the writer (which
-    /// writes them into the staging folder on a thread): `particles` at simulated time `time_s`,
-    /// the outputs standing `at`.
-    pub fn take(
-        &mut self,
-        lattice: &GpuLattice,
-        time_s: f64,
-        particles: u64,
-        at: OutputPositions,
-        covered_cells: Option<String>,
-    ) {
-        self.hold(lattice, time_s, particles, at, covered_cells);
-        self.release();
-    }
-
     /// Whether a checkpoint is held for the DEM's part.
     pub fn holding(&self) -> bool {
         self.held.is_some()
@@ -75,7 +60,9 @@ impl Checkpoints {
         }
     }
 
-    /// As `take`, but held until the DEM's part is complete (`release`).
+    /// The lattice's state, copied off the device, and its header (`particles` at simulated time
+    /// `time_s`, the outputs standing `at`), held until the DEM's part is complete (`release`
+    /// hands them to the writer, which writes them into the staging folder on a thread).
     pub fn hold(
         &mut self,
         lattice: &GpuLattice,
