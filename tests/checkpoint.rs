@@ -159,7 +159,8 @@ fn a_coupled_run_killed_and_resumed_writes_the_same_particles() {
 
 /// The pour of `POUR`, with checkpoints every 10 steps and VTK on.
 fn settling() -> String {
-    POUR.replace("interval = 25\n", "interval = 25\ncheckpoint_interval = 10\n") + "[dem.output]\nvtk = true\n"
+    POUR.replace("interval = 25\n", "interval = 25\ncheckpoint_interval = 10\n")
+        + "[dem.output]\nvtk = true\n"
 }
 
 fn dem_client(args: &[&std::ffi::OsStr]) -> std::process::Output {
@@ -204,7 +205,7 @@ fn a_granular_run_stopped_and_resumed_writes_the_same_bytes() {
     let text = std::fs::read_to_string(part.join("scene.toml")).unwrap();
     std::fs::write(
         part.join("scene.toml"),
-        text.replace("count = [4, 4, 3]", "count = [4, 4, 2]"),
+        text.replace("count = [5, 5, 6]", "count = [5, 5, 5]"),
     )
     .unwrap();
     let run = dem_client(&[os("--resume"), part.as_os_str(), os("--steps"), os("60")]);

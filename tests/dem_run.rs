@@ -5,7 +5,6 @@ mod common;
 use common::*;
 use std::process::Command;
 
-
 #[test]
 fn a_granular_scene_runs_alone_and_writes_csv_energy_and_vtk() {
     let dir = temp_dir("dem-run");
