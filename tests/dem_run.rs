@@ -5,32 +5,6 @@ mod common;
 use common::*;
 use std::process::Command;
 
-const POUR: &str = r#"name = "small-pour"
-[domain]
-min = [0.0, 0.0, 0.0]
-max = [0.03, 0.03, 0.06]
-[fluid]
-density = 1.2
-dynamic_viscosity = 1.8e-5
-[time]
-dt = 2.0e-3
-steps = 50
-[output]
-interval = 25
-[particles]
-density = 2500.0
-[[dem.material]]
-name = "glass"
-restitution = 0.5
-friction = 0.4
-[[dem.insert]]
-origin = [0.004, 0.004, 0.004]
-count = [5, 5, 6]
-spacing = 0.005
-radius = [0.0017, 0.002]
-jitter = 0.0004
-"#;
-
 #[test]
 fn a_granular_scene_runs_alone_and_writes_csv_energy_and_vtk() {
     let dir = temp_dir("dem-run");

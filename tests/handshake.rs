@@ -20,7 +20,7 @@ fn protocol_version_mismatch_is_refused_naming_both_versions() {
     let (code, _) = server.wait_exit(Duration::from_secs(10));
     let server_err = Proc::drain(&server.stderr);
     assert_eq!(code, Some(1));
-    let expected = "protocol version mismatch: lbm-server speaks version 1, the DEM client speaks version 7";
+    let expected = "protocol version mismatch: lbm-server speaks version 2, the DEM client speaks version 7";
     assert!(server_err.contains(expected), "{server_err}");
     assert!(client_err.contains(expected), "{client_err}");
     assert_eq!(summary(&out)["steps_completed"], 0);

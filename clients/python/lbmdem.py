@@ -1,4 +1,4 @@
-"""DEM side of the LBM-DEM co-simulation protocol, version 1, for Python DEMs (YADE, scripts).
+"""DEM side of the LBM-DEM co-simulation protocol, version 2, for Python DEMs (YADE, scripts).
 
 The contract is ``PROTOCOL.md`` at the repository root; this module implements its DEM side over
 iceoryx2 shared memory (PyPI ``iceoryx2==0.10.0``) and numpy::
@@ -15,6 +15,13 @@ iceoryx2 shared memory (PyPI ``iceoryx2==0.10.0``) and numpy::
                 break
 
 Every failure raises a :class:`LinkError` whose message names the peer and the last completed step.
+
+Checkpoints (PROTOCOL.md 6.4): a DEM that can save and restore its whole state builds its Hello with
+``capabilities=Capabilities.CHECKPOINT``; a reply whose flags carry ``StepFlags.CHECKPOINT`` then
+asks it to write its state for the next step into :func:`checkpoint_dir`, and last the empty file
+``dem.complete`` (:func:`complete_checkpoint`), before it sends the next states (or, after FINAL or
+STOP, before it ends). A resumed run's Welcome has ``first_step`` > 0: the DEM restores that step's
+state from :func:`resume_dir` and starts its loop there.
 """
 
 from __future__ import annotations
@@ -38,7 +45,9 @@ except ImportError as e:  # pragma: no cover - depends on the environment
 
 __all__ = [
     "PROTOCOL_VERSION", "MAGIC", "PREFIX_LEN", "KIND_HELLO", "KIND_WELCOME", "TEXT_LEN",
-    "Physics", "Status", "StepFlags", "Units", "Hello", "Welcome",
+    "Physics", "Status", "StepFlags", "Capabilities", "Units", "Hello", "Welcome",
+    "CHECKPOINT_DIR_ENV", "RESUME_DIR_ENV", "DEM_COMPLETE", "checkpoint_dir", "resume_dir",
+    "complete_checkpoint",
     "ParticleState", "ParticleReply", "StepHeader", "STATE_DTYPE", "REPLY_DTYPE",
     "LinkError", "PeerDied", "PeerStopped", "PeerTimeout", "StepMismatch", "BadCount",
     "BadReply", "Refused", "VersionMismatch", "Interrupted", "TransportError",
@@ -50,7 +59,7 @@ __all__ = [
 # ---------------------------------------------------------------------------------------------
 
 #: Version of the protocol this module speaks.
-PROTOCOL_VERSION = 1
+PROTOCOL_VERSION = 2
 #: First four bytes of every handshake message: ASCII "LBDM" as a little-endian u32.
 MAGIC = 0x4D44424C
 assert MAGIC == int.from_bytes(b"LBDM", "little")
@@ -107,6 +116,41 @@ class StepFlags(enum.IntFlag):
     STOP = 1
     #: Fluid -> DEM: the reply to the last step of the run.
     FINAL = 2
+    #: Fluid -> DEM (to a DEM with Capabilities.CHECKPOINT): write your state for the next step
+    #: into checkpoint_dir(), then dem.complete, before sending its states (PROTOCOL.md 6.4).
+    CHECKPOINT = 4
+
+
+class Capabilities(enum.IntFlag):
+    """Bits of ``Hello.capabilities``."""
+
+    #: The DEM writes its state when asked (StepFlags.CHECKPOINT) and resumes at first_step.
+    CHECKPOINT = 1
+
+
+#: The environment variables of a DEM started by lbm-server: the staging folder of the checkpoint
+#: being written, and the folder of the checkpoint a resumed run goes on from.
+CHECKPOINT_DIR_ENV = "LBMDEM_CHECKPOINT_DIR"
+RESUME_DIR_ENV = "LBMDEM_RESUME_DIR"
+#: The marker a DEM writes last into the checkpoint folder: its part is complete.
+DEM_COMPLETE = "dem.complete"
+
+
+def checkpoint_dir() -> Optional[str]:
+    """The folder to write this DEM's part of a checkpoint into ($LBMDEM_CHECKPOINT_DIR)."""
+    return os.environ.get(CHECKPOINT_DIR_ENV) or None
+
+
+def resume_dir() -> Optional[str]:
+    """The folder of the checkpoint a resumed run goes on from ($LBMDEM_RESUME_DIR)."""
+    return os.environ.get(RESUME_DIR_ENV) or None
+
+
+def complete_checkpoint(folder: str) -> None:
+    """Writes the marker that this DEM's part of the checkpoint in ``folder`` is complete."""
+    with open(os.path.join(folder, DEM_COMPLETE), "wb") as f:
+        f.flush()
+        os.fsync(f.fileno())
 
 
 # ---------------------------------------------------------------------------------------------
@@ -208,7 +252,7 @@ class Hello(ctypes.Structure):
         ("state_size", _u32),
         ("reply_size", _u32),
         ("header_size", _u32),
-        ("reserved", _u32),
+        ("capabilities", _u32),  # Capabilities bits (version 1: reserved, 0)
         ("units", Units),
         ("physics", _u64),
         ("initial_count", _u64),
@@ -221,13 +265,13 @@ class Hello(ctypes.Structure):
 
     @classmethod
     def new(cls, units: Optional[Units] = None, physics: int = 0, initial_count: int = 0,
-            software: str = "lbmdem.py") -> "Hello":
+            software: str = "lbmdem.py", capabilities: int = 0) -> "Hello":
         units = units if units is not None else Units.si()
         return cls(
             magic=MAGIC, version=PROTOCOL_VERSION, size=ctypes.sizeof(cls), kind=KIND_HELLO,
             pid=os.getpid(), state_size=ctypes.sizeof(ParticleState),
             reply_size=ctypes.sizeof(ParticleReply), header_size=ctypes.sizeof(StepHeader),
-            reserved=0, units=Units(units.length_m, units.time_s, units.mass_kg),
+            capabilities=int(capabilities), units=Units(units.length_m, units.time_s, units.mass_kg),
             physics=int(physics), initial_count=int(initial_count), software=_text(software),
         )
 
@@ -244,7 +288,7 @@ class Hello(ctypes.Structure):
 
 
 class Welcome(ctypes.Structure):
-    """Fluid -> DEM, once, in answer to Hello (344 bytes). Quantities in the DEM's units."""
+    """Fluid -> DEM, once, in answer to Hello (360 bytes). Quantities in the DEM's units."""
 
     _fields_ = [
         ("magic", _u32),
@@ -265,6 +309,8 @@ class Welcome(ctypes.Structure):
         ("physics", _u64),
         ("software", ctypes.c_char * TEXT_LEN),
         ("reason", ctypes.c_char * (2 * TEXT_LEN)),
+        ("first_step", _u64),  # the run's first step: > 0 in a resumed run (PROTOCOL.md 6.4)
+        ("cell_size", _f64),  # the lattice's cell size, the lubrication cut-off; 0 without one
     ]
 
     @staticmethod
@@ -299,11 +345,11 @@ def _check_layouts() -> None:
         StepHeader: (32, {"time": 8, "count": 16, "flags": 24}),
         Units: (24, {"time_s": 8, "mass_kg": 16}),
         Hello: (144, {"pid": 16, "state_size": 24, "reply_size": 28, "header_size": 32,
-                      "units": 40, "physics": 64, "initial_count": 72, "software": 80}),
-        Welcome: (344, {"pid": 16, "status": 24, "periodic": 28, "capacity": 32, "steps": 40, "dt": 48,
+                      "capabilities": 36, "units": 40, "physics": 64, "initial_count": 72, "software": 80}),
+        Welcome: (360, {"pid": 16, "status": 24, "periodic": 28, "capacity": 32, "steps": 40, "dt": 48,
                         "domain_min": 56, "domain_max": 80, "gravity": 104,
                         "fluid_density": 128, "fluid_viscosity": 136, "physics": 144,
-                        "software": 152, "reason": 216}),
+                        "software": 152, "reason": 216, "first_step": 344, "cell_size": 352}),
     }
     for t, (size, offsets) in expect.items():
         assert ctypes.sizeof(t) == size, (t.__name__, ctypes.sizeof(t))

@@ -1,12 +1,14 @@
 //! `dem-client connect`: the DEM side of the lockstep loop.
 
+use crate::checkpoint;
 use crate::dem::lubrication::SqueezeFilm;
 use crate::dem::timestep::substeps;
 use crate::dem::world::{Body, World, CHUNK};
 use crate::dem::V3;
+use crate::lockstep::Lockstep;
 use protocol::transport::LinkOptions;
 use protocol::{
-    DemLink, Hello, LinkError, ParticleReply, ParticleState, Physics, StepFlags, StepHeader, Units, Welcome,
+    Capabilities, DemLink, Hello, LinkError, ParticleReply, ParticleState, Physics, Units, Welcome,
 };
 use rayon::prelude::*;
 use std::path::PathBuf;
@@ -32,6 +34,14 @@ pub struct ConnectArgs {
     /// free flight, islands) at the end; without it a line each.
     #[arg(long, short)]
     verbose: bool,
+    /// The folder to write this DEM's part of a checkpoint into when the fluid asks (default:
+    /// $LBMDEM_CHECKPOINT_DIR, which lbm-server sets for a DEM it starts). Without one the Hello
+    /// declares no CHECKPOINT capability.
+    #[arg(long, value_name = "DIR")]
+    checkpoint_dir: Option<PathBuf>,
+    /// The checkpoint folder a resumed run goes on from (default: $LBMDEM_RESUME_DIR).
+    #[arg(long, value_name = "DIR")]
+    resume_from: Option<PathBuf>,
     /// Testing: announce this protocol version instead of ours.
     #[arg(long, hide = true)]
     protocol_version: Option<u32>,
@@ -54,17 +64,28 @@ pub struct ConnectArgs {
 
 /// Deliberate misbehaviour, for the tests of the failure rules.
 #[derive(Clone, Copy, Default)]
-struct Faults {
-    churn: bool,
-    skip_step: Option<u64>,
+pub(crate) struct Faults {
+    pub churn: bool,
+    pub skip_step: Option<u64>,
     stall_at: Option<u64>,
     stall_for: Option<Duration>,
     stall_busy: bool,
 }
 
 impl Faults {
+    /// The faults the testing arguments ask for.
+    fn of(args: &ConnectArgs) -> Faults {
+        Faults {
+            churn: args.churn,
+            skip_step: args.skip_step,
+            stall_at: args.stall_at,
+            stall_for: args.stall_for.map(Duration::from_secs_f64),
+            stall_busy: args.stall_busy,
+        }
+    }
+
     /// Stays silent at `stall_at`: asleep or spinning, for `stall_for` or for ever.
-    fn stall(&self, step: u64) {
+    pub fn stall(&self, step: u64) {
         if self.stall_at != Some(step) {
             return;
         }
@@ -123,24 +144,23 @@ pub fn main(args: ConnectArgs) -> ExitCode {
         }
     };
     let mut last = None;
-    let faults = Faults {
-        churn: args.churn,
-        skip_step: args.skip_step,
-        stall_at: args.stall_at,
-        stall_for: args.stall_for.map(Duration::from_secs_f64),
-        stall_busy: args.stall_busy,
-    };
+    let faults = Faults::of(&args);
     let (sub, limits) = particles.couple(&scene, &welcome, setup.dt_max);
     say_coupling(args.verbose, &particles, sub, setup.contact_time, limits);
-    match step_loop(
-        &link,
-        &welcome,
-        &mut particles,
-        sub,
-        &interrupted,
+    if let Err(e) = resume(&args, &welcome, &mut particles) {
+        protocol::say!("dem-client: error: {e}");
+        return ExitCode::from(2);
+    }
+    let checkpoint_dir = checkpoint::folder(args.checkpoint_dir.as_ref(), checkpoint::CHECKPOINT_DIR_ENV);
+    let lockstep = Lockstep {
+        link: &link,
+        welcome: &welcome,
+        substeps: sub,
+        interrupted: &interrupted,
         faults,
-        &mut last,
-    ) {
+        checkpoint_dir: checkpoint_dir.as_deref(),
+    };
+    match lockstep.run(&mut particles, &mut last) {
         Ok(steps) => {
             let stopped = steps < welcome.steps && !interrupted.load(Ordering::SeqCst);
             say_finish(args.verbose, &particles, steps, stopped.then_some(welcome.steps));
@@ -155,6 +175,28 @@ pub fn main(args: ConnectArgs) -> ExitCode {
             ExitCode::from(1)
         }
     }
+}
+
+/// A resumed run (Welcome's `first_step` above 0): the particles' state of that step, from
+/// dem.bin in the checkpoint folder (`--resume-from`, $LBMDEM_RESUME_DIR).
+fn resume(args: &ConnectArgs, welcome: &Welcome, particles: &mut CoupledParticles) -> Result<(), String> {
+    if welcome.first_step == 0 {
+        return Ok(());
+    }
+    let dir = checkpoint::folder(args.resume_from.as_ref(), checkpoint::RESUME_DIR_ENV).ok_or_else(|| {
+        format!(
+            "the fluid resumes the run at step {}, but no checkpoint folder was given (--resume-from, ${})",
+            welcome.first_step,
+            checkpoint::RESUME_DIR_ENV
+        )
+    })?;
+    checkpoint::read_coupled(&dir, welcome.first_step, particles)?;
+    protocol::say!(
+        "dem-client: resumed at step {} from {}",
+        welcome.first_step,
+        dir.display()
+    );
+    Ok(())
 }
 
 /// The scene (or the default one) and its DEM set up, with the arguments checked.
@@ -187,6 +229,9 @@ fn join(
         particles.world.bodies.len(),
         &format!("dem-client {} (soft-sphere DEM)", env!("CARGO_PKG_VERSION")),
     );
+    if checkpoint::folder(args.checkpoint_dir.as_ref(), checkpoint::CHECKPOINT_DIR_ENV).is_some() {
+        hello.capabilities |= Capabilities::CHECKPOINT;
+    }
     if let Some(v) = args.protocol_version {
         hello.version = v;
     }
@@ -320,62 +365,6 @@ mod tests {
         assert!(!failure(&died, None).contains("raise"));
         assert!(failure(&died, None).ends_with("last completed step: none"));
     }
-}
-
-/// Runs the lockstep loop; returns the number of completed steps.
-fn step_loop(
-    link: &DemLink,
-    welcome: &Welcome,
-    particles: &mut CoupledParticles,
-    substeps: Substeps,
-    interrupted: &AtomicBool,
-    faults: Faults,
-    last: &mut Option<u64>,
-) -> Result<u64, LinkError> {
-    let mut states: Vec<ParticleState> = Vec::new();
-    let mut replies: Vec<ParticleReply> = Vec::new();
-    for step in 0..welcome.steps {
-        if faults.churn && step > 0 {
-            particles.churn(step);
-        }
-        faults.stall(step);
-        let stop = interrupted.load(Ordering::SeqCst);
-        let flags = if stop { StepFlags::STOP } else { 0 };
-        let sent_step = if faults.skip_step == Some(step) {
-            step + 1
-        } else {
-            step
-        };
-        particles.states_into(&mut states);
-        let header = StepHeader::new(sent_step, step as f64 * welcome.dt, states.len(), flags);
-        link.send_states(header, |i| states[i])?;
-        let received = link.receive_forces(step)?;
-        replies.clear();
-        replies.extend_from_slice(received.particles());
-        check_ids(&states, &replies)?;
-        let done = received.header().has(StepFlags::FINAL | StepFlags::STOP) || stop;
-        drop(received);
-        *last = Some(step);
-        if done {
-            return Ok(step + 1);
-        }
-        particles.advance(&replies, substeps, welcome.dt);
-    }
-    Ok(welcome.steps)
-}
-
-/// The fluid must answer every particle, in order.
-fn check_ids(states: &[ParticleState], replies: &[ParticleReply]) -> Result<(), LinkError> {
-    let wrong = states.iter().zip(replies).position(|(s, r)| s.id != r.id);
-    if replies.len() != states.len() || wrong.is_some() {
-        return Err(LinkError::Ipc(format!(
-            "the fluid's reply does not match the states sent (count {} vs {}, first wrong index {:?})",
-            replies.len(),
-            states.len(),
-            wrong
-        )));
-    }
-    Ok(())
 }
 
 /// rho_f / dt_fluid (the fluid's Welcome) with `coupling.substep_drag` in a scene with a lattice,
@@ -547,9 +536,34 @@ impl CoupledParticles {
             .fold(f64::INFINITY, f64::min)
     }
 
+    /// The counters a checkpoint carries: the next id, the DEM steps, the steps in free flight and
+    /// the sphere-steps flown of all.
+    pub fn counters(&self) -> [u64; 5] {
+        [
+            self.next_id,
+            self.dem_steps,
+            self.free_steps,
+            self.flown_sphere_steps,
+            self.sphere_steps,
+        ]
+    }
+
+    /// The counters of a checkpoint (`counters`).
+    pub fn set_counters(&mut self, c: &[u64]) -> Result<(), String> {
+        let [next_id, dem_steps, free_steps, flown, spheres] = c else {
+            return Err(format!(
+                "dem.bin holds {} counters of a coupled run, not 5",
+                c.len()
+            ));
+        };
+        (self.next_id, self.dem_steps, self.free_steps) = (*next_id, *dem_steps, *free_steps);
+        (self.flown_sphere_steps, self.sphere_steps) = (*flown, *spheres);
+        Ok(())
+    }
+
     /// Test aid: removes the last particle or inserts a copy of the first with a fresh id, next to
     /// it where there is room, so the particle count changes between steps.
-    fn churn(&mut self, step: u64) {
+    pub(crate) fn churn(&mut self, step: u64) {
         if step % 2 == 1 && self.world.bodies.len() > 1 {
             self.world.pop();
             return;

@@ -4,10 +4,13 @@
 //! a running `lbm-server` as the DEM side of the co-simulation. See docs/dem.md.
 
 mod bench;
+mod checkpoint;
 mod connect;
 mod dem;
+mod lockstep;
 mod output;
 mod run;
+mod run_checkpoint;
 
 use clap::{Parser, Subcommand};
 use std::path::PathBuf;

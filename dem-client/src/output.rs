@@ -1,6 +1,7 @@
 //! Outputs of `dem-client run`: particles.csv, energy.csv, VTK polydata (.vtp + .pvd).
 
 use crate::dem::world::World;
+use scene::checkpoint::OutputPositions;
 use scene::row_file::RowFile;
 use std::io::Write;
 use std::path::Path;
@@ -12,6 +13,16 @@ pub struct ParticleCsv(RowFile);
 impl ParticleCsv {
     pub fn create(path: &Path) -> std::io::Result<Self> {
         RowFile::create(path, "step,time,id,x,y,z,vx,vy,vz,wx,wy,wz,fx,fy,fz,tx,ty,tz").map(Self)
+    }
+
+    /// particles.csv of a resumed run, cut back to where its checkpoint found it.
+    pub fn resume(path: &Path, at: &OutputPositions) -> Result<Self, String> {
+        resumed(path, at).map(Self)
+    }
+
+    /// Bytes of whole rows in the file.
+    pub fn kept(&self) -> u64 {
+        self.0.kept()
     }
 
     pub fn write(&mut self, step: u64, world: &World) -> std::io::Result<()> {
@@ -33,6 +44,16 @@ pub struct EnergyCsv(RowFile);
 impl EnergyCsv {
     pub fn create(path: &Path) -> std::io::Result<Self> {
         RowFile::create(path, "step,time,kinetic_energy,contacts").map(Self)
+    }
+
+    /// energy.csv of a resumed run, cut back to where its checkpoint found it.
+    pub fn resume(path: &Path, at: &OutputPositions) -> Result<Self, String> {
+        resumed(path, at).map(Self)
+    }
+
+    /// Bytes of whole rows in the file (after a `commit`, all written).
+    pub fn kept(&self) -> u64 {
+        self.0.kept()
     }
 
     pub fn write(&mut self, step: u64, world: &World) -> std::io::Result<()> {
@@ -59,6 +80,18 @@ impl Vtk {
         Self(scene::vtp::ParticleSeries::new(dir))
     }
 
+    /// The series of a resumed run: the frames its checkpoint lists.
+    pub fn resume(dir: &Path, at: &OutputPositions) -> Result<Self, String> {
+        scene::vtp::ParticleSeries::resume(dir, at.particles_pvd.clone())
+            .map(Self)
+            .map_err(|e| format!("particles.pvd: {e}"))
+    }
+
+    /// The frames so far (time, file).
+    pub fn frames(&self) -> &[(f64, String)] {
+        self.0.frames()
+    }
+
     /// The world's spheres with their velocity, angular velocity and contact force and torque.
     pub fn write(&mut self, step: u64, world: &World) -> std::io::Result<()> {
         let bodies = &world.bodies;
@@ -82,4 +115,14 @@ impl Vtk {
         };
         self.0.write(step, world.time, &frame)
     }
+}
+
+/// The row file at `path` reopened where the checkpoint `at` found it.
+fn resumed(path: &Path, at: &OutputPositions) -> Result<RowFile, String> {
+    let name = path.file_name().unwrap_or_default().to_string_lossy();
+    let kept = *at
+        .files
+        .get(name.as_ref())
+        .ok_or_else(|| format!("the checkpoint does not record where {name} stood"))?;
+    RowFile::resume(path, kept).map_err(|e| e.to_string())
 }

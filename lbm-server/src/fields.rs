@@ -2,6 +2,7 @@
 //! velocity (fields/stepNNNNNNNNN.vti, listed with their times in fields.pvd) and the probe lines
 //! of `output.line` (line<N>.csv), all in SI units.
 
+use crate::checkpoint::OutputPositions;
 use crate::vtk::{write_vti, Grid, Series};
 use scene::lattice::LatticeUnits;
 use scene::{ProbeLine, Scene};
@@ -24,15 +25,34 @@ pub struct FieldOutput {
 impl FieldOutput {
     /// The outputs of a run of `scene` on the lattice `units` into `out`: a line<N>.csv with its
     /// header for each probe line (fields/ is made with the first snapshot).
-    pub fn new(scene: &Scene, units: &LatticeUnits, out: &Path) -> Result<FieldOutput, String> {
+    /// Resumed (`at`, a checkpoint's positions), each line<N>.csv is cut back to where the
+    /// checkpoint found it and fields.pvd holds the checkpoint's snapshots.
+    pub fn new(
+        scene: &Scene,
+        units: &LatticeUnits,
+        out: &Path,
+        at: Option<&OutputPositions>,
+    ) -> Result<FieldOutput, String> {
         let io = |e: std::io::Error| format!("{}: {e}", out.display());
         let mut probes = Vec::new();
         for (i, line) in scene.output.line.iter().enumerate() {
-            let file = std::fs::File::create(out.join(format!("line{i}.csv"))).map_err(io)?;
-            let mut w = std::io::BufWriter::new(file);
-            writeln!(w, "step,time,s,density,ux,uy,uz").map_err(io)?;
+            let name = format!("line{i}.csv");
+            let w = match at {
+                None => {
+                    let file = std::fs::File::create(out.join(&name)).map_err(io)?;
+                    let mut w = std::io::BufWriter::new(file);
+                    writeln!(w, "step,time,s,density,ux,uy,uz").map_err(io)?;
+                    w
+                }
+                Some(at) => std::io::BufWriter::new(at.reopen(out, &name)?),
+            };
             probes.push((line.clone(), w));
         }
+        let pvd = out.join("fields.pvd");
+        let series = match at {
+            None => Series::new(pvd),
+            Some(at) => Series::resume(pvd, at.fields_pvd.clone()).map_err(io)?,
+        };
         Ok(FieldOutput {
             out: out.to_path_buf(),
             grid: Grid {
@@ -40,7 +60,7 @@ impl FieldOutput {
                 origin: scene.domain.min,
                 dx: units.dx,
             },
-            series: Series::new(out.join("fields.pvd")),
+            series,
             probes,
             domain_min: scene.domain.min,
             fluid_density: scene.fluid.density,
@@ -117,6 +137,22 @@ impl FieldOutput {
                 .map_err(|e| format!("line probe: {e}"))?;
             }
         }
+        Ok(())
+    }
+
+    /// Where the outputs stand, for a checkpoint: the probe lines written out and their lengths,
+    /// the snapshots listed in fields.pvd, into `at`.
+    pub fn positions(&mut self, at: &mut OutputPositions) -> Result<(), String> {
+        self.flush()?;
+        for (i, (_, w)) in self.probes.iter().enumerate() {
+            let len = w
+                .get_ref()
+                .metadata()
+                .map_err(|e| format!("line{i}.csv: {e}"))?
+                .len();
+            at.files.insert(format!("line{i}.csv"), len);
+        }
+        at.fields_pvd = self.series.entries().to_vec();
         Ok(())
     }
 

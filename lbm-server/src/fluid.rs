@@ -1,6 +1,7 @@
 //! A fluid-only scene (a `[lattice]` and no particles): the GPU lattice alone, with health checks,
 //! VTK snapshots, probe lines and a summary.
 
+use crate::checkpoint::{Checkpoints, Loaded, OutputPositions};
 use crate::fields::FieldOutput;
 use crate::lbm::geometry::{tau_minus, Face, Operator, Setup};
 use crate::lbm::gpu::{Gpu, GpuLattice, Health};
@@ -166,8 +167,9 @@ enum Stop {
     Failed(String),
 }
 
-/// Runs a fluid-only scene on the ranks of `comm`, cut into `blocks`; returns the exit code
-/// (the same on every rank). Rank 0 writes the outputs and says how the run went.
+/// Runs a fluid-only scene on the ranks of `comm`, cut into `blocks` (from its checkpoint where
+/// `checkpoints` resumes one); returns the exit code (the same on every rank). Rank 0 writes the
+/// outputs and says how the run went.
 pub fn run(
     scene: &Scene,
     scene_file: &str,
@@ -176,6 +178,7 @@ pub fn run(
     interrupted: Arc<AtomicBool>,
     comm: &dyn Communicator,
     blocks: [usize; 3],
+    mut checkpoints: Checkpoints,
 ) -> u8 {
     let units = scene.lattice_units.as_ref().expect("fluid scenes have a lattice");
     let root = comm.rank() == 0;
@@ -185,7 +188,7 @@ pub fn run(
         kernels.truncate(1);
     }
     let trial = Trial::new(kernels, Vec::new(), steps);
-    let started = start_lattice(scene, units, comm, blocks, &trial);
+    let started = start_lattice(scene, units, (comm, blocks), &trial, checkpoints.resumed.as_ref());
     if !crate::parallel::all(comm, started.is_ok()) {
         if let Err(e) = &started {
             let rank = if comm.size() > 1 {
@@ -199,9 +202,28 @@ pub fn run(
     }
     let (gpu, mut lattice) = started.expect("started on every rank");
     let started = Instant::now();
-    let (result, trial) = match FluidRun::new(scene, units, out, comm, trial.clone()) {
+    let from = lattice.time();
+    let at = checkpoints.resumed.as_ref().map(|l| l.header.outputs.clone());
+    let run = FluidRun::new(
+        scene,
+        units,
+        out,
+        comm,
+        trial.clone(),
+        at.as_ref(),
+        &mut checkpoints,
+    );
+    let (result, trial) = match run {
         Ok(mut run) => (run.steps(&mut lattice, steps, &interrupted), run.trial),
         Err(e) => (Err(e), trial),
+    };
+    let result = match result {
+        Ok(()) => checkpoints.wait().map_err(Stop::Failed),
+        Err(Stop::Interrupted) => {
+            let _ = checkpoints.wait();
+            Err(Stop::Interrupted)
+        }
+        failed => failed,
     };
     let wall = started.elapsed().as_secs_f64();
     let (reason, code) = match &result {
@@ -214,6 +236,7 @@ pub fn run(
         return code;
     }
     let ended = Ended {
+        from,
         result,
         reason,
         code,
@@ -225,8 +248,9 @@ pub fn run(
     report(scene, scene_file, out, &gpu.adapter.name, parallel, ended)
 }
 
-/// How a fluid run ended.
+/// How a fluid run ended (`from`: the step it started from).
 struct Ended {
+    from: u64,
     result: Result<(), Stop>,
     reason: String,
     code: u8,
@@ -271,7 +295,7 @@ fn report(
         steps_requested: e.steps,
         steps_completed: e.completed,
         wall_time_s: wall,
-        mlups: cells * e.completed as f64 / wall.max(1e-9) / 1e6,
+        mlups: cells * (e.completed - e.from) as f64 / wall.max(1e-9) / 1e6,
         kernel: e.trial.kept().kernel.name(),
         trial: e.trial.lines.clone(),
         exit_reason: e.reason,
@@ -284,7 +308,7 @@ fn report(
     if e.code == 0 {
         protocol::say!(
             "lbm-server: {} steps in {wall:.2} s ({:.2} MLUPS); output in {}",
-            e.completed,
+            e.completed - e.from,
             summary.mlups,
             out.display()
         );
@@ -294,13 +318,13 @@ fn report(
 
 /// This rank's device and block of the scene's lattice on it, the run's first line said (by rank
 /// 0) once it is ready to step (and a warning where its tau is near 1/2, or its storage was
-/// measured to fail).
+/// measured to fail); its state the checkpoint's where `resumed`.
 fn start_lattice(
     scene: &Scene,
     units: &LatticeUnits,
-    comm: &dyn Communicator,
-    blocks: [usize; 3],
+    (comm, blocks): (&dyn Communicator, [usize; 3]),
     trial: &Trial,
+    resumed: Option<&Loaded>,
 ) -> Result<(Arc<Gpu>, BlockLattice), String> {
     let gpu = Arc::new(Gpu::for_local_rank(comm.local_rank())?);
     let d = Decomposition::new(units.n, scene.periodic_axes(), blocks, comm.rank());
@@ -308,7 +332,11 @@ fn start_lattice(
         kernel: trial.kept().kernel,
         ..setup_of(units)
     };
-    let lattice = BlockLattice::new(gpu.clone(), setup, health_of(units), d)?;
+    let mut lattice = BlockLattice::new(gpu.clone(), setup, health_of(units), d)?;
+    if let Some(loaded) = resumed {
+        let bytes = lattice.lattice.population_bytes();
+        lattice.lattice.restore_raw(&loaded.raw_state(bytes)?);
+    }
     crate::run::started();
     if comm.rank() != 0 {
         return Ok((gpu, lattice));
@@ -361,6 +389,7 @@ struct FluidRun<'a> {
     units: &'a LatticeUnits,
     comm: &'a dyn Communicator,
     fields: Option<FieldOutput>,
+    checkpoints: &'a mut Checkpoints,
     /// The step of the last check that passed (its fields kept on the device).
     last_good: Option<u64>,
     /// The start-up trial of the kernels (trials.rs) and its clock.
@@ -369,15 +398,18 @@ struct FluidRun<'a> {
 }
 
 impl<'a> FluidRun<'a> {
+    /// The outputs into `out`, resumed `at` a checkpoint's positions where given.
     fn new(
         scene: &'a Scene,
         units: &'a LatticeUnits,
         out: &'a Path,
         comm: &'a dyn Communicator,
         trial: Trial,
+        at: Option<&OutputPositions>,
+        checkpoints: &'a mut Checkpoints,
     ) -> Result<Self, Stop> {
         let fields = if comm.rank() == 0 {
-            FieldOutput::new(scene, units, out).map(Some)
+            FieldOutput::new(scene, units, out, at).map(Some)
         } else {
             Ok(None)
         };
@@ -391,6 +423,7 @@ impl<'a> FluidRun<'a> {
             units,
             comm,
             fields: fields.expect("checked"),
+            checkpoints,
             last_good: None,
             trial,
             made: Instant::now(),
@@ -421,11 +454,15 @@ impl<'a> FluidRun<'a> {
         interrupted: &AtomicBool,
     ) -> Result<(), Stop> {
         let check = self.units.check_interval;
-        let lines_every = self.scene.output.interval;
-        let fields_every = self.scene.output.fields_interval;
-        let due = |s: u64, every: u64| every > 0 && s.is_multiple_of(every);
+        let every = [
+            check,
+            self.scene.output.interval,
+            self.scene.output.fields_interval,
+            self.checkpoints.schedule.every(),
+        ];
         // Rank 0's progress alone.
         let mut progress = (self.comm.rank() == 0).then(|| Progress::new(steps));
+        progress.iter_mut().for_each(|p| p.update(lattice.time()));
         while lattice.time() < steps {
             let now = lattice.time();
             // The trial times one step at a time (each followed by the health check's readback).
@@ -433,7 +470,7 @@ impl<'a> FluidRun<'a> {
             if trial {
                 self.take_kernel(&mut lattice.lattice);
             }
-            let next = [check, lines_every, fields_every]
+            let next = every
                 .iter()
                 .filter(|e| **e > 0)
                 .map(|e| (now / e + 1) * e)
@@ -446,27 +483,7 @@ impl<'a> FluidRun<'a> {
             // ranks agree, so that all stop at the same step.
             let going = !interrupted.load(Ordering::SeqCst);
             let stopping = !crate::parallel::all(self.comm, going);
-            let last = next == steps || stopping;
-            let (lines, snapshot) = (due(next, lines_every) || last, due(next, fields_every) || last);
-            // The whole field crosses the bus only when something is written from it; a check
-            // alone reads the status and, if it fails, one cell.
-            if lines || snapshot {
-                let (fields, bad) = lattice.fields(self.comm);
-                if let Some(bad) = bad {
-                    return Err(self.blow_up(lattice, next, check, bad));
-                }
-                let written = self.write(next, &fields, lines, snapshot);
-                // Every rank stops where rank 0 could not write.
-                if !crate::parallel::all(self.comm, written.is_ok()) {
-                    return Err(Stop::Failed(
-                        written.err().unwrap_or_else(|| "rank 0's outputs".into()),
-                    ));
-                }
-            } else if let Some(bad) = lattice.health(self.comm) {
-                return Err(self.blow_up(lattice, next, check, bad));
-            }
-            lattice.keep_fields();
-            self.last_good = Some(next);
+            self.outputs(lattice, next, next == steps || stopping)?;
             progress.iter_mut().for_each(|p| p.update(next));
             if stopping {
                 progress.iter().for_each(Progress::abandon);
@@ -478,16 +495,50 @@ impl<'a> FluidRun<'a> {
         self.flush().map_err(Stop::Failed)
     }
 
-    /// Rank 0 writes the probe lines and the snapshot of step `step`.
-    fn write(&mut self, step: u64, fields: &[[f32; 4]], lines: bool, snapshot: bool) -> Result<(), String> {
-        let Some(out) = &mut self.fields else {
-            return Ok(());
-        };
-        if lines {
-            out.write_lines(step, fields)?;
+    /// The outputs after step `step` (the `last` of the run: all of them): the probe lines and
+    /// the snapshot where due, with the health check (or the check alone), and a checkpoint where
+    /// due; its outputs' positions are those before a last step's outputs that are not due
+    /// (a run resumed from it then writes what an uninterrupted one does).
+    fn outputs(&mut self, lattice: &mut BlockLattice, step: u64, last: bool) -> Result<(), Stop> {
+        let due = |every: u64| every > 0 && step.is_multiple_of(every);
+        let (lines, snapshot) = (
+            due(self.scene.output.interval),
+            due(self.scene.output.fields_interval),
+        );
+        let checkpoint = self.checkpoints.enabled() && (last || self.checkpoints.schedule.due(step));
+        // The whole field crosses the bus only when something is written from it; a check
+        // alone reads the status and, if it fails, one cell.
+        if lines || snapshot || last {
+            let (fields, bad) = lattice.fields(self.comm);
+            if let Some(bad) = bad {
+                return Err(self.blow_up(lattice, step, bad));
+            }
+            self.write(step, &fields, lines, snapshot)?;
+            if checkpoint {
+                self.checkpoint(&lattice.lattice)?;
+            }
+            self.write(step, &fields, last && !lines, last && !snapshot)?;
+        } else if let Some(bad) = lattice.health(self.comm) {
+            return Err(self.blow_up(lattice, step, bad));
+        } else if checkpoint {
+            self.checkpoint(&lattice.lattice)?;
         }
-        if snapshot {
-            out.write_snapshot(step, fields)?;
+        lattice.keep_fields();
+        self.last_good = Some(step);
+        Ok(())
+    }
+
+    /// Rank 0 writes the probe lines and the snapshot of `step`, those asked for; every rank
+    /// stops where rank 0 could not write.
+    fn write(&mut self, step: u64, fields: &[[f32; 4]], lines: bool, snapshot: bool) -> Result<(), Stop> {
+        let written = match &mut self.fields {
+            Some(out) if lines || snapshot => write_fields(out, step, fields, lines, snapshot),
+            _ => Ok(()),
+        };
+        if !crate::parallel::all(self.comm, written.is_ok()) {
+            return Err(Stop::Failed(
+                written.err().unwrap_or_else(|| "rank 0's outputs".into()),
+            ));
         }
         Ok(())
     }
@@ -496,9 +547,23 @@ impl<'a> FluidRun<'a> {
         self.fields.as_mut().map_or(Ok(()), FieldOutput::flush)
     }
 
+    /// A checkpoint of the lattice as it is now (one rank), and of where the outputs stand.
+    fn checkpoint(&mut self, lattice: &GpuLattice) -> Result<(), Stop> {
+        let mut at = OutputPositions::default();
+        if let Some(fields) = &mut self.fields {
+            fields.positions(&mut at).map_err(Stop::Failed)?;
+        }
+        self.checkpoints.stage().map_err(Stop::Failed)?;
+        let time = lattice.time as f64 * self.units.dt;
+        self.checkpoints.hold(lattice, time, 0, at, None);
+        self.checkpoints.release();
+        Ok(())
+    }
+
     /// Describes the cell furthest out of bounds (`bad`, the first found, where none is further),
     /// with the rank that holds it, and writes the last good snapshot (rank 0).
-    fn blow_up(&mut self, lattice: &BlockLattice, step: u64, check: u64, bad: RankUnhealthy) -> Stop {
+    fn blow_up(&mut self, lattice: &BlockLattice, step: u64, bad: RankUnhealthy) -> Stop {
+        let check = self.units.check_interval;
         let bad = lattice.furthest_unhealthy(self.comm).unwrap_or(bad);
         let kept = lattice.kept_fields(self.comm);
         let (origin, dx) = (self.scene.domain.min, self.units.dx);
@@ -520,4 +585,21 @@ impl<'a> FluidRun<'a> {
         }
         Stop::Failed(msg)
     }
+}
+
+/// The probe lines and the snapshot of `step` into `out`, those asked for.
+fn write_fields(
+    out: &mut FieldOutput,
+    step: u64,
+    fields: &[[f32; 4]],
+    lines: bool,
+    snapshot: bool,
+) -> Result<(), String> {
+    if lines {
+        out.write_lines(step, fields)?;
+    }
+    if snapshot {
+        out.write_snapshot(step, fields)?;
+    }
+    Ok(())
 }

@@ -16,6 +16,10 @@ pub const RUN_ENV: &str = "LBMDEM_RUN";
 pub const SCENE_ENV: &str = "LBMDEM_SCENE";
 /// Where the Python clients are found when lbm-server runs away from its source tree.
 pub const CLIENTS_ENV: &str = "LBMDEM_CLIENTS";
+/// The staging folder a DEM writes its part of a checkpoint into (OUT/checkpoint.staging,
+/// absolute), and the folder of the checkpoint a resumed run goes on from (PROTOCOL.md 6.4).
+pub const CHECKPOINT_DIR_ENV: &str = "LBMDEM_CHECKPOINT_DIR";
+pub const RESUME_DIR_ENV: &str = "LBMDEM_RESUME_DIR";
 
 /// How the DEM side of a run starts.
 pub enum DemStart {
@@ -55,10 +59,11 @@ impl DemCommand {
 
     /// Starts the command for run `run` with the scene copy at `scene`, in a process group of
     /// its own (as `spawn_dem_client`).
-    pub fn spawn(&self, run: &str, scene: &Path) -> std::io::Result<Child> {
+    pub fn spawn(&self, run: &str, scene: &Path, env: &[(&str, PathBuf)]) -> std::io::Result<Child> {
         use std::os::unix::process::CommandExt;
         let mut cmd = Command::new(&self.argv[0]);
         cmd.args(&self.argv[1..])
+            .envs(env.iter().map(|(k, v)| (k, v)))
             .env(RUN_ENV, run)
             .env(SCENE_ENV, std::path::absolute(scene)?)
             .env("PYTHONPATH", python_path(&self.python_path)?)
@@ -105,7 +110,7 @@ pub fn find_on_path(name: &str) -> Option<PathBuf> {
 }
 
 /// Starts `dem-client connect` for run `run` with the scene copy at `scene`, `--verbose` where
-/// `verbose`.
+/// `verbose` (and `env`, the checkpoint folders).
 ///
 /// The DEM gets a process group of its own, so a terminal's Ctrl-C reaches only lbm-server, which
 /// then ends the run in order (STOP in its next reply) instead of racing the DEM's own handler.
@@ -115,10 +120,12 @@ pub fn spawn_dem_client(
     scene: &Path,
     timeout_s: f64,
     verbose: bool,
+    env: &[(&str, PathBuf)],
 ) -> std::io::Result<Child> {
     use std::os::unix::process::CommandExt;
     Command::new(exe)
         .process_group(0)
+        .envs(env.iter().map(|(k, v)| (k, v)))
         .arg("connect")
         .arg("--service")
         .arg(run)

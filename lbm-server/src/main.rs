@@ -2,6 +2,7 @@
 
 mod bench;
 mod bench_link;
+mod checkpoint;
 mod coupled;
 mod fields;
 mod fluid;

@@ -2,6 +2,7 @@
 //! summaries report it. A coupled run's summary.json is `run/summary.rs`'s; what it says on the
 //! terminal is `terminal.rs`'s.
 
+use crate::checkpoint::OutputPositions;
 use protocol::{ParticleReply, ParticleState};
 use scene::row_file::RowFile;
 use serde::Serialize;
@@ -25,6 +26,32 @@ impl ParticleOutput {
         let rows = RowFile::create(&out.join("particles.csv"), Self::HEADER)?;
         let vtk = vtk.then(|| scene::vtp::ParticleSeries::new(out));
         Ok(Self { rows, vtk })
+    }
+
+    /// particles.csv (and the .vtp series where `vtk`) of a resumed run, as they stood `at` its
+    /// checkpoint: the rows written after it cut off.
+    pub fn resume(out: &Path, vtk: bool, at: &OutputPositions) -> Result<Self, String> {
+        let kept = *at
+            .files
+            .get("particles.csv")
+            .ok_or("the checkpoint does not record where particles.csv stood")?;
+        let rows = RowFile::resume(&out.join("particles.csv"), kept).map_err(|e| e.to_string())?;
+        let vtk = match vtk {
+            true => Some(
+                scene::vtp::ParticleSeries::resume(out, at.particles_pvd.clone())
+                    .map_err(|e| format!("particles.pvd: {e}"))?,
+            ),
+            false => None,
+        };
+        Ok(Self { rows, vtk })
+    }
+
+    /// Where particles.csv and the .vtp series stand, into `at` (a checkpoint's).
+    pub fn positions(&self, at: &mut OutputPositions) {
+        at.files.insert("particles.csv".into(), self.rows.kept());
+        if let Some(vtk) = &self.vtk {
+            at.particles_pvd = vtk.frames().to_vec();
+        }
     }
 
     /// Writes the particles of one step (states and replies in SI, same order); an error names

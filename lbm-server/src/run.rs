@@ -7,26 +7,31 @@
 //! - here: the lockstep loop (`Session::step_loop`), each coupled step a list of named passes
 //!   (`Session::coupled_step`): `exchange.rs` receives the DEM's states and sends the replies,
 //!   `answer.rs` is the fluid's answer to the states, `ending.rs` how a step ends the run.
+//! - `checkpointing.rs`: the run's checkpoints, with the DEM's part (PROTOCOL.md 6.4); `resume.rs`:
+//!   a run prepared to go on from one (`--resume`).
 //! - `counters.rs`: what the run counts, and where its wall time goes (summary.json's `time_s`).
 //! - `summary.rs`: summary.json.
 //!
 //! A scene with a lattice and no particles runs the fluid alone (`fluid.rs`).
 
 mod answer;
+mod checkpointing;
 mod counters;
 mod ending;
 mod exchange;
 mod prepare;
+mod resume;
 mod session;
 mod summary;
 mod welcome;
 
+use crate::checkpoint::OutputPositions;
 use crate::launch::{self, DemStart};
 use crate::terminal::Progress;
 use exchange::SiStates;
 use prepare::prepare;
 use protocol::transport::new_run_name;
-use protocol::{ParticleReply, StepHeader};
+use protocol::{ParticleReply, StepFlags, StepHeader};
 use session::Session;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -66,6 +71,14 @@ pub struct RunArgs {
     /// and its last line.
     #[arg(long, short)]
     verbose: bool,
+    /// Steps between two checkpoints (OUT/checkpoint/; overrides `output.checkpoint_interval`;
+    /// 0: none by steps). docs/checkpoint.md.
+    #[arg(long, value_name = "N")]
+    checkpoint_interval: Option<u64>,
+    /// Goes on from the last checkpoint in OUT, with the scene of OUT/scene.toml, to its last
+    /// step or `--steps`, appending to the outputs there.
+    #[arg(long, value_name = "OUT", conflicts_with_all = ["scene", "out"])]
+    resume: Option<PathBuf>,
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -115,6 +128,7 @@ pub fn main(args: RunArgs) -> ExitCode {
     let prepared = prepared.expect("prepared on every rank");
     if prepared.scene.lattice.is_some() && prepared.scene.particle_count() == 0 {
         let p = &prepared;
+        let checkpoints = p.checkpoints();
         return ExitCode::from(crate::fluid::run(
             &p.scene,
             &p.scene_file,
@@ -123,6 +137,7 @@ pub fn main(args: RunArgs) -> ExitCode {
             interrupted,
             &*comm,
             p.blocks,
+            checkpoints,
         ));
     }
     let dem = match dem_start(&args, &prepared) {
@@ -187,8 +202,9 @@ impl Session {
         let mut si = SiStates::new(self.hello.expect("connected").units);
         let mut replies = Vec::new();
         let mut progress = Progress::new(self.p.steps);
+        progress.update(self.first_step);
         self.counters.start();
-        for step in 0..self.p.steps {
+        for step in self.first_step..self.p.steps {
             if let Some(ending) = self.coupled_step(step, &mut si, &mut replies, &mut progress)? {
                 return Ok(ending);
             }
@@ -198,9 +214,10 @@ impl Session {
     }
 
     /// One coupled step, pass by pass, each timed (`counters.rs`): the DEM's states received
-    /// (waiting for the DEM) and read in SI (exchange), the fluid's answer (fluid: the states
-    /// checked, the fluid's step, its health check), how the step ends, the reply sent (exchange),
-    /// the particles written (output); how the run ends where this step ends it.
+    /// (waiting for the DEM; a checkpoint held for the DEM's part then complete) and read in SI
+    /// (exchange), the fluid's answer (fluid: the states checked, the fluid's step, its health
+    /// check), how the step ends, the reply sent (exchange; CHECKPOINT where one is due), the
+    /// particles written and a checkpoint taken (output); how the run ends where this step ends it.
     fn coupled_step(
         &mut self,
         step: u64,
@@ -210,6 +227,9 @@ impl Session {
     ) -> Result<Option<Ending>, String> {
         let last = step + 1 == self.p.steps;
         let received = self.receive_states(step)?;
+        if self.checkpoints.holding() {
+            self.release_checkpoint()?;
+        }
         self.counters.lap_waiting_for_dem();
         let states = si.read(&received);
         self.counters.lap_exchange();
@@ -218,22 +238,58 @@ impl Session {
         let count = states.len();
         let header = received.header();
         let end = self.step_end(step, last, header, failure);
+        let checkpoint = self.checkpoint_due(step, last, &end);
+        if checkpoint {
+            self.stage_checkpoint()?;
+        }
         si.keep_for_output(&received, end.output);
         drop(received);
-        let reply = StepHeader::new(step, header.time, count, end.flags(last));
-        if reply.flags != 0 {
+        let flags = end.flags(last) | if checkpoint { StepFlags::CHECKPOINT } else { 0 };
+        if end.flags(last) != 0 {
             // The reply ends the run: the bar leaves the terminal before the DEM's last line.
             progress.finish();
         }
-        self.reply(reply, si.units, replies)?;
+        self.reply(
+            StepHeader::new(step, header.time, count, flags),
+            si.units,
+            replies,
+        )?;
         self.counters.completed(step, count);
         self.counters.lap_exchange();
-        if end.output {
-            let time = header.time * si.units.time_s;
-            self.particles.write_step(step, time, &si.states, replies)?;
-        }
+        let time = header.time * si.units.time_s;
+        self.write_particles(step, time, (end.output, checkpoint), si, replies)?;
         progress.update(step + 1);
         self.counters.lap_output();
-        self.end_at(end, last, progress)
+        let ending = self.end_at(end, last, progress)?;
+        if ending.is_some() || last {
+            self.finish_checkpoint();
+        }
+        Ok(ending)
+    }
+
+    /// The particles of `step` where `output` says, and where `checkpoint` says the fluid's state
+    /// held for a checkpoint, with where the outputs stood: before this step's rows where only a
+    /// last or stopped step gets them (a run resumed from it writes what an uninterrupted one does).
+    fn write_particles(
+        &mut self,
+        step: u64,
+        time: f64,
+        (output, checkpoint): (bool, bool),
+        si: &SiStates,
+        replies: &[ParticleReply],
+    ) -> Result<(), String> {
+        let mut at = OutputPositions::default();
+        let regular = step.is_multiple_of(self.p.scene.output.interval);
+        self.particles.positions(&mut at);
+        if output {
+            self.particles.write_step(step, time, &si.states, replies)?;
+        }
+        if regular {
+            self.particles.positions(&mut at);
+        }
+        if checkpoint {
+            self.hold_checkpoint(at, replies.len() as u64)?;
+        }
+        Ok(())
     }
 }

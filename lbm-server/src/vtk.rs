@@ -64,9 +64,26 @@ impl Series {
         }
     }
 
+    /// The series of a resumed run, its entries so far (a checkpoint's), the .pvd rewritten.
+    pub fn resume(path: PathBuf, entries: Vec<(f64, String)>) -> std::io::Result<Self> {
+        let series = Self { path, entries };
+        series.write()?;
+        Ok(series)
+    }
+
+    /// The entries so far: time [s] and file (relative to the .pvd).
+    pub fn entries(&self) -> &[(f64, String)] {
+        &self.entries
+    }
+
     /// Adds `file` (relative to the .pvd) at simulation time `time` [s].
     pub fn add(&mut self, time: f64, file: &str) -> std::io::Result<()> {
         self.entries.push((time, file.to_string()));
+        self.write()
+    }
+
+    /// Writes the .pvd with the entries so far.
+    fn write(&self) -> std::io::Result<()> {
         let mut text = String::from(
             "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n<Collection>\n",
         );

@@ -4,7 +4,13 @@
 use core::mem::size_of;
 
 /// Version of this protocol. Bump on any change of a message layout or of the step rules.
-pub const PROTOCOL_VERSION: u32 = 1;
+/// Version 2: Hello's `capabilities`, Welcome's `first_step` and `cell_size`, the step flag
+/// `CHECKPOINT` (PROTOCOL.md 6.4).
+pub const PROTOCOL_VERSION: u32 = 2;
+
+/// The oldest version this build still speaks: a fluid answers a version-1 Hello with a
+/// version-1 Welcome (no `first_step`, `cell_size`; no CHECKPOINT flags, no resumed runs).
+pub const OLDEST_VERSION: u32 = 1;
 
 /// First four bytes of every handshake message: ASCII "LBDM" read as a little-endian u32.
 pub const MAGIC: u32 = u32::from_le_bytes(*b"LBDM");
@@ -138,7 +144,8 @@ pub struct Hello {
     pub state_size: u32,
     pub reply_size: u32,
     pub header_size: u32,
-    pub reserved: u32,
+    /// [`Capabilities`] bits of the DEM side (version 1: reserved, 0).
+    pub capabilities: u32,
     pub units: Units,
     /// [`Physics`] bits the DEM side applies.
     pub physics: u64,
@@ -146,6 +153,16 @@ pub struct Hello {
     pub initial_count: u64,
     /// Name and version of the DEM software (NUL padded UTF-8).
     pub software: [u8; TEXT_LEN],
+}
+
+/// What a DEM side can do beyond the lockstep, as a bit set in [`Hello::capabilities`].
+pub struct Capabilities;
+
+impl Capabilities {
+    /// It writes its whole state into the checkpoint folder when a reply carries
+    /// `StepFlags::CHECKPOINT`, and goes on from such a state at `Welcome::first_step`
+    /// (PROTOCOL.md 6.4).
+    pub const CHECKPOINT: u32 = 1 << 0;
 }
 
 /// Outcome of the handshake, in [`Welcome::status`].
@@ -175,7 +192,8 @@ impl Status {
     }
 }
 
-/// Fluid -> DEM, once, in answer to `Hello` (344 bytes in version 1). Quantities in the DEM's units.
+/// Fluid -> DEM, once, in answer to `Hello` (360 bytes in version 2, the first 344 in version 1).
+/// Quantities in the DEM's units.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[repr(C)]
 pub struct Welcome {
@@ -206,6 +224,11 @@ pub struct Welcome {
     pub physics: u64,
     pub software: [u8; TEXT_LEN],
     pub reason: [u8; TEXT_LEN * 2],
+    /// Version 2: the run's first step (0, or the step of the checkpoint a resumed run goes on
+    /// from; the run covers steps `first_step .. steps - 1`).
+    pub first_step: u64,
+    /// Version 2: the lattice's cell size (length), the lubrication cut-off (0: no lattice).
+    pub cell_size: f64,
 }
 
 /// Why a handshake message could not be read.
@@ -247,43 +270,70 @@ pub fn read_prefix(bytes: &[u8]) -> Result<(u32, u32, u32, u32), DecodeError> {
     Ok((word(0), word(1), word(2), word(3)))
 }
 
-/// Plain-old-data messages that travel as bytes.
+/// Plain-old-data messages that travel as bytes: in version v, the first `size_in(v)` bytes of
+/// the struct (a later version only appends fields).
 pub trait Message: Copy {
     const KIND: u32;
 
+    /// The message's size in `version`.
+    fn size_in(version: u32) -> usize;
+
+    /// The message's bytes, as many as its `size` field (its prefix's third word) says.
     fn to_bytes(&self) -> Vec<u8> {
         // SAFETY: implementors are #[repr(C)] structs of integers, floats and byte arrays, with
         // no implicit padding (checked by the layout tests), so every byte is initialised.
         let ptr = self as *const Self as *const u8;
-        unsafe { core::slice::from_raw_parts(ptr, size_of::<Self>()) }.to_vec()
+        let all = unsafe { core::slice::from_raw_parts(ptr, size_of::<Self>()) };
+        let size = u32::from_le_bytes(all[8..12].try_into().unwrap()) as usize;
+        all[..size.min(all.len())].to_vec()
     }
 
-    /// Checks magic, kind, version and size, then copies the message out of `bytes`.
+    /// Checks magic, kind, version (one this build speaks) and size, then copies the message out
+    /// of `bytes` (fields of later versions zero).
     fn from_bytes(bytes: &[u8]) -> Result<Self, DecodeError> {
         let (magic, version, size, kind) = read_prefix(bytes)?;
         if magic != MAGIC {
             return Err(DecodeError::BadMagic(magic));
         }
-        if version != PROTOCOL_VERSION {
+        if !(OLDEST_VERSION..=PROTOCOL_VERSION).contains(&version) {
             return Err(DecodeError::Version(PROTOCOL_VERSION, version));
         }
         if kind != Self::KIND {
             return Err(DecodeError::WrongKind(kind));
         }
-        if size as usize != size_of::<Self>() || bytes.len() < size_of::<Self>() {
-            return Err(DecodeError::Size(size_of::<Self>(), size as usize));
+        let expected = Self::size_in(version);
+        if size as usize != expected || bytes.len() < expected {
+            return Err(DecodeError::Size(expected, size as usize));
         }
-        // SAFETY: length checked above; every bit pattern is valid for these field types.
-        Ok(unsafe { core::ptr::read_unaligned(bytes.as_ptr() as *const Self) })
+        let mut full = vec![0u8; size_of::<Self>()];
+        full[..expected].copy_from_slice(&bytes[..expected]);
+        // SAFETY: `full` holds the whole struct; every bit pattern is valid for these field types.
+        Ok(unsafe { core::ptr::read_unaligned(full.as_ptr() as *const Self) })
     }
 }
 
 impl Message for Hello {
     const KIND: u32 = KIND_HELLO;
+
+    /// 144 bytes in versions 1 and 2 (version 2 names the reserved word `capabilities`).
+    fn size_in(_version: u32) -> usize {
+        size_of::<Hello>()
+    }
 }
+
+/// Bytes of a version-1 Welcome: up to `reason`'s end.
+pub const WELCOME_V1_SIZE: usize = 344;
 
 impl Message for Welcome {
     const KIND: u32 = KIND_WELCOME;
+
+    fn size_in(version: u32) -> usize {
+        if version == 1 {
+            WELCOME_V1_SIZE
+        } else {
+            size_of::<Welcome>()
+        }
+    }
 }
 
 /// Encodes `text` as a NUL padded, truncated UTF-8 field.
@@ -314,7 +364,7 @@ impl Hello {
             state_size: size_of::<crate::ParticleState>() as u32,
             reply_size: size_of::<crate::ParticleReply>() as u32,
             header_size: size_of::<crate::StepHeader>() as u32,
-            reserved: 0,
+            capabilities: 0,
             units,
             physics,
             initial_count: initial_count as u64,
@@ -352,6 +402,17 @@ impl Welcome {
             physics: 0,
             software: text_field(software),
             reason: [0; TEXT_LEN * 2],
+            first_step: 0,
+            cell_size: 0.0,
+        }
+    }
+
+    /// This Welcome as `version` sends it (a version-1 DEM gets the first 344 bytes).
+    pub fn for_version(self, version: u32) -> Self {
+        Self {
+            version,
+            size: Self::size_in(version) as u32,
+            ..self
         }
     }
 
@@ -388,6 +449,7 @@ mod tests {
         assert_eq!(size_of::<Hello>(), 144);
         assert_eq!(offset_of!(Hello, pid), 16);
         assert_eq!(offset_of!(Hello, state_size), 24);
+        assert_eq!(offset_of!(Hello, capabilities), 36);
         assert_eq!(offset_of!(Hello, units), 40);
         assert_eq!(offset_of!(Hello, physics), 64);
         assert_eq!(offset_of!(Hello, initial_count), 72);
@@ -396,7 +458,9 @@ mod tests {
 
     #[test]
     fn welcome_layout() {
-        assert_eq!(size_of::<Welcome>(), 344);
+        assert_eq!(size_of::<Welcome>(), 360);
+        assert_eq!(offset_of!(Welcome, first_step), 344);
+        assert_eq!(offset_of!(Welcome, cell_size), 352);
         assert_eq!(offset_of!(Welcome, status), 24);
         assert_eq!(offset_of!(Welcome, periodic), 28);
         assert_eq!(offset_of!(Welcome, capacity), 32);
@@ -428,6 +492,27 @@ mod tests {
             Err(DecodeError::WrongKind(KIND_HELLO))
         );
         assert_eq!(field_text(&hello.software), "test-dem 1.0");
+    }
+
+    /// A version-1 Welcome is the first 344 bytes, read back with the version-2 fields zero; a
+    /// version-1 Hello is read as one with no capabilities.
+    #[test]
+    fn version_1_messages_are_read_and_written() {
+        let mut welcome = Welcome::accepted("fluid");
+        welcome.first_step = 40;
+        welcome.cell_size = 1e-3;
+        let v2 = welcome.to_bytes();
+        assert_eq!(v2.len(), 360);
+        assert_eq!(Welcome::from_bytes(&v2), Ok(welcome));
+        let v1 = welcome.for_version(1).to_bytes();
+        assert_eq!(v1.len(), WELCOME_V1_SIZE);
+        let read = Welcome::from_bytes(&v1).unwrap();
+        assert_eq!((read.version, read.first_step, read.cell_size), (1, 0, 0.0));
+        assert_eq!(read.steps, welcome.steps);
+        let mut hello = Hello::new(Units::SI, Physics::GRAVITY, 3, "old dem");
+        hello.version = 1;
+        let read = Hello::from_bytes(&hello.to_bytes()).unwrap();
+        assert_eq!((read.version, read.capabilities), (1, 0));
     }
 
     #[test]

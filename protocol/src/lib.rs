@@ -12,7 +12,7 @@ pub mod squeeze_film;
 pub mod transport;
 pub mod wire;
 
-pub use handshake::{Hello, Physics, Status, Units, Welcome, PROTOCOL_VERSION};
+pub use handshake::{Capabilities, Hello, Physics, Status, Units, Welcome, PROTOCOL_VERSION};
 pub use transport::{DemLink, FluidLink, LinkError, Peer};
 pub use wire::{ParticleReply, ParticleState, StepFlags, StepHeader};
 

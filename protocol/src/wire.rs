@@ -64,6 +64,10 @@ impl StepFlags {
     pub const STOP: u64 = 1;
     /// Fluid -> DEM: this is the reply of the last step of the run.
     pub const FINAL: u64 = 2;
+    /// Fluid -> DEM (protocol version 2, only to a DEM with `Capabilities::CHECKPOINT`): write your
+    /// whole state for the next step (n + 1) into the checkpoint folder before sending its states;
+    /// their arrival tells the fluid that the DEM's part of the checkpoint is complete.
+    pub const CHECKPOINT: u64 = 4;
 }
 
 #[cfg(test)]

@@ -144,6 +144,9 @@ impl Scene {
         if self.output.interval == 0 {
             return Err(c.fail("output.interval", 0, "must be at least 1 step"));
         }
+        if let Some(minutes) = self.output.checkpoint_wall_interval {
+            c.positive("output.checkpoint_wall_interval", minutes, "min")?;
+        }
         Ok(())
     }
 

@@ -24,6 +24,8 @@ steps = 100
 [output]
 interval = 10
 fields_interval = 50
+checkpoint_interval = 20
+checkpoint_wall_interval = 30.0
 [[output.line]]
 axis = "z"
 through = [0.008, 0.008, 0.008]
@@ -146,6 +148,7 @@ duration = 0.1
 [output]
 time_interval = 0.01
 fields_time_interval = 0.05
+checkpoint_time_interval = 0.05
 [lattice]
 resolution = 16
 operator = "mrt"
@@ -310,6 +313,8 @@ const ANY_INTEGER: &[(&str, i64)] = &[
     ("output.fields_interval", 0),
     ("output.fields_interval", i64::MAX),
     ("output.interval", i64::MAX),
+    ("output.checkpoint_interval", 0),
+    ("output.checkpoint_interval", i64::MAX),
     ("lattice.check_interval", i64::MAX),
     ("dem.insert[0].seed", 0),
     ("dem.insert[0].seed", i64::MAX),

@@ -130,6 +130,20 @@ pub struct Output {
     /// Probe lines through the fluid, written as line<N>.csv.
     #[serde(default)]
     pub line: Vec<ProbeLine>,
+    /// `output.checkpoint_interval` as given.
+    #[serde(rename = "checkpoint_interval", default)]
+    pub(crate) given_checkpoint_interval: Option<u64>,
+    /// Simulated time between two checkpoints [s], instead of `checkpoint_interval`: the nearest
+    /// whole number of steps.
+    #[serde(default)]
+    pub checkpoint_time_interval: Option<f64>,
+    /// Steps between two checkpoints (OUT/checkpoint/, docs/checkpoint.md); 0: none but the run's
+    /// end. `output.checkpoint_interval` (default 0) or those of `output.checkpoint_time_interval`.
+    #[serde(skip)]
+    pub checkpoint_interval: u64,
+    /// Wall-clock minutes between two checkpoints (none where not given), whatever the steps.
+    #[serde(default)]
+    pub checkpoint_wall_interval: Option<f64>,
 }
 
 impl Default for Output {
@@ -142,6 +156,10 @@ impl Default for Output {
             fields_time_interval: None,
             fields_interval: 0,
             line: Vec::new(),
+            given_checkpoint_interval: None,
+            checkpoint_time_interval: None,
+            checkpoint_interval: 0,
+            checkpoint_wall_interval: None,
         }
     }
 }
@@ -526,7 +544,9 @@ fn block_centres(b: &Block) -> impl Iterator<Item = [f64; 3]> + '_ {
     })
 }
 
+pub mod checkpoint;
 mod checks;
+pub mod checksum;
 pub mod dem;
 #[cfg(test)]
 mod every_field;

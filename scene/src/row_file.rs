@@ -32,6 +32,39 @@ impl RowFile {
         Ok(rows)
     }
 
+    /// Opens the file at `path` to go on after its first `kept` bytes (a resumed run: the rows
+    /// written after its checkpoint are cut off). A file shorter than that is refused.
+    pub fn resume(path: &Path, kept: u64) -> std::io::Result<Self> {
+        use std::io::{Seek, SeekFrom};
+        let mut file = std::fs::OpenOptions::new()
+            .write(true)
+            .open(path)
+            .map_err(|e| named(path, e))?;
+        let len = file.metadata().map_err(|e| named(path, e))?.len();
+        if len < kept {
+            let problem = format!("holds {len} bytes, the checkpoint needs {kept}");
+            return Err(named(path, std::io::Error::other(problem)));
+        }
+        file.set_len(kept).map_err(|e| named(path, e))?;
+        file.seek(SeekFrom::Start(kept)).map_err(|e| named(path, e))?;
+        Ok(Self {
+            file,
+            path: path.to_path_buf(),
+            staged: Vec::new(),
+            kept,
+        })
+    }
+
+    /// The file, positioned at its end (for a writer of its own).
+    pub fn into_file(self) -> File {
+        self.file
+    }
+
+    /// Bytes of whole rows in the file (what a checkpoint records).
+    pub fn kept(&self) -> u64 {
+        self.kept
+    }
+
     /// Where rows are staged (`write!` into it); they reach the file at the next commit.
     pub fn staged(&mut self) -> &mut Vec<u8> {
         &mut self.staged

@@ -1,6 +1,6 @@
 //! Times a scene may give in seconds instead of steps: `time.duration` for `time.steps`,
 //! `output.time_interval` for `output.interval`, `output.fields_time_interval` for
-//! `output.fields_interval`. With a `[lattice]` the time step is derived, so a count of steps is
+//! `output.fields_interval`, `output.checkpoint_time_interval` for `output.checkpoint_interval`. With a `[lattice]` the time step is derived, so a count of steps is
 //! not something a user can write down before the first run; a time is. Each becomes a whole
 //! number of steps of `time.dt`: the duration the steps that cover it, an interval the nearest.
 
@@ -65,6 +65,14 @@ impl Scene {
             round: Round::Nearest,
         };
         self.output.fields_interval = snapshots.resolve(dt, file)?.unwrap_or(0);
+        let checkpoints = Either {
+            steps_field: "output.checkpoint_interval",
+            steps: self.output.given_checkpoint_interval,
+            time_field: "output.checkpoint_time_interval",
+            time: self.output.checkpoint_time_interval,
+            round: Round::Nearest,
+        };
+        self.output.checkpoint_interval = checkpoints.resolve(dt, file)?.unwrap_or(0);
         Ok(())
     }
 }

@@ -29,6 +29,22 @@ impl ParticleSeries {
         }
     }
 
+    /// The series of a resumed run: its frames so far (a checkpoint's), particles.pvd rewritten
+    /// with them.
+    pub fn resume(dir: &Path, frames: Vec<(f64, String)>) -> std::io::Result<Self> {
+        let series = Self {
+            dir: dir.to_path_buf(),
+            frames,
+        };
+        series.write_pvd()?;
+        Ok(series)
+    }
+
+    /// The frames so far: time [s] and file name.
+    pub fn frames(&self) -> &[(f64, String)] {
+        &self.frames
+    }
+
     /// Writes `frame` as step `step` at time `time` [s] and rewrites particles.pvd.
     pub fn write(&mut self, step: u64, time: f64, frame: &Frame) -> std::io::Result<()> {
         let name = format!("particles_{step:06}.vtp");

@@ -321,3 +321,31 @@ pub fn output_text(output: &Output) -> String {
         String::from_utf8_lossy(&output.stderr)
     )
 }
+
+/// A granular pour alone (`dem-client run`): 150 spheres of two sizes settling in a box, 50
+/// steps, rows every 25.
+pub const POUR: &str = r#"name = "small-pour"
+[domain]
+min = [0.0, 0.0, 0.0]
+max = [0.03, 0.03, 0.06]
+[fluid]
+density = 1.2
+dynamic_viscosity = 1.8e-5
+[time]
+dt = 2.0e-3
+steps = 50
+[output]
+interval = 25
+[particles]
+density = 2500.0
+[[dem.material]]
+name = "glass"
+restitution = 0.5
+friction = 0.4
+[[dem.insert]]
+origin = [0.004, 0.004, 0.004]
+count = [5, 5, 6]
+spacing = 0.005
+radius = [0.0017, 0.002]
+jitter = 0.0004
+"#;

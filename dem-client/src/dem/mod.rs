@@ -2,6 +2,7 @@
 //! set-up of a world from a scene.
 
 pub mod batch;
+pub mod bytes;
 pub mod contact;
 pub mod lubrication;
 pub mod neighbor;

@@ -35,6 +35,7 @@ mod flight;
 mod gather;
 mod lists;
 mod pairs;
+mod saved;
 mod walls;
 
 pub use bodies::Body;

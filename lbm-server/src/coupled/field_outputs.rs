@@ -2,15 +2,52 @@
 //! (line<N>.csv), after the steps the scene asks for and at the run's end.
 
 use super::FluidSide;
+use crate::checkpoint::{Checkpoints, OutputPositions};
 
 impl FluidSide {
     /// The field outputs due after this step: a snapshot every `output.fields_interval` steps
     /// (where it is above 0) and after the run's last step, the probe lines every
     /// `output.interval` steps and after the last (fields/, fields.pvd, line<N>.csv).
+    /// At the last step, where the outputs stood before those it gets only as the last is kept
+    /// (`before_last`, for its checkpoint).
     pub(super) fn write_fields(&mut self) -> Result<(), String> {
         let (step, last) = (self.steps, self.steps == self.run_steps);
-        let due = |every: u64| every > 0 && (step.is_multiple_of(every) || last);
-        self.write_outputs(due(self.fields_every), due(self.lines_every), last)
+        let due = |every: u64| every > 0 && step.is_multiple_of(every);
+        let (snapshot, lines) = (due(self.fields_every), due(self.lines_every));
+        if !last {
+            return self.write_outputs(snapshot, lines, false);
+        }
+        self.write_outputs(snapshot, lines, false)?;
+        let mut at = OutputPositions::default();
+        self.fields.positions(&mut at)?;
+        self.before_last = Some(at);
+        let left = |every: u64, written: bool| every > 0 && !written;
+        self.write_outputs(
+            left(self.fields_every, snapshot),
+            left(self.lines_every, lines),
+            true,
+        )
+    }
+
+    /// Where the field outputs stand, into `at` (a checkpoint's): at the last step, before those
+    /// only a last step gets.
+    pub fn positions(&mut self, at: &mut OutputPositions) -> Result<(), String> {
+        match self.before_last.take() {
+            Some(before) => {
+                at.files.extend(before.files);
+                at.fields_pvd = before.fields_pvd;
+                Ok(())
+            }
+            None => self.fields.positions(at),
+        }
+    }
+
+    /// Takes the lattice's state for a checkpoint (`checkpoints`), with the outputs standing `at`
+    /// and the run's `particles`.
+    pub fn checkpoint(&self, checkpoints: &mut Checkpoints, at: OutputPositions, particles: u64) {
+        let time = self.steps as f64 * self.units.dt;
+        let way = Some(self.lattice.covered_cells().name().to_string());
+        checkpoints.hold(&self.lattice, time, particles, at, way);
     }
 
     /// Where a run ends before its last step (Ctrl-C, the DEM's STOP): the field outputs a last

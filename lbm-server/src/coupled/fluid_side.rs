@@ -13,6 +13,7 @@ use super::radius_correction::radius_deficit_product;
 use super::states::LatticeStates;
 use super::warnings::lattice_warnings;
 use super::ways::trial;
+use crate::checkpoint::{Loaded, OutputPositions};
 use crate::fields::FieldOutput;
 use crate::fluid::{health_of, setup_of};
 use crate::lbm::geometry::Setup;
@@ -61,11 +62,21 @@ pub struct FluidSide {
     warnings: Vec<Warning>,
     /// Whether the run said that covers were dropped (`health.rs`).
     pub(super) said_dropped: bool,
+    /// Where the field outputs stood at the last step before those only a last step gets (a
+    /// checkpoint there records these: a run resumed from it writes what an uninterrupted one
+    /// does).
+    pub(super) before_last: Option<OutputPositions>,
 }
 
 impl FluidSide {
-    /// The fluid a scene asks for, for a run of `steps` steps writing its field outputs into `out`.
-    pub fn for_scene(scene: &Scene, steps: u64, out: &Path) -> Result<FluidSide, String> {
+    /// The fluid a scene asks for, for a run of `steps` steps writing its field outputs into `out`;
+    /// resumed, in the state of the checkpoint `resumed`.
+    pub fn for_scene(
+        scene: &Scene,
+        steps: u64,
+        out: &Path,
+        resumed: Option<&Loaded>,
+    ) -> Result<FluidSide, String> {
         let Some(units) = scene.lattice_units.clone() else {
             return Err(format!(
                 "scene '{}' has particles but no [lattice]: the fluid needs one",
@@ -90,13 +101,16 @@ impl FluidSide {
             kernel: trial.kept().kernel,
             ..setup_of(&units)
         };
-        let lattice = GpuLattice::new(gpu, setup, health_of(&units), Some(options))?;
+        let mut lattice = GpuLattice::new(gpu, setup, health_of(&units), Some(options))?;
+        if let Some(loaded) = resumed {
+            lattice.restore_raw(&loaded.raw_state(lattice.population_bytes())?);
+        }
         let lubrication = scene
             .coupling
             .lubrication
             .then(|| HeldLubrication::for_lattice(scene, &units));
         let warnings = lattice_warnings(scene, &units, &radii);
-        let fields = FieldOutput::new(scene, &units, out)?;
+        let fields = FieldOutput::new(scene, &units, out, resumed.map(|l| &l.header.outputs))?;
         Ok(FluidSide {
             lattice,
             units,
@@ -105,7 +119,7 @@ impl FluidSide {
             gravity: scene.gravity,
             lubrication,
             deficit_product,
-            steps: 0,
+            steps: resumed.map_or(0, |l| l.header.step),
             trial,
             covered,
             made: std::time::Instant::now(),
@@ -116,6 +130,7 @@ impl FluidSide {
             run_steps: steps,
             warnings,
             said_dropped: false,
+            before_last: None,
         })
     }
 

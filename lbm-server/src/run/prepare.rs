@@ -3,6 +3,7 @@
 //! cleared of an earlier run's outputs.
 
 use super::{DemMode, RunArgs};
+use crate::checkpoint::{Checkpoints, Loaded};
 use crate::parallel::{blocks_of, Communicator};
 use scene::output_lock::OutputLock;
 use scene::Scene;
@@ -13,12 +14,18 @@ use std::time::Duration;
 pub(super) struct Prepared {
     pub(super) scene: Scene,
     pub(super) scene_file: String,
+    /// The scene file's text (its hash is a checkpoint's `scene_hash`).
+    pub(super) scene_text: String,
     pub(super) steps: u64,
     pub(super) out: PathBuf,
     pub(super) scene_copy: PathBuf,
     pub(super) connect_timeout: Duration,
     /// The lattice's blocks along x, y and z, one per rank.
     pub(super) blocks: [usize; 3],
+    /// The checkpoint a resumed run goes on from (`--resume`), found and checked.
+    pub(super) resumed: Option<Loaded>,
+    /// `--checkpoint-interval`.
+    pub(super) checkpoint_interval: Option<u64>,
     /// The output folder's lock, held for the whole run (by rank 0, which writes the outputs).
     pub(super) _lock: Option<OutputLock>,
 }
@@ -26,6 +33,15 @@ pub(super) struct Prepared {
 /// The scene of `args` ready to run on the ranks of `comm`: rank 0 alone makes and locks the
 /// output folder.
 pub(super) fn prepare(args: &RunArgs, comm: &dyn Communicator) -> Result<Prepared, String> {
+    if let Some(out) = &args.resume {
+        if comm.size() > 1 {
+            return Err(format!(
+                "--resume on {} ranks: a run resumes on one rank",
+                comm.size()
+            ));
+        }
+        return super::resume::prepare_resume(args, out);
+    }
     let (scene, scene_file, text) = match &args.scene {
         Some(path) => {
             let scene = Scene::load(path).map_err(|e| e.to_string())?;
@@ -42,23 +58,16 @@ pub(super) fn prepare(args: &RunArgs, comm: &dyn Communicator) -> Result<Prepare
         protocol::say!("lbm-server: warning: {warning}");
     }
     require_lattice(&scene, &scene_file)?;
-    let steps = match args.duration {
-        Some(duration) => scene.steps_covering(duration, "--duration")?,
-        None => args.steps.unwrap_or(scene.time.steps),
-    };
-    if steps == 0 {
-        return Err("--steps = 0: must be at least 1".into());
-    }
-    let default_timeout = if args.dem == DemMode::External {
-        f64::INFINITY
-    } else {
-        30.0
-    };
-    let connect_timeout = args.connect_timeout.unwrap_or(default_timeout);
-    if connect_timeout.is_nan() || connect_timeout <= 0.0 {
-        return Err(format!("--connect-timeout = {connect_timeout} s: must be > 0"));
-    }
+    let steps = run_steps(args, &scene)?;
+    let connect_timeout = connect_timeout(args)?;
     let blocks = blocks(&scene, comm.size())?;
+    if comm.size() > 1 && scene::checkpoint::Schedule::new(&scene, args.checkpoint_interval).enabled() {
+        return Err(format!(
+            "checkpoints on {} ranks: a run writes checkpoints on one rank (drop \
+             --checkpoint-interval and output.checkpoint_*, or run on one rank)",
+            comm.size()
+        ));
+    }
     if let Some(units) = &scene.lattice_units {
         let block: [usize; 3] = std::array::from_fn(|a| units.n[a] / blocks[a]);
         fits_the_device(block)?;
@@ -76,11 +85,14 @@ pub(super) fn prepare(args: &RunArgs, comm: &dyn Communicator) -> Result<Prepare
     Ok(Prepared {
         scene,
         scene_file,
+        scene_text: text,
         steps,
         out,
         scene_copy,
-        connect_timeout: Duration::try_from_secs_f64(connect_timeout).unwrap_or(Duration::MAX),
+        connect_timeout,
         blocks,
+        resumed: None,
+        checkpoint_interval: args.checkpoint_interval,
         _lock: lock,
     })
 }
@@ -121,10 +133,45 @@ fn blocks(scene: &Scene, ranks: usize) -> Result<[usize; 3], String> {
     Ok(blocks)
 }
 
+/// The run's steps: `--duration`'s, `--steps` or the scene's.
+pub(super) fn run_steps(args: &RunArgs, scene: &Scene) -> Result<u64, String> {
+    let steps = match args.duration {
+        Some(duration) => scene.steps_covering(duration, "--duration")?,
+        None => args.steps.unwrap_or(scene.time.steps),
+    };
+    if steps == 0 {
+        return Err("--steps = 0: must be at least 1".into());
+    }
+    Ok(steps)
+}
+
+/// The longest wait for the DEM to connect (`--connect-timeout`).
+pub(super) fn connect_timeout(args: &RunArgs) -> Result<Duration, String> {
+    let default_timeout = if args.dem == DemMode::External {
+        f64::INFINITY
+    } else {
+        30.0
+    };
+    let connect_timeout = args.connect_timeout.unwrap_or(default_timeout);
+    if connect_timeout.is_nan() || connect_timeout <= 0.0 {
+        return Err(format!("--connect-timeout = {connect_timeout} s: must be > 0"));
+    }
+    Ok(Duration::try_from_secs_f64(connect_timeout).unwrap_or(Duration::MAX))
+}
+
+impl Prepared {
+    /// The run's checkpoints: the scene's, every `--checkpoint-interval` steps where given.
+    pub(super) fn checkpoints(&self) -> Checkpoints {
+        let resumed = self.resumed.clone();
+        let every = self.checkpoint_interval;
+        Checkpoints::new(&self.out, &self.scene, &self.scene_text, every, resumed)
+    }
+}
+
 /// A lattice the device cannot hold is refused before the output folder is touched or the
 /// lattice allocated: the limits of the adapter the run opens (where none is found, the run's
 /// start says why).
-fn fits_the_device(n: [usize; 3]) -> Result<(), String> {
+pub(super) fn fits_the_device(n: [usize; 3]) -> Result<(), String> {
     match crate::lbm::gpu::Gpu::adapter_limits() {
         Ok(limits) => crate::lbm::gpu::fits_device(&limits, n),
         Err(_) => Ok(()),
@@ -133,6 +180,16 @@ fn fits_the_device(n: [usize; 3]) -> Result<(), String> {
 
 /// Removes what an earlier run wrote into `out` under this run's output names, saying so.
 fn clear_earlier_outputs(out: &std::path::Path) -> Result<(), String> {
+    for dir in [
+        crate::checkpoint::DIR,
+        crate::checkpoint::OLD,
+        crate::checkpoint::STAGING,
+    ] {
+        let dir = out.join(dir);
+        if dir.is_dir() {
+            std::fs::remove_dir_all(&dir).map_err(|e| format!("cannot remove {}: {e}", dir.display()))?;
+        }
+    }
     let removed = scene::outputs::clear_earlier(out, scene::outputs::LBM_SERVER).map_err(|e| {
         format!(
             "cannot remove an earlier run's outputs from {}: {e}",

@@ -7,6 +7,7 @@ use super::prepare::Prepared;
 use super::summary::PeerInfo;
 use super::welcome::{welcome_for, yielded};
 use super::{Ending, EXIT_BAD_INPUT, EXIT_FAILURE, EXIT_INTERRUPTED};
+use crate::checkpoint::Checkpoints;
 use crate::coupled::FluidSide;
 use crate::launch::{self, DemStart};
 use crate::output::ParticleOutput;
@@ -32,6 +33,12 @@ pub(super) struct Session {
     pub(super) told_to_end: bool,
     /// The steps completed and where the wall time went.
     pub(super) counters: Counters,
+    /// The run's checkpoints, and whether it writes them (the DEM declares it can: Hello's
+    /// CHECKPOINT capability).
+    pub(super) checkpoints: Checkpoints,
+    pub(super) checkpointing: bool,
+    /// The run's first step (a resumed run's checkpoint's; else 0).
+    pub(super) first_step: u64,
 }
 
 impl Session {
@@ -55,9 +62,17 @@ impl Session {
             timeout: Duration::from_secs_f64(p.scene.coupling.timeout),
         };
         let link = FluidLink::create(options, p.scene.capacity() as usize).map_err(|e| e.to_string())?;
-        let particles = ParticleOutput::create(&p.out, p.scene.dem.output.vtk)
-            .map_err(|e| format!("{}: {e}", p.out.display()))?;
-        let fluid = FluidSide::for_scene(&p.scene, p.steps, &p.out)?;
+        let vtk = p.scene.dem.output.vtk;
+        let particles = match &p.resumed {
+            Some(loaded) => ParticleOutput::resume(&p.out, vtk, &loaded.header.outputs),
+            None => ParticleOutput::create(&p.out, vtk).map_err(|e| e.to_string()),
+        }
+        .map_err(|e| format!("{}: {e}", p.out.display()))?;
+        let fluid = FluidSide::for_scene(&p.scene, p.steps, &p.out, p.resumed.as_ref())?;
+        let checkpoints = p.checkpoints();
+        let first_step = p.resumed.as_ref().map_or(0, |l| l.header.step);
+        let mut counters = Counters::new();
+        counters.last_completed = first_step.checked_sub(1);
         Ok(Session {
             p,
             link,
@@ -68,7 +83,10 @@ impl Session {
             peer: None,
             hello: None,
             told_to_end: false,
-            counters: Counters::new(),
+            counters,
+            checkpoints,
+            checkpointing: false,
+            first_step,
         })
     }
 
@@ -76,7 +94,7 @@ impl Session {
     fn connect(&mut self, dem: &DemStart) -> Result<(), String> {
         super::started();
         let spawned = self.start_dem(dem)?;
-        let (scene, steps) = (&self.p.scene, self.p.steps);
+        let (scene, steps, first) = (&self.p.scene, self.p.steps, self.first_step);
         let physics = self.fluid.physics();
         let interrupted = self.interrupted.clone();
         let hello = self
@@ -85,12 +103,13 @@ impl Session {
                 spawned,
                 self.p.connect_timeout,
                 &|| interrupted.load(Ordering::SeqCst),
-                |hello| welcome_for(scene, steps, hello, physics & !yielded(hello)),
+                |hello| welcome_for(scene, steps, first, hello, physics & !yielded(hello)),
             )
             .map_err(|e| e.to_string())?;
         if yielded(&hello) != 0 {
             self.fluid.leave_lubrication();
         }
+        self.checkpointing = self.dem_checkpoints(&hello)?;
         self.peer = Some(PeerInfo {
             software: protocol::handshake::field_text(&hello.software),
             pid: hello.pid,
@@ -134,7 +153,7 @@ impl Session {
         match dem {
             DemStart::Command(command) => {
                 let child = command
-                    .spawn(&run, &self.p.scene_copy)
+                    .spawn(&run, &self.p.scene_copy, &self.checkpoint_env()?)
                     .map_err(|e| format!("cannot start the DEM `{}`: {e}", command.describe()))?;
                 let pid = child.id();
                 self.child = Some(child);
@@ -144,8 +163,15 @@ impl Session {
                 let exe = launch::find_dem_client()
                     .ok_or("cannot find dem-client next to lbm-server or on PATH (build it: cargo build)")?;
                 let (scene, timeout) = (&self.p.scene_copy, self.p.scene.coupling.timeout);
-                let child = launch::spawn_dem_client(&exe, &run, scene, timeout, terminal::verbose())
-                    .map_err(|e| format!("cannot start {}: {e}", exe.display()))?;
+                let child = launch::spawn_dem_client(
+                    &exe,
+                    &run,
+                    scene,
+                    timeout,
+                    terminal::verbose(),
+                    &self.checkpoint_env()?,
+                )
+                .map_err(|e| format!("cannot start {}: {e}", exe.display()))?;
                 let pid = child.id();
                 self.child = Some(child);
                 Ok(Some(pid))
@@ -161,6 +187,13 @@ impl Session {
                 Ok(None)
             }
         }
+    }
+
+    /// Whether the DEM process the run started has exited.
+    pub(super) fn dem_exited(&mut self) -> bool {
+        self.child
+            .as_mut()
+            .is_some_and(|c| matches!(c.try_wait(), Ok(Some(_))))
     }
 
     /// A failure of the fluid, with the last completed step.
@@ -180,8 +213,9 @@ impl Session {
     /// Ends the DEM process, writes summary.json; returns the exit code (1 where summary.json
     /// cannot be written).
     fn finish(mut self, result: Result<Ending, String>) -> u8 {
+        let checkpointed = self.checkpoints.wait();
         let dem_status = self.end_dem(result.is_ok() || self.told_to_end);
-        let (reason, code) = match &result {
+        let (mut reason, mut code) = match &result {
             // A DEM the run started that refused its input (exit 2: YADE or LIGGGHTS missing, a
             // deck or script that does not fit the scene) before or at step 0: the run's input
             // was bad, and it said why.
@@ -198,6 +232,10 @@ impl Session {
             }
             Err(e) => (format!("error: {e}"), EXIT_FAILURE),
         };
+        if let Err(e) = checkpointed {
+            protocol::say!("lbm-server: error: {e}");
+            (reason, code) = (format!("error: {e}"), EXIT_FAILURE);
+        }
         if let (Err(msg), true) = (&result, code == EXIT_FAILURE) {
             protocol::say!("lbm-server: error: {msg}");
         }

@@ -11,8 +11,15 @@ pub(super) fn yielded(hello: &Hello) -> u64 {
     hello.physics & Physics::LUBRICATION
 }
 
-/// The fluid's answer to a DEM's Hello, in the DEM's units.
-pub(super) fn welcome_for(scene: &Scene, steps: u64, hello: &Hello, physics: u64) -> Welcome {
+/// The fluid's answer to a DEM's Hello, in the DEM's units, for a run of `steps` steps from
+/// `first_step` (a resumed run's checkpoint's; else 0).
+pub(super) fn welcome_for(
+    scene: &Scene,
+    steps: u64,
+    first_step: u64,
+    hello: &Hello,
+    physics: u64,
+) -> Welcome {
     let u = hello.units;
     let accel = u.length_m / (u.time_s * u.time_s);
     let mut w = Welcome::accepted(&format!(
@@ -28,6 +35,8 @@ pub(super) fn welcome_for(scene: &Scene, steps: u64, hello: &Hello, physics: u64
     w.fluid_viscosity = scene.fluid.dynamic_viscosity / (u.mass_kg / (u.length_m * u.time_s));
     w.physics = physics;
     w.periodic = Welcome::periodic_bits(scene.periodic_axes());
+    w.first_step = first_step;
+    w.cell_size = scene.lattice_units.as_ref().map_or(0.0, |l| l.dx / u.length_m);
     w
 }
 
@@ -43,7 +52,7 @@ mod tests {
         let ours = Physics::LATTICE_BOLTZMANN | Physics::BUOYANCY | Physics::LUBRICATION;
         let welcome = |dem: u64| {
             let hello = Hello::new(protocol::Units::SI, dem, 1, "test");
-            welcome_for(&scene, 1, &hello, ours & !yielded(&hello)).physics
+            welcome_for(&scene, 1, 0, &hello, ours & !yielded(&hello)).physics
         };
         assert_eq!(welcome(Physics::GRAVITY), ours);
         assert_eq!(

@@ -89,10 +89,12 @@ impl FluidLink {
                 ));
             }
         };
+        // A Welcome in the Hello's version (a version-1 DEM reads the first 344 bytes).
+        let v = hello.version;
         if let Some((status, why)) = check_hello(&hello, self.capacity) {
-            return self.refuse(Welcome::refused(&software, status, &why));
+            return self.refuse(Welcome::refused(&software, status, &why).for_version(v));
         }
-        let mut answer = welcome(&hello);
+        let mut answer = welcome(&hello).for_version(v);
         answer.capacity = self.capacity as u64;
         if answer.status != Status::Accepted as u32 {
             return self.refuse(answer);
@@ -100,7 +102,8 @@ impl FluidLink {
         if answer.physics & hello.physics & Physics::EXCLUSIVE != 0 {
             let twice = Physics::names(answer.physics & hello.physics & Physics::EXCLUSIVE);
             let why = format!("both sides apply {}", twice.join(", "));
-            return self.refuse(Welcome::refused(&software, Status::PhysicsConflict, &why));
+            let refusal = Welcome::refused(&software, Status::PhysicsConflict, &why);
+            return self.refuse(refusal.for_version(v));
         }
         self.send_welcome(&answer)?;
         self.watch = Watch {

@@ -1,6 +1,6 @@
 //! The lattice on the GPU (wgpu): the device, the lattice's state and its ways of stepping, the
 //! buffers and bindings its kernels share, its parameters, the cell list, the step loop (AA
-//! pattern) and the health check.
+//! pattern), the health check and the state a checkpoint holds.
 
 mod bindings;
 mod cell_list;
@@ -8,6 +8,7 @@ mod device;
 mod halo;
 mod health;
 mod params;
+mod snapshot;
 mod state;
 mod step;
 mod way;
@@ -22,4 +23,5 @@ pub(in crate::lbm) use device::ListLayout;
 pub use halo::{HaloKernels, HaloLayer};
 pub use health::{furthest_out_of_bounds, Health, Unhealthy};
 pub(in crate::lbm) use params::vec4;
+pub use snapshot::RawState;
 pub use state::{equilibrium_field, total_mass, GpuLattice};

@@ -1,0 +1,65 @@
+//! `lbm-server run --resume OUT`: the run of OUT goes on from its last checkpoint, with the scene
+//! of OUT/scene.toml. Found, checked and compared with the scene before anything in OUT is
+//! touched: a checkpoint of another scene, lattice or storage, of another format version, or one
+//! truncated or corrupt is refused (exit 2) naming what differs.
+
+use super::prepare::{connect_timeout, fits_the_device, run_steps, Prepared};
+use super::RunArgs;
+use crate::checkpoint::{Expected, Loaded};
+use scene::output_lock::OutputLock;
+use scene::Scene;
+use std::path::Path;
+
+/// The run of `out` prepared to go on from its last checkpoint.
+pub(super) fn prepare_resume(args: &RunArgs, out: &Path) -> Result<Prepared, String> {
+    let scene_copy = out.join("scene.toml");
+    let scene = Scene::load(&scene_copy).map_err(|e| e.to_string())?;
+    let text = std::fs::read_to_string(&scene_copy).map_err(|e| format!("{}: {e}", scene_copy.display()))?;
+    let units = scene
+        .lattice_units
+        .as_ref()
+        .ok_or_else(|| format!("{}: a run to resume has a [lattice]", scene_copy.display()))?;
+    let steps = run_steps(args, &scene)?;
+    let connect_timeout = connect_timeout(args)?;
+    fits_the_device(units.n)?;
+    let lock = OutputLock::take(out)?;
+    let started = std::time::Instant::now();
+    let loaded = Loaded::open(out)?;
+    let read_s = started.elapsed().as_secs_f64();
+    let fluid_only = scene.particle_count() == 0;
+    loaded.check_run(&Expected {
+        scene_text: &text,
+        lattice: units.n,
+        storage: units.storage.name(),
+        particles: fluid_only.then_some(0),
+    })?;
+    let step = loaded.header.step;
+    if steps <= step {
+        return Err(format!(
+            "the checkpoint in {} is at step {step}, the run's last step is {steps}: nothing to \
+             resume (give a larger --steps)",
+            loaded.dir.display()
+        ));
+    }
+    scene::checkpoint::remove_later_snapshots(out, &loaded.header.outputs)
+        .map_err(|e| format!("{}: {e}", out.display()))?;
+    protocol::say!(
+        "lbm-server: resuming {} from its checkpoint at step {step} to step {steps} (read and \
+         checked in {read_s:.2} s)",
+        out.display()
+    );
+    Ok(Prepared {
+        scene,
+        scene_file: scene_copy.display().to_string(),
+        scene_text: text,
+        steps,
+        out: out.to_path_buf(),
+        scene_copy,
+        connect_timeout,
+        // A run resumes on one rank (prepare refuses --resume on several).
+        blocks: [1, 1, 1],
+        resumed: Some(loaded),
+        checkpoint_interval: args.checkpoint_interval,
+        _lock: Some(lock),
+    })
+}
