@@ -76,7 +76,20 @@ struct Particle {
 // none of whose links leaves the fluid or wraps (status[4] of them: their neighbours are at fixed
 // index offsets), from the back the others (status[8]). Entry e holds the cell and the 19
 // populations it sends out this step (`collide_covered`), laid out by BY_POPULATION.
-@group(0) @binding(3) var<storage, read_write> saved: array<u32>;
+// Seen four words at a time (an entry point binds a buffer once): with one record per cell
+// (BY_POPULATION false) entry e's 20 words, the cell and its 19 populations, are the five vectors
+// from 5 e, each moved by one vector load or store, where llvmpipe loops over the SIMD lanes per
+// access; single words through `saved_word` and `set_saved_word`.
+@group(0) @binding(3) var<storage, read_write> saved: array<vec4<u32>>;
+
+// Word w of the list of covered cells, and its store.
+fn saved_word(w: u32) -> u32 {
+    return saved[w >> 2u][w & 3u];
+}
+
+fn set_saved_word(w: u32, value: u32) {
+    saved[w >> 2u][w & 3u] = value;
+}
 
 const NO_CELL: u32 = 0xffffffffu;
 
@@ -183,7 +196,7 @@ fn cover(
     let m = p.edge;
     let origin = box_origin(p);
     let cells = m * m * m;
-    // Every invocation of the workgroup takes the same turns (`list_entry` may gather a subgroup).
+    // Every invocation of the workgroup takes the same turns (`list_position` may gather a subgroup).
     for (var start = 0u; start < cells; start += 64u) {
         let t = start + local;
         var k = NO_CELL;
@@ -227,13 +240,13 @@ const NO_LIST: u32 = 2u;
 
 // Cell k joins the front of the covered cells' list (status[4] of them) or its back (status[8]); a
 // cell that would not fit is counted by `covered_groups`. Called by every invocation of `cover`
-// at each turn, `list` NO_LIST for those whose cell joins none (`list_entry` may gather a subgroup).
+// at each turn, `list` NO_LIST for those whose cell joins none (`list_position` may gather a
+// subgroup).
 fn join_list(k: u32, list: u32) {
-    let front = list_entry(list == FRONT, 4u);
-    let back = list_entry(list == BACK, 8u);
-    let e = select(imb_info.w - 1u - back, front, list == FRONT);
-    if list != NO_LIST && select(back, front, list == FRONT) < imb_info.w {
-        saved[list_cell(e)] = k;
+    let position = list_position(list);
+    let e = select(imb_info.w - 1u - position, position, list == FRONT);
+    if list != NO_LIST && position < imb_info.w {
+        set_saved_word(list_cell(e), k);
         // SKIP: the fluid kernels leave the listed cells alone (a cell beyond the list's room is
         // updated without its solid term, as with the redo, and the run stops).
         if SKIP {
@@ -308,7 +321,7 @@ fn population(e: u32, i: u32) -> u32 {
 fn collide_covered(at: Invocation) {
     let e = listed(at);
     if e == NO_CELL { return; }
-    let k = saved[list_cell(e)];
+    let k = saved_word(list_cell(e));
     let p = coords(k);
     var f: array<f32, 19>;
     // Without branches (llvmpipe would run both sides): in the odd step of a cell with a link that
@@ -339,10 +352,59 @@ fn collide_covered(at: Invocation) {
     if SKIP {
         store_populations(k, out);
     } else {
+        keep(e, k, out);
+    }
+}
+
+// Covered cell k's populations `out` kept in entry e of the list until `store_covered`: each in its
+// population's run (BY_POPULATION), or the cell's record written as five vectors.
+fn keep(e: u32, k: u32, out: array<f32, 19>) {
+    if BY_POPULATION {
         //#for i
-        saved[population(e, {i}u)] = bitcast<u32>(out[{i}]);
+        set_saved_word(population(e, {i}u), bitcast<u32>(out[{i}]));
+        //#end
+    } else {
+        var w: array<u32, 20>;
+        w[0] = k;
+        //#for i
+        w[{i} + 1] = bitcast<u32>(out[{i}]);
+        //#end
+        saved[5u * e] = vec4<u32>(w[0], w[1], w[2], w[3]);
+        saved[5u * e + 1u] = vec4<u32>(w[4], w[5], w[6], w[7]);
+        saved[5u * e + 2u] = vec4<u32>(w[8], w[9], w[10], w[11]);
+        saved[5u * e + 3u] = vec4<u32>(w[12], w[13], w[14], w[15]);
+        saved[5u * e + 4u] = vec4<u32>(w[16], w[17], w[18], w[19]);
+    }
+}
+
+// A covered cell and the populations `keep` kept for it.
+struct Kept {
+    k: u32,
+    out: array<f32, 19>,
+}
+
+// Entry e of the list: its cell and the populations kept (`keep`).
+fn kept(e: u32) -> Kept {
+    var c: Kept;
+    if BY_POPULATION {
+        c.k = saved_word(list_cell(e));
+        //#for i
+        c.out[{i}] = bitcast<f32>(saved_word(population(e, {i}u)));
+        //#end
+    } else {
+        let r = array<vec4<u32>, 5>(
+            saved[5u * e],
+            saved[5u * e + 1u],
+            saved[5u * e + 2u],
+            saved[5u * e + 3u],
+            saved[5u * e + 4u],
+        );
+        c.k = r[0].x;
+        //#for i
+        c.out[{i}] = bitcast<f32>(r[({i} + 1) / 4][({i} + 1) % 4]);
         //#end
     }
+    return c;
 }
 
 // SKIP, after the fluid step: the listed cells' bits of the cover mask back to zero.
@@ -350,7 +412,7 @@ fn collide_covered(at: Invocation) {
 fn uncover_listed(at: Invocation) {
     let e = listed(at);
     if e == NO_CELL { return; }
-    let k = saved[list_cell(e)];
+    let k = saved_word(list_cell(e));
     atomicAnd(&covered[mask_word(k)], ~mask_bit(k));
 }
 
@@ -387,12 +449,8 @@ fn store_populations(k: u32, out: array<f32, 19>) {
 fn store_covered(at: Invocation) {
     let e = listed(at);
     if e == NO_CELL { return; }
-    let k = saved[list_cell(e)];
-    var out: array<f32, 19>;
-    //#for i
-    out[{i}] = bitcast<f32>(saved[population(e, {i}u)]);
-    //#end
-    store_populations(k, out);
+    let c = kept(e);
+    store_populations(c.k, c.out);
 }
 
 // SKIP: which of the four cells of quad q (cells 4q to 4q + 3, four bits of one mask word) the
@@ -427,57 +485,55 @@ fn solid_term(k: u32, f: array<f32, 19>, m: Moments, post: array<f32, 19>) -> ar
 
 // The collision of a cell covered by particles (seed eq. 7): the fluid part of `post` (the
 // operator's relaxation and source) is weighted by 1 - sum B, and each particle adds B_s Omega_s
-// (`solid_collision`).
+// (`solid_collision`). The particles in the order of their keys (`hold_slot`'s order: the sums do
+// not depend on the order of arrival), their weights B (eq. 7) from their solid fractions with the
+// total capped at 1. The first particle is held through the three sums; the others (few: a cell
+// two particles cover) are looked up again for each, since an array indexed by slot would live in
+// memory on llvmpipe, each access a loop over the SIMD lanes.
 fn immersed_boundary(k: u32, f: array<f32, 19>, m: Moments, post: array<f32, 19>) -> array<f32, 19> {
     let count = min(atomicLoad(&covered[k]), SLOTS);
     if count == 0u { return post; }
-    var c = cell_covers(k, count);
+    let first = slot_cover(k, 0u);
+    var eps_total = first.eps;
+    for (var s = 1u; s < count; s++) {
+        eps_total += slot_cover(k, s).eps;
+    }
+    let scale = select(1.0, 1.0 / eps_total, eps_total > 1.0);
+    let b_first = weighting(first.eps * scale);
+    var b_total = b_first;
+    for (var s = 1u; s < count; s++) {
+        b_total += weighting(slot_cover(k, s).eps * scale);
+    }
     var out: array<f32, 19>;
     //#for i
-    out[{i}] = f[{i}] - (1.0 - c.b_total) * (f[{i}] - post[{i}]);
+    out[{i}] = f[{i}] - (1.0 - b_total) * (f[{i}] - post[{i}]);
     //#end
     let own = own_collision(f, m, post);
-    for (var s = 0u; s < count; s++) {
-        out = solid_collision(c.ids[s], c.t[s], c.x[s], c.b[s], f, m, own, out);
+    out = solid_collision(first.p, first.t, first.x, b_first, f, m, own, out);
+    for (var s = 1u; s < count; s++) {
+        let c = slot_cover(k, s);
+        out = solid_collision(c.p, c.t, c.x, weighting(c.eps * scale), f, m, own, out);
     }
     return out;
 }
 
-// The particles covering a cell (at most 4), in the order of their keys, with the cell's offset
-// in each one's box, the cell's centre there, each one's weight B and their sum.
-struct Covers {
-    ids: array<u32, 4>,
-    t: array<vec3<i32>, 4>,
-    x: array<vec3<f32>, 4>,
-    b: array<f32, 4>,
-    b_total: f32,
+// A particle covering a cell, with the cell's offset in its box, the cell's centre there and the
+// cell's solid fraction.
+struct Cover {
+    p: Particle,
+    t: vec3<i32>,
+    x: vec3<f32>,
+    eps: f32,
 }
 
-// The `count` particles covering cell k (`hold_slot`'s order: the sums do not depend on the order
-// of arrival), and their weights B (eq. 7) from their solid fractions as `cover` computed them
-// (the same function of the same values: the cell centre in the particle's box, one period away
-// where the box wraps), the total solid fraction capped at 1.
-fn cell_covers(k: u32, count: u32) -> Covers {
-    var c: Covers;
-    for (var s = 0u; s < count; s++) {
-        c.ids[s] = slot_particle(atomicLoad(&slots[k * SLOTS + s]));
-    }
-    var eps: array<f32, 4>;
-    var eps_total = 0.0;
-    for (var s = 0u; s < count; s++) {
-        let p = particles[c.ids[s]];
-        c.t[s] = box_offset(k, p);
-        c.x[s] = vec3<f32>(box_origin(p) + c.t[s]) + 0.5;
-        eps[s] = solid_fraction(c.x[s], p.pos_r.xyz, p.pos_r.w);
-        eps_total += eps[s];
-    }
-    let scale = select(1.0, 1.0 / eps_total, eps_total > 1.0);
-    c.b_total = 0.0;
-    for (var s = 0u; s < count; s++) {
-        c.b[s] = weighting(eps[s] * scale);
-        c.b_total += c.b[s];
-    }
-    return c;
+// The particle of slot s of cell k, and its solid fraction as `cover` computed it (the same
+// function of the same values: the cell centre in the particle's box, one period away where the
+// box wraps).
+fn slot_cover(k: u32, s: u32) -> Cover {
+    let p = particles[slot_particle(atomicLoad(&slots[k * SLOTS + s]))];
+    let t = box_offset(k, p);
+    let x = vec3<f32>(box_origin(p) + t) + 0.5;
+    return Cover(p, t, x, solid_fraction(x, p.pos_r.xyz, p.pos_r.w));
 }
 
 // With SUPERPOSITION, what the solid term keeps of the fluid's own collision, post - S - f (S: the
@@ -496,14 +552,14 @@ fn own_collision(f: array<f32, 19>, m: Moments, post: array<f32, 19>) -> array<f
     return own;
 }
 
-// Particle j's solid term in a covered cell (its offset t in the particle's box, its centre x,
+// Particle p's solid term in a covered cell (its offset t in the particle's box, its centre x,
 // the particle's weight b), added to `out`: b Omega_i with Omega_i = f_ibar - f_i + f_eq_i(rho,
 // u_s) - f_eq_ibar(rho, u) (seed eq. 8), or with SUPERPOSITION Omega_i = f_eq_i(rho, u_s) -
 // f_eq_i(rho, u) + own_i, where u_s is the solid's velocity at the cell centre (eq. 9, at x
 // rather than half a link on). The momentum it takes from the fluid, -b sum_i Omega_i c_i (the
 // cell's term of eq. 10), goes to the particle's pair of this cell for `reduce`.
 fn solid_collision(
-    j: u32,
+    p: Particle,
     t: vec3<i32>,
     x: vec3<f32>,
     b: f32,
@@ -513,7 +569,6 @@ fn solid_collision(
     fluid: array<f32, 19>,
 ) -> array<f32, 19> {
     var out = fluid;
-    let p = particles[j];
     let solid = p.vel.xyz + cross(p.omega.xyz, x - p.pos_r.xyz);
     // f_eq_i(rho, u_s) - f_eq_ibar(rho, u) = w_i rho (3 c.sum + 4.5 (c.sum)(c.diff) - 1.5 sum.diff)
     // with sum = u_s + u, diff = u_s - u (eq. 3); f_eq_i(rho, u_s) - f_eq_i(rho, u) the same with

@@ -18,3 +18,11 @@ fn list_entry(want: bool, counter: u32) -> u32 {
     }
     return subgroupBroadcastFirst(first) + rank;
 }
+
+// The position in its list (FRONT counted by status[4], BACK by status[8]) of each invocation
+// whose cell joins one (`list`), 0 for NO_LIST: one atomic per subgroup and list.
+fn list_position(list: u32) -> u32 {
+    let front = list_entry(list == FRONT, 4u);
+    let back = list_entry(list == BACK, 8u);
+    return select(back, front, list == FRONT);
+}

@@ -15,6 +15,7 @@
 # grid at 16 cells, 224 x 224 x 256, closed and periodic, one sphere, both ways of treating the
 # covered cells, each pass timed: what a closed box costs), coupled_trt.txt (256 x 256 x 512, 1 to
 # 32^3 particles, ratio to LBM-only, time per pass, the covered cells fused, redone and skipped),
+# coupled_seed_density.txt (lavapipe's sweep: 512 and 4096 particles on 64 x 64 x 128, by pass),
 # coupled_atomic_list.txt (32^3, the list joined with one atomic per cell, not per subgroup),
 # coupled_dense.txt (64^3 particles, a dense bed), coupled_dem.txt (1 and 32^3 particles, the
 # host idle 1.1 ms a step as for a DEM), default/ (the default scene), suspension/ and
@@ -109,15 +110,22 @@ if [ "$mode" = small ]; then
     cube=32x32x32 tencate=32x32x32 coupled=32x32x64 counts=1,8,64 dense=512 dense_dem=64 steps=30
     # lavapipe runs the per-cell kernel at a tenth of the quads' speed or less
     kernel_steps=5
+    seed_grid=32x32x64 seed_counts=64
 else
     cube=256x256x256 tencate=224x224x256 coupled=256x256x512 counts=1,8,64,512,4096,32768 dense=262144 dense_dem=32768 steps=300
     kernel_steps=$steps
+    seed_grid=64x64x128 seed_counts=512,4096
 fi
 # Coupled, the seed's Fig. 5 sweep (issue 5's target: 90% of LBM-only at 32^3 particles; its own
 # LBM-only row on the same grid): first, as the batch's most wanted figure (2026-12-05: skip with
 # the four-cell quads, never run on a GPU).
 step coupled_trt 90 200 $bin/lbm-server bench --grid $coupled --operator trt --particles $counts \
     --steps $((steps / 3)) --rounds 1 --kernel ours --passes --covered-cells all
+# The lavapipe sweep at the seed's density (one sphere of 4 cells per 1024 cells: 512 on 64 x 64 x
+# 128, and 4096 there, denser), LBM-only beside it, each pass timed (BENCHMARKS.md "The coupled
+# step at the seed's density"): a few seconds on a GPU, the same passes as on lavapipe.
+step coupled_seed_density 20 45 $bin/lbm-server bench --grid $seed_grid --operator trt --particles $seed_counts \
+    --steps $((steps / 3)) --rounds 2 --passes --covered-cells all
 # The kernels (issue 40): the per-cell kernel against the quads' kernels, each with the populations
 # in fp32, fp16s and fp16c (FP16S >= 1.5x FP32 on a GPU), BGK, rounds alternating, beside the
 # naive two-lattice kernel and the copy bandwidth of the same run (issue 3's target: 85% of it;
