@@ -11,6 +11,7 @@ pub use scene::lattice::Storage;
 pub trait StorageOnDevice: Copy {
     fn buffer_bytes(self, cells: usize) -> u64;
     fn shader(self) -> String;
+    fn access_shader(self) -> String;
     #[cfg(test)]
     fn rounding_bound(self, x: f64) -> f64;
     fn encode(self, values: &[f32]) -> Vec<u8>;
@@ -25,8 +26,19 @@ impl StorageOnDevice for Storage {
         ((cells * self.bytes()) as u64).div_ceil(16) * 16
     }
 
-    /// The shader source of the storage's buffers and load/store pair.
+    /// The shader source of the storage's buffers and load/store pair (with the four-cell quads
+    /// for FP32).
     fn shader(self) -> String {
+        const QUADS: &str = include_str!("../../../shaders/quads.wgsl");
+        match self {
+            Storage::Fp32 => format!("{}\n{QUADS}", self.access_shader()),
+            _ => self.access_shader(),
+        }
+    }
+
+    /// The shader source of the storage's buffers and load/store pair alone (the halo kernels,
+    /// halo.wgsl).
+    fn access_shader(self) -> String {
         const FP32: &str = include_str!("../../../shaders/storage_fp32.wgsl");
         const FP16: &str = include_str!("../../../shaders/storage_fp16.wgsl");
         const FP16S: &str = include_str!("../../../shaders/fp16s.wgsl");

@@ -47,7 +47,7 @@ impl GpuLattice {
             bind_group_layouts: &[Some(&self.layout), Some(&layout)],
             immediate_size: 0,
         });
-        let source = format!("{}\n{HALO_SHADER}", self.setup.storage.shader());
+        let source = format!("{}\n{HALO_SHADER}", self.setup.storage.access_shader());
         let module = d.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("halo.wgsl"),
             source: wgpu::ShaderSource::Wgsl(crate::lbm::unroll::unroll(&source).into()),
