@@ -676,7 +676,7 @@ fn a_run_says_a_short_header_and_a_line_per_warning() {
     assert!(err.contains("lubrication below"), "the DEM's step limits: {err}");
 }
 
-/// `coupling.covered_cells = "auto"` and `lattice.kernel = "auto"`: the run times the quads' and
+/// `coupling.covered_cells = "timed"` and `lattice.kernel = "auto"`: the run times the quads' and
 /// the per-cell kernels, then redo, skip and fused, on its own first steps (from step 10, each 5
 /// steps a round, 3 rounds), says what it measured and kept, and writes the same particles.csv as
 /// a run that takes the quads' kernels and redoes the covered cells throughout (the kernels and
@@ -698,7 +698,7 @@ fn a_timed_run_changes_ways_and_not_its_particles() {
     assert_eq!(code, Some(0), "{redo_err}");
     assert!(!redo_err.contains("covered cells timed"), "{redo_err}");
     assert!(!redo_err.contains("kernels timed"), "{redo_err}");
-    let (code, err, timed) = run_verbose("timed", &scene("auto", "auto"));
+    let (code, err, timed) = run_verbose("timed", &scene("timed", "auto"));
     assert_eq!(code, Some(0), "{err}");
     assert!(
         err.contains("the kernels and the ways of the covered cells timed on the run's first steps"),

@@ -183,12 +183,17 @@ pub fn run(
     let units = scene.lattice_units.as_ref().expect("fluid scenes have a lattice");
     let root = comm.rank() == 0;
     // On several ranks every rank steps in lockstep: no trial, the first kernels open.
-    let mut kernels = kernels_of(&units.kernel);
+    let mut trial = Trial::new(kernels_of(&units.kernel), Vec::new(), steps);
     if comm.size() > 1 {
-        kernels.truncate(1);
+        trial.pin_first();
     }
-    let trial = Trial::new(kernels, Vec::new(), steps);
-    let started = start_lattice(scene, units, (comm, blocks), &trial, checkpoints.resumed.as_ref());
+    let started = start_lattice(
+        scene,
+        units,
+        (comm, blocks),
+        &mut trial,
+        checkpoints.resumed.as_ref(),
+    );
     if !crate::parallel::all(comm, started.is_ok()) {
         if let Err(e) = &started {
             let rank = if comm.size() > 1 {
@@ -323,10 +328,14 @@ fn start_lattice(
     scene: &Scene,
     units: &LatticeUnits,
     (comm, blocks): (&dyn Communicator, [usize; 3]),
-    trial: &Trial,
+    trial: &mut Trial,
     resumed: Option<&Loaded>,
 ) -> Result<(Arc<Gpu>, BlockLattice), String> {
     let gpu = Arc::new(Gpu::for_local_rank(comm.local_rank())?);
+    // On a CPU driver the kernels are not timed (coupled/ways.rs, `trial`).
+    if gpu.adapter.device_type == wgpu::DeviceType::Cpu {
+        trial.pin_first();
+    }
     let d = Decomposition::new(units.n, scene.periodic_axes(), blocks, comm.rank());
     let setup = Setup {
         kernel: trial.kept().kernel,

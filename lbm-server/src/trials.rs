@@ -142,6 +142,12 @@ impl Trial {
         self.longest() > 0
     }
 
+    /// Times nothing: the run keeps the kernels and the way it starts with (the first of each).
+    pub fn pin_first(&mut self) {
+        self.kernels.truncate(1);
+        self.ways.truncate(1);
+    }
+
     /// The choice step `step` (0 for the first; called for every step in order) takes, told that
     /// it starts at `now` (seconds on a clock that only goes forward).
     pub fn choice_for(&mut self, step: u64, now: f64) -> Choice {

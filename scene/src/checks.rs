@@ -222,7 +222,7 @@ impl Scene {
         c.one_of(
             "coupling.covered_cells",
             &self.coupling.covered_cells,
-            &["auto", "fused", "redo", "skip"],
+            &["auto", "timed", "fused", "redo", "skip"],
         )?;
         if self.coupling.timeout > 86_400.0 {
             return Err(c.fail(

@@ -214,9 +214,10 @@ pub struct Coupling {
     /// "fused" in the fluid kernels (each cell tests one bit), "redo" collided before them and
     /// stored over their result (the fluid kernels stay branch-free and run while the DEM takes
     /// its step), "skip" collided in place before them, which skip them (one bit per cell). All
-    /// three give the same run bit for bit. "auto" (default): the run times the three on its first
-    /// steps, on its device, and keeps the fastest (with `lattice.kernel`: lbm-server/src/trials.rs;
-    /// in runs of a few hundred steps or more, the redo in shorter ones).
+    /// three give the same run bit for bit. "auto" (default): on a GPU the run times the three on
+    /// its first steps and keeps the fastest (with `lattice.kernel`: lbm-server/src/trials.rs; in
+    /// runs of a few hundred steps or more, the redo in shorter ones); on a CPU driver (lavapipe)
+    /// it takes the redo and the quads' kernels. "timed": the trial on every device.
     #[serde(default = "default_covered_cells")]
     pub covered_cells: String,
     /// With a `[lattice]`: "none" (default) draws each sphere on the lattice at its radius;

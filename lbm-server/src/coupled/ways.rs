@@ -10,21 +10,30 @@ use crate::trials::{kernels_of, Trial};
 use scene::Scene;
 
 /// The ways of the covered cells the scene's `coupling.covered_cells` leaves open: the three
-/// with "auto" (the redo first: the way the run starts with), else the one it names.
+/// with "auto" or "timed" (the redo first: the way the run starts with), else the one it names.
 pub(super) fn covered_cells_of(scene: &Scene) -> Result<Vec<CoveredCells>, String> {
     let name = scene.coupling.covered_cells.as_str();
     match CoveredCells::from_name(name) {
+        _ if name == "timed" => Ok(vec![CoveredCells::Redo, CoveredCells::Skip, CoveredCells::Fused]),
         Some(CoveredCells::Auto) => Ok(vec![CoveredCells::Redo, CoveredCells::Skip, CoveredCells::Fused]),
         Some(mode) => Ok(vec![mode]),
         None => Err(format!(
-            "coupling.covered_cells = {name:?}: expected \"auto\", \"fused\", \"redo\" or \"skip\""
+            "coupling.covered_cells = {name:?}: expected \"auto\", \"timed\", \"fused\", \"redo\" or \"skip\""
         )),
     }
 }
 
-/// The start-up trial of a coupled run of `steps` steps over what the scene leaves open.
-pub(super) fn trial(scene: &Scene, kernel: &str, steps: u64) -> Result<Trial, String> {
-    Ok(Trial::new(kernels_of(kernel), covered_cells_of(scene)?, steps))
+/// The start-up trial of a coupled run of `steps` steps over what the scene leaves open. On a
+/// CPU driver (lavapipe, `cpu`) "auto" times nothing and takes the quads' kernels and the redo:
+/// building the other kernels there costs about a second each, more than a short run wins back,
+/// and a run busy building them notices a dead DEM late; `coupling.covered_cells = "timed"`
+/// times them on every device.
+pub(super) fn trial(scene: &Scene, kernel: &str, steps: u64, cpu: bool) -> Result<Trial, String> {
+    let mut trial = Trial::new(kernels_of(kernel), covered_cells_of(scene)?, steps);
+    if cpu && scene.coupling.covered_cells != "timed" {
+        trial.pin_first();
+    }
+    Ok(trial)
 }
 
 impl FluidSide {

@@ -80,7 +80,8 @@ impl CoveredCells {
     /// The definite ways (what `bench --covered-cells all` and the reference tests run).
     pub const DEFINITE: [CoveredCells; 3] = [CoveredCells::Redo, CoveredCells::Fused, CoveredCells::Skip];
 
-    /// The scene's `coupling.covered_cells` ("auto", "fused", "redo", "skip").
+    /// The scene's `coupling.covered_cells` ("auto", "fused", "redo", "skip"; "timed" is "auto"
+    /// timed on every device, coupled/ways.rs).
     pub fn from_name(name: &str) -> Option<CoveredCells> {
         match name {
             "auto" => Some(CoveredCells::Auto),
