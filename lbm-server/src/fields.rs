@@ -17,9 +17,8 @@ pub struct FieldOutput {
     probes: Vec<(ProbeLine, std::io::BufWriter<std::fs::File>)>,
     domain_min: [f64; 3],
     fluid_density: f64,
-    dt: f64,
-    /// The SI velocity of a lattice velocity of 1 [m/s] (`LatticeUnits::velocity_unit`).
-    velocity_unit: f64,
+    /// The lattice's units: its cells' centres, seconds and velocities in SI.
+    units: LatticeUnits,
 }
 
 impl FieldOutput {
@@ -64,8 +63,7 @@ impl FieldOutput {
             probes,
             domain_min: scene.domain.min,
             fluid_density: scene.fluid.density,
-            dt: units.dt,
-            velocity_unit: units.velocity_unit(),
+            units: units.clone(),
         })
     }
 
@@ -77,7 +75,7 @@ impl FieldOutput {
     /// Density [kg/m^3] and velocity [m/s] of every cell of the lattice `fields`.
     fn si_fields(&self, fields: &[[f32; 4]]) -> (Vec<f32>, Vec<[f32; 3]>) {
         let rho = self.fluid_density as f32;
-        let c = self.velocity_unit as f32;
+        let c = self.units.velocity_unit() as f32;
         (
             fields.iter().map(|f| f[0] * rho).collect(),
             fields.iter().map(|f| [f[1] * c, f[2] * c, f[3] * c]).collect(),
@@ -91,7 +89,9 @@ impl FieldOutput {
         let io = |e: std::io::Error| format!("{name}: {e}");
         std::fs::create_dir_all(self.out.join("fields")).map_err(io)?;
         write_vti(&self.out.join(&name), &self.grid, &density, &velocity).map_err(io)?;
-        self.series.add(step as f64 * self.dt, &name).map_err(io)
+        self.series
+            .add(self.units.seconds(step as f64), &name)
+            .map_err(io)
     }
 
     /// The snapshot of the last check that passed (step `good`), where a run blew up: a line
@@ -107,28 +107,28 @@ impl FieldOutput {
 
     /// A row per cell of each probe line after `step` steps.
     pub fn write_lines(&mut self, step: u64, fields: &[[f32; 4]]) -> Result<(), String> {
-        let (n, dx) = (self.grid.n, self.grid.dx);
-        let (rho, c) = (self.fluid_density, self.velocity_unit);
-        let (min, dt) = (self.domain_min, self.dt);
+        let n = self.grid.n;
+        let (rho, c) = (self.fluid_density, self.units.velocity_unit());
+        let (min, units) = (self.domain_min, &self.units);
         for (line, w) in &mut self.probes {
             let axis = ["x", "y", "z"]
                 .iter()
                 .position(|a| *a == line.axis)
                 .expect("validated axis");
             let cell_of = |a: usize| {
-                let v = ((line.through[a] - min[a]) / dx).floor();
+                let v = units.cells(line.through[a] - min[a]).floor();
                 (v.max(0.0) as usize).min(n[a] - 1)
             };
             let mut idx = [cell_of(0), cell_of(1), cell_of(2)];
             for i in 0..n[axis] {
                 idx[axis] = i;
                 let f = fields[idx[0] + n[0] * (idx[1] + n[1] * idx[2])];
-                let s = min[axis] + (i as f64 + 0.5) * dx;
+                let s = units.cell_centre(idx, min)[axis];
                 let u = [f[1] as f64 * c, f[2] as f64 * c, f[3] as f64 * c];
                 writeln!(
                     w,
                     "{step},{:e},{s:e},{:e},{:e},{:e},{:e}",
-                    step as f64 * dt,
+                    units.seconds(step as f64),
                     f[0] as f64 * rho,
                     u[0],
                     u[1],

@@ -575,7 +575,7 @@ impl<'a> FluidRun<'a> {
         let check = self.units.check_interval;
         let bad = lattice.furthest_unhealthy(self.comm).unwrap_or(bad);
         let kept = lattice.kept_fields(self.comm);
-        let (origin, dx) = (self.scene.domain.min, self.units.dx);
+        let origin = self.scene.domain.min;
         let rank = if self.comm.size() > 1 {
             format!("rank {}, ", bad.rank)
         } else {
@@ -584,7 +584,8 @@ impl<'a> FluidRun<'a> {
         let mut msg = format!(
             "the fluid became unstable between steps {} and {step}: furthest out of bounds, {rank}{}",
             step.saturating_sub(check),
-            bad.cell.describe(&health_of(self.units), origin, dx)
+            bad.cell
+                .describe(&health_of(self.units), |c| self.units.cell_centre(c, origin))
         );
         if let Some(out) = &mut self.fields {
             if let Some((good, fields)) = self.last_good.take().zip(kept) {

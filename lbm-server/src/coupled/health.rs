@@ -61,7 +61,9 @@ impl FluidSide {
     /// last check that passed written as last_good.vti.
     pub(super) fn unstable(&mut self, bad: Unhealthy) -> String {
         let bad = self.lattice.furthest_unhealthy().unwrap_or(bad);
-        let what = bad.describe(&health_of(&self.units), self.origin, self.units.dx);
+        let what = bad.describe(&health_of(&self.units), |c| {
+            self.units.cell_centre(c, self.origin)
+        });
         let mut msg = format!(
             "the fluid became unstable by step {}: furthest out of bounds, {what}",
             self.steps

@@ -332,9 +332,11 @@ fn a_blow_up_is_named_at_the_cell_furthest_out_of_bounds() {
     );
     let furthest = lattice.furthest_unhealthy().expect("unhealthy");
     assert_eq!((furthest.cell, furthest.coords), (141, setup.coords(141)));
-    let said = furthest.describe(&lattice_health, [0.5, 0.0, -1.0], 0.01);
-    let [i, j, k] = setup.coords(141);
     let centre = |origin: f64, n: usize| origin + (n as f64 + 0.5) * 0.01;
+    let said = furthest.describe(&lattice_health, |[i, j, k]| {
+        [centre(0.5, i), centre(0.0, j), centre(-1.0, k)]
+    });
+    let [i, j, k] = setup.coords(141);
     let at = format!(
         "cell 141 at ({i}, {j}, {k}), centre ({:.4e}, {:.4e}, {:.4e}) m: lattice speed 0.600",
         centre(0.5, i),

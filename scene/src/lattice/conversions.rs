@@ -16,6 +16,11 @@ impl LatticeUnits {
         std::array::from_fn(|a| self.cells(point[a] - origin[a]))
     }
 
+    /// SI centre [m] of the cell at `cell` (its indices) of a lattice whose corner is at `origin` [m].
+    pub fn cell_centre(&self, cell: [usize; 3], origin: [f64; 3]) -> [f64; 3] {
+        std::array::from_fn(|a| origin[a] + (cell[a] as f64 + 0.5) * self.dx)
+    }
+
     /// Lattice velocity of an SI velocity [m/s]: u dt / dx.
     pub fn velocity(&self, u: [f64; 3]) -> [f64; 3] {
         u.map(|v| v * self.dt / self.dx)

@@ -53,9 +53,9 @@ impl Unhealthy {
     }
 
     /// "cell K at (i, j, k), centre (x, y, z) m: QUANTITY", naming the quantity that failed the
-    /// check, the centre in SI in a lattice of cells `dx` [m] wide from `origin` [m].
-    pub fn describe(&self, health: &Health, origin: [f64; 3], dx: f64) -> String {
-        let [x, y, z]: [f64; 3] = std::array::from_fn(|a| origin[a] + (self.coords[a] as f64 + 0.5) * dx);
+    /// check, the centre in SI (`centre` of the cell's indices: `LatticeUnits::cell_centre`).
+    pub fn describe(&self, health: &Health, centre: impl Fn([usize; 3]) -> [f64; 3]) -> String {
+        let [x, y, z] = centre(self.coords);
         let [i, j, k] = self.coords;
         format!(
             "cell {} at ({i}, {j}, {k}), centre ({x:.4e}, {y:.4e}, {z:.4e}) m: {}",
