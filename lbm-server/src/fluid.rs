@@ -445,9 +445,7 @@ impl<'a> FluidRun<'a> {
         let choice = self
             .trial
             .choice_for(lattice.time, self.made.elapsed().as_secs_f64());
-        for line in self.trial.take_report() {
-            protocol::say!("lbm-server: {line}");
-        }
+        self.trial.say_report();
         if choice.kernel != lattice.kernel() {
             if let Err(e) = lattice.set_kernel(choice.kernel) {
                 protocol::say!("lbm-server: warning: {e}; the run times the others without it");

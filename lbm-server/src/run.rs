@@ -278,16 +278,19 @@ impl Session {
         si: &SiStates,
         replies: &[ParticleReply],
     ) -> Result<(), String> {
+        // Where the outputs stand is read only for a checkpoint (the per-step path stays as it was).
         let mut at = OutputPositions::default();
         let regular = step.is_multiple_of(self.p.scene.output.interval);
-        self.particles.positions(&mut at);
+        if checkpoint && !regular {
+            self.particles.positions(&mut at);
+        }
         if output {
             self.particles.write_step(step, time, &si.states, replies)?;
         }
-        if regular {
-            self.particles.positions(&mut at);
-        }
         if checkpoint {
+            if regular {
+                self.particles.positions(&mut at);
+            }
             self.hold_checkpoint(at, replies.len() as u64)?;
         }
         Ok(())

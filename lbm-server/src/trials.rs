@@ -331,6 +331,24 @@ impl Trial {
     pub fn take_report(&mut self) -> Vec<String> {
         std::mem::take(&mut self.report)
     }
+
+    /// Says the stages' lines not yet said: what each timed and kept, its times with `--verbose`.
+    pub fn say_report(&mut self) {
+        for line in self.take_report() {
+            crate::terminal::say_either(
+                &format!("lbm-server: {} {}", brief_line(&line), crate::terminal::MORE),
+                &format!("lbm-server: {line}"),
+            );
+        }
+    }
+}
+
+/// A stage's line in brief: what it timed and what it kept, without the times ("kernels timed
+/// with the covered cells redo: quads kept").
+fn brief_line(line: &str) -> String {
+    let what = line.split(" (").next().unwrap_or(line);
+    let kept = line.rsplit(": ").next().unwrap_or("");
+    format!("{what}: {kept}")
 }
 
 /// The median of `values` (NaN when empty).

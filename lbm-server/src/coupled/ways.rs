@@ -5,7 +5,6 @@
 use super::FluidSide;
 use crate::lbm::imb::CoveredCells;
 use crate::lbm::kernel::Kernel;
-use crate::terminal::{self, MORE};
 use crate::trials::{kernels_of, Trial};
 use scene::Scene;
 
@@ -59,12 +58,7 @@ impl FluidSide {
         let choice = self
             .trial
             .choice_for(self.steps, self.made.elapsed().as_secs_f64());
-        for line in self.trial.take_report() {
-            terminal::say_either(
-                &format!("lbm-server: {} {MORE}", brief_trial_line(&line)),
-                &format!("lbm-server: {line}"),
-            );
-        }
+        self.trial.say_report();
         if (choice.kernel, choice.way) == (self.lattice.kernel(), self.lattice.covered_cells()) {
             return;
         }
@@ -73,12 +67,4 @@ impl FluidSide {
             self.trial.refuse();
         }
     }
-}
-
-/// A trial's line in brief: what it timed and what it kept, without the times ("kernels timed with
-/// the covered cells redo: quads kept").
-fn brief_trial_line(line: &str) -> String {
-    let what = line.split(" (").next().unwrap_or(line);
-    let kept = line.rsplit(": ").next().unwrap_or("");
-    format!("{what}: {kept}")
 }
