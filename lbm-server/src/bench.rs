@@ -62,6 +62,12 @@ pub struct BenchArgs {
     /// (with --per-cell, each with the quads' and the per-cell kernel).
     #[arg(long, value_delimiter = ',')]
     storage: Vec<String>,
+    /// Cut the grid over N ranks that are threads of this one process (no MPI), each with its own
+    /// handle on the device of its rank number (one GPU: ranks sharing it), the halo exchanged
+    /// through the host as between MPI ranks: MLUPS per rank and in total, halo bytes per step and
+    /// the exchange's share, as under mpirun. 1 is the same code on one block (the baseline).
+    #[arg(long)]
+    thread_ranks: Option<usize>,
     /// Timed rounds, ours and the naive kernel alternating (best round reported).
     #[arg(long, default_value_t = 3)]
     rounds: u32,
@@ -104,6 +110,12 @@ pub fn main(args: BenchArgs) -> ExitCode {
     // a scaling series).
     let ranks = crate::parallel::start();
     let result = match &ranks {
+        Ok(_) if args.thread_ranks.is_some() && crate::parallel::launched_ranks().is_some() => Err(
+            "--thread-ranks under a launcher (mpirun, srun): ranks are either MPI's or threads, \
+                 not both; drop --thread-ranks or the launcher"
+                .into(),
+        ),
+        Ok(_) if args.thread_ranks.is_some() => ranks::on_threads(&args),
         Ok(comm) if crate::parallel::launched_ranks().is_some() => ranks::run(&args, &**comm),
         Ok(_) => run(&args),
         Err(e) => Err(e.clone()),

@@ -1,11 +1,11 @@
-//! `lbm-server bench` on several ranks (under mpirun or srun): the lattice cut into blocks, one
-//! per rank, stepped with the halo exchange; MLUPS per rank and in total, the halo's bytes per
-//! step and the exchange's share of the step.
+//! `lbm-server bench` on several ranks (under mpirun or srun, or `--thread-ranks N`: threads of
+//! one process): the lattice cut into blocks, one per rank, stepped with the halo exchange; MLUPS
+//! per rank and in total, the halo's bytes per step and the exchange's share of the step.
 
 use super::{parse_faces, parse_grid, parse_operator, BenchArgs};
 use crate::lbm::geometry::Setup;
 use crate::lbm::gpu::{Gpu, Health};
-use crate::parallel::{all, choose_blocks, BlockLattice, Communicator, Decomposition};
+use crate::parallel::{all, choose_blocks, BlockLattice, Communicator, Decomposition, ThreadRanks};
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -60,6 +60,28 @@ pub fn run(args: &BenchArgs, comm: &dyn Communicator) -> Result<(), String> {
         print(args, n, blocks, &rows);
     }
     Ok(())
+}
+
+/// [`run`] on `--thread-ranks N` threads of this process, one rank each; the first rank's error.
+pub fn on_threads(args: &BenchArgs) -> Result<(), String> {
+    let n = args.thread_ranks.unwrap_or(1);
+    if n == 0 {
+        return Err("--thread-ranks = 0: must be at least 1".into());
+    }
+    let results: Vec<Result<(), String>> = std::thread::scope(|s| {
+        let handles: Vec<_> = ThreadRanks::world(n)
+            .into_iter()
+            .map(|comm| s.spawn(move || run(args, &comm)))
+            .collect();
+        handles
+            .into_iter()
+            .map(|h| {
+                h.join()
+                    .unwrap_or_else(|_| Err("a rank's thread panicked".into()))
+            })
+            .collect()
+    });
+    results.into_iter().collect()
 }
 
 fn start(

@@ -7,6 +7,7 @@
 //! - `halo.rs`: the exchange of the populations that cross the block faces, after every step.
 //! - `block.rs`: one rank's lattice, stepped, read and checked with the others ([`BlockLattice`]).
 //! - `summary.rs`: what summary.json says of the ranks.
+//! - `thread_ranks.rs`: ranks as threads of one process (the tests; `bench --thread-ranks`).
 //!
 //! Every rank runs the same code, one rank included: a run on one rank is the single-process run.
 
@@ -19,6 +20,7 @@ mod mpi_world;
 mod summary;
 #[cfg(test)]
 mod tests;
+mod thread_ranks;
 
 pub use block::{BlockLattice, RankUnhealthy};
 pub use communicator::launched_ranks;
@@ -26,6 +28,7 @@ use communicator::OneRank;
 pub use communicator::{all, Communicator};
 pub use decomposition::{check_blocks, choose_blocks, Decomposition};
 pub use summary::ParallelSummary;
+pub use thread_ranks::ThreadRanks;
 
 /// Whether this build runs on several ranks (`--features mpi`).
 pub const MPI_BUILD: bool = cfg!(feature = "mpi");
