@@ -1,34 +1,43 @@
 #!/usr/bin/env python3
 """The LIGGGHTS adapter's cost against LIGGGHTS's own step, at 20,000 particles, without a fluid.
 
+    cargo build --release -p lbmdem-native
     PYTHONPATH=clients/python:clients/liggghts python3 validation/crossdem/adapter_overhead.py \\
-        [--atoms-per-side 25 25 32] [--k 50] [--fluid-steps 10]
+        [--atoms-per-side 25 25 32] [--k 50] [--fluid-steps 10] [--rounds 3] [--modes ...]
 
 A bed of 20,000 glass spheres (1 mm, Hertz, a floor, gravity) settles for 2000 LIGGGHTS steps;
-then, one after another, the same fluid steps of k LIGGGHTS steps each are timed:
+then, in each round, one after another, the same fluid steps of k LIGGGHTS steps each are timed:
 
 | Mode | Each fluid step |
 |---|---|
 | liggghts | `run k pre no post no`: LIGGGHTS's own steps |
-| held | the adapter's work as in a run with `coupling.substep_drag = false` and `lubrication = false`: read x, v, omega, radius, ids into the fluid's particle states, hold a load per atom (`held_loads.py`), run with `fix external`'s callback writing it every step |
-| within | the same with the loads that follow the atoms (`substep_loads.py`: the sub-step drag and the squeeze films, the scene's defaults) |
+| noop | the same with `fix external` and a compiled callback that writes zero forces (the fix's own cost) |
+| native | the adapter's work with clients/native (the default where it is built), loads held as in a run with `--loads held`: gather x, v, omega, radius, ids into the fluid's particle states, hold the reply's force and torque, `fix external`'s compiled callback writing them every step |
+| native-within | the same with the loads that follow the atoms (the sub-step drag and the squeeze films, the scene's defaults), evaluated in clients/native at each LIGGGHTS step |
+| held | the held loads in Python (held_loads.py, where the library is not built) |
+| within | the following loads in numpy (substep_loads.py; slow: one round is enough) |
 
-The exchange with the fluid (iceoryx2) is not in it: PROTOCOL.md section 10 measures it (20,000
-particles, Python <-> Rust: ~0.55 ms per fluid step). Prints the time per LIGGGHTS step of each
-mode and the adapter's share over LIGGGHTS's own, and writes them as JSON (--json).
+The reply (force, torque) of each fluid step is made before the timing. The exchange with the
+fluid (iceoryx2) is not in it: PROTOCOL.md section 10 measures it (20,000 particles, Python <->
+Rust: ~0.55 ms per fluid step). Prints the time per LIGGGHTS step of each mode and round, and each
+mode's share over LIGGGHTS's own: the median over the rounds of its time over LIGGGHTS's time in
+the same round; writes them as JSON (--json).
 """
 
 from __future__ import annotations
 
 import argparse
+import ctypes
 import json
 import sys
 import time
 
 import numpy as np
 
+import lbmdem
 import liggghts
 import lbm_liggghts
+import native
 from held_loads import HeldLoads
 from substep_loads import SqueezeFilms, SubstepLoads
 
@@ -56,24 +65,58 @@ def bed_deck(n: tuple) -> list:
     ]
 
 
-def time_mode(lmp, mode: str, k: int, steps: int, loads) -> float:
-    """Seconds per LIGGGHTS step over `steps` fluid steps of `mode`."""
-    lo, hi, periodic = np.zeros(3), np.ones(3), np.zeros(3, bool)
+MODES = ("liggghts", "noop", "native", "native-within", "held")
+
+
+def replies(lmp, count: int, steps: int) -> list:
+    """A reply per fluid step: small random forces and torques, 40% of the weight upwards."""
     rng = np.random.default_rng(1)
+    atoms = lmp.atoms()
+    mass = lmp.vector(b"rmass", atoms.count)
+    out = []
+    for _ in range(steps):
+        r = np.zeros(count, lbmdem.REPLY_DTYPE)
+        r["id"] = atoms.tag.astype(np.int64) - 1
+        r["force"] = 1e-6 * rng.standard_normal((count, 3)) + (mass * 9.81 * 0.4)[:, None] * [0, 0, 1]
+        r["torque"] = 1e-12 * rng.standard_normal((count, 3))
+        out.append(r)
+    return out
+
+
+def time_mode(lmp, mode: str, k: int, loads, fluid: list) -> float:
+    """Seconds per LIGGGHTS step over the fluid steps of ``fluid`` but the first."""
+    lo, hi, periodic = np.zeros(3), np.ones(3), np.zeros(3, bool)
     t0 = time.perf_counter()
-    for i in range(steps + 1):
+    for i, reply in enumerate(fluid):
         if i == 1:  # the first, with LIGGGHTS's set-up of the new fix, is not timed
             t0 = time.perf_counter()
-        if mode != "liggghts":
+        if mode.startswith("native"):
+            loads.states(lo, hi, periodic)
+            loads.hold(reply, True)
+        elif mode in ("held", "within"):
             atoms = lmp.atoms()
             states = lbm_liggghts.states_of(atoms, lo, hi, periodic)
-            mass = lmp.vector(b"rmass", atoms.count)
-            force = 1e-6 * rng.standard_normal((atoms.count, 3)) + (mass * 9.81 * 0.4)[:, None] * [0, 0, 1]
-            loads.hold(states["id"], force, np.zeros_like(force), atoms)
+            loads.hold(reply["id"], reply["force"], reply["torque"], atoms)
         lmp.command(f"run {k} pre no post no" if i else f"run {k} post no")
-        if mode != "liggghts":
+        if loads is not None:
             loads.check()
-    return (time.perf_counter() - t0) / (steps * k)
+    return (time.perf_counter() - t0) / ((len(fluid) - 1) * k)
+
+
+def make_loads(lmp, mode: str, within):
+    """The loads of ``mode`` and its fix external's callback (None: no fix)."""
+    if mode == "liggghts":
+        return None, None
+    if mode == "noop":
+        lib = native.load_library()
+        return None, (ctypes.cast(lib.lbmdem_zero_apply, ctypes.c_void_p).value, None)
+    if mode.startswith("native"):
+        loads = native.NativeLoads(native.load_library(), lmp)
+        if mode == "native-within":
+            loads.follow(within)
+        return loads, loads.callback()
+    loads = HeldLoads(lmp, within if mode == "within" else None)
+    return loads, loads.apply
 
 
 def main(argv=None) -> int:
@@ -81,6 +124,10 @@ def main(argv=None) -> int:
     ap.add_argument("--atoms-per-side", nargs=3, type=int, default=[25, 25, 32])
     ap.add_argument("--k", type=int, default=50, help="LIGGGHTS steps per fluid step")
     ap.add_argument("--fluid-steps", type=int, default=10)
+    ap.add_argument("--rounds", type=int, default=3)
+    ap.add_argument("--modes", nargs="+", default=list(MODES),
+                    choices=list(MODES) + ["within"], help="the modes of each round, in order "
+                    "(liggghts is always timed)")
     ap.add_argument("--json", help="write the times here")
     args = ap.parse_args(argv)
     lmp = liggghts.Liggghts(liggghts.load_library(), ["-log", "none", "-screen", "none"])
@@ -90,25 +137,29 @@ def main(argv=None) -> int:
     dt_fluid = args.k * lmp.timestep()
     films = SqueezeFilms(0.07, 0.000625 / 4.0, [(2, 0.0, 1)], np.zeros(3))
     within = SubstepLoads(1210.0, dt_fluid, [0.0, 0.0, -9.81], True, films)
-    held, follow = HeldLoads(lmp), HeldLoads(lmp, within)
-    callback = {"held": held, "within": follow}
-    current = {"loads": held}
-    times = {}
-    for mode in ("liggghts", "held", "within", "liggghts", "held"):
-        if mode != "liggghts":
-            current["loads"] = callback[mode]
-            lmp.fix_external("lbm_fluid", lambda *a: current["loads"].apply(*a))
-        t = time_mode(lmp, mode, args.k, args.fluid_steps, callback.get(mode))
-        if mode != "liggghts":
-            lmp.command("unfix lbm_fluid")
-        times.setdefault(mode, []).append(t)
-        print(f"{mode:9s} {1e3 * t:.3f} ms per LIGGGHTS step ({n} atoms, k = {args.k})",
-              flush=True)
-    own = min(times["liggghts"])
-    result = {"atoms": n, "k": args.k, "fluid_steps": args.fluid_steps,
+    fluid = replies(lmp, n, args.fluid_steps + 1)
+    modes = ["liggghts"] + [m for m in args.modes if m != "liggghts"]
+    times = {m: [] for m in modes}
+    for r in range(args.rounds):
+        for mode in modes:
+            if mode == "within" and r:
+                continue
+            loads, callback = make_loads(lmp, mode, within)
+            if callback is not None:
+                lmp.fix_external("lbm_fluid", callback)
+            t = time_mode(lmp, mode, args.k, loads, fluid)
+            if callback is not None:
+                lmp.command("unfix lbm_fluid")
+            times[mode].append(t)
+            print(f"round {r + 1} {mode:13s} {1e3 * t:8.3f} ms per LIGGGHTS step ({n} atoms, "
+                  f"k = {args.k})", flush=True)
+    own = times["liggghts"]
+    over = {m: round(float(np.median([t / own[i] for i, t in enumerate(ts)])) - 1.0, 4)
+            for m, ts in times.items() if m != "liggghts"}
+    result = {"atoms": n, "k": args.k, "fluid_steps": args.fluid_steps, "rounds": args.rounds,
               "ms_per_liggghts_step": {m: [round(1e3 * t, 4) for t in ts] for m, ts in times.items()},
-              "overhead": {m: round(min(times[m]) / own - 1.0, 4) for m in ("held", "within")}}
-    print(json.dumps(result["overhead"]))
+              "overhead_median": over}
+    print(json.dumps(over))
     if args.json:
         with open(args.json, "w") as f:
             json.dump(result, f, indent=1)

@@ -1,0 +1,195 @@
+//! The fluid's force and torque on each atom over the LIGGGHTS steps of one fluid step
+//! (clients/liggghts/held_loads.py's `HeldLoads`, compiled): held constant, or following the
+//! atoms ([`SubstepLoads`]).
+//!
+//! LIGGGHTS integrates with velocity Verlet; `fix external`'s callback, called where the forces
+//! are summed (`post_force`), writes the force into `fexternal` (the fix then adds it to the
+//! atoms' force) and adds the torque to the atoms' torque. The coupled loop runs
+//! `run k pre no post no`, so the first half kick of a fluid step uses the forces LIGGGHTS summed
+//! at the end of the previous one, with the previous loads: [`Loads::hold`] adds the change of
+//! the loads to them, so that every LIGGGHTS step of fluid step n sees the loads of step n.
+
+use crate::lammps::{row_of, Atoms, Lammps};
+use crate::vec3::{add_to, scale, sub, V3};
+use crate::within::{Kinematics, SubstepLoads};
+use protocol::ParticleReply;
+
+/// The held force and torque in the order of the atoms, kept while LIGGGHTS keeps that order.
+struct Order {
+    tags: Vec<i32>,
+    force: Vec<V3>,
+    torque: Vec<V3>,
+    any_torque: bool,
+    /// The `fexternal` these forces were written to (the fix's own array keeps them).
+    written: usize,
+}
+
+/// Force and torque by particle id (atom ID - 1), applied by `fix external`.
+pub struct Loads {
+    pub lammps: Lammps,
+    force: Vec<V3>,
+    torque: Vec<V3>,
+    /// The loads within the fluid step (None: held), the LIGGGHTS step at its start.
+    pub within: Option<SubstepLoads>,
+    first_step: i64,
+    order: Option<Order>,
+    /// Each atom's id, the id -> atom row map, and the spin scratch of the following loads.
+    rows: Vec<usize>,
+    row_of_id: Vec<usize>,
+    spin: Vec<V3>,
+    /// What went wrong in the callback (LIGGGHTS cannot be stopped from there).
+    pub error: Option<String>,
+}
+
+impl Loads {
+    pub fn new(lammps: Lammps) -> Loads {
+        Loads {
+            lammps,
+            force: Vec::new(),
+            torque: Vec::new(),
+            within: None,
+            first_step: 0,
+            order: None,
+            rows: Vec::new(),
+            row_of_id: Vec::new(),
+            spin: Vec::new(),
+            error: None,
+        }
+    }
+
+    /// Holds the reply's loads. With `ran` (LIGGGHTS ran before: its forces are summed) the
+    /// atoms' force and torque take the change of the loads, for the first half kick of the next
+    /// run.
+    pub fn hold(&mut self, replies: &[ParticleReply], ran: bool) -> Result<(), String> {
+        let size = replies.iter().map(|r| r.id as usize + 1).max().unwrap_or(0).max(self.force.len());
+        // SAFETY: LIGGGHTS is between runs.
+        let atoms = unsafe { self.lammps.atoms()? };
+        self.map_rows(atoms.tag, size)?;
+        let size = self.row_of_id.len();
+        let (mut force, mut torque) = (vec![[0.0; 3]; size], vec![[0.0; 3]; size]);
+        for r in replies {
+            force[r.id as usize] = r.force;
+            torque[r.id as usize] = r.torque;
+        }
+        if self.within.is_some() {
+            self.hold_within(&mut force, &torque, &atoms)?;
+        }
+        if ran {
+            for (i, &id) in self.rows.iter().enumerate() {
+                add_to(&mut atoms.f[i], sub(force[id], self.force.get(id).copied().unwrap_or_default()));
+                add_to(&mut atoms.torque[i], sub(torque[id], self.torque.get(id).copied().unwrap_or_default()));
+            }
+        }
+        (self.force, self.torque, self.order) = (force, torque, None);
+        Ok(())
+    }
+
+    /// Starts the fluid step of `self.within` from the atoms' state; `force` takes the loads at
+    /// its start (the drag is 0 there: F_n and the films).
+    fn hold_within(&mut self, force: &mut [V3], torque: &[V3], atoms: &Atoms) -> Result<(), String> {
+        let (_, step) = self.lammps.clock()?;
+        self.first_step = step;
+        let kin = Kinematics { x: atoms.x, v: atoms.v, omega: atoms.omega, radius: atoms.radius };
+        let within = self.within.as_mut().expect("within");
+        within.hold(&self.rows, force, torque, &kin, atoms.rmass);
+        let mut start = vec![[0.0; 3]; self.rows.len()];
+        self.spin.resize(self.rows.len(), [0.0; 3]);
+        within.loads(&self.rows, &self.row_of_id, 0.0, &kin, |_| ([0.0; 3], [0.0; 3]), 0.0,
+                     &mut start, &mut self.spin);
+        for (i, &id) in self.rows.iter().enumerate() {
+            force[id] = start[i];
+        }
+        Ok(())
+    }
+
+    /// `rows` (each atom's id) and `row_of_id` for the atoms' tags, ids below `size`.
+    fn map_rows(&mut self, tags: &[i32], size: usize) -> Result<(), String> {
+        self.rows.clear();
+        for &t in tags {
+            self.rows.push(row_of(t)?);
+        }
+        let size = size.max(self.rows.iter().map(|&r| r + 1).max().unwrap_or(0));
+        self.row_of_id.clear();
+        self.row_of_id.resize(size, usize::MAX);
+        for (i, &id) in self.rows.iter().enumerate() {
+            self.row_of_id[id] = i;
+        }
+        Ok(())
+    }
+
+    /// `fix external`'s callback: fexternal = the force, torque += the torque.
+    pub fn apply(&mut self, step: i64, tags: &[i32], fexternal: &mut [V3]) -> Result<(), String> {
+        if self.within.is_some() {
+            return self.follow(step, tags, fexternal);
+        }
+        let address = fexternal.as_ptr() as usize;
+        let same = self.order.as_ref().is_some_and(|o| o.tags == tags);
+        if !same {
+            self.order = Some(self.in_atom_order(tags)?);
+        }
+        let order = self.order.as_mut().expect("order");
+        if order.written != address {
+            fexternal.copy_from_slice(&order.force);
+            order.written = address;
+        }
+        if order.any_torque {
+            // SAFETY: inside LIGGGHTS's post_force, the arrays as it holds them.
+            let atoms = unsafe { self.lammps.atoms()? };
+            for (t, add) in atoms.torque.iter_mut().zip(&order.torque) {
+                add_to(t, *add);
+            }
+        }
+        Ok(())
+    }
+
+    /// The held loads in the order of the atoms (`tags`).
+    fn in_atom_order(&mut self, tags: &[i32]) -> Result<Order, String> {
+        let mut order = Order { tags: tags.to_vec(), force: Vec::with_capacity(tags.len()),
+                                torque: Vec::with_capacity(tags.len()), any_torque: false, written: 0 };
+        for &t in tags {
+            let id = row_of(t)?;
+            order.force.push(self.force.get(id).copied().unwrap_or_default());
+            let torque = self.torque.get(id).copied().unwrap_or_default();
+            order.any_torque |= torque != [0.0; 3];
+            order.torque.push(torque);
+        }
+        Ok(order)
+    }
+
+    /// The following loads at this LIGGGHTS step; what the callback wrote is kept in
+    /// `self.force`, `self.torque` (the next `hold` corrects the first half kick by it).
+    fn follow(&mut self, step: i64, tags: &[i32], fexternal: &mut [V3]) -> Result<(), String> {
+        let (dt, _) = self.lammps.clock()?;
+        // SAFETY: inside LIGGGHTS's post_force.
+        let atoms = unsafe { self.lammps.atoms()? };
+        if self.rows.len() != tags.len() || self.rows.iter().zip(tags).any(|(&r, &t)| r + 1 != t as usize) {
+            let size = self.force.len();
+            self.map_rows(tags, size)?;
+            self.grow(self.row_of_id.len());
+        }
+        let within = self.within.as_mut().expect("within");
+        let kin = Kinematics { x: atoms.x, v: atoms.v, omega: atoms.omega, radius: atoms.radius };
+        let g = within.gravity;
+        let (f, torque, mass) = (&*atoms.f, &*atoms.torque, atoms.rmass);
+        self.spin.resize(tags.len(), [0.0; 3]);
+        within.loads(&self.rows, &self.row_of_id, (step - self.first_step) as f64 * dt, &kin,
+                     |i| (sub(f[i], scale(g, mass[i])), torque[i]), dt, fexternal, &mut self.spin);
+        for (i, &id) in self.rows.iter().enumerate() {
+            add_to(&mut atoms.torque[i], self.spin[i]);
+            self.force[id] = fexternal[i];
+            self.torque[id] = self.spin[i];
+        }
+        Ok(())
+    }
+
+    /// Grows the held tables (and the following loads' tables) to `size` ids.
+    fn grow(&mut self, size: usize) {
+        if size > self.force.len() {
+            self.force.resize(size, [0.0; 3]);
+            self.torque.resize(size, [0.0; 3]);
+        }
+        if let Some(w) = &mut self.within {
+            w.grow(size);
+        }
+    }
+}
