@@ -9,8 +9,9 @@ evaluates the loads that follow the atoms (the sub-step drag and the squeeze fil
 clients/python/substep_loads.py and dem-client do). :class:`held_loads.HeldLoads` does the same in
 Python where the library is not built.
 
-The library is found at ``$LBMDEM_NATIVE``, else as the newest of ``target/release`` and
-``target/debug`` of the checkout these clients belong to (``$CARGO_TARGET_DIR`` first).
+The library is found at ``$LBMDEM_NATIVE``, else as the newest of ``target/release``,
+``target/debug`` and their ``deps`` (where ``cargo test`` leaves it) of the checkout these clients
+belong to (``$CARGO_TARGET_DIR`` first).
 """
 
 from __future__ import annotations
@@ -41,7 +42,8 @@ def candidates() -> list:
         return [Path(os.environ["LBMDEM_NATIVE"])]
     roots = [Path(os.environ["CARGO_TARGET_DIR"])] if os.environ.get("CARGO_TARGET_DIR") else []
     roots.append(Path(__file__).resolve().parents[2] / "target")
-    found = [r / p / LIBRARY for r in roots for p in ("release", "debug")]
+    found = [r / p / LIBRARY for r in roots for p in ("release", "debug", "release/deps",
+                                                      "debug/deps")]
     return sorted((p for p in found if p.exists()), key=lambda p: -p.stat().st_mtime)
 
 

@@ -68,8 +68,10 @@ def bed_deck(n: tuple) -> list:
 MODES = ("liggghts", "noop", "native", "native-within", "held")
 
 
-def replies(lmp, count: int, steps: int) -> list:
-    """A reply per fluid step: small random forces and torques, 40% of the weight upwards."""
+def replies(lmp, count: int, steps: int, scale: float) -> list:
+    """A reply per fluid step: random forces and torques, 40% of the weight upwards, all times
+    ``scale`` (1e-12 by default: loads that move nothing, so that LIGGGHTS's own work, its
+    neighbour-list rebuilds included, stays that of the run without them)."""
     rng = np.random.default_rng(1)
     atoms = lmp.atoms()
     mass = lmp.vector(b"rmass", atoms.count)
@@ -77,19 +79,21 @@ def replies(lmp, count: int, steps: int) -> list:
     for _ in range(steps):
         r = np.zeros(count, lbmdem.REPLY_DTYPE)
         r["id"] = atoms.tag.astype(np.int64) - 1
-        r["force"] = 1e-6 * rng.standard_normal((count, 3)) + (mass * 9.81 * 0.4)[:, None] * [0, 0, 1]
-        r["torque"] = 1e-12 * rng.standard_normal((count, 3))
+        r["force"] = scale * (1e-6 * rng.standard_normal((count, 3))
+                              + (mass * 9.81 * 0.4)[:, None] * [0, 0, 1])
+        r["torque"] = scale * 1e-12 * rng.standard_normal((count, 3))
         out.append(r)
     return out
 
 
-def time_mode(lmp, mode: str, k: int, loads, fluid: list) -> float:
-    """Seconds per LIGGGHTS step over the fluid steps of ``fluid`` but the first."""
+def time_mode(lmp, mode: str, k: int, loads, fluid: list) -> tuple:
+    """Seconds per LIGGGHTS step over the fluid steps of ``fluid`` but the first: wall-clock and
+    this process's CPU time (the share of a loaded machine's cores the others took left out)."""
     lo, hi, periodic = np.zeros(3), np.ones(3), np.zeros(3, bool)
-    t0 = time.perf_counter()
+    t0 = c0 = 0.0
     for i, reply in enumerate(fluid):
         if i == 1:  # the first, with LIGGGHTS's set-up of the new fix, is not timed
-            t0 = time.perf_counter()
+            t0, c0 = time.perf_counter(), time.process_time()
         if mode.startswith("native"):
             loads.states(lo, hi, periodic)
             loads.hold(reply, True)
@@ -100,7 +104,8 @@ def time_mode(lmp, mode: str, k: int, loads, fluid: list) -> float:
         lmp.command(f"run {k} pre no post no" if i else f"run {k} post no")
         if loads is not None:
             loads.check()
-    return (time.perf_counter() - t0) / ((len(fluid) - 1) * k)
+    steps = (len(fluid) - 1) * k
+    return (time.perf_counter() - t0) / steps, (time.process_time() - c0) / steps
 
 
 def make_loads(lmp, mode: str, within):
@@ -119,6 +124,20 @@ def make_loads(lmp, mode: str, within):
     return loads, loads.apply
 
 
+def overhead(times: dict, modes: list) -> dict:
+    """Each mode's median of its time over the mean of LIGGGHTS's own just before and after it
+    (the machine's speed drifts), less 1."""
+    own, per_round = times["liggghts"], len(modes) + 1
+    out = {}
+    for slot, m in enumerate(modes):
+        ratios = []
+        for r, t in enumerate(times[m]):
+            before = own[r * per_round + slot]
+            ratios.append(t / (0.5 * (before + own[r * per_round + slot + 1])))
+        out[m] = round(float(np.median(ratios)) - 1.0, 4)
+    return out
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--atoms-per-side", nargs=3, type=int, default=[25, 25, 32])
@@ -128,6 +147,9 @@ def main(argv=None) -> int:
     ap.add_argument("--modes", nargs="+", default=list(MODES),
                     choices=list(MODES) + ["within"], help="the modes of each round, in order "
                     "(liggghts is always timed)")
+    ap.add_argument("--load-scale", type=float, default=1e-12,
+                    help="the replies' loads times this (1: 40%% of the weight and random forces "
+                         "of about 1e-6 N, which make LIGGGHTS rebuild its neighbour lists more)")
     ap.add_argument("--json", help="write the times here")
     args = ap.parse_args(argv)
     lmp = liggghts.Liggghts(liggghts.load_library(), ["-log", "none", "-screen", "none"])
@@ -137,29 +159,32 @@ def main(argv=None) -> int:
     dt_fluid = args.k * lmp.timestep()
     films = SqueezeFilms(0.07, 0.000625 / 4.0, [(2, 0.0, 1)], np.zeros(3))
     within = SubstepLoads(1210.0, dt_fluid, [0.0, 0.0, -9.81], True, films)
-    fluid = replies(lmp, n, args.fluid_steps + 1)
-    modes = ["liggghts"] + [m for m in args.modes if m != "liggghts"]
-    times = {m: [] for m in modes}
+    fluid = replies(lmp, n, args.fluid_steps + 1, args.load_scale)
+    modes = [m for m in args.modes if m != "liggghts"]
+    times, cpu = {m: [] for m in ["liggghts"] + modes}, {m: [] for m in ["liggghts"] + modes}
     for r in range(args.rounds):
-        for mode in modes:
+        # LIGGGHTS alone before and after each mode: its neighbours' mean is the mode's baseline
+        for mode in [x for m in modes for x in ("liggghts", m)] + ["liggghts"]:
             if mode == "within" and r:
                 continue
             loads, callback = make_loads(lmp, mode, within)
             if callback is not None:
                 lmp.fix_external("lbm_fluid", callback)
-            t = time_mode(lmp, mode, args.k, loads, fluid)
+            t, c = time_mode(lmp, mode, args.k, loads, fluid)
             if callback is not None:
                 lmp.command("unfix lbm_fluid")
             times[mode].append(t)
-            print(f"round {r + 1} {mode:13s} {1e3 * t:8.3f} ms per LIGGGHTS step ({n} atoms, "
-                  f"k = {args.k})", flush=True)
-    own = times["liggghts"]
-    over = {m: round(float(np.median([t / own[i] for i, t in enumerate(ts)])) - 1.0, 4)
-            for m, ts in times.items() if m != "liggghts"}
+            cpu[mode].append(c)
+            print(f"round {r + 1} {mode:13s} {1e3 * t:8.3f} ms per LIGGGHTS step, CPU {1e3 * c:8.3f} "
+                  f"ms ({n} atoms, k = {args.k})", flush=True)
     result = {"atoms": n, "k": args.k, "fluid_steps": args.fluid_steps, "rounds": args.rounds,
+              "load_scale": args.load_scale,
               "ms_per_liggghts_step": {m: [round(1e3 * t, 4) for t in ts] for m, ts in times.items()},
-              "overhead_median": over}
-    print(json.dumps(over))
+              "cpu_ms_per_liggghts_step": {m: [round(1e3 * t, 4) for t in ts]
+                                           for m, ts in cpu.items()},
+              "overhead_median": overhead(times, modes),
+              "cpu_overhead_median": overhead(cpu, modes)}
+    print(json.dumps({"wall": result["overhead_median"], "cpu": result["cpu_overhead_median"]}))
     if args.json:
         with open(args.json, "w") as f:
             json.dump(result, f, indent=1)

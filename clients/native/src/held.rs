@@ -14,14 +14,13 @@ use crate::vec3::{add_to, scale, sub, V3};
 use crate::within::{Kinematics, SubstepLoads};
 use protocol::ParticleReply;
 
-/// The held force and torque in the order of the atoms, kept while LIGGGHTS keeps that order.
-struct Order {
-    tags: Vec<i32>,
-    force: Vec<V3>,
-    torque: Vec<V3>,
-    any_torque: bool,
-    /// The `fexternal` these forces were written to (the fix's own array keeps them).
-    written: usize,
+/// What the callback wrote into `fexternal` since the last `hold`: the fix's own per-atom
+/// array, which LIGGGHTS moves with its atoms when it sorts them or loses some (FixExternal's
+/// `copy_arrays`), so that it holds each atom's force until the loads change or atoms come in.
+#[derive(Clone, Copy, PartialEq)]
+struct Written {
+    address: usize,
+    count: usize,
 }
 
 /// Force and torque by particle id (atom ID - 1), applied by `fix external`.
@@ -32,7 +31,9 @@ pub struct Loads {
     /// The loads within the fluid step (None: held), the LIGGGHTS step at its start.
     pub within: Option<SubstepLoads>,
     first_step: i64,
-    order: Option<Order>,
+    written: Option<Written>,
+    /// Whether any held torque is not 0.
+    any_torque: bool,
     /// Each atom's id, the id -> atom row map, and the spin scratch of the following loads.
     rows: Vec<usize>,
     row_of_id: Vec<usize>,
@@ -49,7 +50,8 @@ impl Loads {
             torque: Vec::new(),
             within: None,
             first_step: 0,
-            order: None,
+            written: None,
+            any_torque: false,
             rows: Vec::new(),
             row_of_id: Vec::new(),
             spin: Vec::new(),
@@ -80,7 +82,8 @@ impl Loads {
                 add_to(&mut atoms.torque[i], sub(torque[id], self.torque.get(id).copied().unwrap_or_default()));
             }
         }
-        (self.force, self.torque, self.order) = (force, torque, None);
+        self.any_torque = torque.iter().any(|t| *t != [0.0; 3]);
+        (self.force, self.torque, self.written) = (force, torque, None);
         Ok(())
     }
 
@@ -122,38 +125,21 @@ impl Loads {
         if self.within.is_some() {
             return self.follow(step, tags, fexternal);
         }
-        let address = fexternal.as_ptr() as usize;
-        let same = self.order.as_ref().is_some_and(|o| o.tags == tags);
-        if !same {
-            self.order = Some(self.in_atom_order(tags)?);
+        let now = Written { address: fexternal.as_ptr() as usize, count: tags.len() };
+        if self.written != Some(now) {
+            for (f, &t) in fexternal.iter_mut().zip(tags) {
+                *f = self.force.get(row_of(t)?).copied().unwrap_or_default();
+            }
+            self.written = Some(now);
         }
-        let order = self.order.as_mut().expect("order");
-        if order.written != address {
-            fexternal.copy_from_slice(&order.force);
-            order.written = address;
-        }
-        if order.any_torque {
-            // SAFETY: inside LIGGGHTS's post_force, the arrays as it holds them.
-            let atoms = unsafe { self.lammps.atoms()? };
-            for (t, add) in atoms.torque.iter_mut().zip(&order.torque) {
-                add_to(t, *add);
+        if self.any_torque {
+            // SAFETY: inside LIGGGHTS's post_force, the array as it holds it.
+            let torque = unsafe { self.lammps.torque(tags.len())? };
+            for (t, &tag) in torque.iter_mut().zip(tags) {
+                add_to(t, self.torque.get(tag as usize - 1).copied().unwrap_or_default());
             }
         }
         Ok(())
-    }
-
-    /// The held loads in the order of the atoms (`tags`).
-    fn in_atom_order(&mut self, tags: &[i32]) -> Result<Order, String> {
-        let mut order = Order { tags: tags.to_vec(), force: Vec::with_capacity(tags.len()),
-                                torque: Vec::with_capacity(tags.len()), any_torque: false, written: 0 };
-        for &t in tags {
-            let id = row_of(t)?;
-            order.force.push(self.force.get(id).copied().unwrap_or_default());
-            let torque = self.torque.get(id).copied().unwrap_or_default();
-            order.any_torque |= torque != [0.0; 3];
-            order.torque.push(torque);
-        }
-        Ok(order)
     }
 
     /// The following loads at this LIGGGHTS step; what the callback wrote is kept in
