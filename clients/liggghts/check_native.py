@@ -69,7 +69,7 @@ def run(lib, how: str, following: bool) -> np.ndarray:
         loads = native.NativeLoads(native.load_library(), lmp)
         if law is not None:
             loads.follow(law)
-        lmp.fix_external("lbm_fluid", loads.callback())
+        loads.attach("lbm_fluid")
     else:
         loads = HeldLoads(lmp, law)
         lmp.fix_external("lbm_fluid", loads.apply)

@@ -227,7 +227,10 @@ class Adapter:
         if within is not None:
             k = self._limit_step(welcome, k, within)
         self.loads = self._loads(within)
-        lmp.fix_external(FIX_FLUID, self.loads.callback() if self.native else self.loads.apply)
+        if self.native:
+            self.loads.attach(FIX_FLUID)
+        else:
+            lmp.fix_external(FIX_FLUID, self.loads.apply)
         return k
 
     def _loads(self, within: Optional[SubstepLoads]):

@@ -245,11 +245,12 @@ class Liggghts:
                             ctypes.c_void_p)
         return bool(find(self._modify(), style.encode(), 0))
 
-    def fix_external(self, fix_id: str, callback) -> None:
-        """Adds ``fix ID all external pf/callback 1 1`` and points it at ``callback``, called in
-        post_force every step to fill fexternal: a Python ``callback(timestep, nlocal, tag, x,
-        fexternal)``, or a C one as (its address, its caller pointer) (native.py)."""
-        self.command(f"fix {fix_id} all external pf/callback 1 1")
+    def fix_external(self, fix_id: str, callback, group: str = "all", napply: int = 1) -> None:
+        """Adds ``fix ID GROUP external pf/callback 1 NAPPLY`` and points it at ``callback``,
+        called in post_force every step to fill fexternal (added to the force of the group's
+        atoms at the steps that are multiples of NAPPLY): a Python ``callback(timestep, nlocal,
+        tag, x, fexternal)``, or a C one as (its address, its caller pointer) (native.py)."""
+        self.command(f"fix {fix_id} {group} external pf/callback 1 {napply}")
         find = self._member(_FIND_FIX_ID, [ctypes.c_void_p, ctypes.c_char_p], ctypes.c_void_p)
         fix = find(self._modify(), fix_id.encode())
         if not fix or _word(fix) != self._vtable(_VTABLE_FIX_EXTERNAL):
@@ -257,7 +258,6 @@ class Liggghts:
         set_callback = self._member(_SET_CALLBACK, [ctypes.c_void_p, ctypes.c_void_p,
                                                     ctypes.c_void_p], None)
         if isinstance(callback, tuple):
-            self._callback = callback
             set_callback(fix, callback[0], callback[1])
             return
         self._callback = Callback(lambda _caller, step, n, tag, x, fext:

@@ -27,7 +27,7 @@ import lbmdem
 
 #: The library's file name, and the version of its functions' signatures this module speaks.
 LIBRARY = "liblbmdem_native.so"
-ABI_VERSION = 1
+ABI_VERSION = 3
 
 _dp = ctypes.POINTER(ctypes.c_double)
 
@@ -58,6 +58,7 @@ def load_library() -> ctypes.CDLL:
     except OSError as e:
         raise NotBuilt(f"{paths[0]} cannot be loaded: {e}") from None
     lib.lbmdem_native_abi.restype = ctypes.c_uint32
+    lib.lbmdem_held_napply.restype = ctypes.c_int64
     if lib.lbmdem_native_abi() != ABI_VERSION:
         raise NotBuilt(f"{paths[0]} is another version (rebuild: cargo build -p lbmdem-native)")
     vp, sz = ctypes.c_void_p, ctypes.c_size_t
@@ -107,9 +108,23 @@ class NativeLoads:
             _doubles(w[2] for w in walls), _doubles(periods))
         self.within = within
 
-    def callback(self) -> tuple:
-        """``fix external``'s callback and its caller pointer."""
-        return ctypes.cast(self.lib.lbmdem_loads_apply, ctypes.c_void_p).value, self.ctx
+    def attach(self, fix_id: str) -> list:
+        """Adds the ``fix external`` that applies the loads. Held, its per-atom array keeps the
+        force in the atoms' order (LIGGGHTS moves it with them), and a second one, of no atoms,
+        keeps the torque; the second's callback adds both to the atoms' force and torque in one
+        pass, the fixes' own loop skipped (``napply`` a step never reached). Returns the fixes'
+        IDs."""
+        address = lambda fn: ctypes.cast(getattr(self.lib, fn), ctypes.c_void_p).value  # noqa: E731
+        if self.within is not None:
+            self.lmp.fix_external(fix_id, (address("lbmdem_loads_apply"), self.ctx))
+            return [fix_id]
+        never = self.lib.lbmdem_held_napply()
+        self.lmp.fix_external(fix_id, (address("lbmdem_loads_apply"), self.ctx), napply=never)
+        group = f"{fix_id}_none"
+        self.lmp.command(f"group {group} id 0")  # no atom has ID 0
+        self.lmp.fix_external(f"{fix_id}_torque", (address("lbmdem_torque_apply"), self.ctx),
+                              group, napply=never)
+        return [fix_id, f"{fix_id}_torque"]
 
     def states(self, lo, hi, periodic) -> np.ndarray:
         """The atoms as the fluid's particle states (ids atom ID - 1, centres wrapped along the

@@ -42,6 +42,8 @@ from held_loads import HeldLoads
 from substep_loads import SqueezeFilms, SubstepLoads
 
 RADIUS, SPACING, DENSITY = 0.0005, 0.00105, 2500.0
+#: The ID of the adapter's fix external (lbm_liggghts.FIX_FLUID).
+FIX = lbm_liggghts.FIX_FLUID
 
 
 def bed_deck(n: tuple) -> list:
@@ -109,19 +111,21 @@ def time_mode(lmp, mode: str, k: int, loads, fluid: list) -> tuple:
 
 
 def make_loads(lmp, mode: str, within):
-    """The loads of ``mode`` and its fix external's callback (None: no fix)."""
+    """The loads of ``mode`` with their ``fix external`` added; the fixes' IDs."""
     if mode == "liggghts":
-        return None, None
+        return None, []
     if mode == "noop":
         lib = native.load_library()
-        return None, (ctypes.cast(lib.lbmdem_zero_apply, ctypes.c_void_p).value, None)
+        lmp.fix_external(FIX, (ctypes.cast(lib.lbmdem_zero_apply, ctypes.c_void_p).value, None))
+        return None, [FIX]
     if mode.startswith("native"):
         loads = native.NativeLoads(native.load_library(), lmp)
         if mode == "native-within":
             loads.follow(within)
-        return loads, loads.callback()
+        return loads, loads.attach(FIX)
     loads = HeldLoads(lmp, within if mode == "within" else None)
-    return loads, loads.apply
+    lmp.fix_external(FIX, loads.apply)
+    return loads, [FIX]
 
 
 def overhead(times: dict, modes: list) -> dict:
@@ -167,12 +171,10 @@ def main(argv=None) -> int:
         for mode in [x for m in modes for x in ("liggghts", m)] + ["liggghts"]:
             if mode == "within" and r:
                 continue
-            loads, callback = make_loads(lmp, mode, within)
-            if callback is not None:
-                lmp.fix_external("lbm_fluid", callback)
+            loads, fixes = make_loads(lmp, mode, within)
             t, c = time_mode(lmp, mode, args.k, loads, fluid)
-            if callback is not None:
-                lmp.command("unfix lbm_fluid")
+            for fix in fixes:
+                lmp.command(f"unfix {fix}")
             times[mode].append(t)
             cpu[mode].append(c)
             print(f"round {r + 1} {mode:13s} {1e3 * t:8.3f} ms per LIGGGHTS step, CPU {1e3 * c:8.3f} "

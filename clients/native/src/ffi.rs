@@ -13,11 +13,17 @@ use std::ffi::{c_char, c_int, c_void};
 use std::panic::{catch_unwind, AssertUnwindSafe};
 
 /// The version of these functions' signatures (native.py refuses another).
-pub const ABI_VERSION: u32 = 1;
+pub const ABI_VERSION: u32 = 3;
 
 #[no_mangle]
 pub extern "C" fn lbmdem_native_abi() -> u32 {
     ABI_VERSION
+}
+
+/// `napply` of the held loads' two `fix external`s ([`crate::held::NEVER`]).
+#[no_mangle]
+pub extern "C" fn lbmdem_held_napply() -> i64 {
+    crate::held::NEVER
 }
 
 /// A new set of loads for the LIGGGHTS instance `handle`, held constant until
@@ -114,6 +120,25 @@ pub unsafe extern "C" fn lbmdem_loads_apply(caller: *mut c_void, step: i64, nloc
     let tags = std::slice::from_raw_parts(tag, n);
     let fext = std::slice::from_raw_parts_mut((*fexternal).cast::<[f64; 3]>(), n);
     status(loads, |l| l.apply(step, tags, fext));
+}
+
+/// The held loads' second callback (`FixExternal::FnPtr`), of a `fix external` of no atoms
+/// added after the first: its `fexternal` keeps the torque in the atoms' order; it adds the
+/// first fix's `fexternal` to the atoms' force and its own to their torque.
+///
+/// # Safety
+/// As for `lbmdem_loads_apply`.
+#[no_mangle]
+pub unsafe extern "C" fn lbmdem_torque_apply(caller: *mut c_void, step: i64, nlocal: c_int,
+                                             tag: *mut c_int, _x: *mut *mut f64, held: *mut *mut f64) {
+    let loads = &mut *caller.cast::<Loads>();
+    if nlocal <= 0 || loads.error.is_some() {
+        return;
+    }
+    let n = nlocal as usize;
+    let tags = std::slice::from_raw_parts(tag, n);
+    let held = std::slice::from_raw_parts_mut((*held).cast::<[f64; 3]>(), n);
+    status(loads, |l| l.apply_torque(step, tags, held));
 }
 
 /// A callback that writes zero forces: `fix external`'s own cost

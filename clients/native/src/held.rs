@@ -14,14 +14,18 @@ use crate::vec3::{add_to, scale, sub, V3};
 use crate::within::{Kinematics, SubstepLoads};
 use protocol::ParticleReply;
 
-/// What the callback wrote into `fexternal` since the last `hold`: the fix's own per-atom
+/// What a callback wrote into its fix's `fexternal` since the last `hold`: the fix's own per-atom
 /// array, which LIGGGHTS moves with its atoms when it sorts them or loses some (FixExternal's
-/// `copy_arrays`), so that it holds each atom's force until the loads change or atoms come in.
+/// `copy_arrays`), so that it holds each atom's load until the loads change or atoms come in.
 #[derive(Clone, Copy, PartialEq)]
 struct Written {
     address: usize,
     count: usize,
 }
+
+/// `napply` of the held loads' two `fix external`s: their own loop that adds `fexternal` to the
+/// force runs only at the steps that are multiples of it (the callbacks add the loads).
+pub const NEVER: i64 = 2_147_483_647;
 
 /// Force and torque by particle id (atom ID - 1), applied by `fix external`.
 pub struct Loads {
@@ -32,6 +36,9 @@ pub struct Loads {
     pub within: Option<SubstepLoads>,
     first_step: i64,
     written: Option<Written>,
+    written_torque: Option<Written>,
+    /// The force fix's `fexternal` at this step (its callback comes first), for the torque's.
+    force_rows: Option<(i64, Written)>,
     /// Whether any held torque is not 0.
     any_torque: bool,
     /// Each atom's id, the id -> atom row map, and the spin scratch of the following loads.
@@ -51,6 +58,8 @@ impl Loads {
             within: None,
             first_step: 0,
             written: None,
+            written_torque: None,
+            force_rows: None,
             any_torque: false,
             rows: Vec::new(),
             row_of_id: Vec::new(),
@@ -83,7 +92,7 @@ impl Loads {
             }
         }
         self.any_torque = torque.iter().any(|t| *t != [0.0; 3]);
-        (self.force, self.torque, self.written) = (force, torque, None);
+        (self.force, self.torque, self.written, self.written_torque) = (force, torque, None, None);
         Ok(())
     }
 
@@ -120,24 +129,48 @@ impl Loads {
         Ok(())
     }
 
-    /// `fix external`'s callback: fexternal = the force, torque += the torque.
+    /// `fix external`'s callback: fexternal = the force (following the atoms, also torque +=
+    /// the torque). Held, the fix's `fexternal` keeps the force, added by `apply_torque`.
     pub fn apply(&mut self, step: i64, tags: &[i32], fexternal: &mut [V3]) -> Result<(), String> {
         if self.within.is_some() {
             return self.follow(step, tags, fexternal);
         }
         let now = Written { address: fexternal.as_ptr() as usize, count: tags.len() };
         if self.written != Some(now) {
-            for (f, &t) in fexternal.iter_mut().zip(tags) {
-                *f = self.force.get(row_of(t)?).copied().unwrap_or_default();
-            }
+            by_tag(&self.force, tags, fexternal)?;
             self.written = Some(now);
         }
-        if self.any_torque {
-            // SAFETY: inside LIGGGHTS's post_force, the array as it holds it.
-            let torque = unsafe { self.lammps.torque(tags.len())? };
-            for (t, &tag) in torque.iter_mut().zip(tags) {
-                add_to(t, self.torque.get(tag as usize - 1).copied().unwrap_or_default());
+        self.force_rows = Some((step, now));
+        Ok(())
+    }
+
+    /// The callback of the second, held, `fix external` (of no atoms), whose `fexternal` keeps
+    /// the held torque in the atoms' order: force += the first fix's `fexternal`, torque += this
+    /// one's, in one pass (where the fixes' own loop runs, at multiples of `NEVER`, the force is
+    /// left to it).
+    pub fn apply_torque(&mut self, step: i64, tags: &[i32], held: &mut [V3]) -> Result<(), String> {
+        let now = Written { address: held.as_ptr() as usize, count: tags.len() };
+        if self.any_torque && self.written_torque != Some(now) {
+            by_tag(&self.torque, tags, held)?;
+            self.written_torque = Some(now);
+        }
+        let Some((at, rows)) = self.force_rows.take().filter(|(at, w)| *at == step && w.count == tags.len()) else {
+            return Err(format!("step {step}: the force's fix external did not run before the torque's"));
+        };
+        // SAFETY: inside LIGGGHTS's post_force; `rows` is the force fix's fexternal of this step.
+        let (f, torque) = unsafe { self.lammps.forces(tags.len())? };
+        let force = unsafe { std::slice::from_raw_parts(rows.address as *const V3, rows.count) };
+        let force_too = at % NEVER != 0;
+        match (force_too, self.any_torque) {
+            (true, true) => {
+                for (((f, t), fh), th) in f.iter_mut().zip(torque.iter_mut()).zip(force).zip(held.iter()) {
+                    add_to(f, *fh);
+                    add_to(t, *th);
+                }
             }
+            (true, false) => f.iter_mut().zip(force).for_each(|(f, fh)| add_to(f, *fh)),
+            (false, true) => torque.iter_mut().zip(held.iter()).for_each(|(t, th)| add_to(t, *th)),
+            (false, false) => {}
         }
         Ok(())
     }
@@ -178,4 +211,12 @@ impl Loads {
             w.grow(size);
         }
     }
+}
+
+/// `out[i]` = `table[tag[i] - 1]` (0 for an ID beyond the table).
+fn by_tag(table: &[V3], tags: &[i32], out: &mut [V3]) -> Result<(), String> {
+    for (o, &t) in out.iter_mut().zip(tags) {
+        *o = table.get(row_of(t)?).copied().unwrap_or_default();
+    }
+    Ok(())
 }

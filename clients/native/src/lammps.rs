@@ -77,12 +77,12 @@ impl Lammps {
         Ok(if n == 0 { &[] } else { std::slice::from_raw_parts(p, n) })
     }
 
-    /// The atoms' torque alone (the held loads' callback).
+    /// The atoms' force and torque alone (the held loads' callback).
     ///
     /// # Safety
     /// As for `atoms`; `n` the owned atoms.
-    pub unsafe fn torque<'a>(&self, n: usize) -> Result<&'a mut [V3], String> {
-        self.rows(b"torque\0", n)
+    pub unsafe fn forces<'a>(&self, n: usize) -> Result<(&'a mut [V3], &'a mut [V3]), String> {
+        Ok((self.rows(b"f\0", n)?, self.rows(b"torque\0", n)?))
     }
 
     /// The owned atoms' arrays.
