@@ -30,11 +30,13 @@ from held_loads import HeldLoads
 from substep_loads import SqueezeFilms, SubstepLoads
 
 K, FLUID_STEPS, N = 20, 4, (6, 6, 4)
-RADIUS, SPACING = 0.0005, 0.00105
+RADIUS, SPACING, DENSITY = 0.0005, 0.00105, 2500.0
 
 
-def deck() -> list:
-    lx, ly, lz = (SPACING * c for c in N)
+def bed_deck(n: tuple, settle: int) -> list:
+    """A bed of n[0] x n[1] x n[2] glass spheres of 1 mm on a floor, under gravity, that settles
+    for ``settle`` steps (also validation/crossdem/adapter_overhead.py's)."""
+    lx, ly, lz = (SPACING * c for c in n)
     return [
         "units si", "atom_style granular", "atom_modify map array", "boundary f f f",
         "newton off", "communicate single vel yes",
@@ -47,14 +49,16 @@ def deck() -> list:
         "pair_style gran model hertz tangential history", "pair_coeff * *",
         "timestep 2e-6", f"lattice sc {SPACING!r} origin 0.5 0.5 0.5",
         f"region bed block 0 {lx!r} 0 {ly!r} 0 {lz!r} units box",
-        "create_atoms 1 region bed", f"set group all diameter {2 * RADIUS!r} density 2500.0",
+        "create_atoms 1 region bed", f"set group all diameter {2 * RADIUS!r} density {DENSITY!r}",
         "fix floor all wall/gran model hertz tangential history primitive type 1 zplane 0.0",
         "fix gravity all gravity 9.81 vector 0.0 0.0 -1.0", "fix integr all nve/sphere",
-        "run 300",
+        f"run {settle}",
     ]
 
 
 def within(dt_fluid: float) -> SubstepLoads:
+    """The loads following the atoms: water-like liquid (1210 kg/m^3, 0.07 Pa s), the films' cut-off
+    a cell of 0.156 mm, the floor's film."""
     films = SqueezeFilms(0.07, 0.000625 / 4.0, [(2, 0.0, 1)], np.zeros(3))
     return SubstepLoads(1210.0, dt_fluid, [0.0, 0.0, -9.81], True, films)
 
@@ -62,7 +66,7 @@ def within(dt_fluid: float) -> SubstepLoads:
 def run(lib, how: str, following: bool) -> np.ndarray:
     """x, v, omega (by atom ID) after the fluid steps, the loads applied by ``how``."""
     lmp = liggghts.Liggghts(lib, ["-log", "none", "-screen", "none"])
-    for line in deck():
+    for line in bed_deck(N, 300):
         lmp.command(line)
     law = within(K * lmp.timestep()) if following else None
     if how == "native":

@@ -38,33 +38,11 @@ import lbmdem
 import liggghts
 import lbm_liggghts
 import native
+from check_native import bed_deck, within as following
 from held_loads import HeldLoads
-from substep_loads import SqueezeFilms, SubstepLoads
 
-RADIUS, SPACING, DENSITY = 0.0005, 0.00105, 2500.0
 #: The ID of the adapter's fix external (lbm_liggghts.FIX_FLUID).
 FIX = lbm_liggghts.FIX_FLUID
-
-
-def bed_deck(n: tuple) -> list:
-    lx, ly, lz = (SPACING * c for c in n)
-    return [
-        "units si", "atom_style granular", "atom_modify map array", "boundary f f f",
-        "newton off", "communicate single vel yes",
-        f"region domain block 0 {lx!r} 0 {ly!r} 0 {2 * lz!r} units box", "create_box 1 domain",
-        "neighbor 0.0002 bin", "neigh_modify delay 0",
-        "fix m1 all property/global youngsModulus peratomtype 5.0e6",
-        "fix m2 all property/global poissonsRatio peratomtype 0.3",
-        "fix m3 all property/global coefficientRestitution peratomtypepair 1 0.9",
-        "fix m4 all property/global coefficientFriction peratomtypepair 1 0.5",
-        "pair_style gran model hertz tangential history", "pair_coeff * *",
-        "timestep 2e-6", f"lattice sc {SPACING!r} origin 0.5 0.5 0.5",
-        f"region bed block 0 {lx!r} 0 {ly!r} 0 {lz!r} units box",
-        "create_atoms 1 region bed", f"set group all diameter {2 * RADIUS!r} density {DENSITY!r}",
-        "fix floor all wall/gran model hertz tangential history primitive type 1 zplane 0.0",
-        "fix gravity all gravity 9.81 vector 0.0 0.0 -1.0", "fix integr all nve/sphere",
-        "run 2000",
-    ]
 
 
 MODES = ("liggghts", "noop", "native", "native-within", "held")
@@ -157,12 +135,11 @@ def main(argv=None) -> int:
     ap.add_argument("--json", help="write the times here")
     args = ap.parse_args(argv)
     lmp = liggghts.Liggghts(liggghts.load_library(), ["-log", "none", "-screen", "none"])
-    for line in bed_deck(tuple(args.atoms_per_side)):
+    for line in bed_deck(tuple(args.atoms_per_side), 2000):
         lmp.command(line)
     n = lmp.natoms()
     dt_fluid = args.k * lmp.timestep()
-    films = SqueezeFilms(0.07, 0.000625 / 4.0, [(2, 0.0, 1)], np.zeros(3))
-    within = SubstepLoads(1210.0, dt_fluid, [0.0, 0.0, -9.81], True, films)
+    within = following(dt_fluid)
     fluid = replies(lmp, n, args.fluid_steps + 1, args.load_scale)
     modes = [m for m in args.modes if m != "liggghts"]
     times, cpu = {m: [] for m in ["liggghts"] + modes}, {m: [] for m in ["liggghts"] + modes}
