@@ -48,19 +48,26 @@ def candidates() -> list:
 
 
 def load_library() -> ctypes.CDLL:
-    """The native helper, or NotBuilt saying how to build it."""
-    paths = candidates()
-    if not paths:
-        raise NotBuilt(f"{LIBRARY} not found (build it: cargo build --release -p lbmdem-native, "
-                       f"or set LBMDEM_NATIVE to its path)")
-    try:
-        lib = ctypes.CDLL(str(paths[0]))
-    except OSError as e:
-        raise NotBuilt(f"{paths[0]} cannot be loaded: {e}") from None
-    lib.lbmdem_native_abi.restype = ctypes.c_uint32
+    """The native helper (the first candidate of this version), or NotBuilt saying how to build
+    it."""
+    paths, why = candidates(), []
+    for path in paths:
+        try:
+            lib = ctypes.CDLL(str(path))
+        except OSError as e:
+            why.append(f"{path} cannot be loaded: {e}")
+            continue
+        lib.lbmdem_native_abi.restype = ctypes.c_uint32
+        if lib.lbmdem_native_abi() == ABI_VERSION:
+            return _declare(lib, path)
+        why.append(f"{path} is another version")
+    raise NotBuilt(f"{LIBRARY} {'; '.join(why) if why else 'not found'} (build it: cargo build "
+                   f"--release -p lbmdem-native, or set LBMDEM_NATIVE to its path)")
+
+
+def _declare(lib: ctypes.CDLL, path: Path) -> ctypes.CDLL:
+    """``lib`` with its functions' signatures."""
     lib.lbmdem_held_napply.restype = ctypes.c_int64
-    if lib.lbmdem_native_abi() != ABI_VERSION:
-        raise NotBuilt(f"{paths[0]} is another version (rebuild: cargo build -p lbmdem-native)")
     vp, sz = ctypes.c_void_p, ctypes.c_size_t
     for fn, args, res in (
         ("lbmdem_loads_new", [vp, vp, vp], vp),
@@ -74,7 +81,7 @@ def load_library() -> ctypes.CDLL:
     ):
         f = getattr(lib, fn)
         f.argtypes, f.restype = args, res
-    lib.path = paths[0]
+    lib.path = path
     return lib
 
 
