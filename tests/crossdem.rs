@@ -285,7 +285,11 @@ fn liggghts_native_loads_are_the_python_adapters() {
     let path = format!("{PYTHON_CLIENTS}:{}", clients.display());
     for (script, args, said_ok) in [
         ("check_native.py", &[][..], "the native loads are the adapter's"),
-        ("check_loads.py", &["--native"][..], "force and torque act as held"),
+        (
+            "check_loads.py",
+            &["--native"][..],
+            "force and torque act as held",
+        ),
     ] {
         let check = Command::new("python3")
             .arg(clients.join(script))

@@ -32,9 +32,16 @@ pub extern "C" fn lbmdem_held_napply() -> i64 {
 /// # Safety
 /// `handle` is a live LIGGGHTS instance, the two functions its library's extract functions.
 #[no_mangle]
-pub unsafe extern "C" fn lbmdem_loads_new(handle: *mut c_void, extract_atom: ExtractFn,
-                                          extract_global: ExtractFn) -> *mut Loads {
-    Box::into_raw(Box::new(Loads::new(Lammps { handle, extract_atom, extract_global })))
+pub unsafe extern "C" fn lbmdem_loads_new(
+    handle: *mut c_void,
+    extract_atom: ExtractFn,
+    extract_global: ExtractFn,
+) -> *mut Loads {
+    Box::into_raw(Box::new(Loads::new(Lammps {
+        handle,
+        extract_atom,
+        extract_global,
+    })))
 }
 
 /// # Safety
@@ -53,14 +60,27 @@ pub unsafe extern "C" fn lbmdem_loads_free(loads: *mut Loads) {
 /// # Safety
 /// `gravity` and `periods` point to 3 doubles, `wall_axis`, `wall_at`, `wall_sign` to `n_walls`.
 #[no_mangle]
-pub unsafe extern "C" fn lbmdem_loads_follow(loads: *mut Loads, fluid_density: f64, dt: f64,
-                                             gravity: *const f64, drag: c_int, viscosity: f64,
-                                             cutoff: f64, n_walls: usize, wall_axis: *const i64,
-                                             wall_at: *const f64, wall_sign: *const f64,
-                                             periods: *const f64) {
+pub unsafe extern "C" fn lbmdem_loads_follow(
+    loads: *mut Loads,
+    fluid_density: f64,
+    dt: f64,
+    gravity: *const f64,
+    drag: c_int,
+    viscosity: f64,
+    cutoff: f64,
+    n_walls: usize,
+    wall_axis: *const i64,
+    wall_at: *const f64,
+    wall_sign: *const f64,
+    periods: *const f64,
+) {
     let films = (cutoff > 0.0).then(|| {
         let walls = (0..n_walls)
-            .map(|w| Wall { axis: *wall_axis.add(w) as usize, at: *wall_at.add(w), sign: *wall_sign.add(w) })
+            .map(|w| Wall {
+                axis: *wall_axis.add(w) as usize,
+                at: *wall_at.add(w),
+                sign: *wall_sign.add(w),
+            })
             .collect();
         SqueezeFilms::new(viscosity, cutoff, walls, *periods.cast::<[f64; 3]>())
     });
@@ -73,10 +93,18 @@ pub unsafe extern "C" fn lbmdem_loads_follow(loads: *mut Loads, fluid_density: f
 /// # Safety
 /// `replies` points to `n` replies.
 #[no_mangle]
-pub unsafe extern "C" fn lbmdem_loads_hold(loads: *mut Loads, replies: *const ParticleReply, n: usize,
-                                           ran: c_int) -> c_int {
+pub unsafe extern "C" fn lbmdem_loads_hold(
+    loads: *mut Loads,
+    replies: *const ParticleReply,
+    n: usize,
+    ran: c_int,
+) -> c_int {
     let loads = &mut *loads;
-    let replies = if n == 0 { &[][..] } else { std::slice::from_raw_parts(replies, n) };
+    let replies = if n == 0 {
+        &[][..]
+    } else {
+        std::slice::from_raw_parts(replies, n)
+    };
     status(loads, |l| l.hold(replies, ran != 0))
 }
 
@@ -85,8 +113,14 @@ pub unsafe extern "C" fn lbmdem_loads_hold(loads: *mut Loads, replies: *const Pa
 /// # Safety
 /// `out` has room for `capacity` states; `lo`, `hi` point to 3 doubles, `periodic` to 3 bytes.
 #[no_mangle]
-pub unsafe extern "C" fn lbmdem_states(loads: *mut Loads, out: *mut ParticleState, capacity: usize,
-                                       lo: *const f64, hi: *const f64, periodic: *const u8) -> isize {
+pub unsafe extern "C" fn lbmdem_states(
+    loads: *mut Loads,
+    out: *mut ParticleState,
+    capacity: usize,
+    lo: *const f64,
+    hi: *const f64,
+    periodic: *const u8,
+) -> isize {
     let loads = &mut *loads;
     let domain = Domain {
         lo: *lo.cast::<[f64; 3]>(),
@@ -102,7 +136,11 @@ pub unsafe extern "C" fn lbmdem_states(loads: *mut Loads, out: *mut ParticleStat
         }
         gather(&atoms, &domain, std::slice::from_raw_parts_mut(out, n))
     });
-    if done == 0 { n as isize } else { -1 }
+    if done == 0 {
+        n as isize
+    } else {
+        -1
+    }
 }
 
 /// `fix external`'s callback (`FixExternal::FnPtr`): `caller` is the `Loads`.
@@ -110,8 +148,14 @@ pub unsafe extern "C" fn lbmdem_states(loads: *mut Loads, out: *mut ParticleStat
 /// # Safety
 /// Called by LIGGGHTS's FixExternal::post_force with `caller` from `lbmdem_loads_new`.
 #[no_mangle]
-pub unsafe extern "C" fn lbmdem_loads_apply(caller: *mut c_void, step: i64, nlocal: c_int,
-                                            tag: *mut c_int, _x: *mut *mut f64, fexternal: *mut *mut f64) {
+pub unsafe extern "C" fn lbmdem_loads_apply(
+    caller: *mut c_void,
+    step: i64,
+    nlocal: c_int,
+    tag: *mut c_int,
+    _x: *mut *mut f64,
+    fexternal: *mut *mut f64,
+) {
     let loads = &mut *caller.cast::<Loads>();
     if nlocal <= 0 || loads.error.is_some() {
         return;
@@ -129,8 +173,14 @@ pub unsafe extern "C" fn lbmdem_loads_apply(caller: *mut c_void, step: i64, nloc
 /// # Safety
 /// As for `lbmdem_loads_apply`.
 #[no_mangle]
-pub unsafe extern "C" fn lbmdem_torque_apply(caller: *mut c_void, step: i64, nlocal: c_int,
-                                             tag: *mut c_int, _x: *mut *mut f64, held: *mut *mut f64) {
+pub unsafe extern "C" fn lbmdem_torque_apply(
+    caller: *mut c_void,
+    step: i64,
+    nlocal: c_int,
+    tag: *mut c_int,
+    _x: *mut *mut f64,
+    held: *mut *mut f64,
+) {
     let loads = &mut *caller.cast::<Loads>();
     if nlocal <= 0 || loads.error.is_some() {
         return;
@@ -147,8 +197,14 @@ pub unsafe extern "C" fn lbmdem_torque_apply(caller: *mut c_void, step: i64, nlo
 /// # Safety
 /// Called by LIGGGHTS's FixExternal::post_force.
 #[no_mangle]
-pub unsafe extern "C" fn lbmdem_zero_apply(_: *mut c_void, _: i64, nlocal: c_int, _: *mut c_int,
-                                           _: *mut *mut f64, fexternal: *mut *mut f64) {
+pub unsafe extern "C" fn lbmdem_zero_apply(
+    _: *mut c_void,
+    _: i64,
+    nlocal: c_int,
+    _: *mut c_int,
+    _: *mut *mut f64,
+    fexternal: *mut *mut f64,
+) {
     if nlocal > 0 {
         std::ptr::write_bytes(*fexternal, 0, 3 * nlocal as usize);
     }
@@ -178,7 +234,9 @@ fn status(loads: &mut Loads, f: impl FnOnce(&mut Loads) -> Result<(), String>) -
             -1
         }
         Err(_) => {
-            loads.error.get_or_insert_with(|| "the native helper panicked".into());
+            loads
+                .error
+                .get_or_insert_with(|| "the native helper panicked".into());
             -1
         }
     }

@@ -27,7 +27,13 @@ pub struct SqueezeFilms {
 
 impl SqueezeFilms {
     pub fn new(viscosity: f64, cutoff: f64, walls: Vec<Wall>, periods: V3) -> SqueezeFilms {
-        SqueezeFilms { viscosity, cutoff, walls, periods, pairs: Vec::new() }
+        SqueezeFilms {
+            viscosity,
+            cutoff,
+            walls,
+            periods,
+            pairs: Vec::new(),
+        }
     }
 
     /// The pairs (by id) that can come within the cut-off while each sphere moves up to `travel`.
@@ -44,8 +50,12 @@ impl SqueezeFilms {
             if i == usize::MAX || j == usize::MAX {
                 continue;
             }
-            let pair = self.pair_force(separation(sub(x[i], x[j]), self.periods), sub(v[i], v[j]),
-                                       radius[i], radius[j]);
+            let pair = self.pair_force(
+                separation(sub(x[i], x[j]), self.periods),
+                sub(v[i], v[j]),
+                radius[i],
+                radius[j],
+            );
             crate::vec3::add_to(&mut f[i], pair);
             f[j] = sub(f[j], pair);
         }
@@ -64,7 +74,10 @@ impl SqueezeFilms {
         let normal = scale(d, 1.0 / if dist > 0.0 { dist } else { 1.0 });
         let r_eff = ri * rj / (ri + rj);
         let approach = -dot(dv, normal);
-        scale(normal, film_damping(self.viscosity, r_eff, dist - ri - rj, self.cutoff) * approach)
+        scale(
+            normal,
+            film_damping(self.viscosity, r_eff, dist - ri - rj, self.cutoff) * approach,
+        )
     }
 }
 
@@ -129,11 +142,20 @@ impl Grid {
         let (mut width, mut dims, mut periodic) = ([0.0; 3], [1usize; 3], [false; 3]);
         for a in 0..3 {
             periodic[a] = periods[a] > 0.0;
-            let span = if periodic[a] { periods[a] } else { hi[a] - lo[a] + size };
+            let span = if periodic[a] {
+                periods[a]
+            } else {
+                hi[a] - lo[a] + size
+            };
             dims[a] = ((span / size).floor() as usize).max(1);
             width[a] = span / dims[a] as f64;
         }
-        Grid { lo, width, dims, periodic }
+        Grid {
+            lo,
+            width,
+            dims,
+            periodic,
+        }
     }
 
     fn cell(&self, p: V3) -> [usize; 3] {
@@ -141,7 +163,11 @@ impl Grid {
         for a in 0..3 {
             let k = ((p[a] - self.lo[a]) / self.width[a]).floor() as i64;
             let d = self.dims[a] as i64;
-            c[a] = if self.periodic[a] { k.rem_euclid(d) } else { k.clamp(0, d - 1) } as usize;
+            c[a] = if self.periodic[a] {
+                k.rem_euclid(d)
+            } else {
+                k.clamp(0, d - 1)
+            } as usize;
         }
         c
     }
@@ -219,10 +245,14 @@ mod tests {
     fn cloud(n: usize, seed: u64) -> Vec<V3> {
         let mut s = seed;
         let mut next = || {
-            s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             (s >> 11) as f64 / (1u64 << 53) as f64
         };
-        (0..n).map(|_| [next() * 0.01, next() * 0.01, next() * 0.004]).collect()
+        (0..n)
+            .map(|_| [next() * 0.01, next() * 0.01, next() * 0.004])
+            .collect()
     }
 
     #[test]
@@ -230,13 +260,25 @@ mod tests {
         let x = cloud(400, 7);
         let radius = vec![0.0004; x.len()];
         for periods in [[0.0; 3], [0.01, 0.0, 0.0], [0.01, 0.01, 0.004]] {
-            assert_eq!(near_pairs(&x, &radius, 0.0003, periods), brute(&x, &radius, 0.0003, periods));
+            assert_eq!(
+                near_pairs(&x, &radius, 0.0003, periods),
+                brute(&x, &radius, 0.0003, periods)
+            );
         }
     }
 
     #[test]
     fn a_film_pushes_an_approaching_pair_apart_and_damps_a_wall_approach() {
-        let mut films = SqueezeFilms::new(0.1, 0.001, vec![Wall { axis: 2, at: 0.0, sign: 1.0 }], [0.0; 3]);
+        let mut films = SqueezeFilms::new(
+            0.1,
+            0.001,
+            vec![Wall {
+                axis: 2,
+                at: 0.0,
+                sign: 1.0,
+            }],
+            [0.0; 3],
+        );
         let x = [[0.0, 0.0, 0.0021], [0.0021, 0.0, 0.0021]];
         let (v, radius) = ([[0.01, 0.0, 0.0], [0.0, 0.0, -0.01]], [0.001, 0.001]);
         films.candidates(&[0, 1], &x, &radius, 0.0);

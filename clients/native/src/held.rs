@@ -72,7 +72,12 @@ impl Loads {
     /// atoms' force and torque take the change of the loads, for the first half kick of the next
     /// run.
     pub fn hold(&mut self, replies: &[ParticleReply], ran: bool) -> Result<(), String> {
-        let size = replies.iter().map(|r| r.id as usize + 1).max().unwrap_or(0).max(self.force.len());
+        let size = replies
+            .iter()
+            .map(|r| r.id as usize + 1)
+            .max()
+            .unwrap_or(0)
+            .max(self.force.len());
         // SAFETY: LIGGGHTS is between runs.
         let atoms = unsafe { self.lammps.atoms()? };
         self.map_rows(atoms.tag, size)?;
@@ -87,8 +92,14 @@ impl Loads {
         }
         if ran {
             for (i, &id) in self.rows.iter().enumerate() {
-                add_to(&mut atoms.f[i], sub(force[id], self.force.get(id).copied().unwrap_or_default()));
-                add_to(&mut atoms.torque[i], sub(torque[id], self.torque.get(id).copied().unwrap_or_default()));
+                add_to(
+                    &mut atoms.f[i],
+                    sub(force[id], self.force.get(id).copied().unwrap_or_default()),
+                );
+                add_to(
+                    &mut atoms.torque[i],
+                    sub(torque[id], self.torque.get(id).copied().unwrap_or_default()),
+                );
             }
         }
         self.any_torque = torque.iter().any(|t| *t != [0.0; 3]);
@@ -101,13 +112,26 @@ impl Loads {
     fn hold_within(&mut self, force: &mut [V3], torque: &[V3], atoms: &Atoms) -> Result<(), String> {
         let (_, step) = self.lammps.clock()?;
         self.first_step = step;
-        let kin = Kinematics { x: atoms.x, v: atoms.v, omega: atoms.omega, radius: atoms.radius };
+        let kin = Kinematics {
+            x: atoms.x,
+            v: atoms.v,
+            omega: atoms.omega,
+            radius: atoms.radius,
+        };
         let within = self.within.as_mut().expect("within");
         within.hold(&self.rows, force, torque, &kin, atoms.rmass);
         let mut start = vec![[0.0; 3]; self.rows.len()];
         self.spin.resize(self.rows.len(), [0.0; 3]);
-        within.loads(&self.rows, &self.row_of_id, 0.0, &kin, |_| ([0.0; 3], [0.0; 3]), 0.0,
-                     &mut start, &mut self.spin);
+        within.loads(
+            &self.rows,
+            &self.row_of_id,
+            0.0,
+            &kin,
+            |_| ([0.0; 3], [0.0; 3]),
+            0.0,
+            &mut start,
+            &mut self.spin,
+        );
         for (i, &id) in self.rows.iter().enumerate() {
             force[id] = start[i];
         }
@@ -135,7 +159,10 @@ impl Loads {
         if self.within.is_some() {
             return self.follow(step, tags, fexternal);
         }
-        let now = Written { address: fexternal.as_ptr() as usize, count: tags.len() };
+        let now = Written {
+            address: fexternal.as_ptr() as usize,
+            count: tags.len(),
+        };
         if self.written != Some(now) {
             by_tag(&self.force, tags, fexternal)?;
             self.written = Some(now);
@@ -149,13 +176,22 @@ impl Loads {
     /// one's, in one pass (where the fixes' own loop runs, at multiples of `NEVER`, the force is
     /// left to it).
     pub fn apply_torque(&mut self, step: i64, tags: &[i32], held: &mut [V3]) -> Result<(), String> {
-        let now = Written { address: held.as_ptr() as usize, count: tags.len() };
+        let now = Written {
+            address: held.as_ptr() as usize,
+            count: tags.len(),
+        };
         if self.any_torque && self.written_torque != Some(now) {
             by_tag(&self.torque, tags, held)?;
             self.written_torque = Some(now);
         }
-        let Some((at, rows)) = self.force_rows.take().filter(|(at, w)| *at == step && w.count == tags.len()) else {
-            return Err(format!("step {step}: the force's fix external did not run before the torque's"));
+        let Some((at, rows)) = self
+            .force_rows
+            .take()
+            .filter(|(at, w)| *at == step && w.count == tags.len())
+        else {
+            return Err(format!(
+                "step {step}: the force's fix external did not run before the torque's"
+            ));
         };
         // SAFETY: inside LIGGGHTS's post_force; `rows` is the force fix's fexternal of this step.
         let (f, torque) = unsafe { self.lammps.forces(tags.len())? };
@@ -169,7 +205,10 @@ impl Loads {
                 }
             }
             (true, false) => f.iter_mut().zip(force).for_each(|(f, fh)| add_to(f, *fh)),
-            (false, true) => torque.iter_mut().zip(held.iter()).for_each(|(t, th)| add_to(t, *th)),
+            (false, true) => torque
+                .iter_mut()
+                .zip(held.iter())
+                .for_each(|(t, th)| add_to(t, *th)),
             (false, false) => {}
         }
         Ok(())
@@ -187,12 +226,25 @@ impl Loads {
             self.grow(self.row_of_id.len());
         }
         let within = self.within.as_mut().expect("within");
-        let kin = Kinematics { x: atoms.x, v: atoms.v, omega: atoms.omega, radius: atoms.radius };
+        let kin = Kinematics {
+            x: atoms.x,
+            v: atoms.v,
+            omega: atoms.omega,
+            radius: atoms.radius,
+        };
         let g = within.gravity;
         let (f, torque, mass) = (&*atoms.f, &*atoms.torque, atoms.rmass);
         self.spin.resize(tags.len(), [0.0; 3]);
-        within.loads(&self.rows, &self.row_of_id, (step - self.first_step) as f64 * dt, &kin,
-                     |i| (sub(f[i], scale(g, mass[i])), torque[i]), dt, fexternal, &mut self.spin);
+        within.loads(
+            &self.rows,
+            &self.row_of_id,
+            (step - self.first_step) as f64 * dt,
+            &kin,
+            |i| (sub(f[i], scale(g, mass[i])), torque[i]),
+            dt,
+            fexternal,
+            &mut self.spin,
+        );
         for (i, &id) in self.rows.iter().enumerate() {
             add_to(&mut atoms.torque[i], self.spin[i]);
             self.force[id] = fexternal[i];

@@ -43,7 +43,10 @@ impl Lammps {
         // SAFETY: as in `atom`.
         let p = unsafe { (self.extract_global)(self.handle, name.as_ptr().cast()) };
         if p.is_null() {
-            return Err(format!("no global '{}'", String::from_utf8_lossy(&name[..name.len() - 1])));
+            return Err(format!(
+                "no global '{}'",
+                String::from_utf8_lossy(&name[..name.len() - 1])
+            ));
         }
         Ok(p)
     }
@@ -58,7 +61,10 @@ impl Lammps {
     pub fn clock(&self) -> Result<(f64, i64), String> {
         // SAFETY: dt is a double, ntimestep a bigint (int64_t).
         unsafe {
-            Ok((*self.global(b"dt\0")?.cast::<f64>(), *self.global(b"ntimestep\0")?.cast::<i64>()))
+            Ok((
+                *self.global(b"dt\0")?.cast::<f64>(),
+                *self.global(b"ntimestep\0")?.cast::<i64>(),
+            ))
         }
     }
 
@@ -69,12 +75,20 @@ impl Lammps {
     /// reallocates the array.
     unsafe fn rows<'a>(&self, name: &'static [u8], n: usize) -> Result<&'a mut [V3], String> {
         let rows = self.atom(name)?.cast::<*mut V3>();
-        Ok(if n == 0 { &mut [] } else { std::slice::from_raw_parts_mut(*rows, n) })
+        Ok(if n == 0 {
+            &mut []
+        } else {
+            std::slice::from_raw_parts_mut(*rows, n)
+        })
     }
 
     unsafe fn column<'a, T>(&self, name: &'static [u8], n: usize) -> Result<&'a [T], String> {
         let p = self.atom(name)?.cast::<T>();
-        Ok(if n == 0 { &[] } else { std::slice::from_raw_parts(p, n) })
+        Ok(if n == 0 {
+            &[]
+        } else {
+            std::slice::from_raw_parts(p, n)
+        })
     }
 
     /// The atoms' force and torque alone (the held loads' callback).

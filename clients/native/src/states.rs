@@ -17,10 +17,10 @@ pub struct Domain {
 pub fn gather(atoms: &Atoms, domain: &Domain, out: &mut [ParticleState]) -> Result<(), String> {
     for (i, s) in out.iter_mut().enumerate() {
         let mut position = atoms.x[i];
-        for a in 0..3 {
+        for (a, p) in position.iter_mut().enumerate() {
             if domain.periodic[a] {
                 let (lo, span) = (domain.lo[a], domain.hi[a] - domain.lo[a]);
-                position[a] = lo + floored_mod(position[a] - lo, span);
+                *p = lo + floored_mod(*p - lo, span);
             }
         }
         *s = ParticleState {

@@ -57,8 +57,16 @@ impl SubstepLoads {
     pub fn hold(&mut self, rows: &[usize], force: &[V3], torque: &[V3], atoms: &Kinematics, mass: &[f64]) {
         let size = force.len().max(self.impulse.len());
         let (impulse, angular) = (grown(&self.impulse, size), grown(&self.angular_impulse, size));
-        for t in [&mut self.force, &mut self.torque, &mut self.v0, &mut self.w0, &mut self.accel,
-                  &mut self.spin_accel, &mut self.impulse, &mut self.angular_impulse] {
+        for t in [
+            &mut self.force,
+            &mut self.torque,
+            &mut self.v0,
+            &mut self.w0,
+            &mut self.accel,
+            &mut self.spin_accel,
+            &mut self.impulse,
+            &mut self.angular_impulse,
+        ] {
             t.clear();
             t.resize(size, [0.0; 3]);
         }
@@ -69,12 +77,20 @@ impl SubstepLoads {
             self.torque[id] = torque[id];
             self.v0[id] = atoms.v[i];
             self.w0[id] = atoms.omega[i];
-            self.accel[id] = add(scale(add(force[id], scale(impulse[id], 1.0 / self.dt)), 1.0 / m), self.gravity);
+            self.accel[id] = add(
+                scale(add(force[id], scale(impulse[id], 1.0 / self.dt)), 1.0 / m),
+                self.gravity,
+            );
             self.spin_accel[id] = scale(add(torque[id], scale(angular[id], 1.0 / self.dt)), 1.0 / inertia);
         }
         if let Some(films) = &mut self.films {
             let speed = atoms.v.iter().map(|&v| norm(v)).fold(0.0, f64::max);
-            films.candidates(rows, atoms.x, atoms.radius, 2.0 * speed * self.dt + 1e-3 * films.cutoff);
+            films.candidates(
+                rows,
+                atoms.x,
+                atoms.radius,
+                2.0 * speed * self.dt + 1e-3 * films.cutoff,
+            );
         }
     }
 
@@ -83,8 +99,17 @@ impl SubstepLoads {
     /// (`contact`, `contact_torque`) add `substep` times themselves (the films' force with the
     /// contact force) to the impulses.
     #[allow(clippy::too_many_arguments)]
-    pub fn loads(&mut self, rows: &[usize], row_of_id: &[usize], s: f64, atoms: &Kinematics,
-                 contact: impl Fn(usize) -> (V3, V3), substep: f64, force: &mut [V3], torque: &mut [V3]) {
+    pub fn loads(
+        &mut self,
+        rows: &[usize],
+        row_of_id: &[usize],
+        s: f64,
+        atoms: &Kinematics,
+        contact: impl Fn(usize) -> (V3, V3),
+        substep: f64,
+        force: &mut [V3],
+        torque: &mut [V3],
+    ) {
         for (i, &id) in rows.iter().enumerate() {
             let (_, c_r) = substep_drag(self.rate, atoms.radius[i]);
             let spin_lag = sub(sub(atoms.omega[i], self.w0[id]), scale(self.spin_accel[id], s));
@@ -107,8 +132,16 @@ impl SubstepLoads {
 
     /// Grows the tables to `size` ids (zero loads for ids that were not in the reply).
     pub fn grow(&mut self, size: usize) {
-        for t in [&mut self.force, &mut self.torque, &mut self.v0, &mut self.w0, &mut self.accel,
-                  &mut self.spin_accel, &mut self.impulse, &mut self.angular_impulse] {
+        for t in [
+            &mut self.force,
+            &mut self.torque,
+            &mut self.v0,
+            &mut self.w0,
+            &mut self.accel,
+            &mut self.spin_accel,
+            &mut self.impulse,
+            &mut self.angular_impulse,
+        ] {
             if t.len() < size {
                 t.resize(size, [0.0; 3]);
             }
