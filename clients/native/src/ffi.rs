@@ -156,14 +156,9 @@ pub unsafe extern "C" fn lbmdem_loads_apply(
     _x: *mut *mut f64,
     fexternal: *mut *mut f64,
 ) {
-    let loads = &mut *caller.cast::<Loads>();
-    if nlocal <= 0 || loads.error.is_some() {
-        return;
-    }
-    let n = nlocal as usize;
-    let tags = std::slice::from_raw_parts(tag, n);
-    let fext = std::slice::from_raw_parts_mut((*fexternal).cast::<[f64; 3]>(), n);
-    status(loads, |l| l.apply(step, tags, fext));
+    in_callback(caller, nlocal, tag, fexternal, |l, tags, fext| {
+        l.apply(step, tags, fext)
+    });
 }
 
 /// The held loads' second callback (`FixExternal::FnPtr`), of a `fix external` of no atoms
@@ -181,14 +176,31 @@ pub unsafe extern "C" fn lbmdem_torque_apply(
     _x: *mut *mut f64,
     held: *mut *mut f64,
 ) {
+    in_callback(caller, nlocal, tag, held, |l, tags, held| {
+        l.apply_torque(step, tags, held)
+    });
+}
+
+/// Runs `f` on the `Loads` at `caller` with the atoms' tags and the fix's `fexternal` (nothing
+/// without atoms or after an error).
+///
+/// # Safety
+/// As for `lbmdem_loads_apply`: LIGGGHTS's arrays of `nlocal` atoms.
+unsafe fn in_callback(
+    caller: *mut c_void,
+    nlocal: c_int,
+    tag: *mut c_int,
+    fexternal: *mut *mut f64,
+    f: impl FnOnce(&mut Loads, &[i32], &mut [[f64; 3]]) -> Result<(), String>,
+) {
     let loads = &mut *caller.cast::<Loads>();
     if nlocal <= 0 || loads.error.is_some() {
         return;
     }
     let n = nlocal as usize;
     let tags = std::slice::from_raw_parts(tag, n);
-    let held = std::slice::from_raw_parts_mut((*held).cast::<[f64; 3]>(), n);
-    status(loads, |l| l.apply_torque(step, tags, held));
+    let rows = std::slice::from_raw_parts_mut((*fexternal).cast::<[f64; 3]>(), n);
+    status(loads, |l| f(l, tags, rows));
 }
 
 /// A callback that writes zero forces: `fix external`'s own cost

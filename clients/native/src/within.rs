@@ -57,16 +57,7 @@ impl SubstepLoads {
     pub fn hold(&mut self, rows: &[usize], force: &[V3], torque: &[V3], atoms: &Kinematics, mass: &[f64]) {
         let size = force.len().max(self.impulse.len());
         let (impulse, angular) = (grown(&self.impulse, size), grown(&self.angular_impulse, size));
-        for t in [
-            &mut self.force,
-            &mut self.torque,
-            &mut self.v0,
-            &mut self.w0,
-            &mut self.accel,
-            &mut self.spin_accel,
-            &mut self.impulse,
-            &mut self.angular_impulse,
-        ] {
+        for t in self.tables() {
             t.clear();
             t.resize(size, [0.0; 3]);
         }
@@ -130,9 +121,9 @@ impl SubstepLoads {
         }
     }
 
-    /// Grows the tables to `size` ids (zero loads for ids that were not in the reply).
-    pub fn grow(&mut self, size: usize) {
-        for t in [
+    /// Every per-id table.
+    fn tables(&mut self) -> [&mut Vec<V3>; 8] {
+        [
             &mut self.force,
             &mut self.torque,
             &mut self.v0,
@@ -141,7 +132,12 @@ impl SubstepLoads {
             &mut self.spin_accel,
             &mut self.impulse,
             &mut self.angular_impulse,
-        ] {
+        ]
+    }
+
+    /// Grows the tables to `size` ids (zero loads for ids that were not in the reply).
+    pub fn grow(&mut self, size: usize) {
+        for t in self.tables() {
             if t.len() < size {
                 t.resize(size, [0.0; 3]);
             }
