@@ -2,8 +2,9 @@
 //! built-in DEM, LIGGGHTS and YADE, each started by `lbm-server run --dem ...`; and a DEM the run
 //! starts that refuses its input (LIGGGHTS or YADE missing, a deck whose atoms lack radius or
 //! omega, atoms or bodies that are not the scene's particles) ends the run with a clear message,
-//! exit status 2, no process and no shared-memory file left. Where LIGGGHTS or YADE is absent the
-//! tests that need it say that they were skipped and why, and pass.
+//! exit status 2, no process and no shared-memory file left; and the LIGGGHTS adapter's compiled
+//! loads (clients/native) act as its Python loads do. Where LIGGGHTS or YADE is absent the tests
+//! that need it say that they were skipped and why, and pass.
 
 mod common;
 use common::*;
@@ -267,4 +268,42 @@ fn dem_yade_without_yade_says_how_to_install_it() {
     assert!(said.contains("YADE is not installed"), "{said}");
     assert!(said.contains("apt-get install yade python3-yade"), "{said}");
     assert!(!said.contains("lbm-server: scene '"), "nothing ran: {said}");
+}
+
+/// The LIGGGHTS adapter's compiled loads (clients/native) move the atoms as its Python loads do:
+/// held to the bit, following the atoms (the sub-step drag and the squeeze films) within 1e-9,
+/// LIGGGHTS reordering its atoms within a fluid step (clients/liggghts/check_native.py); and a
+/// held force and torque act exactly from step 0 (check_loads.py --native). Skipped where
+/// LIGGGHTS or the native helper (`cargo build -p lbmdem-native`) is missing.
+#[test]
+fn liggghts_native_loads_are_the_python_adapters() {
+    let test = "liggghts_native_loads_are_the_python_adapters";
+    if !liggghts_present(test) {
+        return;
+    }
+    let clients = Path::new(ROOT).join("clients/liggghts");
+    let path = format!("{PYTHON_CLIENTS}:{}", clients.display());
+    for (script, args, said_ok) in [
+        ("check_native.py", &[][..], "the native loads are the adapter's"),
+        (
+            "check_loads.py",
+            &["--native"][..],
+            "force and torque act as held",
+        ),
+    ] {
+        let check = Command::new("python3")
+            .arg(clients.join(script))
+            .args(args)
+            .current_dir(temp_dir("crossdem-native"))
+            .env("PYTHONPATH", &path)
+            .output()
+            .expect("python3 runs");
+        let said = output_text(&check);
+        if check.status.code() == Some(2) {
+            skipped(&format!("{test}: skipped: {}", said.trim()));
+            return;
+        }
+        assert!(check.status.success(), "{script}: {said}");
+        assert!(said.contains(said_ok), "{script}: {said}");
+    }
 }

@@ -1,13 +1,13 @@
 #!/usr/bin/env python3
 """Measures that the held force and torque act on LIGGGHTS's atoms as the adapter applies them.
 
-    python3 clients/liggghts/check_loads.py [--steps-per-load K]
+    python3 clients/liggghts/check_loads.py [--steps-per-load K] [--native]
 
 One sphere (r 5 mm, 1000 kg/m^3, no gravity, no walls) takes three "fluid steps" of K LIGGGHTS
-steps each, with a different force and torque held over each (held_loads.py, fix external), as the
-coupled loop does. Velocity Verlet with a constant force over each span is exact, so the sphere
+steps each, with a different force and torque held over each (held_loads.py, fix external; with
+--native clients/native, native.py), as the coupled loop does; the first span starts at step 0. Velocity Verlet with a constant force over each span is exact, so the sphere
 must end with v = sum(F) K dt / m and omega = sum(T) K dt / I, I = 2/5 m r^2. Prints both and
-exits 0 when they agree to 1e-9, 1 when not, 2 when LIGGGHTS is not installed.
+exits 0 when they agree to 1e-9, 1 when not, 2 when LIGGGHTS (or the native helper) is missing.
 """
 
 from __future__ import annotations
@@ -22,6 +22,11 @@ import numpy as np
 
 import liggghts
 from held_loads import HeldLoads
+
+try:  # with clients/python (lbmdem) on PYTHONPATH: --native
+    import native
+except ImportError:
+    native = None
 
 RADIUS, DENSITY, DT = 0.005, 1000.0, 1.0e-5
 #: (force [N], torque [N m]) held over each span.
@@ -53,7 +58,7 @@ fix integr all nve/sphere
 """
 
 
-def measure(k: int) -> tuple:
+def measure(k: int, compiled: bool) -> tuple:
     """(v, omega) of the sphere after the spans of LOADS, K LIGGGHTS steps each."""
     folder = tempfile.mkdtemp(prefix="lbm-liggghts-check-")
     deck = os.path.join(folder, "check.in")
@@ -62,11 +67,18 @@ def measure(k: int) -> tuple:
     lmp = liggghts.Liggghts(liggghts.load_library(),
                             ["-log", os.path.join(folder, "log.liggghts"), "-screen", "none"])
     lmp.file(deck)
-    loads = HeldLoads(lmp)
-    lmp.fix_external("lbm_fluid", loads.apply)
+    if compiled:
+        loads = native.NativeLoads(native.load_library(), lmp)
+        loads.attach("lbm_fluid")
+    else:
+        loads = HeldLoads(lmp)
+        lmp.fix_external("lbm_fluid", loads.apply)
     for i, (force, torque) in enumerate(LOADS):
-        loads.hold(np.array([0]), np.array([force]), np.array([torque]),
-                   lmp.atoms() if i else None)
+        if compiled:
+            loads.hold(np.array([(0, force, torque)], native.lbmdem.REPLY_DTYPE), i > 0)
+        else:
+            loads.hold(np.array([0]), np.array([force]), np.array([torque]),
+                       lmp.atoms() if i else None)
         lmp.command(f"run {k} pre no post no" if i else f"run {k}")
         loads.check()
     atoms = lmp.atoms()
@@ -76,10 +88,13 @@ def measure(k: int) -> tuple:
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--steps-per-load", type=int, default=7, help="LIGGGHTS steps per span")
-    k = ap.parse_args().steps_per_load
+    ap.add_argument("--native", action="store_true",
+                    help="the loads of clients/native (clients/python on PYTHONPATH)")
+    args = ap.parse_args()
+    k = args.steps_per_load
     try:
-        v, omega = measure(k)
-    except liggghts.NotInstalled as e:
+        v, omega = measure(k, args.native)
+    except (liggghts.NotInstalled, *((native.NotBuilt,) if native else ())) as e:
         print(f"check_loads: {e}", file=sys.stderr)
         return 2
     mass = DENSITY * 4.0 / 3.0 * math.pi * RADIUS ** 3

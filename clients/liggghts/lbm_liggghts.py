@@ -10,9 +10,10 @@ one atom per particle of the scene (atom ID i is the scene's particle i - 1), a 
 style, materials, contact law, walls, gravity and ``fix nve/sphere``. Then, each fluid step, the
 adapter reads the atoms' x, v, omega and radius, sends them to the fluid (clients/python/lbmdem.py,
 PROTOCOL.md), and runs k LIGGGHTS steps (k = fluid dt / LIGGGHTS timestep) with the fluid's force
-and torque on them (``fix external``; held_loads.py), following the atoms within the fluid step
-as the scene's ``coupling.substep_drag`` and ``coupling.lubrication`` say (substep_loads.py: the
-adapter then integrates the squeeze films). LIGGGHTS applies gravity; the fluid adds buoyancy
+and torque on them (``fix external``), following the atoms within the fluid step as the scene's
+``coupling.substep_drag`` and ``coupling.lubrication`` say (the adapter then integrates the
+squeeze films). The per-step work runs in clients/native (native.py: the library the workspace
+builds), else in Python (held_loads.py, substep_loads.py; much slower for large beds). LIGGGHTS applies gravity; the fluid adds buoyancy
 (and lubrication where the scene turns the adapter's films off). Exit status 0 after the FINAL reply or a STOP, 1 when the link or
 LIGGGHTS fails during the run, 2 for bad input (LIGGGHTS missing, a deck error, atoms that are not
 the scene's particles).
@@ -26,6 +27,7 @@ import os
 import signal
 import sys
 import time
+from typing import Optional
 
 import numpy as np
 
@@ -36,6 +38,7 @@ import scene_dem
 from deck import BadInput, check_atoms, log_errors, open_deck, substeps, units_of, version
 from exit_guard import ExitGuard
 from held_loads import HeldLoads
+import native
 from substep_loads import SqueezeFilms, SubstepLoads
 
 PROG = "lbm-liggghts"
@@ -68,6 +71,9 @@ def parse_args(argv=None) -> argparse.Namespace:
                          "scene's coupling.substep_drag and coupling.lubrication say, the films "
                          "integrated here (default); held: held constant, the fluid adds its own "
                          "lubrication (cheaper for large beds)")
+    ap.add_argument("--python-loads", action="store_true",
+                    help="apply the loads in Python (held_loads.py) even where the native helper "
+                         "(clients/native) is built")
     ap.add_argument("--probe", action="store_true",
                     help="only say whether LIGGGHTS can be loaded (exit 0) or not (exit 2)")
     args = ap.parse_args(argv)
@@ -220,9 +226,43 @@ class Adapter:
                   else None)
         if within is not None:
             k = self._limit_step(welcome, k, within)
-        self.loads = HeldLoads(lmp, within)
-        lmp.fix_external(FIX_FLUID, self.loads.apply)
+        self.loads = self._loads(within)
+        if self.native:
+            self.loads.attach(FIX_FLUID)
+        else:
+            lmp.fix_external(FIX_FLUID, self.loads.apply)
         return k
+
+    def _loads(self, within: Optional[SubstepLoads]):
+        """The loads in clients/native, or in Python where it is not built (or not wanted)."""
+        self.native = False
+        if not self.args.python_loads:
+            try:
+                loads = native.NativeLoads(native.load_library(), self.lmp)
+            except native.NotBuilt as e:
+                say(f"warning: {e}: the loads in Python (slower at each LIGGGHTS step)")
+            else:
+                if within is not None:
+                    loads.follow(within)
+                self.native = True
+                say(f"the loads at each LIGGGHTS step: {loads.lib.path}")
+                return loads
+        return HeldLoads(self.lmp, within)
+
+    def _states(self, lo: np.ndarray, hi: np.ndarray, periodic: np.ndarray):
+        """The atoms' states, and the atoms' arrays (None with the native helper)."""
+        if self.native:
+            return self.loads.states(lo, hi, periodic), None
+        atoms = self.lmp.atoms()
+        return states_of(atoms, lo, hi, periodic), atoms
+
+    def _hold(self, states: np.ndarray, forces: np.ndarray, atoms, ran: bool) -> None:
+        """Holds the fluid's reply over the next run (``ran``: LIGGGHTS ran before)."""
+        if self.native:
+            self.loads.hold(forces, ran)
+        else:
+            self.loads.hold(states["id"], forces["force"], forces["torque"],
+                            atoms if ran else None)
 
     def _limit_step(self, welcome: lbmdem.Welcome, k: int, within: SubstepLoads) -> int:
         """More LIGGGHTS steps per fluid step where the drag or the films need a shorter one."""
@@ -241,11 +281,10 @@ class Adapter:
         ran, step, count = False, 0, self.lmp.natoms()
         while True:
             flags = lbmdem.StepFlags.STOP if self.stop_requested else 0
-            atoms = self.lmp.atoms()
-            if atoms.count < count:
-                say(f"warning: LIGGGHTS lost {count - atoms.count} atoms in step {step - 1}")
-            count = atoms.count
-            states = states_of(atoms, lo, hi, periodic)
+            states, atoms = self._states(lo, hi, periodic)
+            if len(states) < count:
+                say(f"warning: LIGGGHTS lost {count - len(states)} atoms in step {step - 1}")
+            count = len(states)
             t0 = time.perf_counter()
             self.link.send_states(step, step * welcome.dt, states, flags)
             header, forces = self.link.receive_forces(step)
@@ -256,8 +295,7 @@ class Adapter:
             if step + 1 >= welcome.steps:
                 raise lbmdem.BadReply(f"the {lbmdem.FLUID} did not mark the reply to step "
                                       f"{step}, the last of {welcome.steps}, FINAL", step)
-            self.loads.hold(states["id"], forces["force"], forces["torque"],
-                            atoms if ran else None)
+            self._hold(states, forces, atoms, ran)
             self.lmp.command(f"run {k} pre no post no" if ran else f"run {k}")
             self.loads.check()
             ran = True

@@ -245,16 +245,21 @@ class Liggghts:
                             ctypes.c_void_p)
         return bool(find(self._modify(), style.encode(), 0))
 
-    def fix_external(self, fix_id: str, callback: Callable) -> None:
-        """Adds ``fix ID all external pf/callback 1 1`` and points it at ``callback(timestep,
-        nlocal, tag, x, fexternal)``, called in post_force every step to fill fexternal."""
-        self.command(f"fix {fix_id} all external pf/callback 1 1")
+    def fix_external(self, fix_id: str, callback, group: str = "all", napply: int = 1) -> None:
+        """Adds ``fix ID GROUP external pf/callback 1 NAPPLY`` and points it at ``callback``,
+        called in post_force every step to fill fexternal (added to the force of the group's
+        atoms at the steps that are multiples of NAPPLY): a Python ``callback(timestep, nlocal,
+        tag, x, fexternal)``, or a C one as (its address, its caller pointer) (native.py)."""
+        self.command(f"fix {fix_id} {group} external pf/callback 1 {napply}")
         find = self._member(_FIND_FIX_ID, [ctypes.c_void_p, ctypes.c_char_p], ctypes.c_void_p)
         fix = find(self._modify(), fix_id.encode())
         if not fix or _word(fix) != self._vtable(_VTABLE_FIX_EXTERNAL):
             raise Unsupported(f"fix {fix_id} is not a FixExternal (another layout)")
-        set_callback = self._member(_SET_CALLBACK, [ctypes.c_void_p, Callback, ctypes.c_void_p],
-                                    None)
+        set_callback = self._member(_SET_CALLBACK, [ctypes.c_void_p, ctypes.c_void_p,
+                                                    ctypes.c_void_p], None)
+        if isinstance(callback, tuple):
+            set_callback(fix, callback[0], callback[1])
+            return
         self._callback = Callback(lambda _caller, step, n, tag, x, fext:
                                   callback(step, n, tag, x, fext))
-        set_callback(fix, self._callback, None)
+        set_callback(fix, ctypes.cast(self._callback, ctypes.c_void_p), None)

@@ -14,7 +14,9 @@ module gives, at each of the DEM's force evaluations, what ``dem-client`` applie
   h = max(gap, 0.01 R*), h_c one lattice cell, between spheres and against the scene's walls.
   A DEM that applies them declares ``LUBRICATION`` in its Hello (the fluid then adds none).
 
-Plain numpy; per-particle tables are indexed by particle id.
+Plain numpy; per-particle tables are indexed by particle id. clients/yade uses it between
+``O.step()``s; the LIGGGHTS adapter evaluates the same law compiled (clients/native, with the
+protocol crate's ``substep_drag`` and ``squeeze_film``), and this module where that is not built.
 """
 
 from __future__ import annotations

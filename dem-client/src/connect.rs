@@ -6,6 +6,7 @@ use crate::dem::timestep::substeps;
 use crate::dem::world::{Body, World, CHUNK};
 use crate::dem::V3;
 use crate::lockstep::Lockstep;
+use protocol::substep_drag::substep_drag;
 use protocol::transport::LinkOptions;
 use protocol::{
     Capabilities, DemLink, Hello, LinkError, ParticleReply, ParticleState, Physics, Units, Welcome,
@@ -376,17 +377,6 @@ fn covered_mass_rate(scene: &scene::Scene, welcome: &Welcome) -> f64 {
     } else {
         0.0
     }
-}
-
-/// The rate at which the immersed boundary's force answers a sphere's velocity, the fluid state
-/// held: its solid term drives the fluid of the covered cells to the sphere's velocity every
-/// step, so dF/dv = -sum_cells B rho dx^3 / dt, about the fluid mass the sphere covers per fluid
-/// step, rho_f V / dt [N s/m]; for the torque rho_f (2/5) V r^2 / dt [N m s]. The DEM applies
-/// F_n - drag (v(t) - v_n - a t), a the acceleration of the held force, gravity and the previous
-/// step's mean contact force (`advance`): the fluid's answer to what the contacts change.
-fn substep_drag(covered_mass_rate: f64, r: f64) -> (f64, f64) {
-    let drag = covered_mass_rate * 4.0 / 3.0 * std::f64::consts::PI * r.powi(3);
-    (drag, 0.4 * drag * r * r)
 }
 
 /// How a fluid step is advanced: in `contact` DEM sub-steps, or, with `free_flight`

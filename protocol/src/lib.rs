@@ -9,6 +9,7 @@ pub mod cleanup;
 pub mod handshake;
 pub mod liveness;
 pub mod squeeze_film;
+pub mod substep_drag;
 pub mod transport;
 pub mod wire;
 

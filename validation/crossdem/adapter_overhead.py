@@ -1,79 +1,123 @@
 #!/usr/bin/env python3
 """The LIGGGHTS adapter's cost against LIGGGHTS's own step, at 20,000 particles, without a fluid.
 
+    cargo build --release -p lbmdem-native
     PYTHONPATH=clients/python:clients/liggghts python3 validation/crossdem/adapter_overhead.py \\
-        [--atoms-per-side 25 25 32] [--k 50] [--fluid-steps 10]
+        [--atoms-per-side 25 25 32] [--k 50] [--fluid-steps 10] [--rounds 3] [--modes ...]
 
 A bed of 20,000 glass spheres (1 mm, Hertz, a floor, gravity) settles for 2000 LIGGGHTS steps;
-then, one after another, the same fluid steps of k LIGGGHTS steps each are timed:
+then, in each round, one after another, the same fluid steps of k LIGGGHTS steps each are timed:
 
 | Mode | Each fluid step |
 |---|---|
 | liggghts | `run k pre no post no`: LIGGGHTS's own steps |
-| held | the adapter's work as in a run with `coupling.substep_drag = false` and `lubrication = false`: read x, v, omega, radius, ids into the fluid's particle states, hold a load per atom (`held_loads.py`), run with `fix external`'s callback writing it every step |
-| within | the same with the loads that follow the atoms (`substep_loads.py`: the sub-step drag and the squeeze films, the scene's defaults) |
+| noop | the same with `fix external` and a compiled callback that writes zero forces (the fix's own cost) |
+| native | the adapter's work with clients/native (the default where it is built), loads held as in a run with `--loads held`: gather x, v, omega, radius, ids into the fluid's particle states, hold the reply's force and torque, `fix external`'s compiled callback writing them every step |
+| native-within | the same with the loads that follow the atoms (the sub-step drag and the squeeze films, the scene's defaults), evaluated in clients/native at each LIGGGHTS step |
+| held | the held loads in Python (held_loads.py, where the library is not built) |
+| within | the following loads in numpy (substep_loads.py; slow: one round is enough) |
 
-The exchange with the fluid (iceoryx2) is not in it: PROTOCOL.md section 10 measures it (20,000
-particles, Python <-> Rust: ~0.55 ms per fluid step). Prints the time per LIGGGHTS step of each
-mode and the adapter's share over LIGGGHTS's own, and writes them as JSON (--json).
+The reply (force, torque) of each fluid step is made before the timing. The exchange with the
+fluid (iceoryx2) is not in it: PROTOCOL.md section 10 measures it (20,000 particles, Python <->
+Rust: ~0.55 ms per fluid step). Prints the time per LIGGGHTS step of each mode and round, and each
+mode's share over LIGGGHTS's own: the median over the rounds of its time over LIGGGHTS's time in
+the same round; writes them as JSON (--json).
 """
 
 from __future__ import annotations
 
 import argparse
+import ctypes
 import json
 import sys
 import time
 
 import numpy as np
 
+import lbmdem
 import liggghts
 import lbm_liggghts
+import native
+from check_native import bed_deck, within as following
 from held_loads import HeldLoads
-from substep_loads import SqueezeFilms, SubstepLoads
 
-RADIUS, SPACING, DENSITY = 0.0005, 0.00105, 2500.0
-
-
-def bed_deck(n: tuple) -> list:
-    lx, ly, lz = (SPACING * c for c in n)
-    return [
-        "units si", "atom_style granular", "atom_modify map array", "boundary f f f",
-        "newton off", "communicate single vel yes",
-        f"region domain block 0 {lx!r} 0 {ly!r} 0 {2 * lz!r} units box", "create_box 1 domain",
-        "neighbor 0.0002 bin", "neigh_modify delay 0",
-        "fix m1 all property/global youngsModulus peratomtype 5.0e6",
-        "fix m2 all property/global poissonsRatio peratomtype 0.3",
-        "fix m3 all property/global coefficientRestitution peratomtypepair 1 0.9",
-        "fix m4 all property/global coefficientFriction peratomtypepair 1 0.5",
-        "pair_style gran model hertz tangential history", "pair_coeff * *",
-        "timestep 2e-6", f"lattice sc {SPACING!r} origin 0.5 0.5 0.5",
-        f"region bed block 0 {lx!r} 0 {ly!r} 0 {lz!r} units box",
-        "create_atoms 1 region bed", f"set group all diameter {2 * RADIUS!r} density {DENSITY!r}",
-        "fix floor all wall/gran model hertz tangential history primitive type 1 zplane 0.0",
-        "fix gravity all gravity 9.81 vector 0.0 0.0 -1.0", "fix integr all nve/sphere",
-        "run 2000",
-    ]
+#: The ID of the adapter's fix external (lbm_liggghts.FIX_FLUID).
+FIX = lbm_liggghts.FIX_FLUID
 
 
-def time_mode(lmp, mode: str, k: int, steps: int, loads) -> float:
-    """Seconds per LIGGGHTS step over `steps` fluid steps of `mode`."""
-    lo, hi, periodic = np.zeros(3), np.ones(3), np.zeros(3, bool)
+MODES = ("liggghts", "noop", "native", "native-within", "held")
+
+
+def replies(lmp, count: int, steps: int, scale: float) -> list:
+    """A reply per fluid step: random forces and torques, 40% of the weight upwards, all times
+    ``scale`` (1e-12 by default: loads that move nothing, so that LIGGGHTS's own work, its
+    neighbour-list rebuilds included, stays that of the run without them)."""
     rng = np.random.default_rng(1)
-    t0 = time.perf_counter()
-    for i in range(steps + 1):
+    atoms = lmp.atoms()
+    mass = lmp.vector(b"rmass", atoms.count)
+    out = []
+    for _ in range(steps):
+        r = np.zeros(count, lbmdem.REPLY_DTYPE)
+        r["id"] = atoms.tag.astype(np.int64) - 1
+        r["force"] = scale * (1e-6 * rng.standard_normal((count, 3))
+                              + (mass * 9.81 * 0.4)[:, None] * [0, 0, 1])
+        r["torque"] = scale * 1e-12 * rng.standard_normal((count, 3))
+        out.append(r)
+    return out
+
+
+def time_mode(lmp, mode: str, k: int, loads, fluid: list) -> tuple:
+    """Seconds per LIGGGHTS step over the fluid steps of ``fluid`` but the first: wall-clock and
+    this process's CPU time (the share of a loaded machine's cores the others took left out)."""
+    lo, hi, periodic = np.zeros(3), np.ones(3), np.zeros(3, bool)
+    t0 = c0 = 0.0
+    for i, reply in enumerate(fluid):
         if i == 1:  # the first, with LIGGGHTS's set-up of the new fix, is not timed
-            t0 = time.perf_counter()
-        if mode != "liggghts":
+            t0, c0 = time.perf_counter(), time.process_time()
+        if mode.startswith("native"):
+            loads.states(lo, hi, periodic)
+            loads.hold(reply, True)
+        elif mode in ("held", "within"):
             atoms = lmp.atoms()
             states = lbm_liggghts.states_of(atoms, lo, hi, periodic)
-            mass = lmp.vector(b"rmass", atoms.count)
-            force = 1e-6 * rng.standard_normal((atoms.count, 3)) + (mass * 9.81 * 0.4)[:, None] * [0, 0, 1]
-            loads.hold(states["id"], force, np.zeros_like(force), atoms)
+            loads.hold(reply["id"], reply["force"], reply["torque"], atoms)
         lmp.command(f"run {k} pre no post no" if i else f"run {k} post no")
-        if mode != "liggghts":
+        if loads is not None:
             loads.check()
-    return (time.perf_counter() - t0) / (steps * k)
+    steps = (len(fluid) - 1) * k
+    return (time.perf_counter() - t0) / steps, (time.process_time() - c0) / steps
+
+
+def make_loads(lmp, mode: str, within):
+    """The loads of ``mode`` with their ``fix external`` added; the fixes' IDs."""
+    if mode == "liggghts":
+        return None, []
+    if mode == "noop":
+        lib = native.load_library()
+        lmp.fix_external(FIX, (ctypes.cast(lib.lbmdem_zero_apply, ctypes.c_void_p).value, None))
+        return None, [FIX]
+    if mode.startswith("native"):
+        loads = native.NativeLoads(native.load_library(), lmp)
+        if mode == "native-within":
+            loads.follow(within)
+        return loads, loads.attach(FIX)
+    loads = HeldLoads(lmp, within if mode == "within" else None)
+    lmp.fix_external(FIX, loads.apply)
+    return loads, [FIX]
+
+
+def overhead(times: dict, modes: list) -> dict:
+    """Each mode's median of its time over the mean of LIGGGHTS's own just before and after it
+    (the machine's speed drifts), less 1."""
+    own, per_round = times["liggghts"], len(modes) + 1
+    out = {}
+    for slot, m in enumerate(modes):
+        ratios = []
+        for r, t in enumerate(times[m]):
+            before = own[r * per_round + slot]
+            ratios.append(t / (0.5 * (before + own[r * per_round + slot + 1])))
+        out[m] = round(float(np.median(ratios)) - 1.0, 4)
+    return out
 
 
 def main(argv=None) -> int:
@@ -81,34 +125,45 @@ def main(argv=None) -> int:
     ap.add_argument("--atoms-per-side", nargs=3, type=int, default=[25, 25, 32])
     ap.add_argument("--k", type=int, default=50, help="LIGGGHTS steps per fluid step")
     ap.add_argument("--fluid-steps", type=int, default=10)
+    ap.add_argument("--rounds", type=int, default=3)
+    ap.add_argument("--modes", nargs="+", default=list(MODES),
+                    choices=list(MODES) + ["within"], help="the modes of each round, in order "
+                    "(liggghts is always timed)")
+    ap.add_argument("--load-scale", type=float, default=1e-12,
+                    help="the replies' loads times this (1: 40%% of the weight and random forces "
+                         "of about 1e-6 N, which make LIGGGHTS rebuild its neighbour lists more)")
     ap.add_argument("--json", help="write the times here")
     args = ap.parse_args(argv)
     lmp = liggghts.Liggghts(liggghts.load_library(), ["-log", "none", "-screen", "none"])
-    for line in bed_deck(tuple(args.atoms_per_side)):
+    for line in bed_deck(tuple(args.atoms_per_side), 2000):
         lmp.command(line)
     n = lmp.natoms()
     dt_fluid = args.k * lmp.timestep()
-    films = SqueezeFilms(0.07, 0.000625 / 4.0, [(2, 0.0, 1)], np.zeros(3))
-    within = SubstepLoads(1210.0, dt_fluid, [0.0, 0.0, -9.81], True, films)
-    held, follow = HeldLoads(lmp), HeldLoads(lmp, within)
-    callback = {"held": held, "within": follow}
-    current = {"loads": held}
-    times = {}
-    for mode in ("liggghts", "held", "within", "liggghts", "held"):
-        if mode != "liggghts":
-            current["loads"] = callback[mode]
-            lmp.fix_external("lbm_fluid", lambda *a: current["loads"].apply(*a))
-        t = time_mode(lmp, mode, args.k, args.fluid_steps, callback.get(mode))
-        if mode != "liggghts":
-            lmp.command("unfix lbm_fluid")
-        times.setdefault(mode, []).append(t)
-        print(f"{mode:9s} {1e3 * t:.3f} ms per LIGGGHTS step ({n} atoms, k = {args.k})",
-              flush=True)
-    own = min(times["liggghts"])
-    result = {"atoms": n, "k": args.k, "fluid_steps": args.fluid_steps,
+    within = following(dt_fluid)
+    fluid = replies(lmp, n, args.fluid_steps + 1, args.load_scale)
+    modes = [m for m in args.modes if m != "liggghts"]
+    times, cpu = {m: [] for m in ["liggghts"] + modes}, {m: [] for m in ["liggghts"] + modes}
+    for r in range(args.rounds):
+        # LIGGGHTS alone before and after each mode: its neighbours' mean is the mode's baseline
+        for mode in [x for m in modes for x in ("liggghts", m)] + ["liggghts"]:
+            if mode == "within" and r:
+                continue
+            loads, fixes = make_loads(lmp, mode, within)
+            t, c = time_mode(lmp, mode, args.k, loads, fluid)
+            for fix in fixes:
+                lmp.command(f"unfix {fix}")
+            times[mode].append(t)
+            cpu[mode].append(c)
+            print(f"round {r + 1} {mode:13s} {1e3 * t:8.3f} ms per LIGGGHTS step, CPU {1e3 * c:8.3f} "
+                  f"ms ({n} atoms, k = {args.k})", flush=True)
+    result = {"atoms": n, "k": args.k, "fluid_steps": args.fluid_steps, "rounds": args.rounds,
+              "load_scale": args.load_scale,
               "ms_per_liggghts_step": {m: [round(1e3 * t, 4) for t in ts] for m, ts in times.items()},
-              "overhead": {m: round(min(times[m]) / own - 1.0, 4) for m in ("held", "within")}}
-    print(json.dumps(result["overhead"]))
+              "cpu_ms_per_liggghts_step": {m: [round(1e3 * t, 4) for t in ts]
+                                           for m, ts in cpu.items()},
+              "overhead_median": overhead(times, modes),
+              "cpu_overhead_median": overhead(cpu, modes)}
+    print(json.dumps({"wall": result["overhead_median"], "cpu": result["cpu_overhead_median"]}))
     if args.json:
         with open(args.json, "w") as f:
             json.dump(result, f, indent=1)
