@@ -78,7 +78,11 @@ fn a_resumed_run_keeps_the_checkpoint_interval_given_on_the_command_line() {
     let dir = temp_dir("ckpt-interval");
     let scene = write_scene(&dir, &channel());
     let out = dir.join("out");
-    let err = run_ok(server(&scene, &out, &["--steps", "50", "--checkpoint-interval", "40"]));
+    let err = run_ok(server(
+        &scene,
+        &out,
+        &["--steps", "50", "--checkpoint-interval", "40"],
+    ));
     assert!(err.contains("checkpoint at step 40 written"), "{err}");
     let header = std::fs::read_to_string(out.join("checkpoint/header.json")).unwrap();
     assert!(header.contains("\"checkpoint_interval\": 40"), "{header}");
@@ -89,11 +93,17 @@ fn a_resumed_run_keeps_the_checkpoint_interval_given_on_the_command_line() {
         err.contains("checkpoint at step 80 written") && err.contains("checkpoint at step 120 written"),
         "every 40 steps, as the first run was told: {err}"
     );
-    assert!(!err.contains("checkpoint at step 60 written"), "not the scene's 60: {err}");
+    assert!(
+        !err.contains("checkpoint at step 60 written"),
+        "not the scene's 60: {err}"
+    );
     let resumed = resume(&out, &["--steps", "140", "--checkpoint-interval", "135"]);
     let err = String::from_utf8_lossy(&resumed.stderr);
     assert_eq!(resumed.status.code(), Some(0), "{err}");
-    assert!(err.contains("checkpoint at step 135 written"), "given anew: {err}");
+    assert!(
+        err.contains("checkpoint at step 135 written"),
+        "given anew: {err}"
+    );
 }
 
 #[test]

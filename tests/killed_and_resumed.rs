@@ -53,8 +53,9 @@ fn wait_for(moment: Moment, out: &Path, server: &mut Proc) -> bool {
     let deadline = Instant::now() + Duration::from_secs(120);
     while Instant::now() < deadline {
         let now = match moment {
-            Moment::BetweenCheckpoints => std::fs::read_to_string(out.join("particles.csv"))
-                .is_ok_and(|t| t.contains("\n25,")),
+            Moment::BetweenCheckpoints => {
+                std::fs::read_to_string(out.join("particles.csv")).is_ok_and(|t| t.contains("\n25,"))
+            }
             Moment::Writing(file) => {
                 out.join("checkpoint/header.json").exists()
                     && out.join("checkpoint.staging").join(file).exists()
@@ -80,7 +81,11 @@ fn dem_of(server: &mut Proc) -> u32 {
         if let Some(child) = children.unwrap_or_default().split_whitespace().next() {
             return child.parse().unwrap();
         }
-        assert!(server.child.try_wait().unwrap().is_none(), "{}", Proc::drain(&server.stderr));
+        assert!(
+            server.child.try_wait().unwrap().is_none(),
+            "{}",
+            Proc::drain(&server.stderr)
+        );
         std::thread::sleep(Duration::from_millis(10));
     }
     panic!("lbm-server {pid} started no dem-client");
@@ -100,7 +105,11 @@ fn kill_and_resume(tag: &str, victim: Victim, moment: Moment) -> (String, String
     let mut server = start(server(scene, &part, &[]));
     let dem = dem_of(&mut server);
     let hit = wait_for(moment, &part, &mut server);
-    assert!(hit, "the run ended before the moment: {}", Proc::drain(&server.stderr));
+    assert!(
+        hit,
+        "the run ended before the moment: {}",
+        Proc::drain(&server.stderr)
+    );
     match victim {
         Victim::Dem => signal(dem, libc::SIGKILL),
         Victim::Fluid => signal(server.child.id(), libc::SIGKILL),
@@ -121,8 +130,16 @@ fn kill_and_resume(tag: &str, victim: Victim, moment: Moment) -> (String, String
         .output()
         .unwrap();
     let err = output_text(&resumed);
-    assert_eq!(resumed.status.code(), Some(0), "killed run:\n{said}\nresumed:\n{err}");
-    for file in ["particles.csv", "checkpoint/populations.bin", "checkpoint/dem.bin"] {
+    assert_eq!(
+        resumed.status.code(),
+        Some(0),
+        "killed run:\n{said}\nresumed:\n{err}"
+    );
+    for file in [
+        "particles.csv",
+        "checkpoint/populations.bin",
+        "checkpoint/dem.bin",
+    ] {
         same_file(&full.join(file), &part.join(file));
     }
     (said, err)
@@ -138,7 +155,11 @@ fn the_dem_killed_between_checkpoints() {
         .find(|l| l.contains("the last complete checkpoint, at step"))
         .unwrap_or_else(|| panic!("the run says what to resume from:\n{said}"));
     assert!(line.contains("lbm-server run --resume"), "{line}");
-    let step = line.split("at step ").nth(1).and_then(|r| r.split(',').next()).unwrap();
+    let step = line
+        .split("at step ")
+        .nth(1)
+        .and_then(|r| r.split(',').next())
+        .unwrap();
     assert!(
         resumed.contains(&format!("from its checkpoint at step {step} ")),
         "{line}\n{resumed}"
@@ -158,5 +179,9 @@ fn the_fluid_killed_between_checkpoints() {
 
 #[test]
 fn the_fluid_killed_while_it_writes_its_part() {
-    kill_and_resume("kill-fluid-writing", Victim::Fluid, Moment::Writing("populations.bin"));
+    kill_and_resume(
+        "kill-fluid-writing",
+        Victim::Fluid,
+        Moment::Writing("populations.bin"),
+    );
 }

@@ -2,10 +2,10 @@
 //! connected to the DEM side (started or announced, then the handshake), stepped in lockstep
 //! (`lockstep.rs`), finished (the DEM ended, summary.json written).
 
+use super::checkpointing::resume_refusal;
 use super::counters::Counters;
 use super::prepare::Prepared;
 use super::summary::PeerInfo;
-use super::checkpointing::resume_refusal;
 use super::welcome::{welcome_for, yielded};
 use super::{Ending, EXIT_BAD_INPUT, EXIT_FAILURE, EXIT_INTERRUPTED};
 use crate::checkpoint::Checkpoints;

@@ -172,7 +172,10 @@ pub fn cut_back(out: &Path, at: &super::OutputPositions) -> Result<(), String> {
         }
         file.set_len(kept).map_err(|e| io(name, e))?;
     }
-    for (name, listed) in [("fields.pvd", &at.fields_pvd), ("particles.pvd", &at.particles_pvd)] {
+    for (name, listed) in [
+        ("fields.pvd", &at.fields_pvd),
+        ("particles.pvd", &at.particles_pvd),
+    ] {
         keep_listed(&out.join(name), listed).map_err(|e| io(name, e))?;
     }
     remove_later_snapshots(out, at).map_err(|e| format!("{}: {e}", out.display()))?;
@@ -189,7 +192,9 @@ fn keep_listed(path: &Path, listed: &[(f64, String)]) -> std::io::Result<()> {
     };
     let keep = |line: &&str| {
         !line.trim_start().starts_with("<DataSet")
-            || listed.iter().any(|(_, f)| line.contains(&format!("file=\"{f}\"")))
+            || listed
+                .iter()
+                .any(|(_, f)| line.contains(&format!("file=\"{f}\"")))
     };
     let kept: String = text.lines().filter(keep).flat_map(|l| [l, "\n"]).collect();
     if kept != text {
