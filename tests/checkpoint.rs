@@ -74,6 +74,39 @@ fn a_fluid_run_stopped_and_resumed_writes_the_same_bytes() {
 }
 
 #[test]
+fn a_resumed_run_keeps_the_checkpoint_interval_given_on_the_command_line() {
+    let dir = temp_dir("ckpt-interval");
+    let scene = write_scene(&dir, &channel());
+    let out = dir.join("out");
+    let err = run_ok(server(
+        &scene,
+        &out,
+        &["--steps", "50", "--checkpoint-interval", "40"],
+    ));
+    assert!(err.contains("checkpoint at step 40 written"), "{err}");
+    let header = std::fs::read_to_string(out.join("checkpoint/header.json")).unwrap();
+    assert!(header.contains("\"checkpoint_interval\": 40"), "{header}");
+    let resumed = resume(&out, &["--steps", "130"]);
+    let err = String::from_utf8_lossy(&resumed.stderr);
+    assert_eq!(resumed.status.code(), Some(0), "{err}");
+    assert!(
+        err.contains("checkpoint at step 80 written") && err.contains("checkpoint at step 120 written"),
+        "every 40 steps, as the first run was told: {err}"
+    );
+    assert!(
+        !err.contains("checkpoint at step 60 written"),
+        "not the scene's 60: {err}"
+    );
+    let resumed = resume(&out, &["--steps", "140", "--checkpoint-interval", "135"]);
+    let err = String::from_utf8_lossy(&resumed.stderr);
+    assert_eq!(resumed.status.code(), Some(0), "{err}");
+    assert!(
+        err.contains("checkpoint at step 135 written"),
+        "given anew: {err}"
+    );
+}
+
+#[test]
 fn a_corrupt_truncated_or_mismatched_checkpoint_is_refused() {
     let dir = temp_dir("ckpt-bad");
     let scene = write_scene(&dir, &channel());
@@ -155,6 +188,53 @@ fn a_coupled_run_killed_and_resumed_writes_the_same_particles() {
         &part.join("checkpoint/populations.bin"),
     );
     same_file(&full.join("checkpoint/dem.bin"), &part.join("checkpoint/dem.bin"));
+}
+
+/// Every file under `dir` but the lock (which holds the pid of the last run) and its bytes.
+fn files_under(dir: &Path) -> std::collections::BTreeMap<std::path::PathBuf, Vec<u8>> {
+    let mut files = std::collections::BTreeMap::new();
+    for entry in std::fs::read_dir(dir).unwrap().map(Result::unwrap) {
+        let path = entry.path();
+        if path.is_dir() {
+            files.extend(files_under(&path));
+        } else if entry.file_name() != ".lock" {
+            files.insert(path.clone(), std::fs::read(&path).unwrap());
+        }
+    }
+    files
+}
+
+/// A coupled run resumed with a DEM that cannot checkpoint (the Python example: no CHECKPOINT
+/// in its Hello) is refused in the Welcome: exit 2, a message naming the DEM and the capability,
+/// and OUT exactly as it was (particles.csv's rows after the checkpoint, the snapshots,
+/// summary.json).
+#[test]
+fn a_resume_with_a_dem_that_cannot_checkpoint_is_refused_changing_nothing() {
+    let dir = temp_dir("ckpt-nocap");
+    let scene = write_scene(&dir, &falling(60));
+    let out = dir.join("out");
+    // The last checkpoint at step 17 records particles.csv before the rows of its last step.
+    run_ok(server(&scene, &out, &["--steps", "17"]));
+    let before = files_under(&out);
+    let script = concat!(env!("CARGO_MANIFEST_DIR"), "/clients/python/example_dem.py");
+    let line = format!("exec python3 {script} --particles 8");
+    let result = resume(&out, &["--dem-command", &line]);
+    let said = output_text(&result);
+    assert_eq!(result.status.code(), Some(2), "{said}");
+    assert!(
+        said.contains("does not declare the CHECKPOINT capability") && said.contains("example_dem.py"),
+        "{said}"
+    );
+    assert!(said.contains("CANNOT_RESUME"), "the DEM is told why: {said}");
+    let after = files_under(&out);
+    assert_eq!(
+        before.keys().collect::<Vec<_>>(),
+        after.keys().collect::<Vec<_>>(),
+        "the same files"
+    );
+    for (path, bytes) in &before {
+        assert!(&after[path] == bytes, "{} changed", path.display());
+    }
 }
 
 /// The pour of `POUR`, with checkpoints every 10 steps and VTK on.

@@ -107,6 +107,8 @@ class Status(enum.IntEnum):
     CAPACITY_EXCEEDED = 3
     BAD_UNITS = 4
     PHYSICS_CONFLICT = 5
+    #: The run resumes from a checkpoint and the DEM does not declare Capabilities.CHECKPOINT.
+    CANNOT_RESUME = 6
 
 
 class StepFlags(enum.IntFlag):

@@ -171,18 +171,20 @@ fn open_outputs(
     })
 }
 
-/// The run's first step and where the outputs stood: the checkpoint's, restored into `world`
-/// (`resumed`), or 0 with the folder cleared of an earlier run's outputs.
+/// The run's first step, where the outputs stood and the `--checkpoint-interval` its first run
+/// was given: the checkpoint's, restored into `world` (`resumed`), or 0 with the folder cleared of
+/// an earlier run's outputs.
 fn first_step(
     (out, text, steps): (&Path, &str, u64),
     world: &mut World,
     resumed: bool,
-) -> Result<(u64, Option<OutputPositions>), Failure> {
+) -> Result<(u64, Option<OutputPositions>, Option<u64>), Failure> {
     if !resumed {
         fresh_outputs(out, text)?;
-        return Ok((0, None));
+        return Ok((0, None, None));
     }
-    let (step, at) = resume(out, text, world).map_err(Failure::BadInput)?;
+    let header = resume(out, text, world).map_err(Failure::BadInput)?;
+    let step = header.step;
     if step >= steps {
         return Err(Failure::BadInput(format!(
             "the checkpoint is at step {step}, the run's last step is {}: nothing to resume \
@@ -190,7 +192,8 @@ fn first_step(
             steps
         )));
     }
-    Ok((step, Some(at)))
+    scene::checkpoint::cut_back(out, &header.outputs).map_err(Failure::Output)?;
+    Ok((step, Some(header.outputs), header.checkpoint_interval))
 }
 
 /// Runs the output steps (from the checkpoint's where `resumed`); Ok(false) when interrupted.
@@ -207,7 +210,7 @@ fn simulate(
     } = p.setup;
     let (k, dt) = substeps(p.scene.time.dt, dt_max);
     world.dt = dt;
-    let (first, at) = first_step((&p.out, &p.text, p.steps), &mut world, resumed)?;
+    let (first, at, given) = first_step((&p.out, &p.text, p.steps), &mut world, resumed)?;
     protocol::say!(
         "dem-client: scene '{}', {} spheres, {} walls, DEM step {dt:.3e} s (t_c {:.3e} s), {k} per output step of {} s{}",
         p.scene.name,
@@ -218,7 +221,7 @@ fn simulate(
         if resumed { format!("; resumed at step {first}") } else { String::new() }
     );
     let (mut csv, mut energy, mut vtk) = open_outputs(&p.scene, &p.out, at.as_ref())?;
-    let mut checkpoints = RunCheckpoints::new(&p.out, &p.scene, &p.text, every);
+    let mut checkpoints = RunCheckpoints::new(&p.out, &p.scene, &p.text, every.or(given));
     let interval = p.scene.output.interval;
     let started = Instant::now();
     let mut done = 0;

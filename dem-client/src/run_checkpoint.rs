@@ -15,6 +15,8 @@ pub struct RunCheckpoints {
     out: PathBuf,
     pub schedule: Schedule,
     scene_hash: String,
+    /// `--checkpoint-interval`, given to this run or to the one it resumed.
+    given: Option<u64>,
 }
 
 /// The outputs of a granular run, as a checkpoint records where they stand.
@@ -25,11 +27,14 @@ pub struct Outputs<'a> {
 }
 
 impl RunCheckpoints {
+    /// The checkpoints of a run of `scene` into `out`, every `every` steps where given
+    /// (`--checkpoint-interval`, or the one the run resumed from was given).
     pub fn new(out: &Path, scene: &scene::Scene, scene_text: &str, every: Option<u64>) -> Self {
         Self {
             out: out.to_path_buf(),
             schedule: Schedule::new(scene, every),
             scene_hash: scene::checkpoint::scene_hash(scene_text),
+            given: every,
         }
     }
 
@@ -67,6 +72,7 @@ impl RunCheckpoints {
             aa_phase: 0,
             face_scale: 1.0,
             covered_cells: None,
+            checkpoint_interval: self.given,
             outputs: at,
             files: vec![dem],
         };
@@ -81,8 +87,9 @@ impl RunCheckpoints {
 }
 
 /// The newest checkpoint in `out`, checked against the scene (its text `scene_text`, its
-/// `spheres`), restored into `world`: its step and where the outputs stood.
-pub fn resume(out: &Path, scene_text: &str, world: &mut World) -> Result<(u64, OutputPositions), String> {
+/// `spheres`), restored into `world`: its header (its step, where the outputs stood, the
+/// `--checkpoint-interval` its run was given).
+pub fn resume(out: &Path, scene_text: &str, world: &mut World) -> Result<Header, String> {
     let (dir, header) = scene::checkpoint::open_newest(out)?;
     let hash = scene::checkpoint::scene_hash(scene_text);
     if header.scene_hash != hash {
@@ -103,7 +110,5 @@ pub fn resume(out: &Path, scene_text: &str, world: &mut World) -> Result<(u64, O
     let path = dir.join(DEM_FILE);
     let bytes = std::fs::read(&path).map_err(|e| format!("{}: {e}", path.display()))?;
     decode(&bytes, header.step, world).map_err(|e| format!("{}: {e}", path.display()))?;
-    scene::checkpoint::remove_later_snapshots(out, &header.outputs)
-        .map_err(|e| format!("{}: {e}", out.display()))?;
-    Ok((header.step, header.outputs))
+    Ok(header)
 }

@@ -64,11 +64,10 @@ impl Series {
         }
     }
 
-    /// The series of a resumed run, its entries so far (a checkpoint's), the .pvd rewritten.
+    /// The series of a resumed run, its entries so far (a checkpoint's; the .pvd was cut back to
+    /// them by `scene::checkpoint::cut_back`).
     pub fn resume(path: PathBuf, entries: Vec<(f64, String)>) -> std::io::Result<Self> {
-        let series = Self { path, entries };
-        series.write()?;
-        Ok(series)
+        Ok(Self { path, entries })
     }
 
     /// The entries so far: time [s] and file (relative to the .pvd).

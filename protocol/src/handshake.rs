@@ -175,6 +175,7 @@ pub enum Status {
     CapacityExceeded = 3,
     BadUnits = 4,
     PhysicsConflict = 5,
+    CannotResume = 6,
 }
 
 impl Status {
@@ -186,6 +187,7 @@ impl Status {
             Status::CapacityExceeded,
             Status::BadUnits,
             Status::PhysicsConflict,
+            Status::CannotResume,
         ]
         .into_iter()
         .find(|s| *s as u32 == v)

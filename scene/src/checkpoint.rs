@@ -13,9 +13,7 @@ mod files;
 mod header;
 mod schedule;
 
-pub use files::{
-    files_besides, open_newest, put_in_place, remove_later_snapshots, staging_folder, write_synced,
-};
+pub use files::{cut_back, files_besides, open_newest, put_in_place, staging_folder, write_synced};
 pub use header::{scene_hash, FileEntry, Header, OutputPositions, FORMAT, VERSION};
 pub use schedule::Schedule;
 

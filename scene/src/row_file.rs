@@ -32,8 +32,9 @@ impl RowFile {
         Ok(rows)
     }
 
-    /// Opens the file at `path` to go on after its first `kept` bytes (a resumed run: the rows
-    /// written after its checkpoint are cut off). A file shorter than that is refused.
+    /// Opens the file at `path` to go on after its first `kept` bytes (a resumed run, whose
+    /// checkpoint found it so: the rows written after it are cut off by
+    /// `scene::checkpoint::cut_back` before the run writes). A file shorter than that is refused.
     pub fn resume(path: &Path, kept: u64) -> std::io::Result<Self> {
         use std::io::{Seek, SeekFrom};
         let mut file = std::fs::OpenOptions::new()
@@ -45,7 +46,6 @@ impl RowFile {
             let problem = format!("holds {len} bytes, the checkpoint needs {kept}");
             return Err(named(path, std::io::Error::other(problem)));
         }
-        file.set_len(kept).map_err(|e| named(path, e))?;
         file.seek(SeekFrom::Start(kept)).map_err(|e| named(path, e))?;
         Ok(Self {
             file,

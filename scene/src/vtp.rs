@@ -29,15 +29,13 @@ impl ParticleSeries {
         }
     }
 
-    /// The series of a resumed run: its frames so far (a checkpoint's), particles.pvd rewritten
-    /// with them.
+    /// The series of a resumed run: its frames so far (a checkpoint's; particles.pvd was cut
+    /// back to them by `scene::checkpoint::cut_back`).
     pub fn resume(dir: &Path, frames: Vec<(f64, String)>) -> std::io::Result<Self> {
-        let series = Self {
+        Ok(Self {
             dir: dir.to_path_buf(),
             frames,
-        };
-        series.write_pvd()?;
-        Ok(series)
+        })
     }
 
     /// The frames so far: time [s] and file name.

@@ -13,6 +13,8 @@ pub struct Checkpoints {
     pub schedule: Schedule,
     writer: Writer,
     scene_hash: String,
+    /// `--checkpoint-interval`, given to this run or to the one it resumed.
+    given: Option<u64>,
     /// The checkpoint this run resumed from.
     pub resumed: Option<Loaded>,
     /// A checkpoint taken and waiting for the DEM's part (`hold`).
@@ -21,7 +23,8 @@ pub struct Checkpoints {
 
 impl Checkpoints {
     /// The checkpoints of a run of `scene` (its file's text `scene_text`) into `out`, every
-    /// `steps` where given (`--checkpoint-interval`), resumed from `resumed`.
+    /// `steps` where given (`--checkpoint-interval`; resumed from `resumed` without it, the
+    /// interval the first run was given), resumed from `resumed`.
     pub fn new(
         out: &Path,
         scene: &scene::Scene,
@@ -29,8 +32,10 @@ impl Checkpoints {
         steps: Option<u64>,
         resumed: Option<Loaded>,
     ) -> Self {
+        let given = steps.or(resumed.as_ref().and_then(|l| l.header.checkpoint_interval));
         Self {
-            schedule: Schedule::new(scene, steps),
+            schedule: Schedule::new(scene, given),
+            given,
             writer: Writer::new(out),
             scene_hash: scene::checkpoint::scene_hash(scene_text),
             resumed,
@@ -86,6 +91,7 @@ impl Checkpoints {
             aa_phase: state.time % 2,
             face_scale: state.face_scale,
             covered_cells,
+            checkpoint_interval: self.given,
             outputs: at,
             files: Vec::new(),
         };
@@ -100,5 +106,12 @@ impl Checkpoints {
     /// Waits for the checkpoint being written.
     pub fn wait(&mut self) -> Result<(), String> {
         self.writer.wait()
+    }
+
+    /// The step of the last complete checkpoint in the output folder, once the one being written
+    /// is done (`wait`): this run's last, else the one it resumed from.
+    pub fn last_complete(&self) -> Option<u64> {
+        let resumed = self.resumed.as_ref().map(|l| l.header.step);
+        self.writer.last.or(resumed)
     }
 }

@@ -21,8 +21,10 @@ pub struct Snapshot {
 /// Writes a run's checkpoints, one at a time.
 pub struct Writer {
     out: PathBuf,
-    /// The one being written.
-    pending: Option<JoinHandle<Result<(), String>>>,
+    /// The one being written (its step, once written).
+    pending: Option<JoinHandle<Result<u64, String>>>,
+    /// The step of the last one written.
+    pub last: Option<u64>,
 }
 
 impl Writer {
@@ -30,6 +32,7 @@ impl Writer {
         Self {
             out: out.to_path_buf(),
             pending: None,
+            last: None,
         }
     }
 
@@ -48,12 +51,14 @@ impl Writer {
 
     /// Waits for the checkpoint being written: its error, where it failed.
     pub fn wait(&mut self) -> Result<(), String> {
-        match self.pending.take() {
-            None => Ok(()),
-            Some(thread) => thread
-                .join()
-                .unwrap_or_else(|_| Err("the checkpoint's writer panicked".into())),
-        }
+        let Some(thread) = self.pending.take() else {
+            return Ok(());
+        };
+        let step = thread
+            .join()
+            .unwrap_or_else(|_| Err("the checkpoint's writer panicked".into()))?;
+        self.last = Some(step);
+        Ok(())
     }
 }
 
@@ -66,8 +71,9 @@ pub fn population_dtype(storage: Storage) -> &'static str {
     }
 }
 
-/// Writes the arrays, lists the DEM's files, writes header.json and puts the folder in place.
-fn write_staged(out: &Path, snapshot: Snapshot) -> Result<(), String> {
+/// Writes the arrays, lists the DEM's files, writes header.json and puts the folder in place;
+/// the checkpoint's step.
+fn write_staged(out: &Path, snapshot: Snapshot) -> Result<u64, String> {
     let started = Instant::now();
     let staging = out.join(scene::checkpoint::STAGING);
     let Snapshot {
@@ -107,5 +113,5 @@ fn write_staged(out: &Path, snapshot: Snapshot) -> Result<(), String> {
         readback_s,
         started.elapsed().as_secs_f64()
     );
-    Ok(())
+    Ok(header.step)
 }

@@ -6,9 +6,12 @@
 
 use super::ending::StepEnd;
 use super::session::Session;
+use super::EXIT_BAD_INPUT;
+use crate::checkpoint::Loaded;
 use crate::checkpoint::OutputPositions;
-use protocol::{Capabilities, Hello};
-use scene::checkpoint::{DEM_COMPLETE, STAGING};
+use protocol::handshake::Status;
+use protocol::{Capabilities, Hello, Welcome};
+use scene::checkpoint::{DEM_COMPLETE, DIR, STAGING};
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
@@ -25,33 +28,40 @@ impl Session {
     }
 
     /// Whether the run writes checkpoints with this DEM: one that cannot (no CHECKPOINT in its
-    /// Hello) gets none, with a warning, and cannot resume a run.
-    pub(super) fn dem_checkpoints(&self, hello: &Hello) -> Result<bool, String> {
-        let can = hello.version >= 2 && hello.capabilities & Capabilities::CHECKPOINT != 0;
+    /// Hello) gets none, with a warning (a resumed run refuses it in its Welcome:
+    /// [`resume_refusal`]).
+    pub(super) fn dem_checkpoints(&self, hello: &Hello) -> bool {
+        let can = can_checkpoint(hello);
         let software = protocol::handshake::field_text(&hello.software);
-        if let Some(loaded) = self.p.resumed.as_ref().filter(|_| !can) {
-            return Err(format!(
-                "cannot resume from {}: the DEM ({software}, protocol version {}) does not declare \
-                 the CHECKPOINT capability in its Hello, so it cannot go on from a checkpoint",
-                loaded.dir.display(),
-                hello.version
-            ));
-        }
-        if let Some(loaded) = &self.p.resumed {
-            if !loaded.header.files.iter().any(|f| f.file == DEM_COMPLETE) {
-                return Err(format!(
-                    "cannot resume from {}: it holds no DEM state",
-                    loaded.dir.display()
-                ));
-            }
-        }
         if self.checkpoints.enabled() && !can {
             protocol::say!(
                 "lbm-server: warning: the DEM ({software}) cannot checkpoint (no CHECKPOINT \
                  capability in its Hello): this run writes no checkpoints"
             );
         }
-        Ok(can && self.checkpoints.enabled())
+        can && self.checkpoints.enabled()
+    }
+
+    /// A resumed run goes on with this DEM: the outputs are cut back to where its checkpoint
+    /// found them (until now OUT is as the earlier run left it).
+    pub(super) fn cut_back_outputs(&self) -> Result<(), String> {
+        match &self.p.resumed {
+            Some(loaded) => scene::checkpoint::cut_back(&self.p.out, &loaded.header.outputs),
+            None => Ok(()),
+        }
+    }
+
+    /// A resumed run refused the DEM in its Welcome (`resume_refusal`): the DEM ended, `why` said,
+    /// nothing in OUT written (not even summary.json); exit 2.
+    pub(super) fn refuse_resume(mut self, why: &str) -> u8 {
+        self.end_dem(true);
+        protocol::say!("lbm-server: error: {why}");
+        protocol::say!(
+            "lbm-server: nothing in {} was changed; its checkpoint needs a DEM that can \
+             checkpoint (dem-client, or a DEM that declares CHECKPOINT: PROTOCOL.md 6.4)",
+            self.p.out.display()
+        );
+        EXIT_BAD_INPUT
     }
 
     /// Whether the reply of `step` asks for a checkpoint: one due after it, or the run ends
@@ -110,4 +120,56 @@ impl Session {
             );
         }
     }
+
+    /// A run that failed while a checkpoint was held for the DEM's part (the DEM died or fell
+    /// silent after the reply that asked for it): where the DEM completed its part first, both
+    /// halves are of one step and the checkpoint goes to the writer (the state is still good);
+    /// else the one before stays.
+    pub(super) fn keep_held_checkpoint(&mut self) {
+        let marker = self.p.out.join(STAGING).join(DEM_COMPLETE);
+        if self.checkpoints.holding() && marker.is_file() {
+            self.checkpoints.release();
+        }
+    }
+
+    /// What a run that did not complete leaves to resume from (once the checkpoint being written
+    /// is done): the last complete checkpoint, or none.
+    pub(super) fn say_resumable(&self) {
+        if !self.checkpoints.enabled() {
+            return;
+        }
+        let out = self.p.out.display();
+        match self.checkpoints.last_complete() {
+            Some(step) => protocol::say!(
+                "lbm-server: the last complete checkpoint, at step {step}, is in {out}/{DIR}: \
+                 `lbm-server run --resume {out}` goes on from it"
+            ),
+            None => protocol::say!(
+                "lbm-server: no checkpoint was completed: the run cannot be resumed (a new run \
+                 starts from step 0)"
+            ),
+        }
+    }
+}
+
+/// Whether the DEM of `hello` writes and reads checkpoints (the CHECKPOINT capability).
+fn can_checkpoint(hello: &Hello) -> bool {
+    hello.version >= 2 && hello.capabilities & Capabilities::CHECKPOINT != 0
+}
+
+/// The Welcome of a run resumed from `resumed` to a DEM that cannot checkpoint: a refusal
+/// (`CANNOT_RESUME`, its reason short enough for the field), and why in full; None where the run
+/// may go on with it.
+pub(super) fn resume_refusal(resumed: Option<&Loaded>, hello: &Hello) -> Option<(Welcome, String)> {
+    let loaded = resumed.filter(|_| !can_checkpoint(hello))?;
+    let software = protocol::handshake::field_text(&hello.software);
+    let why = format!(
+        "cannot resume from {}: the DEM ({software}, protocol version {}) does not declare the \
+         CHECKPOINT capability in its Hello, so it cannot go on from a checkpoint",
+        loaded.dir.display(),
+        hello.version
+    );
+    let ours = format!("lbm-server {}", env!("CARGO_PKG_VERSION"));
+    let reason = "the run resumes from a checkpoint; this DEM does not declare CHECKPOINT (6.4)";
+    Some((Welcome::refused(&ours, Status::CannotResume, reason), why))
 }

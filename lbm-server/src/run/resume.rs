@@ -1,11 +1,14 @@
 //! `lbm-server run --resume OUT`: the run of OUT goes on from its last checkpoint, with the scene
 //! of OUT/scene.toml. Found, checked and compared with the scene before anything in OUT is
-//! touched: a checkpoint of another scene, lattice or storage, of another format version, or one
-//! truncated or corrupt is refused (exit 2) naming what differs.
+//! touched: a checkpoint of another scene, lattice or storage, of another format version, one
+//! truncated or corrupt, or a coupled one without the DEM's part is refused (exit 2) naming what
+//! differs. The outputs are cut back to the checkpoint here for a fluid alone, after the DEM's
+//! handshake for a coupled run (`checkpointing.rs`).
 
 use super::prepare::{connect_timeout, fits_the_device, run_steps, Prepared};
 use super::RunArgs;
 use crate::checkpoint::{Expected, Loaded};
+use scene::checkpoint::DEM_COMPLETE;
 use scene::output_lock::OutputLock;
 use scene::Scene;
 use std::path::Path;
@@ -41,8 +44,14 @@ pub(super) fn prepare_resume(args: &RunArgs, out: &Path) -> Result<Prepared, Str
             loaded.dir.display()
         ));
     }
-    scene::checkpoint::remove_later_snapshots(out, &loaded.header.outputs)
-        .map_err(|e| format!("{}: {e}", out.display()))?;
+    if fluid_only {
+        scene::checkpoint::cut_back(out, &loaded.header.outputs)?;
+    } else if !loaded.header.files.iter().any(|f| f.file == DEM_COMPLETE) {
+        return Err(format!(
+            "cannot resume from {}: it holds no DEM state",
+            loaded.dir.display()
+        ));
+    }
     protocol::say!(
         "lbm-server: resuming {} from its checkpoint at step {step} to step {steps} (read and \
          checked in {read_s:.2} s)",

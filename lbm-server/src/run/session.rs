@@ -2,6 +2,7 @@
 //! connected to the DEM side (started or announced, then the handshake), stepped in lockstep
 //! (`lockstep.rs`), finished (the DEM ended, summary.json written).
 
+use super::checkpointing::resume_refusal;
 use super::counters::Counters;
 use super::prepare::Prepared;
 use super::summary::PeerInfo;
@@ -39,6 +40,8 @@ pub(super) struct Session {
     pub(super) checkpointing: bool,
     /// The run's first step (a resumed run's checkpoint's; else 0).
     pub(super) first_step: u64,
+    /// Why a resumed run refused its DEM (it cannot checkpoint), where it did.
+    refused_resume: Option<String>,
 }
 
 impl Session {
@@ -52,6 +55,9 @@ impl Session {
             }
         };
         let result = session.connect(&dem).and_then(|()| session.step_loop());
+        if let Some(why) = session.refused_resume.take() {
+            return session.refuse_resume(&why);
+        }
         session.finish(result)
     }
 
@@ -87,6 +93,7 @@ impl Session {
             checkpoints,
             checkpointing: false,
             first_step,
+            refused_resume: None,
         })
     }
 
@@ -97,19 +104,31 @@ impl Session {
         let (scene, steps, first) = (&self.p.scene, self.p.steps, self.first_step);
         let physics = self.fluid.physics();
         let interrupted = self.interrupted.clone();
+        let resumed = self.p.resumed.as_ref();
+        let refused = std::cell::Cell::new(None);
         let hello = self
             .link
             .accept(
                 spawned,
                 self.p.connect_timeout,
                 &|| interrupted.load(Ordering::SeqCst),
-                |hello| welcome_for(scene, steps, first, hello, physics & !yielded(hello)),
+                |hello| match resume_refusal(resumed, hello) {
+                    Some((refusal, why)) => {
+                        refused.set(Some(why));
+                        refusal
+                    }
+                    None => welcome_for(scene, steps, first, hello, physics & !yielded(hello)),
+                },
             )
-            .map_err(|e| e.to_string())?;
+            .map_err(|e| {
+                self.refused_resume = refused.take();
+                e.to_string()
+            })?;
         if yielded(&hello) != 0 {
             self.fluid.leave_lubrication();
         }
-        self.checkpointing = self.dem_checkpoints(&hello)?;
+        self.checkpointing = self.dem_checkpoints(&hello);
+        self.cut_back_outputs()?;
         self.peer = Some(PeerInfo {
             software: protocol::handshake::field_text(&hello.software),
             pid: hello.pid,
@@ -213,6 +232,9 @@ impl Session {
     /// Ends the DEM process, writes summary.json; returns the exit code (1 where summary.json
     /// cannot be written).
     fn finish(mut self, result: Result<Ending, String>) -> u8 {
+        if result.is_err() {
+            self.keep_held_checkpoint();
+        }
         let checkpointed = self.checkpoints.wait();
         let dem_status = self.end_dem(result.is_ok() || self.told_to_end);
         let (mut reason, mut code) = match &result {
@@ -238,6 +260,9 @@ impl Session {
         }
         if let (Err(msg), true) = (&result, code == EXIT_FAILURE) {
             protocol::say!("lbm-server: error: {msg}");
+        }
+        if code != 0 {
+            self.say_resumable();
         }
         let summary = self.summary(reason, code);
         if let Err(e) = summary.write(&self.p.out.join("summary.json")) {
@@ -276,7 +301,7 @@ impl Session {
     /// Ends the DEM side: a DEM `told` to end (its last reply said FINAL or STOP) ends on its own
     /// and is given the time to; a spawned one is then ended, an external one is left the time to
     /// read the last reply before our ports close. Returns a spawned DEM's exit status.
-    fn end_dem(&mut self, told: bool) -> Option<i32> {
+    pub(super) fn end_dem(&mut self, told: bool) -> Option<i32> {
         let grace = if told {
             Duration::from_secs(2)
         } else {

@@ -151,10 +151,62 @@ fn check_file(dir: &Path, entry: &FileEntry) -> Result<(), String> {
     Ok(())
 }
 
+/// Cuts the outputs in `out` back to where the checkpoint `at` found them: each appended file
+/// (particles.csv, line<N>.csv, energy.csv) to its recorded length, each .pvd series to the
+/// entries the checkpoint lists, the snapshots written after them removed. A resumed run does this
+/// once it knows it goes on (a coupled one after the DEM's handshake): until then OUT stays as the
+/// earlier run left it, and a resume refused on the way leaves it so.
+pub fn cut_back(out: &Path, at: &super::OutputPositions) -> Result<(), String> {
+    let io = |name: &str, e: std::io::Error| format!("{}: {e}", out.join(name).display());
+    for (name, &kept) in &at.files {
+        let file = std::fs::OpenOptions::new()
+            .write(true)
+            .open(out.join(name))
+            .map_err(|e| io(name, e))?;
+        let len = file.metadata().map_err(|e| io(name, e))?.len();
+        if len < kept {
+            return Err(io(
+                name,
+                std::io::Error::other(format!("holds {len} bytes, the checkpoint needs {kept}")),
+            ));
+        }
+        file.set_len(kept).map_err(|e| io(name, e))?;
+    }
+    for (name, listed) in [
+        ("fields.pvd", &at.fields_pvd),
+        ("particles.pvd", &at.particles_pvd),
+    ] {
+        keep_listed(&out.join(name), listed).map_err(|e| io(name, e))?;
+    }
+    remove_later_snapshots(out, at).map_err(|e| format!("{}: {e}", out.display()))?;
+    Ok(())
+}
+
+/// The .pvd series at `path` (where there is one) with the data sets of `listed` alone: each
+/// other `<DataSet .../>` line dropped.
+fn keep_listed(path: &Path, listed: &[(f64, String)]) -> std::io::Result<()> {
+    let text = match std::fs::read_to_string(path) {
+        Ok(text) => text,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(()),
+        Err(e) => return Err(e),
+    };
+    let keep = |line: &&str| {
+        !line.trim_start().starts_with("<DataSet")
+            || listed
+                .iter()
+                .any(|(_, f)| line.contains(&format!("file=\"{f}\"")))
+    };
+    let kept: String = text.lines().filter(keep).flat_map(|l| [l, "\n"]).collect();
+    if kept != text {
+        std::fs::write(path, kept)?;
+    }
+    Ok(())
+}
+
 /// Removes the snapshot files a run wrote after its checkpoint `at` (those of `fields/step*.vti`
 /// and `particles_*.vtp` that the checkpoint's .pvd entries do not list, from a later step than
 /// the last they list): a resumed run writes again those it is due to. Returns how many.
-pub fn remove_later_snapshots(out: &Path, at: &super::OutputPositions) -> std::io::Result<usize> {
+fn remove_later_snapshots(out: &Path, at: &super::OutputPositions) -> std::io::Result<usize> {
     let mut removed = 0;
     for (folder, head, tail, listed) in [
         ("fields", "step", ".vti", &at.fields_pvd),

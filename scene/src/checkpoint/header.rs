@@ -33,6 +33,10 @@ pub struct Header {
     /// Where the covered cells took their solid term (coupled runs: fused, redo or skip).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub covered_cells: Option<String>,
+    /// The step interval given on the command line (`--checkpoint-interval`), which a resumed run
+    /// keeps unless given another.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub checkpoint_interval: Option<u64>,
     /// Where the outputs stood.
     pub outputs: OutputPositions,
     /// Each file of the checkpoint: the fluid's arrays, then the DEM's files.
@@ -62,8 +66,8 @@ pub struct OutputPositions {
 }
 
 impl OutputPositions {
-    /// The output file `name` in `out`, opened to go on at its recorded length (longer: cut back
-    /// to it).
+    /// The output file `name` in `out`, opened to go on at its recorded length (what is after it
+    /// is cut off by `cut_back`).
     pub fn reopen(&self, out: &Path, name: &str) -> Result<std::fs::File, String> {
         let kept = *self
             .files
