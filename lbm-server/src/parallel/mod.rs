@@ -6,6 +6,8 @@
 //! - `decomposition.rs`: the blocks, chosen or given by the scene, and one rank's block.
 //! - `halo.rs`: the exchange of the populations that cross the block faces, after every step.
 //! - `block.rs`: one rank's lattice, stepped, read and checked with the others ([`BlockLattice`]).
+//! - `pieces.rs`: the field snapshots as ParaView parallel image data, a piece per rank
+//!   ([`FieldPieces`]).
 //! - `summary.rs`: what summary.json says of the ranks.
 //!
 //! Every rank runs the same code, one rank included: a run on one rank is the single-process run.
@@ -14,6 +16,7 @@ mod block;
 mod communicator;
 mod decomposition;
 mod halo;
+mod pieces;
 #[cfg(feature = "mpi")]
 mod mpi_world;
 mod summary;
@@ -25,6 +28,7 @@ pub use communicator::launched_ranks;
 use communicator::OneRank;
 pub use communicator::{all, Communicator};
 pub use decomposition::{check_blocks, choose_blocks, Decomposition};
+pub use pieces::FieldPieces;
 pub use summary::ParallelSummary;
 
 /// Whether this build runs on several ranks (`--features mpi`).
