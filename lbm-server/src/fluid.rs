@@ -237,20 +237,25 @@ pub fn run(
         Err(Stop::Failed(e)) => (format!("error: {e}"), 1),
     };
     let parallel = ParallelSummary::gather(comm, &lattice, &gpu.adapter.name, wall);
-    if !root {
-        return code;
-    }
-    let ended = Ended {
-        from,
-        result,
-        reason,
-        code,
-        wall,
-        steps,
-        completed: lattice.time(),
-        trial,
+    let code = if root {
+        let ended = Ended {
+            from,
+            result,
+            reason,
+            code,
+            wall,
+            steps,
+            completed: lattice.time(),
+            trial,
+        };
+        report(scene, scene_file, out, &gpu.adapter.name, parallel, ended)
+    } else {
+        code
     };
-    report(scene, scene_file, out, &gpu.adapter.name, parallel, ended)
+    // Every rank ends once rank 0 has said how the run went and written its summary: a launcher
+    // ends the other ranks as soon as one exits with a code other than 0.
+    comm.min(0);
+    code
 }
 
 /// How a fluid run ended (`from`: the step it started from).

@@ -26,7 +26,7 @@ mod tests;
 pub use block::{BlockLattice, RankUnhealthy};
 pub use communicator::launched_ranks;
 use communicator::OneRank;
-pub use communicator::{all, Communicator};
+pub use communicator::{all, interrupted, Communicator};
 pub use decomposition::{check_blocks, choose_blocks, Decomposition};
 pub use pieces::FieldPieces;
 pub use summary::ParallelSummary;
