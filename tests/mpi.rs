@@ -7,8 +7,8 @@
 mod common;
 use common::mpi::{mpirun, mpirun_command, scene, PERIODIC, SOLID, WALLED};
 use common::*;
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::path::Path;
+use std::process::Output;
 
 fn text(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned() + &String::from_utf8_lossy(&o.stdout)
