@@ -8,6 +8,7 @@
 //! - `block.rs`: one rank's lattice, stepped, read and checked with the others ([`BlockLattice`]).
 //! - `pieces.rs`: the field snapshots as ParaView parallel image data, a piece per rank
 //!   ([`FieldPieces`]).
+//! - `hosts.rs`: the ranks' hosts; a run with particles keeps its ranks on rank 0's host.
 //! - `summary.rs`: what summary.json says of the ranks.
 //!
 //! Every rank runs the same code, one rank included: a run on one rank is the single-process run.
@@ -16,6 +17,7 @@ mod block;
 mod communicator;
 mod decomposition;
 mod halo;
+mod hosts;
 mod pieces;
 #[cfg(feature = "mpi")]
 mod mpi_world;
@@ -28,6 +30,7 @@ pub use communicator::launched_ranks;
 use communicator::OneRank;
 pub use communicator::{all, interrupted, Communicator};
 pub use decomposition::{check_blocks, choose_blocks, Decomposition};
+pub use hosts::{dem_hosts, hosts};
 pub use pieces::FieldPieces;
 pub use summary::ParallelSummary;
 

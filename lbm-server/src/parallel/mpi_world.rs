@@ -54,8 +54,9 @@ impl Communicator for MpiWorld {
         launched_local_rank().unwrap_or(self.rank())
     }
 
+    /// MPI's processor name (the host's name where MPI gives none).
     fn host(&self) -> String {
-        host_name()
+        mpi::environment::processor_name().unwrap_or_else(|_| host_name())
     }
 
     fn exchange(&self, sends: &[Message], expected: &[Expected]) -> Vec<Vec<f32>> {
