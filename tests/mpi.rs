@@ -52,7 +52,13 @@ fn vti_cells(bytes: &[u8]) -> ([usize; 6], Vec<u8>) {
 /// The six numbers of the extent after `key` in `text`.
 fn extent(text: &str, key: &str) -> [usize; 6] {
     let at = text.find(key).unwrap_or_else(|| panic!("{key} in {text}")) + key.len();
-    let numbers: Vec<usize> = text[at..].split('"').next().unwrap().split(' ').map(|n| n.parse().unwrap()).collect();
+    let numbers: Vec<usize> = text[at..]
+        .split('"')
+        .next()
+        .unwrap()
+        .split(' ')
+        .map(|n| n.parse().unwrap())
+        .collect();
     numbers.try_into().unwrap()
 }
 
@@ -67,7 +73,13 @@ fn pieces_put_together(pvti: &Path) -> Vec<u8> {
     let (mut density, mut velocity) = (vec![None; cells], vec![None; cells]);
     for piece in text.split("<Piece ").skip(1) {
         let e = extent(piece, "Extent=\"");
-        let source = piece.split("Source=\"").nth(1).unwrap().split('"').next().unwrap();
+        let source = piece
+            .split("Source=\"")
+            .nth(1)
+            .unwrap()
+            .split('"')
+            .next()
+            .unwrap();
         let (own, values) = vti_cells(&std::fs::read(pvti.parent().unwrap().join(source)).unwrap());
         assert_eq!(own, e, "{source}: its extent is the .pvti's");
         let mut k = 0;
@@ -75,7 +87,10 @@ fn pieces_put_together(pvti: &Path) -> Vec<u8> {
             for y in e[2]..e[3] {
                 for x in e[0]..e[1] {
                     let g = x + n[0] * (y + n[1] * z);
-                    assert!(density[g].is_none(), "{source}: cell ({x}, {y}, {z}) in two pieces");
+                    assert!(
+                        density[g].is_none(),
+                        "{source}: cell ({x}, {y}, {z}) in two pieces"
+                    );
                     density[g] = Some(values[4 * k..4 * k + 4].to_vec());
                     let at = 4 * (e[1] - e[0]) * (e[3] - e[2]) * (e[5] - e[4]) + 12 * k;
                     velocity[g] = Some(values[at..at + 12].to_vec());
@@ -85,7 +100,9 @@ fn pieces_put_together(pvti: &Path) -> Vec<u8> {
         }
     }
     let all = |v: Vec<Option<Vec<u8>>>| -> Vec<u8> {
-        v.into_iter().flat_map(|c| c.expect("every cell in a piece")).collect()
+        v.into_iter()
+            .flat_map(|c| c.expect("every cell in a piece"))
+            .collect()
     };
     [all(density), all(velocity)].concat()
 }

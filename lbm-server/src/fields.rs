@@ -122,7 +122,11 @@ impl FieldOutput {
         let mut values = values.iter();
         for (cells, axis, w) in &mut self.probes {
             for (&cell, f) in cells.iter().zip(&mut values) {
-                let idx = [cell % grid.n[0], (cell / grid.n[0]) % grid.n[1], cell / (grid.n[0] * grid.n[1])];
+                let idx = [
+                    cell % grid.n[0],
+                    (cell / grid.n[0]) % grid.n[1],
+                    cell / (grid.n[0] * grid.n[1]),
+                ];
                 let s = units.cell_centre(idx, min)[*axis];
                 let u = [f[1] as f64 * c, f[2] as f64 * c, f[3] as f64 * c];
                 writeln!(

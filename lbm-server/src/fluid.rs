@@ -8,7 +8,9 @@ use crate::lbm::gpu::{Gpu, GpuLattice, Health};
 use crate::lbm::kernel::Kernel;
 use crate::lbm::mrt::Rates;
 use crate::output::LatticeSummary;
-use crate::parallel::{all, BlockLattice, Communicator, Decomposition, FieldPieces, ParallelSummary, RankUnhealthy};
+use crate::parallel::{
+    all, BlockLattice, Communicator, Decomposition, FieldPieces, ParallelSummary, RankUnhealthy,
+};
 use crate::terminal::{Progress, Warning};
 use crate::trials::{kernels_of, Trial};
 use scene::lattice::{mach_limit, CollisionOperator, LatticeFace, LatticeUnits};
@@ -439,8 +441,8 @@ impl<'a> FluidRun<'a> {
                 fields.err().unwrap_or_else(|| "rank 0's outputs".into()),
             ));
         }
-        let pieces = (comm.size() > 1)
-            .then(|| FieldPieces::new(scene, units, out.to_path_buf(), d, comm.rank()));
+        let pieces =
+            (comm.size() > 1).then(|| FieldPieces::new(scene, units, out.to_path_buf(), d, comm.rank()));
         Ok(Self {
             scene,
             units,
@@ -583,11 +585,16 @@ impl<'a> FluidRun<'a> {
     /// The snapshot of `step`: on one rank the whole .vti, on several a .pvti of every rank's
     /// piece; listed in fields.pvd.
     fn write_snapshot(&mut self, step: u64, own: &[[f32; 4]]) -> Result<(), String> {
-        let name = match &self.pieces {
-            Some(pieces) => pieces.write(self.comm, &snapshot_name(step), own)?,
-            None => return self.fields.as_mut().map_or(Ok(()), |f| f.write_snapshot(step, own)),
+        let Some(pieces) = &self.pieces else {
+            return self
+                .fields
+                .as_mut()
+                .map_or(Ok(()), |f| f.write_snapshot(step, own));
         };
-        self.fields.as_mut().map_or(Ok(()), |f| f.add_snapshot(step, &name))
+        let name = pieces.write(self.comm, &snapshot_name(step), own)?;
+        self.fields
+            .as_mut()
+            .map_or(Ok(()), |f| f.add_snapshot(step, &name))
     }
 
     fn flush(&mut self) -> Result<(), String> {

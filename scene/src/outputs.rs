@@ -132,7 +132,10 @@ mod tests {
             assert!(dir.join(f).is_file(), "{f} removed");
         }
         assert!(dir.join("line_dir.csv").is_dir(), "a folder is not an output");
-        assert!(!dir.join("fields/step000000100").exists(), "an emptied piece folder is removed");
+        assert!(
+            !dir.join("fields/step000000100").exists(),
+            "an emptied piece folder is removed"
+        );
         assert_eq!(clear_earlier(&dir.join("none"), LBM_SERVER).unwrap(), 0);
         std::fs::remove_dir_all(&dir).unwrap();
     }

@@ -60,12 +60,17 @@ pub fn mpirun() -> Option<PathBuf> {
 /// llvmpipe thread per rank).
 pub fn mpirun_command(mpirun: &Path, ranks: usize, scene: &Path, out: &Path) -> Command {
     let mut cmd = Command::new(mpirun);
-    cmd.args(["--allow-run-as-root", "--oversubscribe", "-np", &ranks.to_string()])
-        .args(["-x", "LP_NUM_THREADS=1", "-x", "NODEVICE_SELECT=1"])
-        .arg(bin("lbm-server"))
-        .arg("run")
-        .arg(scene)
-        .arg("--out")
-        .arg(out);
+    cmd.args([
+        "--allow-run-as-root",
+        "--oversubscribe",
+        "-np",
+        &ranks.to_string(),
+    ])
+    .args(["-x", "LP_NUM_THREADS=1", "-x", "NODEVICE_SELECT=1"])
+    .arg(bin("lbm-server"))
+    .arg("run")
+    .arg(scene)
+    .arg("--out")
+    .arg(out);
     cmd
 }

@@ -6,7 +6,10 @@ use super::Communicator;
 /// Every rank's host at rank 0, in rank order (MPI's processor name; empty elsewhere).
 pub fn hosts(comm: &dyn Communicator) -> Vec<String> {
     let gathered = comm.gather(comm.host().as_bytes());
-    gathered.iter().map(|h| String::from_utf8_lossy(h).into_owned()).collect()
+    gathered
+        .iter()
+        .map(|h| String::from_utf8_lossy(h).into_owned())
+        .collect()
 }
 
 /// The ranks of a run with particles on the hosts `hosts` (rank order; none known: allowed):
@@ -52,7 +55,10 @@ mod tests {
         assert!(dem_hosts(&one).is_ok());
         let two = ["n1", "n2", "n1", "n2"].map(String::from);
         let e = dem_hosts(&two).unwrap_err();
-        assert!(e.contains("4 ranks on 2 hosts (n1: rank 0, 2; n2: rank 1, 3)"), "{e}");
+        assert!(
+            e.contains("4 ranks on 2 hosts (n1: rank 0, 2; n2: rank 1, 3)"),
+            "{e}"
+        );
         assert!(e.contains("must run on rank 0's host (n1)"), "{e}");
     }
 }

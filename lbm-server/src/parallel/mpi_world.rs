@@ -3,7 +3,8 @@
 //! the non-blocking ones waited for with a deadline once the process is asked to stop.
 
 use super::communicator::{
-    host_name, launched_local_rank, past_stop_deadline, was_interrupted, Communicator, Expected, Message, STOP_DEADLINE,
+    host_name, launched_local_rank, past_stop_deadline, was_interrupted, Communicator, Expected, Message,
+    STOP_DEADLINE,
 };
 use mpi::collective::SystemOperation;
 use mpi::request::{Request, Scope};

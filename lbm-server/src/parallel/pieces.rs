@@ -23,7 +23,13 @@ pub struct FieldPieces {
 
 impl FieldPieces {
     /// The pieces of the block `d` (rank `rank`'s) of a run of `scene` on `units`, into `out`.
-    pub fn new(scene: &Scene, units: &LatticeUnits, out: PathBuf, d: &Decomposition, rank: usize) -> FieldPieces {
+    pub fn new(
+        scene: &Scene,
+        units: &LatticeUnits,
+        out: PathBuf,
+        d: &Decomposition,
+        rank: usize,
+    ) -> FieldPieces {
         let blocks = (0..d.ranks())
             .map(|r| {
                 let b = Decomposition::new(d.n, d.periodic(), d.blocks, r);
