@@ -1,104 +1,114 @@
 //! A fluid-only run decomposed over MPI ranks (`mpirun -np N lbm-server run`), against the same
-//! run in one process: the probe lines and every field snapshot byte for byte, walled and
+//! run in one process: the probe lines byte for byte, and every field snapshot's cells (the
+//! pieces of its .pvti put together) bit for bit against the single process's .vti, walled and
 //! periodic, on 2 and 4 ranks; and the refusals of blocks that cannot be. The runs need mpirun
 //! and an lbm-server built with `--features mpi`; where either is missing they say so and pass.
 
 mod common;
+use common::mpi::{mpirun, mpirun_command, scene, PERIODIC, SOLID, WALLED};
 use common::*;
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-/// A box of 8 x 8 x 8 cells (1 mm, tau 0.8) with a body force, run 12 steps with probe lines
-/// and snapshots every 6 steps; `faces` and `extra` (a solid box, `[parallel]`) as given.
-fn scene(name: &str, faces: &str, extra: &str) -> String {
-    format!(
-        r#"name = "{name}"
-[domain]
-min = [0.0, 0.0, 0.0]
-max = [0.008, 0.008, 0.008]
-[fluid]
-density = 1000.0
-dynamic_viscosity = 1.0e-3
-[time]
-steps = 12
-[lattice]
-dx = 0.001
-operator = "mrt"
-tau = 0.8
-velocity_scale = 5.0e-4
-body_acceleration = [1.0e-4, 2.0e-5, -1.0e-5]
-check_interval = 4
-[lattice.faces]
-{faces}
-[output]
-interval = 6
-fields_interval = 6
-[[output.line]]
-axis = "y"
-through = [0.0035, 0.004, 0.0045]
-[[output.line]]
-axis = "z"
-through = [0.0045, 0.0035, 0.004]
-{extra}
-"#
-    )
-}
-
-const WALLED: &str = "x_min = \"periodic\"\nx_max = \"periodic\"\ny_min = \"wall\"\ny_max = \"wall\"\n\
-                      z_min = \"wall\"\nz_max = { type = \"moving_wall\", velocity = [5.0e-4, 1.0e-4, 0.0] }";
-const PERIODIC: &str =
-    "x_min = \"periodic\"\nx_max = \"periodic\"\ny_min = \"periodic\"\ny_max = \"periodic\"\n\
-                        z_min = \"periodic\"\nz_max = \"periodic\"";
-/// Solid cells on both sides of the cuts of 2 and 4 blocks.
-const SOLID: &str = "[[lattice.solid_box]]\nmin = [0.002, 0.003, 0.003]\nmax = [0.005, 0.005, 0.005]";
-
-/// mpirun, where it is installed.
-fn mpirun() -> Option<PathBuf> {
-    let path = std::env::var_os("PATH")?;
-    std::env::split_paths(&path)
-        .map(|d| d.join("mpirun"))
-        .find(|p| p.is_file())
-}
-
-/// `mpirun -np N lbm-server run SCENE --out OUT` (as root too; more ranks than cores; one
-/// llvmpipe thread per rank).
-fn run_on(mpirun: &Path, ranks: usize, scene: &Path, out: &Path) -> Output {
-    Command::new(mpirun)
-        .args([
-            "--allow-run-as-root",
-            "--oversubscribe",
-            "-np",
-            &ranks.to_string(),
-        ])
-        .args(["-x", "LP_NUM_THREADS=1", "-x", "NODEVICE_SELECT=1"])
-        .arg(bin("lbm-server"))
-        .arg("run")
-        .arg(scene)
-        .arg("--out")
-        .arg(out)
-        .output()
-        .unwrap()
-}
+use std::path::Path;
+use std::process::Output;
 
 fn text(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned() + &String::from_utf8_lossy(&o.stdout)
 }
 
-/// The outputs of a fluid run that must not depend on the ranks: the probe lines and snapshots.
+/// The outputs of a fluid run that must not depend on the ranks: the probe lines, fields.pvd (a
+/// snapshot named .vti on one rank, .pvti on several) and each snapshot's cells, density then
+/// velocity, as the bytes of its .vti (one rank) or of its pieces put together (several).
 fn outputs(out: &Path) -> Vec<(String, Vec<u8>)> {
-    let mut files = vec!["line0.csv".to_string(), "line1.csv".into(), "fields.pvd".into()];
-    files.extend(["6", "12"].map(|s| format!("fields/step{s:0>9}.vti")));
+    let read = |f: &str| std::fs::read(out.join(f)).unwrap_or_else(|e| panic!("{f}: {e}"));
+    let mut files: Vec<(String, Vec<u8>)> = ["line0.csv", "line1.csv"]
+        .iter()
+        .map(|f| (f.to_string(), read(f)))
+        .collect();
+    let pvd = String::from_utf8(read("fields.pvd")).unwrap();
+    files.push(("fields.pvd".into(), pvd.replace(".pvti\"", ".vti\"").into_bytes()));
+    for step in ["6", "12"] {
+        let name = format!("fields/step{step:0>9}");
+        let cells = match out.join(format!("{name}.pvti")).is_file() {
+            true => pieces_put_together(&out.join(format!("{name}.pvti"))),
+            false => vti_cells(&read(&format!("{name}.vti"))).1,
+        };
+        files.push((name, cells));
+    }
     files
-        .into_iter()
-        .map(|f| {
-            let bytes = std::fs::read(out.join(&f)).unwrap_or_else(|e| panic!("{f}: {e}"));
-            (f, bytes)
-        })
-        .collect()
+}
+
+/// A .vti's extent (first and last point along x, y, z) and its cells' density and velocity
+/// (raw appended data, x fastest).
+fn vti_cells(bytes: &[u8]) -> ([usize; 6], Vec<u8>) {
+    let marker = b"encoding=\"raw\">_";
+    let start = bytes.windows(marker.len()).position(|w| w == marker).unwrap() + marker.len();
+    let header = String::from_utf8_lossy(&bytes[..start]);
+    let len = |at: usize| u64::from_le_bytes(bytes[at..at + 8].try_into().unwrap()) as usize;
+    let density = &bytes[start + 8..start + 8 + len(start)];
+    let v = start + 8 + density.len();
+    let velocity = &bytes[v + 8..v + 8 + len(v)];
+    (extent(&header, "<Piece Extent=\""), [density, velocity].concat())
+}
+
+/// The six numbers of the extent after `key` in `text`.
+fn extent(text: &str, key: &str) -> [usize; 6] {
+    let at = text.find(key).unwrap_or_else(|| panic!("{key} in {text}")) + key.len();
+    let numbers: Vec<usize> = text[at..]
+        .split('"')
+        .next()
+        .unwrap()
+        .split(' ')
+        .map(|n| n.parse().unwrap())
+        .collect();
+    numbers.try_into().unwrap()
+}
+
+/// The cells of the whole grid of a .pvti, put together from its pieces (each placed by its
+/// extent, checked against the piece's own), as [`vti_cells`] gives a whole .vti's: every cell
+/// covered once.
+fn pieces_put_together(pvti: &Path) -> Vec<u8> {
+    let text = std::fs::read_to_string(pvti).unwrap();
+    let whole = extent(&text, "WholeExtent=\"");
+    let n = [whole[1], whole[3], whole[5]];
+    let cells = n[0] * n[1] * n[2];
+    let (mut density, mut velocity) = (vec![None; cells], vec![None; cells]);
+    for piece in text.split("<Piece ").skip(1) {
+        let e = extent(piece, "Extent=\"");
+        let source = piece
+            .split("Source=\"")
+            .nth(1)
+            .unwrap()
+            .split('"')
+            .next()
+            .unwrap();
+        let (own, values) = vti_cells(&std::fs::read(pvti.parent().unwrap().join(source)).unwrap());
+        assert_eq!(own, e, "{source}: its extent is the .pvti's");
+        let mut k = 0;
+        for z in e[4]..e[5] {
+            for y in e[2]..e[3] {
+                for x in e[0]..e[1] {
+                    let g = x + n[0] * (y + n[1] * z);
+                    assert!(
+                        density[g].is_none(),
+                        "{source}: cell ({x}, {y}, {z}) in two pieces"
+                    );
+                    density[g] = Some(values[4 * k..4 * k + 4].to_vec());
+                    let at = 4 * (e[1] - e[0]) * (e[3] - e[2]) * (e[5] - e[4]) + 12 * k;
+                    velocity[g] = Some(values[at..at + 12].to_vec());
+                    k += 1;
+                }
+            }
+        }
+    }
+    let all = |v: Vec<Option<Vec<u8>>>| -> Vec<u8> {
+        v.into_iter()
+            .flat_map(|c| c.expect("every cell in a piece"))
+            .collect()
+    };
+    [all(density), all(velocity)].concat()
 }
 
 /// The scene on one process, then on each of `runs`' ranks with its `[parallel]` section (or
-/// none): the same outputs byte for byte, and the summary names the ranks and blocks. False
+/// none): the same outputs ([`outputs`]) byte for byte, and the summary names the ranks and blocks. False
 /// where the runs cannot be made (said why).
 fn same_on_ranks(tag: &str, text_: &str, runs: &[(usize, &str)]) -> bool {
     let Some(mpirun) = mpirun() else {
@@ -115,7 +125,7 @@ fn same_on_ranks(tag: &str, text_: &str, runs: &[(usize, &str)]) -> bool {
         let out = dir.join(format!("np{n}"));
         let scene = dir.join(format!("np{n}.toml"));
         std::fs::write(&scene, format!("{text_}\n{parallel}\n")).unwrap();
-        let o = run_on(&mpirun, n, &scene, &out);
+        let o = mpirun_command(&mpirun, n, &scene, &out).output().unwrap();
         if text(&o).contains("built without MPI") {
             eprintln!("skipped: lbm-server is built without MPI (cargo build -p lbm-server --features mpi)");
             return false;

@@ -2,13 +2,15 @@
 //! VTK snapshots, probe lines and a summary.
 
 use crate::checkpoint::{Checkpoints, Loaded, OutputPositions};
-use crate::fields::FieldOutput;
+use crate::fields::{last_good_line, probe_cells, snapshot_name, FieldOutput};
 use crate::lbm::geometry::{tau_minus, Face, Operator, Setup};
 use crate::lbm::gpu::{Gpu, GpuLattice, Health};
 use crate::lbm::kernel::Kernel;
 use crate::lbm::mrt::Rates;
 use crate::output::LatticeSummary;
-use crate::parallel::{BlockLattice, Communicator, Decomposition, ParallelSummary, RankUnhealthy};
+use crate::parallel::{
+    all, BlockLattice, Communicator, Decomposition, FieldPieces, ParallelSummary, RankUnhealthy,
+};
 use crate::terminal::{Progress, Warning};
 use crate::trials::{kernels_of, Trial};
 use scene::lattice::{mach_limit, CollisionOperator, LatticeFace, LatticeUnits};
@@ -194,7 +196,7 @@ pub fn run(
         &mut trial,
         checkpoints.resumed.as_ref(),
     );
-    if !crate::parallel::all(comm, started.is_ok()) {
+    if !all(comm, started.is_ok()) {
         if let Err(e) = &started {
             let rank = if comm.size() > 1 {
                 format!("rank {}: ", comm.rank())
@@ -213,7 +215,7 @@ pub fn run(
         scene,
         units,
         out,
-        comm,
+        (comm, &lattice.decomposition),
         trial.clone(),
         at.as_ref(),
         &mut checkpoints,
@@ -237,20 +239,25 @@ pub fn run(
         Err(Stop::Failed(e)) => (format!("error: {e}"), 1),
     };
     let parallel = ParallelSummary::gather(comm, &lattice, &gpu.adapter.name, wall);
-    if !root {
-        return code;
-    }
-    let ended = Ended {
-        from,
-        result,
-        reason,
-        code,
-        wall,
-        steps,
-        completed: lattice.time(),
-        trial,
+    let code = if root {
+        let ended = Ended {
+            from,
+            result,
+            reason,
+            code,
+            wall,
+            steps,
+            completed: lattice.time(),
+            trial,
+        };
+        report(scene, scene_file, out, &gpu.adapter.name, parallel, ended)
+    } else {
+        code
     };
-    report(scene, scene_file, out, &gpu.adapter.name, parallel, ended)
+    // Every rank ends once rank 0 has said how the run went and written its summary: a launcher
+    // ends the other ranks as soon as one exits with a code other than 0.
+    comm.min(0);
+    code
 }
 
 /// How a fluid run ended (`from`: the step it started from).
@@ -392,12 +399,18 @@ fn write_summary(summary: &FluidSummary, out: &Path) -> std::io::Result<()> {
     std::fs::write(out.join("summary.json"), text + "\n")
 }
 
-/// The outputs of one fluid run (rank 0's; the other ranks step and send their fields).
+/// The outputs of one fluid run: rank 0's probe lines, snapshots (on several ranks, each rank's
+/// piece of them) and summary.
 struct FluidRun<'a> {
     scene: &'a Scene,
     units: &'a LatticeUnits,
     comm: &'a dyn Communicator,
+    /// Rank 0's outputs.
     fields: Option<FieldOutput>,
+    /// On several ranks, every rank's pieces of the snapshots.
+    pieces: Option<FieldPieces>,
+    /// The probe lines' cells (indices of the whole lattice), on every rank.
+    line_cells: Vec<usize>,
     checkpoints: &'a mut Checkpoints,
     /// The step of the last check that passed (its fields kept on the device).
     last_good: Option<u64>,
@@ -407,12 +420,13 @@ struct FluidRun<'a> {
 }
 
 impl<'a> FluidRun<'a> {
-    /// The outputs into `out`, resumed `at` a checkpoint's positions where given.
+    /// The outputs into `out` of the block `d` on the ranks of `comm`, resumed `at` a
+    /// checkpoint's positions where given.
     fn new(
         scene: &'a Scene,
         units: &'a LatticeUnits,
         out: &'a Path,
-        comm: &'a dyn Communicator,
+        (comm, d): (&'a dyn Communicator, &Decomposition),
         trial: Trial,
         at: Option<&OutputPositions>,
         checkpoints: &'a mut Checkpoints,
@@ -422,16 +436,20 @@ impl<'a> FluidRun<'a> {
         } else {
             Ok(None)
         };
-        if !crate::parallel::all(comm, fields.is_ok()) {
+        if !all(comm, fields.is_ok()) {
             return Err(Stop::Failed(
                 fields.err().unwrap_or_else(|| "rank 0's outputs".into()),
             ));
         }
+        let pieces =
+            (comm.size() > 1).then(|| FieldPieces::new(scene, units, out.to_path_buf(), d, comm.rank()));
         Ok(Self {
             scene,
             units,
             comm,
             fields: fields.expect("checked"),
+            pieces,
+            line_cells: probe_cells(scene, units),
             checkpoints,
             last_good: None,
             trial,
@@ -489,7 +507,7 @@ impl<'a> FluidRun<'a> {
             // Interrupted (Ctrl-C), the run ends here: this step gets a last step's outputs. The
             // ranks agree, so that all stop at the same step.
             let going = !interrupted.load(Ordering::SeqCst);
-            let stopping = !crate::parallel::all(self.comm, going);
+            let stopping = !all(self.comm, going);
             self.outputs(lattice, next, next == steps || stopping)?;
             progress.iter_mut().for_each(|p| p.update(next));
             if stopping {
@@ -516,15 +534,15 @@ impl<'a> FluidRun<'a> {
         // The whole field crosses the bus only when something is written from it; a check
         // alone reads the status and, if it fails, one cell.
         if lines || snapshot || last {
-            let (fields, bad) = lattice.fields(self.comm);
+            let (own, bad) = lattice.own_fields(self.comm);
             if let Some(bad) = bad {
                 return Err(self.blow_up(lattice, step, bad));
             }
-            self.write(step, &fields, lines, snapshot)?;
+            self.write(lattice, step, &own, lines, snapshot)?;
             if checkpoint {
                 self.checkpoint(&lattice.lattice)?;
             }
-            self.write(step, &fields, last && !lines, last && !snapshot)?;
+            self.write(lattice, step, &own, last && !lines, last && !snapshot)?;
         } else if let Some(bad) = lattice.health(self.comm) {
             return Err(self.blow_up(lattice, step, bad));
         } else if checkpoint {
@@ -535,19 +553,48 @@ impl<'a> FluidRun<'a> {
         Ok(())
     }
 
-    /// Rank 0 writes the probe lines and the snapshot of `step`, those asked for; every rank
-    /// stops where rank 0 could not write.
-    fn write(&mut self, step: u64, fields: &[[f32; 4]], lines: bool, snapshot: bool) -> Result<(), Stop> {
-        let written = match &mut self.fields {
-            Some(out) if lines || snapshot => write_fields(out, step, fields, lines, snapshot),
-            _ => Ok(()),
-        };
-        if !crate::parallel::all(self.comm, written.is_ok()) {
+    /// The probe lines and the snapshot of `step`, those asked for, from this block's `own`
+    /// fields: rank 0 writes the lines (their cells gathered), every rank its piece of the
+    /// snapshot (on one rank, the whole .vti); every rank stops where one could not write.
+    fn write(
+        &mut self,
+        lattice: &BlockLattice,
+        step: u64,
+        own: &[[f32; 4]],
+        lines: bool,
+        snapshot: bool,
+    ) -> Result<(), Stop> {
+        let mut written = Ok(());
+        if lines && !self.line_cells.is_empty() {
+            let values = lattice.gather_cells(self.comm, own, &self.line_cells);
+            if let Some(out) = &mut self.fields {
+                written = out.write_line_values(step, &values);
+            }
+        }
+        if snapshot {
+            written = written.and(self.write_snapshot(step, own));
+        }
+        if !all(self.comm, written.is_ok()) {
             return Err(Stop::Failed(
-                written.err().unwrap_or_else(|| "rank 0's outputs".into()),
+                written.err().unwrap_or_else(|| "another rank's outputs".into()),
             ));
         }
         Ok(())
+    }
+
+    /// The snapshot of `step`: on one rank the whole .vti, on several a .pvti of every rank's
+    /// piece; listed in fields.pvd.
+    fn write_snapshot(&mut self, step: u64, own: &[[f32; 4]]) -> Result<(), String> {
+        let Some(pieces) = &self.pieces else {
+            return self
+                .fields
+                .as_mut()
+                .map_or(Ok(()), |f| f.write_snapshot(step, own));
+        };
+        let name = pieces.write(self.comm, &snapshot_name(step), own)?;
+        self.fields
+            .as_mut()
+            .map_or(Ok(()), |f| f.add_snapshot(step, &name))
     }
 
     fn flush(&mut self) -> Result<(), String> {
@@ -572,7 +619,7 @@ impl<'a> FluidRun<'a> {
     fn blow_up(&mut self, lattice: &BlockLattice, step: u64, bad: RankUnhealthy) -> Stop {
         let check = self.units.check_interval;
         let bad = lattice.furthest_unhealthy(self.comm).unwrap_or(bad);
-        let kept = lattice.kept_fields(self.comm);
+        let kept = lattice.kept_own_fields();
         let origin = self.scene.domain.min;
         let rank = if self.comm.size() > 1 {
             format!("rank {}, ", bad.rank)
@@ -585,29 +632,25 @@ impl<'a> FluidRun<'a> {
             bad.cell
                 .describe(&health_of(self.units), |c| self.units.cell_centre(c, origin))
         );
+        if let Some((good, own)) = self.last_good.take().zip(kept) {
+            msg += &self.write_last_good(good, &own);
+        }
         if let Some(out) = &mut self.fields {
-            if let Some((good, fields)) = self.last_good.take().zip(kept) {
-                msg += &out.write_last_good(good, &fields);
-            }
             let _ = out.flush();
         }
         Stop::Failed(msg)
     }
-}
 
-/// The probe lines and the snapshot of `step` into `out`, those asked for.
-fn write_fields(
-    out: &mut FieldOutput,
-    step: u64,
-    fields: &[[f32; 4]],
-    lines: bool,
-    snapshot: bool,
-) -> Result<(), String> {
-    if lines {
-        out.write_lines(step, fields)?;
+    /// The snapshot of the last check that passed (step `good`, this block's `own` fields then):
+    /// last_good.vti, on several ranks last_good.pvti and its pieces; a line for the error.
+    fn write_last_good(&mut self, good: u64, own: &[[f32; 4]]) -> String {
+        match (&self.pieces, &self.fields) {
+            (Some(pieces), _) => {
+                let written = pieces.write(self.comm, "last_good", own);
+                last_good_line(good, written.map(|name| pieces.path(&name)))
+            }
+            (None, Some(out)) => out.write_last_good(good, own),
+            (None, None) => String::new(),
+        }
     }
-    if snapshot {
-        out.write_snapshot(step, fields)?;
-    }
-    Ok(())
 }

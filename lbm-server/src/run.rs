@@ -176,6 +176,7 @@ fn on_ctrl_c(interrupted: &AtomicBool) {
         unsafe { libc::_exit(i32::from(EXIT_INTERRUPTED)) };
     }
     interrupted.store(true, Ordering::SeqCst);
+    crate::parallel::interrupted();
 }
 
 /// Start-up is over: Ctrl-C from now on stops the run in order.

@@ -1,4 +1,5 @@
-//! ParaView output of the fluid: VTK image data (.vti, raw appended binary) and a .pvd series.
+//! ParaView output of the fluid: VTK image data (.vti, raw appended binary), parallel image data
+//! (.pvti, naming one .vti piece per rank) and a .pvd series.
 
 use std::fs::File;
 use std::io::{BufWriter, Write};
@@ -12,24 +13,62 @@ pub struct Grid {
     pub dx: f64,
 }
 
+/// A box of a grid's cells: its first cell and its cells along each axis (a rank's block).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Extent {
+    pub first: [usize; 3],
+    pub size: [usize; 3],
+}
+
+impl Extent {
+    /// All the cells of a grid of `n` cells.
+    pub fn whole(n: [usize; 3]) -> Extent {
+        Extent {
+            first: [0; 3],
+            size: n,
+        }
+    }
+
+    /// As VTK writes an extent: the first and last point along x, y and z.
+    fn points(&self) -> String {
+        let [a, b, c] = std::array::from_fn(|i| (self.first[i], self.first[i] + self.size[i]));
+        format!("{} {} {} {} {} {}", a.0, a.1, b.0, b.1, c.0, c.1)
+    }
+
+    fn cells(&self) -> usize {
+        self.size.iter().product()
+    }
+}
+
 /// Writes density [kg/m^3] and velocity [m/s] per cell as a .vti file.
 pub fn write_vti(path: &Path, grid: &Grid, density: &[f32], velocity: &[[f32; 3]]) -> std::io::Result<()> {
-    let [nx, ny, nz] = grid.n;
-    let cells = nx * ny * nz;
+    write_vti_piece(path, grid, Extent::whole(grid.n), density, velocity)
+}
+
+/// Writes density and velocity of the cells `extent` of `grid` (x fastest) as a .vti file: a
+/// piece of a .pvti ([`write_pvti`]), placed in the grid by its extent (the grid's origin and
+/// spacing, its own cells' indices), or the whole grid.
+pub fn write_vti_piece(
+    path: &Path,
+    grid: &Grid,
+    extent: Extent,
+    density: &[f32],
+    velocity: &[[f32; 3]],
+) -> std::io::Result<()> {
     let mut w = BufWriter::new(File::create(path)?);
-    let density_bytes = (cells * 4) as u64;
+    let density_bytes = (extent.cells() * 4) as u64;
     writeln!(w, r#"<?xml version="1.0"?>"#)?;
     writeln!(
         w,
         r#"<VTKFile type="ImageData" version="1.0" byte_order="LittleEndian" header_type="UInt64">"#
     )?;
     let [ox, oy, oz] = grid.origin;
-    let dx = grid.dx;
+    let (dx, points) = (grid.dx, extent.points());
     writeln!(
         w,
-        r#"<ImageData WholeExtent="0 {nx} 0 {ny} 0 {nz}" Origin="{ox} {oy} {oz}" Spacing="{dx} {dx} {dx}">"#
+        r#"<ImageData WholeExtent="{points}" Origin="{ox} {oy} {oz}" Spacing="{dx} {dx} {dx}">"#
     )?;
-    writeln!(w, r#"<Piece Extent="0 {nx} 0 {ny} 0 {nz}">"#)?;
+    writeln!(w, r#"<Piece Extent="{points}">"#)?;
     writeln!(w, r#"<CellData Scalars="density" Vectors="velocity">"#)?;
     writeln!(
         w,
@@ -48,6 +87,28 @@ pub fn write_vti(path: &Path, grid: &Grid, density: &[f32], velocity: &[[f32; 3]
     w.write_all(bytemuck::cast_slice(velocity))?;
     writeln!(w, "\n</AppendedData>\n</VTKFile>")?;
     w.flush()
+}
+
+/// Writes a .pvti: ParaView's parallel image data, the whole `grid` as the `pieces` (each a .vti
+/// by [`write_vti_piece`], named relative to the .pvti, with its extent) that cover it.
+pub fn write_pvti(path: &Path, grid: &Grid, pieces: &[(Extent, String)]) -> std::io::Result<()> {
+    let [ox, oy, oz] = grid.origin;
+    let (dx, whole) = (grid.dx, Extent::whole(grid.n).points());
+    let mut text = String::from("<?xml version=\"1.0\"?>\n");
+    text += r#"<VTKFile type="PImageData" version="1.0" byte_order="LittleEndian" header_type="UInt64">"#;
+    text += &format!(
+        "\n<PImageData WholeExtent=\"{whole}\" GhostLevel=\"0\" Origin=\"{ox} {oy} {oz}\" \
+         Spacing=\"{dx} {dx} {dx}\">\n"
+    );
+    text += "<PCellData Scalars=\"density\" Vectors=\"velocity\">\n";
+    text += "<PDataArray type=\"Float32\" Name=\"density\"/>\n";
+    text += "<PDataArray type=\"Float32\" Name=\"velocity\" NumberOfComponents=\"3\"/>\n";
+    text += "</PCellData>\n";
+    for (extent, source) in pieces {
+        text += &format!("<Piece Extent=\"{}\" Source=\"{source}\"/>\n", extent.points());
+    }
+    text += "</PImageData>\n</VTKFile>\n";
+    std::fs::write(path, text)
 }
 
 /// A .pvd time series, rewritten whole after every snapshot so that it is always complete.

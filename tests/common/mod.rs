@@ -1,6 +1,8 @@
 //! Helpers of the integration tests: find the binaries, write scenes, start and watch processes.
 #![allow(dead_code)]
 
+pub mod mpi;
+
 use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Output, Stdio};

@@ -1,12 +1,13 @@
 //! One rank's block of a decomposed lattice ([`BlockLattice`]): its lattice on the rank's device,
-//! stepped with the halo exchange after every step, its fields gathered on rank 0 and its health
-//! checks agreed by all ranks. On one rank it is the whole lattice, stepped and read as before.
+//! stepped with the halo exchange after every step, its own cells' fields read (each rank writes
+//! its piece of a snapshot), the probe lines' cells gathered on rank 0 and its health checks
+//! agreed by all ranks. On one rank it is the whole lattice, stepped and read as before.
 
 use super::communicator::{all, Communicator};
 use super::decomposition::Decomposition;
 use super::halo::Halo;
 use crate::lbm::geometry::Setup;
-use crate::lbm::gpu::{furthest_out_of_bounds, Gpu, GpuLattice, Health, Unhealthy};
+use crate::lbm::gpu::{furthest_out_of_bounds, out_of_bounds, Gpu, GpuLattice, Health, Unhealthy};
 use std::sync::Arc;
 
 /// One rank's block of the lattice.
@@ -73,19 +74,19 @@ impl BlockLattice {
         }
     }
 
-    /// The whole lattice's fields (density, velocity) at rank 0 (empty elsewhere), and the first
-    /// unhealthy cell in the whole lattice's memory order, if any (at rank 0; elsewhere any rank's
-    /// unhealthy cell: every rank knows whether one failed).
-    pub fn fields(&self, comm: &dyn Communicator) -> (Vec<[f32; 4]>, Option<RankUnhealthy>) {
+    /// This block's own cells' fields (density, velocity; x fastest, ghost layers left out: the
+    /// whole lattice's on one rank), and the first unhealthy cell in the whole lattice's memory
+    /// order, if any (at rank 0; elsewhere any rank's unhealthy cell: every rank knows whether
+    /// one failed).
+    pub fn own_fields(&self, comm: &dyn Communicator) -> (Vec<[f32; 4]>, Option<RankUnhealthy>) {
         let (fields, bad) = self.lattice.fields();
         if self.halo.is_none() {
             return (fields, bad.map(|cell| RankUnhealthy { rank: 0, cell }));
         }
-        let whole = self.gather(comm, &fields);
-        (whole, self.agree(comm, bad))
+        (self.own(&fields), self.agree(comm, bad))
     }
 
-    /// The first unhealthy cell, as [`BlockLattice::fields`] finds it, without the fields.
+    /// The first unhealthy cell, as [`BlockLattice::own_fields`] finds it, without the fields.
     pub fn health(&self, comm: &dyn Communicator) -> Option<RankUnhealthy> {
         let bad = self.lattice.health();
         if self.halo.is_none() {
@@ -94,7 +95,9 @@ impl BlockLattice {
         self.agree(comm, bad)
     }
 
-    /// At rank 0, the cell of the whole lattice furthest out of the check's bounds, if any.
+    /// At rank 0, the cell of the whole lattice furthest out of the check's bounds, if any (of
+    /// equals, the first in the whole lattice's memory order): each rank finds its own block's,
+    /// rank 0 the furthest of those.
     pub fn furthest_unhealthy(&self, comm: &dyn Communicator) -> Option<RankUnhealthy> {
         if self.halo.is_none() {
             return self
@@ -102,9 +105,21 @@ impl BlockLattice {
                 .furthest_unhealthy()
                 .map(|cell| RankUnhealthy { rank: 0, cell });
         }
-        let (fields, _) = self.fields(comm);
-        let cell = furthest_out_of_bounds(&fields, &self.lattice.health_limits())?;
-        Some(self.whole_cell(cell, fields[cell]))
+        let own = self.own(&self.lattice.fields().0);
+        let limits = self.lattice.health_limits();
+        let mine: Vec<u8> = furthest_out_of_bounds(&own, &limits)
+            .map(|i| {
+                let g = self.whole.index(self.decomposition.global(self.own_cell(i)));
+                let by = out_of_bounds(own[i], &limits);
+                cell_bytes(g, own[i], Some(by))
+            })
+            .unwrap_or_default();
+        let furthest = comm
+            .gather(&mine)
+            .iter()
+            .filter_map(|p| read_cell(p))
+            .min_by(|a, b| b.2.total_cmp(&a.2).then(a.0.cmp(&b.0)))?;
+        Some(self.whole_cell(furthest.0, furthest.1))
     }
 
     /// Keeps the fields on the device as the last good ones.
@@ -112,38 +127,57 @@ impl BlockLattice {
         self.lattice.keep_fields();
     }
 
-    /// The kept fields of the whole lattice, at rank 0.
-    pub fn kept_fields(&self, comm: &dyn Communicator) -> Option<Vec<[f32; 4]>> {
-        let kept = self.lattice.kept_fields();
-        if self.halo.is_none() {
-            return kept;
+    /// The kept fields of this block's own cells (as [`BlockLattice::own_fields`]), if kept.
+    pub fn kept_own_fields(&self) -> Option<Vec<[f32; 4]>> {
+        let kept = self.lattice.kept_fields()?;
+        match self.halo {
+            None => Some(kept),
+            Some(_) => Some(self.own(&kept)),
         }
-        let kept = kept.unwrap_or_else(|| vec![[0.0; 4]; self.lattice.setup.cells()]);
-        Some(self.gather(comm, &kept)).filter(|_| comm.rank() == 0)
     }
 
-    /// The block's own cells of `local` (fields of the block's lattice), gathered at rank 0 into
-    /// the whole lattice (empty elsewhere).
-    fn gather(&self, comm: &dyn Communicator, local: &[[f32; 4]]) -> Vec<[f32; 4]> {
-        let own: Vec<[f32; 4]> = self
-            .decomposition
-            .own_cells()
+    /// At rank 0, the values of the whole lattice's `cells` (indices, in their order) from every
+    /// block's `own` fields (empty elsewhere): the probe lines' cells, not the whole field.
+    pub fn gather_cells(&self, comm: &dyn Communicator, own: &[[f32; 4]], cells: &[usize]) -> Vec<[f32; 4]> {
+        if self.halo.is_none() {
+            return cells.iter().map(|&c| own[c]).collect();
+        }
+        let d = &self.decomposition;
+        let mine: Vec<[f32; 4]> = cells
             .iter()
-            .map(|&(l, _)| local[l])
+            .filter_map(|&c| d.own_index(self.whole.coords(c)))
+            .map(|i| own[i])
             .collect();
-        let pieces = comm.gather(bytemuck::cast_slice(&own));
+        let pieces = comm.gather(bytemuck::cast_slice(&mine));
         if pieces.is_empty() {
             return Vec::new();
         }
-        let mut whole = vec![[0f32; 4]; self.whole.cells()];
-        for (rank, piece) in pieces.iter().enumerate() {
-            let d = self.block_of(rank);
-            let values: &[[f32; 4]] = bytemuck::cast_slice(piece);
-            for (&(_, g), v) in d.own_cells().iter().zip(values) {
-                whole[g] = *v;
-            }
-        }
-        whole
+        let mut next = vec![0usize; pieces.len()];
+        cells
+            .iter()
+            .map(|&c| {
+                let rank = d.owner(self.whole.coords(c));
+                let values: &[[f32; 4]] = bytemuck::cast_slice(&pieces[rank]);
+                next[rank] += 1;
+                values[next[rank] - 1]
+            })
+            .collect()
+    }
+
+    /// The block's own cells of `local` (fields of the block's lattice), x fastest.
+    fn own(&self, local: &[[f32; 4]]) -> Vec<[f32; 4]> {
+        self.decomposition
+            .own_cells()
+            .iter()
+            .map(|&(l, _)| local[l])
+            .collect()
+    }
+
+    /// The coordinates in the block's lattice of its own cell `i` (x fastest).
+    fn own_cell(&self, i: usize) -> [usize; 3] {
+        let (d, s) = (&self.decomposition, self.decomposition.size);
+        let x = [i % s[0], (i / s[0]) % s[1], i / (s[0] * s[1])];
+        std::array::from_fn(|a| x[a] + d.lo(a))
     }
 
     /// The ranks agree whether a cell failed; rank 0 learns the first in the whole lattice's
@@ -155,25 +189,17 @@ impl BlockLattice {
         }
         let mine: Vec<u8> = own
             .map(|b| {
-                let g = self.decomposition.global(b.coords);
-                let v = [b.rho, b.u[0], b.u[1], b.u[2]];
-                let mut bytes = (self.whole.index(g) as u64).to_le_bytes().to_vec();
-                bytes.extend_from_slice(bytemuck::cast_slice(&v));
-                bytes
+                let g = self.whole.index(self.decomposition.global(b.coords));
+                cell_bytes(g, [b.rho, b.u[0], b.u[1], b.u[2]], None)
             })
             .unwrap_or_default();
         let first = comm
             .gather(&mine)
             .iter()
-            .filter(|p| p.len() == 24)
-            .map(|p| {
-                let cell = u64::from_le_bytes(p[..8].try_into().expect("8 bytes")) as usize;
-                let v: [f32; 4] = bytemuck::pod_read_unaligned(&p[8..24]);
-                (cell, v)
-            })
-            .min_by_key(|(cell, _)| *cell);
+            .filter_map(|p| read_cell(p))
+            .min_by_key(|(cell, _, _)| *cell);
         Some(match first {
-            Some((cell, v)) => self.whole_cell(cell, v),
+            Some((cell, v, _)) => self.whole_cell(cell, v),
             // Not rank 0: the failure is rank 0's to describe.
             None => self.whole_cell(0, [f32::NAN; 4]),
         })
@@ -192,9 +218,22 @@ impl BlockLattice {
             },
         }
     }
+}
 
-    fn block_of(&self, rank: usize) -> Decomposition {
-        let d = &self.decomposition;
-        Decomposition::new(d.n, d.periodic(), d.blocks, rank)
-    }
+/// A cell of the whole lattice as a rank sends it to rank 0: its index, its fields and how far
+/// they lie out of bounds (where measured).
+fn cell_bytes(cell: usize, v: [f32; 4], by: Option<f64>) -> Vec<u8> {
+    let mut bytes = (cell as u64).to_le_bytes().to_vec();
+    bytes.extend_from_slice(bytemuck::cast_slice(&v));
+    bytes.extend_from_slice(&by.unwrap_or(0.0).to_le_bytes());
+    bytes
+}
+
+/// A cell sent by [`cell_bytes`] (none where the rank had none to send).
+fn read_cell(p: &[u8]) -> Option<(usize, [f32; 4], f64)> {
+    (p.len() == 32).then(|| {
+        let cell = u64::from_le_bytes(p[..8].try_into().expect("8 bytes")) as usize;
+        let v: [f32; 4] = bytemuck::pod_read_unaligned(&p[8..24]);
+        (cell, v, f64::from_le_bytes(p[24..].try_into().expect("8 bytes")))
+    })
 }

@@ -35,6 +35,33 @@ pub trait Communicator {
     fn min(&self, value: u64) -> u64;
 }
 
+/// When this process was asked to stop (Ctrl-C, SIGTERM: [`interrupted`]).
+static INTERRUPTED: std::sync::OnceLock<std::time::Instant> = std::sync::OnceLock::new();
+
+/// This process was asked to stop (Ctrl-C, SIGTERM; mpirun passes them on to every rank): the
+/// ranks stop in order at their next agreement, and a rank whose peers do not answer within
+/// [`STOP_DEADLINE`] of it ends them all.
+pub fn interrupted() {
+    let _ = INTERRUPTED.set(std::time::Instant::now());
+}
+
+/// How long a rank asked to stop waits for its peers before it ends every rank (MPI_Abort): a
+/// peer killed or stuck would otherwise hold it.
+#[cfg_attr(not(feature = "mpi"), allow(dead_code))]
+pub const STOP_DEADLINE: std::time::Duration = std::time::Duration::from_secs(1);
+
+/// Whether this process was asked to stop.
+#[cfg_attr(not(feature = "mpi"), allow(dead_code))]
+pub fn was_interrupted() -> bool {
+    INTERRUPTED.get().is_some()
+}
+
+/// Whether this process was asked to stop more than [`STOP_DEADLINE`] ago.
+#[cfg_attr(not(feature = "mpi"), allow(dead_code))]
+pub fn past_stop_deadline() -> bool {
+    INTERRUPTED.get().is_some_and(|t| t.elapsed() > STOP_DEADLINE)
+}
+
 /// The ranks agree: true where every rank's `ok` is.
 pub fn all(comm: &dyn Communicator, ok: bool) -> bool {
     comm.min(u64::from(ok)) == 1

@@ -122,6 +122,16 @@ impl Decomposition {
         cells
     }
 
+    /// The position among the block's own cells (x fastest, as [`Decomposition::own_cells`] lists
+    /// them) of cell `x` of the whole lattice, where the block holds it.
+    pub fn own_index(&self, x: [usize; 3]) -> Option<usize> {
+        if !(0..3).all(|a| x[a] / self.size[a] == self.coords[a]) {
+            return None;
+        }
+        let l: [usize; 3] = std::array::from_fn(|a| x[a] - self.origin[a]);
+        Some(l[0] + self.size[0] * (l[1] + self.size[1] * l[2]))
+    }
+
     /// The block's lattice, from the whole lattice's `setup`: its solid cells, the whole
     /// lattice's faces where the block meets them, a wall closing each ghost layer.
     pub fn local_setup(&self, setup: &Setup) -> Setup {
@@ -259,5 +269,10 @@ mod tests {
         assert_eq!(first.neighbour(2), Some(4), "periodic along y: wraps");
         assert_eq!(first.global([0, 0, 0]), [0, 5, 0]);
         assert_eq!(d.own_cells().len(), 4 * 2 * 4);
+        for (i, &(_, g)) in d.own_cells().iter().enumerate() {
+            let x = [g % 8, (g / 8) % 6, g / 48];
+            assert_eq!(d.own_index(x), Some(i));
+        }
+        assert_eq!(d.own_index([0, 0, 0]), None);
     }
 }

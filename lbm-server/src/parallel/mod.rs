@@ -6,6 +6,9 @@
 //! - `decomposition.rs`: the blocks, chosen or given by the scene, and one rank's block.
 //! - `halo.rs`: the exchange of the populations that cross the block faces, after every step.
 //! - `block.rs`: one rank's lattice, stepped, read and checked with the others ([`BlockLattice`]).
+//! - `pieces.rs`: the field snapshots as ParaView parallel image data, a piece per rank
+//!   ([`FieldPieces`]).
+//! - `hosts.rs`: the ranks' hosts; a run with particles keeps its ranks on rank 0's host.
 //! - `summary.rs`: what summary.json says of the ranks.
 //! - `thread_ranks.rs`: ranks as threads of one process (the tests; `bench --thread-ranks`).
 //!
@@ -15,6 +18,8 @@ mod block;
 mod communicator;
 mod decomposition;
 mod halo;
+mod hosts;
+mod pieces;
 #[cfg(feature = "mpi")]
 mod mpi_world;
 mod summary;
@@ -25,8 +30,10 @@ mod thread_ranks;
 pub use block::{BlockLattice, RankUnhealthy};
 pub use communicator::launched_ranks;
 use communicator::OneRank;
-pub use communicator::{all, Communicator};
+pub use communicator::{all, interrupted, Communicator};
 pub use decomposition::{check_blocks, choose_blocks, Decomposition};
+pub use hosts::{dem_hosts, hosts};
+pub use pieces::FieldPieces;
 pub use summary::ParallelSummary;
 pub use thread_ranks::ThreadRanks;
 

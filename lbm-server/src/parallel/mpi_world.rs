@@ -1,15 +1,30 @@
 //! MPI's world as the run's [`Communicator`] (`--features mpi`): point-to-point messages started
-//! together (Isend / Irecv) for the halos, gathers in rank order and an all-reduce.
+//! together (Isend / Irecv) for the halos, gathers in rank order and an all-reduce (Iallreduce);
+//! the non-blocking ones waited for with a deadline once the process is asked to stop.
 
-use super::communicator::{host_name, launched_local_rank, Communicator, Expected, Message};
+use super::communicator::{
+    host_name, launched_local_rank, past_stop_deadline, was_interrupted, Communicator, Expected, Message,
+    STOP_DEADLINE,
+};
 use mpi::collective::SystemOperation;
+use mpi::request::{Request, Scope};
 use mpi::topology::{Communicator as _, SimpleCommunicator};
 use mpi::traits::{CommunicatorCollectives, Destination, Source};
 
-/// MPI, initialised for the run (finalised when dropped).
+/// MPI, initialised for the run (finalised when dropped, unless the process was asked to stop).
 pub struct MpiWorld {
-    _universe: mpi::environment::Universe,
+    universe: Option<mpi::environment::Universe>,
     world: SimpleCommunicator,
+}
+
+impl Drop for MpiWorld {
+    /// A process asked to stop (Ctrl-C, SIGTERM) ends without MPI_Finalize: mpirun, ending the
+    /// job, would hold it there until it kills it.
+    fn drop(&mut self) {
+        if was_interrupted() {
+            std::mem::forget(self.universe.take());
+        }
+    }
 }
 
 /// The tag of the gathers' messages (the halos' tags are the faces, 0-5).
@@ -21,7 +36,7 @@ impl MpiWorld {
         let universe = mpi::initialize().ok_or("MPI was already initialised")?;
         let world = universe.world();
         Ok(MpiWorld {
-            _universe: universe,
+            universe: Some(universe),
             world,
         })
     }
@@ -40,8 +55,9 @@ impl Communicator for MpiWorld {
         launched_local_rank().unwrap_or(self.rank())
     }
 
+    /// MPI's processor name (the host's name where MPI gives none).
     fn host(&self) -> String {
-        host_name()
+        mpi::environment::processor_name().unwrap_or_else(|_| host_name())
     }
 
     fn exchange(&self, sends: &[Message], expected: &[Expected]) -> Vec<Vec<f32>> {
@@ -52,17 +68,12 @@ impl Communicator for MpiWorld {
                 let from = self.world.process_at_rank(e.peer as i32);
                 receives.push(from.immediate_receive_into_with_tag(scope, &mut buffer[..], e.tag));
             }
-            let mut sent = Vec::new();
             for m in sends {
                 let to = self.world.process_at_rank(m.peer as i32);
-                sent.push(to.immediate_send_with_tag(scope, m.values, m.tag));
+                receives.push(to.immediate_send_with_tag(scope, m.values, m.tag));
             }
-            for r in receives {
-                r.wait();
-            }
-            for s in sent {
-                s.wait();
-            }
+            let peers: Vec<usize> = expected.iter().map(|e| e.peer).collect();
+            self.wait_all(receives, &format!("the halo of rank(s) {peers:?}"));
         });
         received
     }
@@ -85,8 +96,32 @@ impl Communicator for MpiWorld {
 
     fn min(&self, value: u64) -> u64 {
         let mut out = 0u64;
-        self.world
-            .all_reduce_into(&value, &mut out, SystemOperation::min());
+        mpi::request::scope(|scope| {
+            let op = SystemOperation::min();
+            let all = self.world.immediate_all_reduce_into(scope, &value, &mut out, op);
+            self.wait_all(vec![all], "the other ranks' agreement");
+        });
         out
+    }
+}
+
+impl MpiWorld {
+    /// Waits for `requests` to complete. Where this process was asked to stop (Ctrl-C, SIGTERM)
+    /// and `what` has not come [`STOP_DEADLINE`] later, a peer is gone (killed) or stuck: this
+    /// rank says so and ends every rank (MPI_Abort, exit 130) rather than wait for ever.
+    fn wait_all<'a, D: ?Sized, S: Scope<'a>>(&self, requests: Vec<Request<'a, D, S>>, what: &str) {
+        let mut pending = requests;
+        while !pending.is_empty() {
+            pending = pending.into_iter().filter_map(|r| r.test().err()).collect();
+            if !pending.is_empty() && past_stop_deadline() {
+                protocol::say!(
+                    "lbm-server: error: rank {}: asked to stop, and {what} had not come {} s later (a \
+                     rank killed or stuck): ending every rank",
+                    self.rank(),
+                    STOP_DEADLINE.as_secs_f64()
+                );
+                self.world.abort(130);
+            }
+        }
     }
 }

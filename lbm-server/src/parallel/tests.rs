@@ -8,7 +8,8 @@ use crate::lbm::mrt::Rates;
 use std::sync::Arc;
 
 /// Runs `steps` steps of `setup` from rest on one lattice, and cut into `blocks` on threads;
-/// checks the fields after each of the last two steps (both AA parities) bit for bit.
+/// checks the fields after each of the last two steps (both AA parities) bit for bit, the
+/// blocks' own fields put together into the whole lattice.
 fn check(setup: Setup, blocks: [usize; 3], steps: u64) {
     let gpu = Arc::new(Gpu::new().expect("a wgpu adapter (lavapipe in CI)"));
     let mut one = GpuLattice::new(gpu.clone(), setup.clone(), Health::default(), None).unwrap();
@@ -28,15 +29,26 @@ fn check(setup: Setup, blocks: [usize; 3], steps: u64) {
                     let d = Decomposition::new(setup.n, periodic, blocks, comm.rank());
                     let mut block = BlockLattice::new(gpu, setup, Health::default(), d).unwrap();
                     block.step(steps - 1, &comm);
-                    let first = block.fields(&comm).0;
+                    let first = block.own_fields(&comm).0;
                     block.step(1, &comm);
-                    vec![first, block.fields(&comm).0]
+                    vec![first, block.own_fields(&comm).0]
                 })
             })
             .collect();
         handles.into_iter().map(|h| h.join().unwrap()).collect()
     });
-    for (parity, (want, have)) in expected.iter().zip(&got[0]).enumerate() {
+    let whole = |parity: usize| {
+        let mut whole = vec![[f32::NAN; 4]; setup.cells()];
+        for (rank, pieces) in got.iter().enumerate() {
+            let d = Decomposition::new(setup.n, periodic, blocks, rank);
+            for (&(_, g), v) in d.own_cells().iter().zip(&pieces[parity]) {
+                whole[g] = *v;
+            }
+        }
+        whole
+    };
+    let got = [whole(0), whole(1)];
+    for (parity, (want, have)) in expected.iter().zip(&got).enumerate() {
         let differ: Vec<usize> = (0..want.len()).filter(|&k| want[k] != have[k]).collect();
         assert!(
             differ.is_empty(),

@@ -60,6 +60,10 @@ pub(super) fn prepare(args: &RunArgs, comm: &dyn Communicator) -> Result<Prepare
     require_lattice(&scene, &scene_file)?;
     let steps = run_steps(args, &scene)?;
     let connect_timeout = connect_timeout(args)?;
+    if scene.particle_count() > 0 {
+        // Every rank reaches this with the same scene: the gather is every rank's.
+        crate::parallel::dem_hosts(&crate::parallel::hosts(comm))?;
+    }
     let blocks = blocks(&scene, comm.size())?;
     if comm.size() > 1 && scene::checkpoint::Schedule::new(&scene, args.checkpoint_interval).enabled() {
         return Err(format!(

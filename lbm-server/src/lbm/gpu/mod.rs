@@ -21,7 +21,7 @@ pub use device::Gpu;
 #[cfg(test)]
 pub(in crate::lbm) use device::ListLayout;
 pub use halo::{HaloKernels, HaloLayer};
-pub use health::{furthest_out_of_bounds, Health, Unhealthy};
+pub use health::{furthest_out_of_bounds, out_of_bounds, Health, Unhealthy};
 pub(in crate::lbm) use params::vec4;
 pub use snapshot::RawState;
 pub use state::{equilibrium_field, total_mass, GpuLattice};
