@@ -182,9 +182,10 @@ impl Trial {
         self.choices[k]
     }
 
-    /// Whether the trial is under way at the step last asked for (the run then steps one by one).
+    /// Whether the trial is under way at the step last asked for (the run then steps one by one):
+    /// never where the scene leaves nothing to time.
     pub fn under_way(&self) -> bool {
-        self.runs.is_none() || self.stage.is_some()
+        self.open() && (self.runs.is_none() || self.stage.is_some())
     }
 
     /// Leaves the choice just asked for out of the trial (the device did not build it): the step
@@ -554,6 +555,22 @@ mod tests {
                 way: Redo
             }
         );
+    }
+
+    /// A trial with nothing to time (a pinned kernel, no particles; or pinned on a CPU driver)
+    /// is never under way, so the run steps its first steps in batches; an open one is until it
+    /// is done.
+    #[test]
+    fn a_trial_with_nothing_open_is_never_under_way() {
+        let mut pinned = Trial::new(vec![Quads], Vec::new(), 1000);
+        let mut timed = open();
+        assert!(!pinned.under_way() && timed.under_way());
+        for step in 0..1000 {
+            pinned.choice_for(step, step as f64);
+            timed.choice_for(step, step as f64);
+            assert!(!pinned.under_way(), "step {step}");
+        }
+        assert!(!timed.under_way());
     }
 
     /// A slow step now and then (particles.csv written every 10 steps, 25 times a step's time)
