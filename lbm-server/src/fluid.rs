@@ -5,7 +5,6 @@ use crate::checkpoint::{Checkpoints, Loaded, OutputPositions};
 use crate::fields::FieldOutput;
 use crate::lbm::geometry::{tau_minus, Face, Operator, Setup};
 use crate::lbm::gpu::{Gpu, GpuLattice, Health};
-use crate::lbm::kernel::Kernel;
 use crate::lbm::mrt::Rates;
 use crate::output::LatticeSummary;
 use crate::parallel::{BlockLattice, Communicator, Decomposition, ParallelSummary, RankUnhealthy};
@@ -50,7 +49,7 @@ pub fn setup_of(units: &LatticeUnits) -> Setup {
     setup.force = units.force;
     setup.ramp_steps = units.ramp_steps;
     setup.storage = units.storage;
-    setup.kernel = Kernel::named(&units.kernel).unwrap_or_default();
+    setup.kernel = units.kernel.unwrap_or_default();
     setup
 }
 
@@ -183,7 +182,7 @@ pub fn run(
     let units = scene.lattice_units.as_ref().expect("fluid scenes have a lattice");
     let root = comm.rank() == 0;
     // On several ranks every rank steps in lockstep: no trial, the first kernels open.
-    let mut trial = Trial::new(kernels_of(&units.kernel), Vec::new(), steps);
+    let mut trial = Trial::new(kernels_of(units.kernel), Vec::new(), steps);
     if comm.size() > 1 {
         trial.pin_first();
     }

@@ -32,10 +32,10 @@ pub const ROOM: u64 = 3;
 /// best's is not timed again.
 pub const DROP: f64 = 1.5;
 
-/// The kernels `lattice.kernel` leaves open: both with "auto" (the quads' first: the kernels a
-/// run starts with), else the one it names.
-pub fn kernels_of(name: &str) -> Vec<Kernel> {
-    match Kernel::named(name) {
+/// The kernels `lattice.kernel` leaves open: both with "auto" (None; the quads' first: the
+/// kernels a run starts with), else the one it names.
+pub fn kernels_of(kernel: Option<Kernel>) -> Vec<Kernel> {
+    match kernel {
         Some(kernel) => vec![kernel],
         None => Kernel::ALL.to_vec(),
     }

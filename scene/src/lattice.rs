@@ -7,9 +7,11 @@ use serde::Deserialize;
 
 mod conversions;
 mod faces;
+mod kernel;
 mod operator;
 mod storage;
 
+pub use kernel::Kernel;
 pub use operator::{mach_limit, CollisionOperator};
 pub use storage::Storage;
 
@@ -73,7 +75,7 @@ pub struct LatticeSection {
     /// The fluid kernels: "quads" (by cell class, four-cell quads: built for CPU drivers such as
     /// lavapipe), "cells" (a thread per cell: built for GPUs) or "auto" (default: the run times
     /// both on its first steps and keeps the faster; docs/lbm.md, "Kernels"). The same results
-    /// bit for bit.
+    /// bit for bit. As written ([`LatticeUnits::kernel`] is the one parsed).
     #[serde(default = "default_kernel")]
     pub kernel: String,
 }
@@ -235,12 +237,10 @@ pub struct LatticeUnits {
     pub ramp_steps: f64,
     /// The populations' storage.
     pub storage: Storage,
-    /// The fluid kernels: "auto", "quads" or "cells".
-    pub kernel: String,
+    /// The fluid kernels `lattice.kernel` names; None for "auto" (the run's start-up trial
+    /// chooses).
+    pub kernel: Option<Kernel>,
 }
-
-/// The fluid kernels `lattice.kernel` accepts.
-pub const KERNELS: [&str; 3] = ["auto", "quads", "cells"];
 
 /// Smallest tau - 1/2 accepted, for every operator. BGK was refused below 0.51 until BGK held a
 /// sphere's wake to tau 0.5024 (validation/lbm/REPORT.md, "Stability near tau = 1/2"); near
@@ -373,15 +373,7 @@ impl LatticeUnits {
                 "expected \"fp32\", \"fp16s\" or \"fp16c\"",
             ));
         };
-        let kernel = lattice.kernel.as_str();
-        if !KERNELS.contains(&kernel) {
-            return Err(fail(
-                file,
-                "lattice.kernel",
-                format!("{kernel:?}"),
-                "expected \"auto\", \"quads\" or \"cells\"",
-            ));
-        }
+        let kernel = kernel_of(lattice, file)?;
         let (dt, tau) = time_step(scene, lattice, dx, file)?;
         let mach = lattice_mach(lattice, op, dx, dt, file)?;
         let faces = faces::lattice_faces(scene, lattice, op, [dx, dt], file)?;
@@ -404,9 +396,24 @@ impl LatticeUnits {
             check_interval: lattice.check_interval,
             ramp_steps: lattice.ramp_time / dt,
             storage,
-            kernel: kernel.to_string(),
+            kernel,
         };
         Ok((units, warnings))
+    }
+}
+
+/// `lattice.kernel`: the kernels it names, None for "auto".
+fn kernel_of(lattice: &LatticeSection, file: &str) -> Result<Option<Kernel>, SceneError> {
+    match lattice.kernel.as_str() {
+        "auto" => Ok(None),
+        name => Kernel::named(name).map(Some).ok_or_else(|| {
+            fail(
+                file,
+                "lattice.kernel",
+                format!("{name:?}"),
+                "expected \"auto\", \"quads\" or \"cells\"",
+            )
+        }),
     }
 }
 
@@ -548,6 +555,7 @@ fn solid_cells(
 
 #[cfg(test)]
 mod tests {
+    use super::Kernel;
     use crate::Scene;
 
     /// lattice.ramp_time becomes the steps of the ramp (`Setup::face_ramp` in lbm-server draws
@@ -590,10 +598,15 @@ mod tests {
     /// field and the value.
     #[test]
     fn the_kernel_is_auto_quads_or_cells() {
-        assert_eq!(with_lattice("").expect("scene").kernel, "auto");
-        for name in super::KERNELS {
+        assert_eq!(with_lattice("").expect("scene").kernel, None);
+        let named = [
+            ("auto", None),
+            ("quads", Some(Kernel::Quads)),
+            ("cells", Some(Kernel::Cells)),
+        ];
+        for (name, kernel) in named {
             let units = with_lattice(&format!("kernel = {name:?}")).expect("scene");
-            assert_eq!(units.kernel, name);
+            assert_eq!(units.kernel, kernel);
         }
         let err = with_lattice("kernel = \"quad\"").expect_err("quad").to_string();
         assert!(err.contains("lattice.kernel") && err.contains("quad"), "{err}");

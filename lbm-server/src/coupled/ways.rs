@@ -27,7 +27,7 @@ pub(super) fn covered_cells_of(scene: &Scene) -> Result<Vec<CoveredCells>, Strin
 /// building the other kernels there costs about a second each, more than a short run wins back,
 /// and a run busy building them notices a dead DEM late; `coupling.covered_cells = "timed"`
 /// times them on every device.
-pub(super) fn trial(scene: &Scene, kernel: &str, steps: u64, cpu: bool) -> Result<Trial, String> {
+pub(super) fn trial(scene: &Scene, kernel: Option<Kernel>, steps: u64, cpu: bool) -> Result<Trial, String> {
     let mut trial = Trial::new(kernels_of(kernel), covered_cells_of(scene)?, steps);
     if cpu && scene.coupling.covered_cells != "timed" {
         trial.pin_first();
