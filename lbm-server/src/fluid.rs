@@ -438,19 +438,11 @@ impl<'a> FluidRun<'a> {
         })
     }
 
-    /// While the trial is under way: the kernels of the step `lattice` takes next (the trial's
-    /// lines in the log); a kernel the device does not build is left out.
+    /// While the trial is under way: the kernels of the step `lattice` takes next (the trial's;
+    /// a run without particles has one way of the covered cells).
     fn take_kernel(&mut self, lattice: &mut GpuLattice) {
-        let choice = self
-            .trial
-            .choice_for(lattice.time, self.made.elapsed().as_secs_f64());
-        self.trial.say_report();
-        if choice.kernel != lattice.kernel() {
-            if let Err(e) = lattice.set_kernel(choice.kernel) {
-                protocol::say!("lbm-server: warning: {e}; the run times the others without it");
-                self.trial.refuse();
-            }
-        }
+        let now = self.made.elapsed().as_secs_f64();
+        self.trial.give_choice(lattice, lattice.time, now);
     }
 
     fn steps(

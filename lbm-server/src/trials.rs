@@ -17,6 +17,7 @@
 //! is kept. The trial runs only where the run has [`ROOM`] times the trial's longest length of
 //! steps from [`FIRST`]; in shorter runs "auto" takes the quads' kernels and the redo.
 
+use crate::lbm::gpu::GpuLattice;
 use crate::lbm::imb::CoveredCells;
 use crate::lbm::kernel::Kernel;
 
@@ -186,6 +187,21 @@ impl Trial {
     /// never where the scene leaves nothing to time.
     pub fn under_way(&self) -> bool {
         self.open() && (self.runs.is_none() || self.stage.is_some())
+    }
+
+    /// Gives `lattice` the choice of step `step` (told that it starts at `now`; its stages' lines
+    /// in the log); a choice the device does not build is left out of the trial with a warning
+    /// (the step keeps the lattice's).
+    pub fn give_choice(&mut self, lattice: &mut GpuLattice, step: u64, now: f64) {
+        let choice = self.choice_for(step, now);
+        self.say_report();
+        if (choice.kernel, choice.way) == (lattice.kernel(), lattice.covered_cells()) {
+            return;
+        }
+        if let Err(e) = lattice.set_way(choice.kernel, choice.way) {
+            protocol::say!("lbm-server: warning: {e}; the run times the others without it");
+            self.refuse();
+        }
     }
 
     /// Leaves the choice just asked for out of the trial (the device did not build it): the step

@@ -55,16 +55,7 @@ impl FluidSide {
     /// The kernels and way this step takes (the trial's; its stages' lines in the log); a choice
     /// the device does not build is left out of the trial (this step keeps the lattice's).
     pub(super) fn take_way(&mut self) {
-        let choice = self
-            .trial
-            .choice_for(self.steps, self.made.elapsed().as_secs_f64());
-        self.trial.say_report();
-        if (choice.kernel, choice.way) == (self.lattice.kernel(), self.lattice.covered_cells()) {
-            return;
-        }
-        if let Err(e) = self.lattice.set_way(choice.kernel, choice.way) {
-            protocol::say!("lbm-server: warning: {e}; the run times the others without it");
-            self.trial.refuse();
-        }
+        let now = self.made.elapsed().as_secs_f64();
+        self.trial.give_choice(&mut self.lattice, self.steps, now);
     }
 }
