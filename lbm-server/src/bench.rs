@@ -71,9 +71,10 @@ pub struct BenchArgs {
     /// Timed rounds, ours and the naive kernel alternating (best round reported).
     #[arg(long, default_value_t = 3)]
     rounds: u32,
-    /// Which kernels to time: both, ours or naive (for instruction counts under a profiler).
+    /// Whether to time the naive reference kernel: "both" (ours and it), "none" (ours alone) or
+    /// "only" (it alone; for instruction counts under a profiler).
     #[arg(long, default_value = "both", hide = true)]
-    kernel: String,
+    reference: String,
 }
 
 /// Parses "NXxNYxNZ".
@@ -136,7 +137,7 @@ fn run(args: &BenchArgs) -> Result<(), String> {
     if args.steps == 0 {
         return Err("--steps = 0: must be at least 1".into());
     }
-    let kernels = Kernels::parse(&args.kernel)?;
+    let timed = Timed::parse(&args.reference)?;
     let storages = storage::parse_storages(&args.storage)?;
     let faces = parse_faces(&args.faces)?;
     let gpu = Arc::new(Gpu::new()?);
@@ -147,11 +148,11 @@ fn run(args: &BenchArgs) -> Result<(), String> {
         false => Some(Sweep::new(&gpu, &setup, args)?),
     };
     let mut lattice = GpuLattice::new(gpu.clone(), setup.clone(), Health::default(), None)?;
-    let naive = if kernels.naive { Naive::new(&gpu, n) } else { None };
-    let rounds = Rounds::time(&gpu, &mut lattice, naive.as_ref(), args, kernels.ours);
+    let naive = if timed.naive { Naive::new(&gpu, n) } else { None };
+    let rounds = Rounds::time(&gpu, &mut lattice, naive.as_ref(), args, timed.ours);
     print_grid(&gpu, args, &setup);
     let mlups = best(&rounds.ours);
-    if kernels.ours {
+    if timed.ours {
         print_roofline(&rounds.ours, bandwidth);
         print_health_check(&gpu, &lattice);
         if args.per_cell && storages.is_empty() {
@@ -164,27 +165,27 @@ fn run(args: &BenchArgs) -> Result<(), String> {
     if let Some(sweep) = sweep {
         sweep.run(lattice, &args.particles, mlups)?;
     }
-    if kernels.naive {
-        print_naive(naive.is_some(), &rounds, kernels.ours);
+    if timed.naive {
+        print_naive(naive.is_some(), &rounds, timed.ours);
     }
     Ok(())
 }
 
-/// Which kernels `--kernel` times.
-struct Kernels {
+/// Which of our kernels and the naive reference `--reference` times.
+struct Timed {
     ours: bool,
     naive: bool,
 }
 
-impl Kernels {
-    fn parse(name: &str) -> Result<Kernels, String> {
+impl Timed {
+    fn parse(name: &str) -> Result<Timed, String> {
         let (ours, naive) = match name {
             "both" => (true, true),
-            "ours" => (true, false),
-            "naive" => (false, true),
-            other => return Err(format!("--kernel = {other:?}: expected both, ours or naive")),
+            "none" => (true, false),
+            "only" => (false, true),
+            other => return Err(format!("--reference = {other:?}: expected both, none or only")),
         };
-        Ok(Kernels { ours, naive })
+        Ok(Timed { ours, naive })
     }
 }
 

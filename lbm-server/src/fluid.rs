@@ -5,7 +5,6 @@ use crate::checkpoint::{Checkpoints, Loaded, OutputPositions};
 use crate::fields::{last_good_line, probe_cells, snapshot_name, FieldOutput};
 use crate::lbm::geometry::{tau_minus, Face, Operator, Setup};
 use crate::lbm::gpu::{Gpu, GpuLattice, Health};
-use crate::lbm::kernel::Kernel;
 use crate::lbm::mrt::Rates;
 use crate::output::LatticeSummary;
 use crate::parallel::{
@@ -52,7 +51,7 @@ pub fn setup_of(units: &LatticeUnits) -> Setup {
     setup.force = units.force;
     setup.ramp_steps = units.ramp_steps;
     setup.storage = units.storage;
-    setup.kernel = Kernel::named(&units.kernel).unwrap_or_default();
+    setup.kernel = units.kernel.unwrap_or_default();
     setup
 }
 
@@ -185,7 +184,7 @@ pub fn run(
     let units = scene.lattice_units.as_ref().expect("fluid scenes have a lattice");
     let root = comm.rank() == 0;
     // On several ranks every rank steps in lockstep: no trial, the first kernels open.
-    let mut trial = Trial::new(kernels_of(&units.kernel), Vec::new(), steps);
+    let mut trial = Trial::new(kernels_of(units.kernel), Vec::new(), steps);
     if comm.size() > 1 {
         trial.pin_first();
     }
@@ -457,19 +456,11 @@ impl<'a> FluidRun<'a> {
         })
     }
 
-    /// While the trial is under way: the kernels of the step `lattice` takes next (the trial's
-    /// lines in the log); a kernel the device does not build is left out.
+    /// While the trial is under way: the kernels of the step `lattice` takes next (the trial's;
+    /// a run without particles has one way of the covered cells).
     fn take_kernel(&mut self, lattice: &mut GpuLattice) {
-        let choice = self
-            .trial
-            .choice_for(lattice.time, self.made.elapsed().as_secs_f64());
-        self.trial.say_report();
-        if choice.kernel != lattice.kernel() {
-            if let Err(e) = lattice.set_kernel(choice.kernel) {
-                protocol::say!("lbm-server: warning: {e}; the run times the others without it");
-                self.trial.refuse();
-            }
-        }
+        let now = self.made.elapsed().as_secs_f64();
+        self.trial.give_choice(lattice, lattice.time, now);
     }
 
     fn steps(

@@ -30,15 +30,22 @@
 //! jitter = 0.0004             # m
 //! ```
 
-use crate::numbers::{fail, finite3, non_negative, positive, vec3};
+use crate::numbers::{fail, finite3, positive, vec3};
 use crate::{InitialParticle, SceneError};
 use serde::Deserialize;
 
+mod contact;
 mod insert;
+mod material;
 mod placement;
 
+pub use contact::{
+    Contact, CoulombNormal, DampingLaw, LeverArm, NormalLaw, Preset, RollingLaw, TangentialLaw,
+    TangentialSpring,
+};
 use insert::{lattice, read_csv, validate_insert};
 pub use insert::{CsvInsert, Insert, Radius};
+pub use material::Material;
 pub(crate) use placement::idle_boxes;
 pub use placement::{validate_placement, MAX_INITIAL_WALL_OVERLAP};
 
@@ -87,156 +94,6 @@ impl Default for Dem {
     }
 }
 
-/// A solid's elastic and frictional properties.
-#[derive(Debug, Clone, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Material {
-    pub name: String,
-    /// Young's modulus E [Pa].
-    #[serde(default = "default_young")]
-    pub young_modulus: f64,
-    /// Poisson's ratio nu [-], in [0, 0.5).
-    #[serde(default = "default_poisson")]
-    pub poisson_ratio: f64,
-    /// Coefficient of restitution e [-], in (0, 1].
-    #[serde(default = "default_restitution")]
-    pub restitution: f64,
-    /// Coulomb friction coefficient mu [-] (>= 0).
-    #[serde(default = "default_friction")]
-    pub friction: f64,
-    /// Rolling friction coefficient mu_r [-] (>= 0), used by `contact.rolling`.
-    #[serde(default)]
-    pub rolling_friction: f64,
-    /// Solid density [kg/m^3] (default: `particles.density`).
-    pub density: Option<f64>,
-}
-
-impl Default for Material {
-    /// A soft glass-like solid, E = 5 MPa as in the LIGGGHTS examples (real glass, 60 GPa, would
-    /// need a time step 100x smaller for the same result in a dense granular flow).
-    fn default() -> Self {
-        Self {
-            name: "default".into(),
-            young_modulus: default_young(),
-            poisson_ratio: default_poisson(),
-            restitution: default_restitution(),
-            friction: default_friction(),
-            rolling_friction: 0.0,
-            density: None,
-        }
-    }
-}
-
-/// The contact model: normal, tangential and rolling parts and the switches that select a
-/// reference code's variant of each.
-#[derive(Debug, Clone, Deserialize, Default)]
-#[serde(deny_unknown_fields)]
-pub struct Contact {
-    /// `liggghts` (default) or `yade`.
-    #[serde(default)]
-    pub preset: Preset,
-    #[serde(default)]
-    pub normal: NormalLaw,
-    #[serde(default)]
-    pub tangential: TangentialLaw,
-    #[serde(default)]
-    pub rolling: RollingLaw,
-    /// Linear law: normal stiffness k_n [N/m].
-    pub normal_stiffness: Option<f64>,
-    /// Linear law: normal damping gamma_n [N s/m] (default: from the restitution).
-    pub normal_damping: Option<f64>,
-    /// Linear law: tangential stiffness k_t [N/m] (default k_n).
-    pub tangential_stiffness: Option<f64>,
-    /// Linear law: tangential damping gamma_t [N s/m] (default gamma_n).
-    pub tangential_damping: Option<f64>,
-    /// Linear law: contact time t_c [s]; k_n and gamma_n follow from it and the restitution.
-    pub contact_time: Option<f64>,
-    /// Hertz law: impact velocity for the contact time of the time-step rule [m/s]
-    /// (default sqrt(2 |g| H) + the fastest initial speed, H the domain height).
-    pub impact_velocity: Option<f64>,
-    pub damping_law: Option<DampingLaw>,
-    /// Normal force clamped to >= 0 (no attraction at the end of a damped contact).
-    pub clamp_normal_force: Option<bool>,
-    pub tangential_spring: Option<TangentialSpring>,
-    /// Effective radius of a sphere-wall contact = factor * r (LIGGGHTS 1, YADE 0.5).
-    pub wall_radius_factor: Option<f64>,
-    pub coulomb_normal: Option<CoulombNormal>,
-    pub lever_arm: Option<LeverArm>,
-}
-
-#[derive(Debug, Clone, Copy, Deserialize, Default, PartialEq, Eq)]
-#[serde(rename_all = "snake_case")]
-pub enum Preset {
-    #[default]
-    Liggghts,
-    Yade,
-}
-
-#[derive(Debug, Clone, Copy, Deserialize, Default, PartialEq, Eq)]
-#[serde(rename_all = "snake_case")]
-pub enum NormalLaw {
-    /// F = 4/3 E* sqrt(R*) d^(3/2) + damping.
-    #[default]
-    Hertz,
-    /// F = k_n d + gamma_n v_n (the seed paper's spring-dashpot).
-    Linear,
-}
-
-#[derive(Debug, Clone, Copy, Deserialize, Default, PartialEq, Eq)]
-#[serde(rename_all = "snake_case")]
-pub enum TangentialLaw {
-    /// Spring-dashpot with Coulomb slider and contact history.
-    #[default]
-    History,
-    /// Frictionless.
-    None,
-}
-
-#[derive(Debug, Clone, Copy, Deserialize, Default, PartialEq, Eq)]
-#[serde(rename_all = "snake_case")]
-pub enum RollingLaw {
-    #[default]
-    None,
-    /// Constant directional torque: M_r = -mu_r R* |F_n| w_rel / |w_rel|.
-    ConstantTorque,
-}
-
-#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq)]
-#[serde(rename_all = "snake_case")]
-pub enum DampingLaw {
-    /// gamma = 2 sqrt(5/6) |beta| sqrt(S m*), beta = ln e / sqrt(ln^2 e + pi^2).
-    Liggghts,
-    /// gamma = 2 beta sqrt(m* S), beta from e by Thornton et al. 2013 (B6/B7).
-    Thornton,
-}
-
-#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq)]
-#[serde(rename_all = "snake_case")]
-pub enum TangentialSpring {
-    /// F_t = -k_t xi, xi the total shear displacement (LIGGGHTS).
-    Total,
-    /// F_t += -k_t v_t dt, the force rotated with the contact (YADE).
-    Incremental,
-}
-
-#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq)]
-#[serde(rename_all = "snake_case")]
-pub enum CoulombNormal {
-    /// mu |F_n| of the total normal force, damping included (LIGGGHTS).
-    Absolute,
-    /// mu max(F_n, 0) (YADE).
-    Clamped,
-}
-
-#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq)]
-#[serde(rename_all = "snake_case")]
-pub enum LeverArm {
-    /// r - d/2: the contact point in the middle of the overlap (LIGGGHTS).
-    ContactPoint,
-    /// r (YADE).
-    Radius,
-}
-
 /// An infinite plane wall; particles live on the side `normal` points to.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -278,18 +135,6 @@ impl Default for DemOutput {
 fn default_dt_divisor() -> f64 {
     50.0
 }
-fn default_young() -> f64 {
-    5.0e6
-}
-fn default_poisson() -> f64 {
-    0.3
-}
-fn default_restitution() -> f64 {
-    0.9
-}
-fn default_friction() -> f64 {
-    0.5
-}
 fn default_seed() -> u64 {
     1
 }
@@ -298,22 +143,6 @@ fn yes() -> bool {
 }
 
 impl Dem {
-    /// The materials, with the built-in default when the scene names none.
-    pub fn materials(&self) -> Vec<Material> {
-        if self.material.is_empty() {
-            vec![Material::default()]
-        } else {
-            self.material.clone()
-        }
-    }
-
-    /// Index into [`Dem::materials`] of a material name (`None`: the particle material).
-    pub fn material_index(&self, name: Option<&str>) -> usize {
-        let name = name.or(self.particle_material.as_deref());
-        name.and_then(|n| self.materials().iter().position(|m| m.name == n))
-            .unwrap_or(0)
-    }
-
     /// Do the domain faces act as walls?
     pub fn uses_domain_walls(&self) -> bool {
         self.domain_walls
@@ -341,10 +170,6 @@ impl Dem {
         Ok(())
     }
 
-    fn material_name(&self, name: Option<&str>) -> String {
-        self.materials()[self.material_index(name)].name.clone()
-    }
-
     fn validate_settings(&self, file: &str) -> Result<(), SceneError> {
         if let Some(dt) = self.dt {
             positive(file, "dem.dt", dt, "s")?;
@@ -360,146 +185,6 @@ impl Dem {
         }
         if let Some(skin) = self.skin {
             positive(file, "dem.skin", skin, "m")?;
-        }
-        Ok(())
-    }
-
-    fn validate_materials(&self, file: &str) -> Result<(), SceneError> {
-        for (i, m) in self.material.iter().enumerate() {
-            self.validate_material(file, i, m)?;
-        }
-        let known: Vec<String> = self.materials().into_iter().map(|m| m.name).collect();
-        for (field, name) in self.material_references() {
-            if let Some(name) = name.filter(|n| !known.contains(n)) {
-                return Err(fail(
-                    file,
-                    field,
-                    format!("{name:?}"),
-                    format!("no such material (known: {})", known.join(", ")),
-                ));
-            }
-        }
-        Ok(())
-    }
-
-    /// Material `m`, the scene's `i`-th: a unique name, its moduli, restitution, frictions and
-    /// density in range.
-    fn validate_material(&self, file: &str, i: usize, m: &Material) -> Result<(), SceneError> {
-        let field = |f: &str| format!("dem.material[{i}].{f}");
-        if m.name.is_empty() || self.material[..i].iter().any(|o| o.name == m.name) {
-            return Err(fail(
-                file,
-                field("name"),
-                format!("{:?}", m.name),
-                "must be non-empty and unique",
-            ));
-        }
-        positive(file, &field("young_modulus"), m.young_modulus, "Pa")?;
-        if !(0.0..0.5).contains(&m.poisson_ratio) {
-            return Err(fail(
-                file,
-                field("poisson_ratio"),
-                m.poisson_ratio,
-                "must lie in [0, 0.5)",
-            ));
-        }
-        if !(m.restitution > 0.0 && m.restitution <= 1.0) {
-            return Err(fail(
-                file,
-                field("restitution"),
-                m.restitution,
-                "must lie in (0, 1]",
-            ));
-        }
-        for (name, v) in [("friction", m.friction), ("rolling_friction", m.rolling_friction)] {
-            non_negative(file, &field(name), v, "")?;
-        }
-        if let Some(rho) = m.density {
-            positive(file, &field("density"), rho, "kg/m^3")?;
-        }
-        Ok(())
-    }
-
-    /// Every field that names a material, with the name it gives (None: the default).
-    fn material_references(&self) -> Vec<(String, Option<&String>)> {
-        let mut names = vec![
-            (
-                "dem.particle_material".to_string(),
-                self.particle_material.as_ref(),
-            ),
-            (
-                "dem.domain_wall_material".to_string(),
-                self.domain_wall_material.as_ref(),
-            ),
-        ];
-        let listed: [(&str, Vec<&Option<String>>); 4] = [
-            ("plane", self.plane.iter().map(|p| &p.material).collect()),
-            ("box", self.boxes.iter().map(|b| &b.material).collect()),
-            ("insert", self.insert.iter().map(|b| &b.material).collect()),
-            ("csv", self.csv.iter().map(|b| &b.material).collect()),
-        ];
-        for (kind, materials) in listed {
-            for (i, m) in materials.into_iter().enumerate() {
-                names.push((format!("dem.{kind}[{i}].material"), m.as_ref()));
-            }
-        }
-        names
-    }
-
-    fn validate_contact(&self, file: &str) -> Result<(), SceneError> {
-        let c = &self.contact;
-        let optional = [
-            ("dem.contact.normal_stiffness", c.normal_stiffness, "N/m"),
-            ("dem.contact.normal_damping", c.normal_damping, "N s/m"),
-            ("dem.contact.tangential_stiffness", c.tangential_stiffness, "N/m"),
-            ("dem.contact.tangential_damping", c.tangential_damping, "N s/m"),
-            ("dem.contact.contact_time", c.contact_time, "s"),
-            ("dem.contact.impact_velocity", c.impact_velocity, "m/s"),
-            ("dem.contact.wall_radius_factor", c.wall_radius_factor, ""),
-        ];
-        for (field, v, unit) in optional {
-            match v {
-                Some(v) if field.ends_with("damping") && v.is_finite() && v >= 0.0 => {}
-                Some(v) => positive(file, field, v, unit)?,
-                None => {}
-            }
-        }
-        let linear_only = [
-            ("normal_stiffness", c.normal_stiffness),
-            ("normal_damping", c.normal_damping),
-            ("tangential_stiffness", c.tangential_stiffness),
-            ("tangential_damping", c.tangential_damping),
-            ("contact_time", c.contact_time),
-        ];
-        match c.normal {
-            NormalLaw::Hertz => {
-                if let Some((name, v)) = linear_only.iter().find(|(_, v)| v.is_some()) {
-                    return Err(fail(
-                        file,
-                        format!("dem.contact.{name}"),
-                        v.unwrap(),
-                        "applies to normal = \"linear\" only (Hertz takes its stiffness from the materials)",
-                    ));
-                }
-            }
-            NormalLaw::Linear => {
-                if c.normal_stiffness.is_some() == c.contact_time.is_some() {
-                    return Err(fail(
-                        file,
-                        "dem.contact.normal",
-                        "\"linear\"",
-                        "needs exactly one of normal_stiffness [N/m] or contact_time [s]",
-                    ));
-                }
-                if let (Some(_), Some(damping)) = (c.contact_time, c.normal_damping) {
-                    return Err(fail(
-                        file,
-                        "dem.contact.normal_damping",
-                        damping,
-                        "cannot be given with contact_time (the damping follows from it and the restitution)",
-                    ));
-                }
-            }
         }
         Ok(())
     }

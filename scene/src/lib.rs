@@ -2,6 +2,8 @@
 //!
 //! Every mistake is reported as `FILE: FIELD = VALUE: PROBLEM`, so the user can find and fix it.
 
+pub use coupling::Coupling;
+pub use particles::{Block, InitialParticle, Particles, Sphere, MAX_INITIAL_OVERLAP, MAX_PARTICLES};
 use serde::Deserialize;
 use std::fmt;
 use std::path::Path;
@@ -172,170 +174,9 @@ pub struct ProbeLine {
     pub through: [f64; 3],
 }
 
-#[derive(Debug, Clone, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Coupling {
-    /// Longest wait for a peer that is alive, silent and idle (no CPU) [s]; one that works is
-    /// waited for up to `protocol::transport::BUSY_FACTOR` (60) times as long.
-    #[serde(default = "default_timeout")]
-    pub timeout: f64,
-    /// Most particles one step may carry (default: the initial count).
-    pub capacity: Option<u64>,
-    /// With a `[lattice]`: particles one cell can hold at once (1-4); a cell covered by more keeps
-    /// those with the largest solid fractions (the same every run) and the run warns with the
-    /// count dropped.
-    #[serde(default = "default_slots")]
-    pub slots: u32,
-    /// With a `[lattice]`: solid weighting B, "noble-torczynski" (B(eps, tau)) or "seed" (B = eps).
-    #[serde(default = "default_weighting")]
-    pub weighting: String,
-    /// With a `[lattice]`: the solid collision term, "noble-torczynski" (default: the seed's eq. 8,
-    /// the non-equilibrium part bounced back) or "superposition" (the fluid's own collision with
-    /// its equilibrium moved to the solid's velocity; docs/imb.md, "The solid collision").
-    #[serde(default = "default_solid_collision")]
-    pub solid_collision: String,
-    /// With a `[lattice]`: lubrication correction for sphere-sphere and sphere-wall gaps below one
-    /// cell (default on): integrated in the DEM's sub-steps by a DEM that declares LUBRICATION
-    /// (dem-client does), else the fluid's held correction.
-    #[serde(default = "default_lubrication")]
-    pub lubrication: bool,
-    /// With a `[lattice]`: within a fluid step the DEM lets the held fluid force and torque answer
-    /// the velocity change the contacts cause, at the immersed boundary's own rate c = rho_f V / dt
-    /// (docs/imb.md; default on; off: held constant).
-    #[serde(default = "default_substep_drag")]
-    pub substep_drag: bool,
-    /// With a `[lattice]`: in each fluid step the spheres that can touch no sphere or wall, nor
-    /// come within the squeeze films' cut-off, move in one exact step of their free motion, the
-    /// others in the contacts' DEM sub-steps (docs/dem.md, "Free flight"; default on; off: every
-    /// sphere in the contacts' sub-steps throughout).
-    #[serde(default = "default_free_flight")]
-    pub free_flight: bool,
-    /// With a `[lattice]`: where the covered cells get their solid term (docs/imb.md, "Speed"):
-    /// "fused" in the fluid kernels (each cell tests one bit), "redo" collided before them and
-    /// stored over their result (the fluid kernels stay branch-free and run while the DEM takes
-    /// its step), "skip" collided in place before them, which skip them (one bit per cell). All
-    /// three give the same run bit for bit. "auto" (default): on a GPU the run times the three on
-    /// its first steps and keeps the fastest (with `lattice.kernel`: lbm-server/src/trials.rs; in
-    /// runs of a few hundred steps or more, the redo in shorter ones); on a CPU driver (lavapipe)
-    /// it takes the redo and the quads' kernels. "timed": the trial on every device.
-    #[serde(default = "default_covered_cells")]
-    pub covered_cells: String,
-    /// With a `[lattice]`: "none" (default) draws each sphere on the lattice at its radius;
-    /// "calibrated" draws it larger by the immersed boundary's measured hydrodynamic radius
-    /// deficit at the lattice's tau and operator (docs/imb.md, "Radius correction"; Noble-Torczynski
-    /// weighting only). Buoyancy and the DEM keep the radius.
-    #[serde(default = "default_radius_correction")]
-    pub radius_correction: String,
-}
-
-fn default_radius_correction() -> String {
-    "none".into()
-}
-
-fn default_lubrication() -> bool {
-    true
-}
-
-fn default_substep_drag() -> bool {
-    true
-}
-
-fn default_free_flight() -> bool {
-    true
-}
-
-fn default_covered_cells() -> String {
-    "auto".into()
-}
-
-fn default_slots() -> u32 {
-    2
-}
-
-fn default_weighting() -> String {
-    "noble-torczynski".into()
-}
-
-fn default_solid_collision() -> String {
-    "noble-torczynski".into()
-}
-
-impl Default for Coupling {
-    fn default() -> Self {
-        Self {
-            timeout: default_timeout(),
-            capacity: None,
-            slots: default_slots(),
-            weighting: default_weighting(),
-            solid_collision: default_solid_collision(),
-            lubrication: default_lubrication(),
-            substep_drag: default_substep_drag(),
-            free_flight: default_free_flight(),
-            covered_cells: default_covered_cells(),
-            radius_correction: default_radius_correction(),
-        }
-    }
-}
-
-#[derive(Debug, Clone, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Particles {
-    /// Solid density [kg/m^3].
-    pub density: f64,
-    /// Whether the scene has a `[particles]` section (whose density is checked even where it
-    /// creates no particle).
-    #[serde(skip, default = "given")]
-    pub(crate) given: bool,
-    #[serde(default)]
-    pub sphere: Vec<Sphere>,
-    #[serde(default)]
-    pub block: Vec<Block>,
-}
-
-/// No `[particles]` section: no particles (a fluid-only scene).
-impl Default for Particles {
-    fn default() -> Self {
-        Self {
-            density: unset(),
-            given: false,
-            sphere: Vec::new(),
-            block: Vec::new(),
-        }
-    }
-}
-
-/// One sphere [m, m/s, rad/s].
-#[derive(Debug, Clone, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Sphere {
-    pub position: [f64; 3],
-    pub radius: f64,
-    #[serde(default)]
-    pub velocity: [f64; 3],
-    #[serde(default)]
-    pub angular_velocity: [f64; 3],
-}
-
-/// Spheres on a simple cubic lattice: `count` per axis, `spacing` between centres, first centre at
-/// `origin` [m, m/s].
-#[derive(Debug, Clone, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Block {
-    pub origin: [f64; 3],
-    pub count: [u64; 3],
-    pub spacing: f64,
-    pub radius: f64,
-    #[serde(default)]
-    pub velocity: [f64; 3],
-}
-
 /// Marks a number the file did not give.
-fn unset() -> f64 {
+pub(crate) fn unset() -> f64 {
     f64::NAN
-}
-
-fn given() -> bool {
-    true
 }
 
 fn default_gravity() -> [f64; 3] {
@@ -344,20 +185,6 @@ fn default_gravity() -> [f64; 3] {
 pub(crate) fn default_interval() -> u64 {
     100
 }
-fn default_timeout() -> f64 {
-    10.0
-}
-
-/// A particle at the start of a run, in SI units.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct InitialParticle {
-    pub id: u64,
-    pub position: [f64; 3],
-    pub velocity: [f64; 3],
-    pub angular_velocity: [f64; 3],
-    pub radius: f64,
-}
-
 /// A scene that cannot run: which file, which field, which value, and why.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SceneError {
@@ -382,12 +209,6 @@ impl fmt::Display for SceneError {
 }
 
 impl std::error::Error for SceneError {}
-
-/// Most particles a scene may create (a block of 1000^3 is a typo, not a scene).
-pub const MAX_PARTICLES: u64 = 50_000_000;
-
-/// Largest allowed initial overlap of two spheres, as a fraction of the smaller radius.
-pub const MAX_INITIAL_OVERLAP: f64 = 0.01;
 
 impl Scene {
     /// Reads and validates a scene file; its warnings are kept in [`Scene::warnings`].
@@ -478,76 +299,12 @@ impl Scene {
             len: std::array::from_fn(|a| if axes[a] { max[a] - min[a] } else { 0.0 }),
         }
     }
-
-    /// All particles of the scene with ids 0, 1, 2, ... (spheres first, then blocks).
-    pub fn initial_particles(&self) -> Vec<InitialParticle> {
-        let spheres = self
-            .particles
-            .sphere
-            .iter()
-            .map(|s| (s.position, s.velocity, s.angular_velocity, s.radius));
-        let blocks = self
-            .particles
-            .block
-            .iter()
-            .flat_map(|b| block_centres(b).map(move |p| (p, b.velocity, [0.0; 3], b.radius)));
-        let generated = self
-            .dem
-            .generated
-            .iter()
-            .map(|(p, _)| (p.position, p.velocity, p.angular_velocity, p.radius));
-        spheres
-            .chain(blocks)
-            .chain(generated)
-            .enumerate()
-            .map(
-                |(i, (position, velocity, angular_velocity, radius))| InitialParticle {
-                    id: i as u64,
-                    position,
-                    velocity,
-                    angular_velocity,
-                    radius,
-                },
-            )
-            .collect()
-    }
-
-    /// Number of particles the scene creates (at most u64::MAX, where the counts a scene gives,
-    /// before its checks refuse them, would overflow).
-    pub fn particle_count(&self) -> u64 {
-        let blocks = self.particles.block.iter().fold(0u64, |sum, b| {
-            let count = b.count.iter().fold(1u64, |n, c| n.saturating_mul(*c));
-            sum.saturating_add(count)
-        });
-        (self.particles.sphere.len() as u64)
-            .saturating_add(blocks)
-            .saturating_add(self.dem.generated.len() as u64)
-    }
-
-    /// Most particles a step may carry.
-    pub fn capacity(&self) -> u64 {
-        self.coupling.capacity.unwrap_or(self.particle_count()).max(1)
-    }
-}
-
-fn block_centres(b: &Block) -> impl Iterator<Item = [f64; 3]> + '_ {
-    let [nx, ny, nz] = b.count;
-    (0..nz).flat_map(move |k| {
-        (0..ny).flat_map(move |j| {
-            (0..nx).map(move |i| {
-                [
-                    b.origin[0] + i as f64 * b.spacing,
-                    b.origin[1] + j as f64 * b.spacing,
-                    b.origin[2] + k as f64 * b.spacing,
-                ]
-            })
-        })
-    })
 }
 
 pub mod checkpoint;
 mod checks;
 pub mod checksum;
+mod coupling;
 pub mod dem;
 #[cfg(test)]
 mod every_field;
@@ -557,6 +314,7 @@ pub mod output_lock;
 pub mod outputs;
 pub mod overlap;
 pub mod parallel;
+mod particles;
 pub mod row_file;
 mod times;
 pub mod vtp;

@@ -121,7 +121,7 @@ fi
 # LBM-only row on the same grid): first, as the batch's most wanted figure (2026-12-05: skip with
 # the four-cell quads, never run on a GPU).
 step coupled_trt 90 200 $bin/lbm-server bench --grid $coupled --operator trt --particles $counts \
-    --steps $((steps / 3)) --rounds 1 --kernel ours --passes --covered-cells all
+    --steps $((steps / 3)) --rounds 1 --reference none --passes --covered-cells all
 # The lavapipe sweep at the seed's density (one sphere of 4 cells per 1024 cells: 512 on 64 x 64 x
 # 128, and 4096 there, denser), LBM-only beside it, each pass timed (BENCHMARKS.md "The coupled
 # step at the seed's density"): a few seconds on a GPU, the same passes as on lavapipe.
@@ -150,20 +150,20 @@ done
 # MLUPS there, the periodic bench's at 11800-13500).
 for faces in walls periodic; do
     step bench_$faces 30 60 $bin/lbm-server bench --grid $tencate --faces $faces --operator trt --particles 1 \
-        --steps $((steps / 2)) --rounds 1 --kernel ours --passes --covered-cells both
+        --steps $((steps / 2)) --rounds 1 --reference none --passes --covered-cells both
 done
 # The coupled sweep's 32^3 row with one atomic per covered cell on the list's counter instead of one per
 # subgroup (the default on a GPU since 2026-12-04): what the subgroups gain, by pass.
 LBM_NO_SUBGROUPS=1 step coupled_atomic_list 30 60 $bin/lbm-server bench --grid $coupled --operator trt \
-    --particles ${counts##*,} --steps $((steps / 3)) --rounds 1 --kernel ours --passes --covered-cells redo
+    --particles ${counts##*,} --steps $((steps / 3)) --rounds 1 --reference none --passes --covered-cells redo
 # A dense bed: 64^3 spheres of 4 cells 4 x 4 x 8 cells apart, half the cells covered, both ways.
 step coupled_dense 40 60 $bin/lbm-server bench --grid $coupled --operator trt --particles $dense \
-    --steps $((steps / 15)) --rounds 1 --kernel ours --covered-cells all
+    --steps $((steps / 15)) --rounds 1 --reference none --covered-cells all
 # The coupled step with the host idle 1.1 ms after each step's loads, as for the DEM's step of 32^3
 # beads flown on this machine's cores (2026-12-04): the redo's fluid kernels run meanwhile, the
 # fused ones cannot (the lockstep row waits as long after each fluid step).
 step coupled_dem 40 60 $bin/lbm-server bench --grid $coupled --operator trt --particles 1,$dense_dem \
-    --steps $((steps / 3)) --rounds 1 --kernel ours --covered-cells all --dem-ms 1.1
+    --steps $((steps / 3)) --rounds 1 --reference none --covered-cells all --dem-ms 1.1
 # The default scene, the whole coupled program (DEM process and lockstep included).
 step default/log 30 60 $bin/lbm-server run .gpu/default.toml --out "$OUT/default"
 rm -rf "$OUT/default/fields"

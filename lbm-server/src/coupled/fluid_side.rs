@@ -92,7 +92,7 @@ impl FluidSide {
         let gpu = Arc::new(Gpu::new()?);
         let radii: Vec<f64> = scene.initial_particles().iter().map(|p| p.radius).collect();
         let cpu = gpu.adapter.device_type == wgpu::DeviceType::Cpu;
-        let trial = trial(scene, &units.kernel, steps, cpu)?;
+        let trial = trial(scene, units.kernel, steps, cpu)?;
         let covered = covered_fraction(radii.iter().map(|&r| units.cells(r)), units.n.iter().product());
         let options = ImbOptions {
             covered_cells: trial.kept().way,

@@ -27,7 +27,7 @@ pub(super) fn covered_cells_of(scene: &Scene) -> Result<Vec<CoveredCells>, Strin
 /// building the other kernels there costs about a second each, more than a short run wins back,
 /// and a run busy building them notices a dead DEM late; `coupling.covered_cells = "timed"`
 /// times them on every device.
-pub(super) fn trial(scene: &Scene, kernel: &str, steps: u64, cpu: bool) -> Result<Trial, String> {
+pub(super) fn trial(scene: &Scene, kernel: Option<Kernel>, steps: u64, cpu: bool) -> Result<Trial, String> {
     let mut trial = Trial::new(kernels_of(kernel), covered_cells_of(scene)?, steps);
     if cpu && scene.coupling.covered_cells != "timed" {
         trial.pin_first();
@@ -55,16 +55,7 @@ impl FluidSide {
     /// The kernels and way this step takes (the trial's; its stages' lines in the log); a choice
     /// the device does not build is left out of the trial (this step keeps the lattice's).
     pub(super) fn take_way(&mut self) {
-        let choice = self
-            .trial
-            .choice_for(self.steps, self.made.elapsed().as_secs_f64());
-        self.trial.say_report();
-        if (choice.kernel, choice.way) == (self.lattice.kernel(), self.lattice.covered_cells()) {
-            return;
-        }
-        if let Err(e) = self.lattice.set_way(choice.kernel, choice.way) {
-            protocol::say!("lbm-server: warning: {e}; the run times the others without it");
-            self.trial.refuse();
-        }
+        let now = self.made.elapsed().as_secs_f64();
+        self.trial.give_choice(&mut self.lattice, self.steps, now);
     }
 }

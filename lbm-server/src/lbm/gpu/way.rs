@@ -84,12 +84,6 @@ impl GpuLattice {
         self.set_way(self.kernel(), mode)
     }
 
-    /// Makes the steps from the next on take the fluid kernels `kernel`, with the way of the
-    /// covered cells they take now.
-    pub fn set_kernel(&mut self, kernel: Kernel) -> Result<(), String> {
-        self.set_way(kernel, self.covered_cells())
-    }
-
     /// The fluid kernels the steps take now.
     pub fn kernel(&self) -> Kernel {
         self.way().kernel
