@@ -63,13 +63,21 @@ fn ranks_of(pid: u32) -> Vec<u32> {
     ranks.into_iter().map(|(_, pid)| pid).collect()
 }
 
-/// mpirun has ended within [`ENDED_WITHIN_S`] and left no rank behind; its exit code and the
+/// mpirun and every rank have ended within [`ENDED_WITHIN_S`]; its exit code and the
 /// lines it and the ranks wrote.
 fn ended(run: &mut Proc, ranks: &[u32]) -> (Option<i32>, String) {
     let (code, waited) = run.wait_exit(Duration::from_secs(60));
     assert!(waited < ENDED_WITHIN_S, "mpirun ended {waited:.1} s after");
+    // mpirun may end a moment before a rank it signalled has finished ending.
+    let deadline = std::time::Instant::now() + Duration::from_secs_f64(ENDED_WITHIN_S - waited);
     for &pid in ranks {
-        assert!(is_gone(pid), "rank pid {pid} left running");
+        while !is_gone(pid) && std::time::Instant::now() < deadline {
+            std::thread::sleep(Duration::from_millis(50));
+        }
+        assert!(
+            is_gone(pid),
+            "rank pid {pid} left running {ENDED_WITHIN_S} s after"
+        );
     }
     (code, Proc::drain(&run.stderr) + &Proc::drain(&run.stdout))
 }

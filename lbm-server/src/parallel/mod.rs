@@ -19,9 +19,9 @@ mod communicator;
 mod decomposition;
 mod halo;
 mod hosts;
-mod pieces;
 #[cfg(feature = "mpi")]
 mod mpi_world;
+mod pieces;
 mod summary;
 #[cfg(test)]
 mod tests;
