@@ -4,9 +4,11 @@
 
 use super::communicator::{all, Communicator};
 use super::decomposition::Decomposition;
+use super::coupled_block::block_options;
 use super::halo::Halo;
 use crate::lbm::geometry::Setup;
 use crate::lbm::gpu::{furthest_out_of_bounds, Gpu, GpuLattice, Health, Unhealthy};
+use crate::lbm::imb::ImbOptions;
 use std::sync::Arc;
 
 /// One rank's block of the lattice.
@@ -15,7 +17,7 @@ pub struct BlockLattice {
     pub decomposition: Decomposition,
     /// The whole lattice (for the cells' coordinates and the gathers).
     whole: Setup,
-    halo: Option<Halo>,
+    pub(super) halo: Option<Halo>,
 }
 
 /// An unhealthy cell of the whole lattice, and the rank that holds it.
@@ -32,13 +34,26 @@ impl BlockLattice {
         health: Health,
         d: Decomposition,
     ) -> Result<BlockLattice, String> {
+        Self::with_coupling(gpu, setup, health, d, None)
+    }
+
+    /// The block `d` of the lattice `setup` on `gpu`, at rest, coupled to particles with
+    /// `options` where given (the block's place in the whole lattice added: `coupled_block.rs`).
+    pub fn with_coupling(
+        gpu: Arc<Gpu>,
+        setup: Setup,
+        health: Health,
+        d: Decomposition,
+        options: Option<ImbOptions>,
+    ) -> Result<BlockLattice, String> {
         let split = d.ranks() > 1;
         let local = if split {
             d.local_setup(&setup)
         } else {
             setup.clone()
         };
-        let lattice = GpuLattice::new(gpu, local, health, None)?;
+        let options = options.map(|o| block_options(o, &d, &setup));
+        let lattice = GpuLattice::new(gpu, local, health, options)?;
         let halo = split.then(|| Halo::new(&lattice, &d, &setup));
         Ok(BlockLattice {
             lattice,

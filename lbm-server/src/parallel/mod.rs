@@ -5,13 +5,16 @@
 //!   communicator of one rank, MPI's world another (`mpi_world.rs`, built with `--features mpi`).
 //! - `decomposition.rs`: the blocks, chosen or given by the scene, and one rank's block.
 //! - `halo.rs`: the exchange of the populations that cross the block faces, after every step.
-//! - `block.rs`: one rank's lattice, stepped, read and checked with the others ([`BlockLattice`]).
+//! - `block.rs`: one rank's lattice, stepped, read and checked with the others ([`BlockLattice`]);
+//!   `coupled_block.rs`: its coupled step with particles (the loads made at rank 0 from every
+//!   rank's pairs).
 //! - `summary.rs`: what summary.json says of the ranks.
 //!
 //! Every rank runs the same code, one rank included: a run on one rank is the single-process run.
 
 mod block;
 mod communicator;
+mod coupled_block;
 mod decomposition;
 mod halo;
 #[cfg(feature = "mpi")]

@@ -4,7 +4,7 @@
 use super::communicator::{host_name, launched_local_rank, Communicator, Expected, Message};
 use mpi::collective::SystemOperation;
 use mpi::topology::{Communicator as _, SimpleCommunicator};
-use mpi::traits::{CommunicatorCollectives, Destination, Source};
+use mpi::traits::{CommunicatorCollectives, Destination, Root, Source};
 
 /// MPI, initialised for the run (finalised when dropped).
 pub struct MpiWorld {
@@ -88,5 +88,14 @@ impl Communicator for MpiWorld {
         self.world
             .all_reduce_into(&value, &mut out, SystemOperation::min());
         out
+    }
+
+    fn broadcast(&self, mut bytes: Vec<u8>) -> Vec<u8> {
+        let root = self.world.process_at_rank(0);
+        let mut len = bytes.len() as u64;
+        root.broadcast_into(&mut len);
+        bytes.resize(len as usize, 0);
+        root.broadcast_into(&mut bytes[..]);
+        bytes
     }
 }
