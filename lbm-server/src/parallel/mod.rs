@@ -21,6 +21,8 @@ mod halo;
 mod mpi_world;
 mod summary;
 #[cfg(test)]
+mod coupled_tests;
+#[cfg(test)]
 mod tests;
 
 pub use block::{BlockLattice, RankUnhealthy};

@@ -11,20 +11,21 @@ use std::sync::{Arc, Condvar, Mutex};
 
 /// Messages in flight between the threads: (from, to, tag) -> queue.
 #[derive(Default)]
-struct Post {
+pub(super) struct Post {
     boxes: Mutex<HashMap<(usize, usize, i32), VecDeque<Vec<u8>>>>,
     arrived: Condvar,
 }
 
 /// One rank of a run whose ranks are threads.
-struct ThreadRanks {
-    rank: usize,
-    size: usize,
-    post: Arc<Post>,
+pub(super) struct ThreadRanks {
+    pub(super) rank: usize,
+    pub(super) size: usize,
+    pub(super) post: Arc<Post>,
 }
 
 const GATHER: i32 = 100;
 const MIN: i32 = 101;
+const BROADCAST: i32 = 102;
 
 impl ThreadRanks {
     fn send(&self, to: usize, tag: i32, bytes: Vec<u8>) {
@@ -86,6 +87,13 @@ impl Communicator for ThreadRanks {
             .map(|r| u64::from_le_bytes(self.receive(r, MIN).try_into().unwrap()))
             .min()
             .unwrap()
+    }
+    fn broadcast(&self, bytes: Vec<u8>) -> Vec<u8> {
+        if self.rank != 0 {
+            return self.receive(0, BROADCAST);
+        }
+        (1..self.size).for_each(|r| self.send(r, BROADCAST, bytes.clone()));
+        bytes
     }
 }
 
