@@ -156,7 +156,12 @@ pub fn main(args: RunArgs) -> ExitCode {
     let comm: Rc<dyn Communicator> = Rc::from(comm);
     let Some(dem) = dem.expect("agreed") else {
         let p = &prepared;
-        return ExitCode::from(crate::coupled::follow(&p.scene, p.steps, &p.out, (comm, p.blocks)));
+        return ExitCode::from(crate::coupled::follow(
+            &p.scene,
+            p.steps,
+            &p.out,
+            (comm, p.blocks),
+        ));
     };
     protocol::cleanup::remove_stale_runs();
     let run = new_run_name();

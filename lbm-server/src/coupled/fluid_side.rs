@@ -139,7 +139,12 @@ impl FluidSide {
             .then(|| HeldLubrication::for_lattice(scene, &units));
         let warnings = lattice_warnings(scene, &units, &radii);
         let fields = match comm.rank() {
-            0 => Some(FieldOutput::new(scene, &units, out, resumed.map(|l| &l.header.outputs))?),
+            0 => Some(FieldOutput::new(
+                scene,
+                &units,
+                out,
+                resumed.map(|l| &l.header.outputs),
+            )?),
             _ => None,
         };
         Ok(FluidSide {

@@ -120,7 +120,12 @@ impl FluidSide {
 /// A rank other than 0 of a coupled run of `scene` (`steps` steps, outputs in `out` written by
 /// rank 0): its block of the lattice cut into `blocks`, which does what rank 0 says until the
 /// run ends; the run's exit code.
-pub fn follow(scene: &Scene, steps: u64, out: &Path, (comm, blocks): (Rc<dyn Communicator>, [usize; 3])) -> u8 {
+pub fn follow(
+    scene: &Scene,
+    steps: u64,
+    out: &Path,
+    (comm, blocks): (Rc<dyn Communicator>, [usize; 3]),
+) -> u8 {
     let started = Instant::now();
     let rank = comm.rank();
     let mut fluid = match FluidSide::for_scene(scene, steps, out, None, (comm.clone(), blocks)) {
@@ -168,7 +173,10 @@ fn state_bytes(s: &ParticleState) -> Vec<u8> {
         .chain(&s.angular_velocity)
         .chain([&s.radius])
         .map(|v| v.to_bits());
-    std::iter::once(s.id).chain(values).flat_map(u64::to_le_bytes).collect()
+    std::iter::once(s.id)
+        .chain(values)
+        .flat_map(u64::to_le_bytes)
+        .collect()
 }
 
 /// The state of [`state_bytes`].

@@ -3,8 +3,8 @@
 //! checks agreed by all ranks. On one rank it is the whole lattice, stepped and read as before.
 
 use super::communicator::{all, Communicator};
-use super::decomposition::Decomposition;
 use super::coupled_block::block_options;
+use super::decomposition::Decomposition;
 use super::halo::Halo;
 use crate::lbm::geometry::Setup;
 use crate::lbm::gpu::{furthest_out_of_bounds, Gpu, GpuLattice, Health, Unhealthy};

@@ -51,8 +51,6 @@ impl BlockLattice {
             out.clear();
             return Ok(());
         }
-        self.lattice
-            .reduce_gathered(&merge_pairs(&pieces), out, load)
+        self.lattice.reduce_gathered(&merge_pairs(&pieces), out, load)
     }
-
 }

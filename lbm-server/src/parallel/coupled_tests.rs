@@ -2,16 +2,15 @@
 //! (at rank 0) and the fields bit for bit, with spheres across the cuts, the periodic wraps and
 //! an edge and a corner of the blocks; ranks as threads (`tests.rs`), without MPI.
 
-use super::tests::{Post, ThreadRanks};
+use super::tests::{periodic, walled, ThreadRanks};
 use super::{BlockLattice, Decomposition};
-use crate::lbm::geometry::{Face, Operator, Setup};
+use crate::lbm::geometry::Setup;
 use crate::lbm::gpu::{Gpu, GpuLattice, Health};
 use crate::lbm::imb::{CoveredCells, ImbOptions, Load, SolidParticle};
-use crate::lbm::mrt::Rates;
 use std::sync::Arc;
 
-/// The particles at step `t`: one on the corner where the cuts at 4 cells meet, one across the
-/// periodic x faces, moving and turning.
+/// The particles at step `t` (on the 8 x 6 x 8 lattices of `tests.rs`): one on the edge where the
+/// cuts at x = 4 and z = 4 meet, one across the periodic x faces, moving and turning.
 fn particles(t: u64) -> Vec<SolidParticle> {
     let t = t as f64;
     vec![
@@ -22,7 +21,7 @@ fn particles(t: u64) -> Vec<SolidParticle> {
             angular_velocity: [0.0, 0.01, 0.02],
         },
         SolidParticle {
-            position: [0.3 - 0.04 * t, 6.4, 5.8],
+            position: [0.3 - 0.04 * t, 2.0, 5.8],
             radius: 1.5,
             velocity: [-0.04, 0.01, 0.0],
             angular_velocity: [0.03, 0.0, 0.0],
@@ -39,17 +38,19 @@ fn check(setup: Setup, blocks: [usize; 3], steps: u64) {
         ..ImbOptions::default()
     });
     let mut one = GpuLattice::new(gpu.clone(), setup.clone(), Health::default(), options).unwrap();
-    let want: Vec<Vec<Load>> = (0..steps).map(|t| one.step_coupled(&particles(t)).unwrap()).collect();
+    let want: Vec<Vec<Load>> = (0..steps)
+        .map(|t| one.step_coupled(&particles(t)).unwrap())
+        .collect();
     let want_fields = one.fields().0;
     let ranks: usize = blocks.iter().product();
-    let post = Arc::new(Post::default());
     let periodic: [bool; 3] = std::array::from_fn(|a| setup.periodic(a));
     let (loads, fields) = std::thread::scope(|s| {
-        let handles: Vec<_> = (0..ranks)
-            .map(|rank| {
-                let (gpu, setup, post) = (gpu.clone(), setup.clone(), post.clone());
+        let handles: Vec<_> = ThreadRanks::world(ranks)
+            .into_iter()
+            .enumerate()
+            .map(|(rank, comm)| {
+                let (gpu, setup) = (gpu.clone(), setup.clone());
                 s.spawn(move || {
-                    let comm = ThreadRanks { rank, size: ranks, post };
                     let d = Decomposition::new(setup.n, periodic, blocks, rank);
                     let mut block =
                         BlockLattice::with_coupling(gpu, setup, Health::default(), d, options).unwrap();
@@ -69,25 +70,17 @@ fn check(setup: Setup, blocks: [usize; 3], steps: u64) {
         let mut all: Vec<_> = handles.into_iter().map(|h| h.join().unwrap()).collect();
         all.swap_remove(0)
     });
-    assert!(want.iter().flatten().any(|l| l.force != [0.0; 3]), "the particles feel the fluid");
+    assert!(
+        want.iter().flatten().any(|l| l.force != [0.0; 3]),
+        "the particles feel the fluid"
+    );
     for (t, (w, h)) in want.iter().zip(&loads).enumerate() {
         assert_eq!(w, h, "blocks {blocks:?}, step {t}: the loads differ");
     }
-    let differ = (0..want_fields.len()).filter(|&k| want_fields[k] != fields[k]).count();
+    let differ = (0..want_fields.len())
+        .filter(|&k| want_fields[k] != fields[k])
+        .count();
     assert_eq!(differ, 0, "blocks {blocks:?}: {differ} cells' fields differ");
-}
-
-/// Periodic x, walls, a moving wall, solid cells, a body force, TRT.
-fn walled() -> Setup {
-    crate::lbm::tests::trt_walls_and_solids([8, 8, 8])
-}
-
-/// Periodic, a body force, MRT.
-fn periodic() -> Setup {
-    let rates = Rates::dhumieres(1.0 / 0.8);
-    let mut setup = Setup::new([8, 8, 8], [Face::Periodic; 6], 0.8, Operator::Mrt { rates });
-    setup.force = [2e-4, 1e-4, -1e-4];
-    setup
 }
 
 /// Two and four blocks (an edge of the cuts, the periodic x faces between ranks); few, since

@@ -15,13 +15,13 @@
 mod block;
 mod communicator;
 mod coupled_block;
+#[cfg(test)]
+mod coupled_tests;
 mod decomposition;
 mod halo;
 #[cfg(feature = "mpi")]
 mod mpi_world;
 mod summary;
-#[cfg(test)]
-mod coupled_tests;
 #[cfg(test)]
 mod tests;
 

@@ -11,16 +11,16 @@ use std::sync::{Arc, Condvar, Mutex};
 
 /// Messages in flight between the threads: (from, to, tag) -> queue.
 #[derive(Default)]
-pub(super) struct Post {
+struct Post {
     boxes: Mutex<HashMap<(usize, usize, i32), VecDeque<Vec<u8>>>>,
     arrived: Condvar,
 }
 
 /// One rank of a run whose ranks are threads.
 pub(super) struct ThreadRanks {
-    pub(super) rank: usize,
-    pub(super) size: usize,
-    pub(super) post: Arc<Post>,
+    rank: usize,
+    size: usize,
+    post: Arc<Post>,
 }
 
 const GATHER: i32 = 100;
@@ -28,6 +28,18 @@ const MIN: i32 = 101;
 const BROADCAST: i32 = 102;
 
 impl ThreadRanks {
+    /// The `size` ranks of one run, in rank order, each to be moved into its own thread.
+    pub(super) fn world(size: usize) -> Vec<ThreadRanks> {
+        let post = Arc::new(Post::default());
+        (0..size)
+            .map(|rank| ThreadRanks {
+                rank,
+                size,
+                post: post.clone(),
+            })
+            .collect()
+    }
+
     fn send(&self, to: usize, tag: i32, bytes: Vec<u8>) {
         let mut boxes = self.post.boxes.lock().unwrap();
         boxes.entry((self.rank, to, tag)).or_default().push_back(bytes);
@@ -146,12 +158,12 @@ fn check(setup: Setup, blocks: [usize; 3], steps: u64) {
 }
 
 /// Walls, a moving wall, solid cells (some on the cuts), a body force, TRT.
-fn walled() -> Setup {
+pub(super) fn walled() -> Setup {
     crate::lbm::tests::trt_walls_and_solids([8, 6, 8])
 }
 
 /// Periodic, a body force, MRT.
-fn periodic() -> Setup {
+pub(super) fn periodic() -> Setup {
     let rates = Rates::dhumieres(1.0 / 0.8);
     let mut setup = Setup::new([8, 6, 8], [Face::Periodic; 6], 0.8, Operator::Mrt { rates });
     setup.force = [2e-4, 1e-4, -1e-4];

@@ -29,8 +29,14 @@ impl ImbBlock {
         let periodic = (0..3).map(|a| u32::from(b.periodic[a]) << a).sum::<u32>();
         let mut c = vec![("BLOCK", 1.0), ("WHOLE_PERIODIC", f64::from(periodic))];
         c.extend(axes(["WHOLE_X", "WHOLE_Y", "WHOLE_Z"], b.whole.map(|v| v as f64)));
-        c.extend(axes(["OWN_LO_X", "OWN_LO_Y", "OWN_LO_Z"], b.own_lo.map(|v| v as f64)));
-        c.extend(axes(["OWN_HI_X", "OWN_HI_Y", "OWN_HI_Z"], b.own_hi.map(|v| v as f64)));
+        c.extend(axes(
+            ["OWN_LO_X", "OWN_LO_Y", "OWN_LO_Z"],
+            b.own_lo.map(|v| v as f64),
+        ));
+        c.extend(axes(
+            ["OWN_HI_X", "OWN_HI_Y", "OWN_HI_Z"],
+            b.own_hi.map(|v| v as f64),
+        ));
         c.extend(axes(["BASE_X", "BASE_Y", "BASE_Z"], b.base.map(|v| v as f64)));
         c
     }

@@ -20,12 +20,12 @@ mod staging;
 mod step;
 mod timing;
 
+pub use block::ImbBlock;
 #[cfg(test)]
 pub(super) use chunks::CHUNK;
 pub(super) use coupling::Coupling;
 #[cfg(test)]
 pub(super) use cover::box_edge;
-pub use block::ImbBlock;
 pub use cover::{covered_fraction, solid_reach};
 pub use gathered::merge_pairs;
 pub use options::{CoveredCells, ImbOptions, SolidCollision};

@@ -131,7 +131,9 @@ struct Periods([f64; 3]);
 impl Periods {
     /// The periods of a lattice of `n` cells, periodic along `periodic`.
     fn of((n, periodic): ([usize; 3], [bool; 3])) -> Periods {
-        Periods(std::array::from_fn(|a| if periodic[a] { n[a] as f64 } else { 0.0 }))
+        Periods(std::array::from_fn(
+            |a| if periodic[a] { n[a] as f64 } else { 0.0 },
+        ))
     }
 
     /// `p` with its centre wrapped (`rem_euclid`, a libm `fmod`, only for a centre outside).

@@ -69,7 +69,10 @@ impl GpuLattice {
     /// Before the device's passes: the faces' share of velocity (during the ramp), the particles
     /// staged, and this step's pipelines and counts (particles, pairs, room in the list of
     /// covered cells) for the kernels; the count of particles and the pipelines.
-    pub(super) fn stage<P: SolidParticles + ?Sized>(&mut self, particles: &P) -> Result<(u32, StepPasses), String> {
+    pub(super) fn stage<P: SolidParticles + ?Sized>(
+        &mut self,
+        particles: &P,
+    ) -> Result<(u32, StepPasses), String> {
         self.ramp_faces();
         let pairs = self.stage_particles(particles)?;
         let passes = self.step_passes()?;
@@ -175,7 +178,11 @@ impl GpuLattice {
 
     /// The `n` particles' loads copied where the host reads them, at the end of the passes so
     /// far, which go to the device: the loads' bytes and that submission.
-    pub(super) fn submit_with_loads(&self, mut encoder: wgpu::CommandEncoder, n: u32) -> (u64, wgpu::SubmissionIndex) {
+    pub(super) fn submit_with_loads(
+        &self,
+        mut encoder: wgpu::CommandEncoder,
+        n: u32,
+    ) -> (u64, wgpu::SubmissionIndex) {
         let bytes = n as u64 * LOAD_BYTES;
         let coupling = self.imb.as_ref().expect("coupling");
         if bytes > 0 {
