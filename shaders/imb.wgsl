@@ -123,23 +123,66 @@ fn box_cell(origin: vec3<i32>, m: u32, t: u32) -> vec3<i32> {
     return origin + vec3<i32>(i32(t - row * m), i32(row - layer * m), i32(layer));
 }
 
+// A block of a lattice decomposed over ranks (lbm-server/src/parallel/; BLOCK true): the
+// particles and their boxes stay in the whole lattice's coordinates (WHOLE_* cells, periodic
+// along the axes of the bits of WHOLE_PERIODIC), and the block covers only its own cells, OWN_LO_*
+// to OWN_HI_* (excluded); its lattice's cell (0, 0, 0) is the whole lattice's BASE_* (ghost
+// layers included). Without BLOCK the lattice is the whole.
+override BLOCK: bool = false;
+override WHOLE_X: i32 = 1;
+override WHOLE_Y: i32 = 1;
+override WHOLE_Z: i32 = 1;
+override WHOLE_PERIODIC: u32 = 0u;
+override OWN_LO_X: i32 = 0;
+override OWN_LO_Y: i32 = 0;
+override OWN_LO_Z: i32 = 0;
+override OWN_HI_X: i32 = 1;
+override OWN_HI_Y: i32 = 1;
+override OWN_HI_Z: i32 = 1;
+override BASE_X: i32 = 0;
+override BASE_Y: i32 = 0;
+override BASE_Z: i32 = 0;
+
+// The whole lattice's cells along each axis, and its periodic axes.
+fn whole_n() -> vec3<i32> {
+    if BLOCK { return vec3<i32>(WHOLE_X, WHOLE_Y, WHOLE_Z); }
+    return vec3<i32>(params.n.xyz);
+}
+
+fn whole_periodic() -> vec3<bool> {
+    if BLOCK { return (vec3<u32>(WHOLE_PERIODIC) & vec3<u32>(1u, 2u, 4u)) != vec3<u32>(0u); }
+    return vec3<bool>(face_type(0u) == PERIODIC, face_type(2u) == PERIODIC, face_type(4u) == PERIODIC);
+}
+
+// The whole lattice's coordinates of this lattice's cell k (one of the block's own cells).
+fn whole_coords(k: u32) -> vec3<i32> {
+    if BLOCK { return coords(k) + vec3<i32>(BASE_X, BASE_Y, BASE_Z); }
+    return coords(k);
+}
+
 // The lattice cell of box cell q: wrapped along the periodic axes (a box spans at most the axis and
 // the host wraps the centres into the lattice, so q is less than one period outside), NO_CELL
-// outside the domain along the others.
+// outside the domain along the others, and (BLOCK) outside the block's own cells.
 fn lattice_cell(q: vec3<i32>) -> u32 {
-    let n = vec3<i32>(params.n.xyz);
-    let periodic = vec3<bool>(face_type(0u) == PERIODIC, face_type(2u) == PERIODIC, face_type(4u) == PERIODIC);
+    let n = whole_n();
+    let periodic = whole_periodic();
     let inside = (q >= vec3<i32>(0)) & (q < n);
     if !all(inside | periodic) { return NO_CELL; }
     let wrapped = vec3<i32>(vec3<u32>(wrap(q.x, n.x), wrap(q.y, n.y), wrap(q.z, n.z)));
-    return cell_at(select(q, wrapped, periodic));
+    let g = select(q, wrapped, periodic);
+    if BLOCK {
+        let own = (g >= vec3<i32>(OWN_LO_X, OWN_LO_Y, OWN_LO_Z)) & (g < vec3<i32>(OWN_HI_X, OWN_HI_Y, OWN_HI_Z));
+        if !all(own) { return NO_CELL; }
+        return cell_at(g - vec3<i32>(BASE_X, BASE_Y, BASE_Z));
+    }
+    return cell_at(g);
 }
 
 // The box cell (offset from the box origin) that lattice cell k is in particle p's box: k's
 // coordinates, moved by one period where the box wraps.
 fn box_offset(k: u32, p: Particle) -> vec3<i32> {
-    let n = vec3<i32>(params.n.xyz);
-    let t = coords(k) - box_origin(p);
+    let n = whole_n();
+    let t = whole_coords(k) - box_origin(p);
     let up = select(t, t + n, t < vec3<i32>(0));
     return select(up, up - n, up >= vec3<i32>(i32(p.edge)));
 }
@@ -668,8 +711,10 @@ fn sum_loads(
     }
 }
 
-// Cell k's cover count, mask bit and slots back to zero.
+// Cell k's cover count, mask bit and slots back to zero (NO_CELL: a cell of another rank's block,
+// whose pair rank 0 reduces from the gathered pairs, `reduce_gathered`).
 fn clear_cover(k: u32) {
+    if k == NO_CELL { return; }
     atomicStore(&covered[k], 0u);
     if FUSED {
         atomicAnd(&covered[mask_word(k)], ~mask_bit(k));

@@ -1,7 +1,7 @@
-//! A fluid-only run decomposed over MPI ranks (`mpirun -np N lbm-server run`), against the same
-//! run in one process: the probe lines byte for byte, and every field snapshot's cells (the
-//! pieces of its .pvti put together) bit for bit against the single process's .vti, walled and
-//! periodic, on 2 and 4 ranks; and the refusals of blocks that cannot be. The runs need mpirun
+//! A run decomposed over MPI ranks (`mpirun -np N lbm-server run`), against the same run in one
+//! process, walled and periodic, on 2 and 4 ranks: a fluid-only run's probe lines and every field
+//! snapshot byte for byte; a coupled run's particles.csv byte for byte, spheres across the cuts;
+//! and the refusals of blocks and settings that cannot be. The runs need mpirun
 //! and an lbm-server built with `--features mpi`; where either is missing they say so and pass.
 
 mod common;
@@ -108,9 +108,14 @@ fn pieces_put_together(pvti: &Path) -> Vec<u8> {
 }
 
 /// The scene on one process, then on each of `runs`' ranks with its `[parallel]` section (or
-/// none): the same outputs ([`outputs`]) byte for byte, and the summary names the ranks and blocks. False
+/// none): the same `outputs` byte for byte, and the summary names the ranks and blocks. False
 /// where the runs cannot be made (said why).
-fn same_on_ranks(tag: &str, text_: &str, runs: &[(usize, &str)]) -> bool {
+fn same_on_ranks(
+    tag: &str,
+    text_: &str,
+    runs: &[(usize, &str)],
+    outputs: fn(&Path) -> Vec<(String, Vec<u8>)>,
+) -> bool {
     let Some(mpirun) = mpirun() else {
         eprintln!("skipped: mpirun is not installed (apt-get install openmpi-bin libopenmpi-dev)");
         return false;
@@ -150,13 +155,23 @@ fn same_on_ranks(tag: &str, text_: &str, runs: &[(usize, &str)]) -> bool {
 
 #[test]
 fn a_walled_run_on_2_and_4_ranks_is_the_single_process_run_byte_for_byte() {
-    same_on_ranks("mpi-walled", &scene("walled", WALLED, SOLID), &[(2, ""), (4, "")]);
+    same_on_ranks(
+        "mpi-walled",
+        &scene("walled", WALLED, SOLID),
+        &[(2, ""), (4, "")],
+        outputs,
+    );
 }
 
 #[test]
 fn a_periodic_run_cut_along_two_axes_is_the_single_process_run_byte_for_byte() {
     let blocks = "[parallel]\nblocks = [2, 1, 2]";
-    same_on_ranks("mpi-periodic", &scene("periodic", PERIODIC, ""), &[(4, blocks)]);
+    same_on_ranks(
+        "mpi-periodic",
+        &scene("periodic", PERIODIC, ""),
+        &[(4, blocks)],
+        outputs,
+    );
 }
 
 /// Blocks that cannot be are refused before anything runs, naming the field and value: on one
@@ -210,4 +225,104 @@ fn a_build_without_mpi_refuses_to_run_as_one_of_several_ranks() {
         .unwrap();
     assert_eq!(o.status.code(), Some(2), "{}", text(&o));
     assert!(text(&o).contains("built without MPI"), "{}", text(&o));
+}
+
+/// A coupled scene of 24 steps (1 mm cells, TRT), particles.csv every 4 steps: in a walled box
+/// of 12 x 12 x 16 mm two falling spheres, one across the cuts of 2 blocks (z = 8 mm) and of 4
+/// (y = 6 mm too: across an edge); `periodic`, in a periodic box of 16 x 14 x 16 mm driven by a
+/// body force, the first across the periodic x faces as well (the cuts of [2, 1, 2] blocks).
+fn coupled_scene(name: &str, periodic: bool) -> String {
+    let (max, gravity, first_x) = match periodic {
+        true => ("[0.016, 0.014, 0.016]", 0.0, 0.0005),
+        false => ("[0.012, 0.012, 0.016]", -9.81, 0.006),
+    };
+    let faces = match periodic {
+        true => format!("body_acceleration = [0.5, 0.0, 0.2]\n[lattice.faces]\n{PERIODIC}"),
+        false => String::new(),
+    };
+    format!(
+        r#"name = "{name}"
+gravity = [0.0, 0.0, {gravity}]
+[domain]
+min = [0.0, 0.0, 0.0]
+max = {max}
+[fluid]
+density = 1000.0
+dynamic_viscosity = 0.2
+[time]
+steps = 24
+[output]
+interval = 4
+[coupling]
+timeout = 10.0
+[particles]
+density = 2500.0
+[[particles.sphere]]
+position = [{first_x}, 0.006, 0.008]
+radius = 0.002
+velocity = [0.01, -0.02, 0.0]
+[[particles.sphere]]
+position = [0.003, 0.0095, 0.0125]
+radius = 0.002
+velocity = [0.0, 0.0, -0.03]
+[lattice]
+dx = 0.001
+operator = "trt"
+tau = 0.8
+velocity_scale = 0.05
+check_interval = 8
+{faces}
+"#
+    )
+}
+
+/// The outputs of a coupled run that must not depend on the ranks: particles.csv.
+fn particles_csv(out: &Path) -> Vec<(String, Vec<u8>)> {
+    let bytes = std::fs::read(out.join("particles.csv")).unwrap();
+    assert_eq!(csv_steps(out).len(), 7, "steps 0, 4, ..., 20 and the last");
+    vec![("particles.csv".into(), bytes)]
+}
+
+#[test]
+fn a_coupled_walled_run_on_2_and_4_ranks_writes_the_single_process_particles_byte_for_byte() {
+    let scene = coupled_scene("coupled-walled", false);
+    same_on_ranks("mpi-coupled-walled", &scene, &[(2, ""), (4, "")], particles_csv);
+}
+
+#[test]
+fn a_coupled_periodic_run_on_2_and_4_ranks_writes_the_single_process_particles_byte_for_byte() {
+    let blocks = "[parallel]\nblocks = [2, 1, 2]";
+    let scene = coupled_scene("coupled-periodic", true);
+    same_on_ranks(
+        "mpi-coupled-periodic",
+        &scene,
+        &[(2, ""), (4, blocks)],
+        particles_csv,
+    );
+}
+
+/// What a coupled run on several ranks cannot take yet is refused before anything runs (exit
+/// 2), naming the setting.
+#[test]
+fn a_coupled_run_on_ranks_refuses_the_covered_cells_it_cannot_take() {
+    let Some(mpirun) = mpirun() else {
+        eprintln!("skipped: mpirun is not installed");
+        return;
+    };
+    let dir = temp_dir("mpi-coupled-refused");
+    let text_ = coupled_scene("coupled-fused", false)
+        .replace("timeout = 10.0", "timeout = 10.0\ncovered_cells = \"fused\"");
+    let scene = write_scene(&dir, &text_);
+    let o = run_on(&mpirun, 2, &scene, &dir.join("out"));
+    if text(&o).contains("built without MPI") {
+        eprintln!("skipped: lbm-server is built without MPI");
+        return;
+    }
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    assert!(
+        text(&o).contains("coupling.covered_cells = \"fused\" on 2 ranks"),
+        "{}",
+        text(&o)
+    );
+    assert!(!dir.join("out").join("particles.csv").exists(), "nothing ran");
 }

@@ -70,11 +70,6 @@ impl FieldOutput {
         })
     }
 
-    /// Whether the run has probe lines.
-    pub fn has_lines(&self) -> bool {
-        !self.probes.is_empty()
-    }
-
     /// Density [kg/m^3] and velocity [m/s] of every cell of the lattice `fields`.
     fn si_fields(&self, fields: &[[f32; 4]]) -> (Vec<f32>, Vec<[f32; 3]>) {
         si_fields(fields, self.fluid_density, &self.units)

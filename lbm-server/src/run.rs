@@ -27,6 +27,7 @@ mod welcome;
 
 use crate::checkpoint::OutputPositions;
 use crate::launch::{self, DemStart};
+use crate::parallel::Communicator;
 use crate::terminal::Progress;
 use exchange::SiStates;
 use prepare::prepare;
@@ -35,6 +36,7 @@ use protocol::{ParticleReply, StepFlags, StepHeader};
 use session::Session;
 use std::path::PathBuf;
 use std::process::ExitCode;
+use std::rc::Rc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, OnceLock};
 
@@ -140,17 +142,31 @@ pub fn main(args: RunArgs) -> ExitCode {
             checkpoints,
         ));
     }
-    let dem = match dem_start(&args, &prepared) {
-        Ok(dem) => dem,
-        Err(e) => {
+    // The DEM joins rank 0; the other ranks follow it (coupled/ranks.rs).
+    let dem = match comm.rank() {
+        0 => dem_start(&args, &prepared).map(Some),
+        _ => Ok(None),
+    };
+    if !crate::parallel::all(&*comm, dem.is_ok()) {
+        if let Err(e) = &dem {
             protocol::say!("lbm-server: error: {e}");
-            return ExitCode::from(EXIT_BAD_INPUT);
         }
+        return ExitCode::from(EXIT_BAD_INPUT);
+    }
+    let comm: Rc<dyn Communicator> = Rc::from(comm);
+    let Some(dem) = dem.expect("agreed") else {
+        let p = &prepared;
+        return ExitCode::from(crate::coupled::follow(
+            &p.scene,
+            p.steps,
+            &p.out,
+            (comm, p.blocks),
+        ));
     };
     protocol::cleanup::remove_stale_runs();
     let run = new_run_name();
     let _ = RUN.set(run.clone());
-    let code = Session::start(prepared, &run, dem, interrupted);
+    let code = Session::start(prepared, &run, dem, interrupted, comm);
     protocol::cleanup::remove_run(&run);
     ExitCode::from(code)
 }

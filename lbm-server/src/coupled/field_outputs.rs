@@ -3,6 +3,7 @@
 
 use super::FluidSide;
 use crate::checkpoint::{Checkpoints, OutputPositions};
+use crate::fields::FieldOutput;
 
 impl FluidSide {
     /// The field outputs due after this step: a snapshot every `output.fields_interval` steps
@@ -19,7 +20,8 @@ impl FluidSide {
         }
         self.write_outputs(snapshot, lines, false)?;
         let mut at = OutputPositions::default();
-        self.fields.positions(&mut at)?;
+        let read = self.fields.as_mut().map_or(Ok(()), |f| f.positions(&mut at));
+        self.agreed(read)?;
         self.before_last = Some(at);
         let left = |every: u64, written: bool| every > 0 && !written;
         self.write_outputs(
@@ -38,7 +40,7 @@ impl FluidSide {
                 at.fields_pvd = before.fields_pvd;
                 Ok(())
             }
-            None => self.fields.positions(at),
+            None => self.fields.as_mut().map_or(Ok(()), |f| f.positions(at)),
         }
     }
 
@@ -46,36 +48,43 @@ impl FluidSide {
     /// and the run's `particles`.
     pub fn checkpoint(&self, checkpoints: &mut Checkpoints, at: OutputPositions, particles: u64) {
         let time = self.steps as f64 * self.units.dt;
-        let way = Some(self.lattice.covered_cells().name().to_string());
-        checkpoints.hold(&self.lattice, time, particles, at, way);
+        let way = Some(self.lattice.lattice.covered_cells().name().to_string());
+        checkpoints.hold(&self.lattice.lattice, time, particles, at, way);
     }
 
     /// Where a run ends before its last step (Ctrl-C, the DEM's STOP): the field outputs a last
     /// step gets, less those this step wrote already.
-    pub fn write_fields_of_early_end(&mut self) -> Result<(), String> {
+    pub(super) fn write_fields_of_early_end_here(&mut self) -> Result<(), String> {
         let step = self.steps;
         let left = |every: u64| every > 0 && !step.is_multiple_of(every);
         self.write_outputs(left(self.fields_every), left(self.lines_every), true)
     }
 
     /// Writes a snapshot and the probe lines (where the scene has any) of this step; `last`
-    /// flushes the lines.
+    /// flushes the lines. The fields are gathered from every rank; rank 0 writes them, and the
+    /// ranks agree whether it could.
     fn write_outputs(&mut self, snapshot: bool, lines: bool, last: bool) -> Result<(), String> {
-        let lines = lines && self.fields.has_lines();
+        let lines = lines && self.has_lines;
         if snapshot || lines {
-            let (fields, bad) = self.lattice.fields();
+            let (fields, bad) = self.lattice.fields(&*self.comm);
             if let Some(bad) = bad {
                 return Err(self.unstable(bad));
             }
-            if lines {
-                self.fields.write_lines(self.steps, &fields)?;
-            }
-            if snapshot {
-                self.fields.write_snapshot(self.steps, &fields)?;
-            }
+            let step = self.steps;
+            let written = self.fields.as_mut().map_or(Ok(()), |out| {
+                if lines {
+                    out.write_lines(step, &fields)?;
+                }
+                if snapshot {
+                    out.write_snapshot(step, &fields)?;
+                }
+                Ok(())
+            });
+            self.agreed(written)?;
         }
         if last {
-            self.fields.flush()?;
+            let flushed = self.fields.as_mut().map_or(Ok(()), FieldOutput::flush);
+            self.agreed(flushed)?;
         }
         Ok(())
     }

@@ -17,22 +17,27 @@ use crate::checkpoint::{Loaded, OutputPositions};
 use crate::fields::FieldOutput;
 use crate::fluid::{health_of, setup_of};
 use crate::lbm::geometry::Setup;
-use crate::lbm::gpu::{Gpu, GpuLattice};
+use crate::lbm::gpu::Gpu;
 use crate::lbm::imb::{covered_fraction, ImbOptions, SolidCollision};
 use crate::lubrication::HeldLubrication;
+use crate::parallel::{BlockLattice, Communicator, Decomposition};
 use crate::terminal::Warning;
 use crate::trials::Trial;
 use protocol::{ParticleReply, ParticleState, Physics};
 use scene::lattice::LatticeUnits;
 use scene::Scene;
 use std::path::Path;
+use std::rc::Rc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 
 /// What computes the particles' hydrodynamic loads: the lattice with its units, the buoyancy it
-/// adds and the lubrication correction.
+/// adds and the lubrication correction. On several ranks every rank holds one (its block of the
+/// lattice), rank 0's leading the others step by step (`ranks.rs`).
 pub struct FluidSide {
-    pub(super) lattice: GpuLattice,
+    pub(super) lattice: BlockLattice,
+    /// The run's ranks.
+    pub(super) comm: Rc<dyn Communicator>,
     pub(super) units: LatticeUnits,
     pub(super) origin: [f64; 3],
     fluid_density: f64,
@@ -49,8 +54,10 @@ pub struct FluidSide {
     /// When the fluid side was made: the trial's clock.
     pub(super) made: std::time::Instant,
     /// The run's field outputs: those the scene asks for (`output.fields_interval` above 0,
-    /// `output.line`), and last_good.vti where the fluid blows up.
-    pub(super) fields: FieldOutput,
+    /// `output.line`), and last_good.vti where the fluid blows up (rank 0's; none elsewhere).
+    pub(super) fields: Option<FieldOutput>,
+    /// Whether the scene has probe lines (`output.line`).
+    pub(super) has_lines: bool,
     /// The step of the last health check that passed (its fields kept on the device).
     pub(super) last_good: Option<u64>,
     /// `output.fields_interval` and `output.interval` (the probe lines'), in steps.
@@ -70,12 +77,30 @@ pub struct FluidSide {
 
 impl FluidSide {
     /// The fluid a scene asks for, for a run of `steps` steps writing its field outputs into `out`;
-    /// resumed, in the state of the checkpoint `resumed`.
+    /// resumed, in the state of the checkpoint `resumed`; on the ranks of `comm`, this rank's
+    /// block of the lattice cut into `blocks` (the ranks agree that each made its own).
     pub fn for_scene(
         scene: &Scene,
         steps: u64,
         out: &Path,
         resumed: Option<&Loaded>,
+        (comm, blocks): (Rc<dyn Communicator>, [usize; 3]),
+    ) -> Result<FluidSide, String> {
+        let made = Self::make(scene, steps, out, resumed, (comm.clone(), blocks));
+        if crate::parallel::all(&*comm, made.is_ok()) {
+            return made;
+        }
+        Err(made.err().unwrap_or_else(|| {
+            "another rank could not start its block of the fluid (its error above)".into()
+        }))
+    }
+
+    fn make(
+        scene: &Scene,
+        steps: u64,
+        out: &Path,
+        resumed: Option<&Loaded>,
+        (comm, blocks): (Rc<dyn Communicator>, [usize; 3]),
     ) -> Result<FluidSide, String> {
         let Some(units) = scene.lattice_units.clone() else {
             return Err(format!(
@@ -89,10 +114,10 @@ impl FluidSide {
             units.operator.name(),
             units.tau,
         )?;
-        let gpu = Arc::new(Gpu::new()?);
+        let gpu = Arc::new(Gpu::for_local_rank(comm.local_rank())?);
         let radii: Vec<f64> = scene.initial_particles().iter().map(|p| p.radius).collect();
         let cpu = gpu.adapter.device_type == wgpu::DeviceType::Cpu;
-        let trial = trial(scene, units.kernel, steps, cpu)?;
+        let trial = trial(scene, units.kernel, steps, (cpu, comm.size()))?;
         let covered = covered_fraction(radii.iter().map(|&r| units.cells(r)), units.n.iter().product());
         let options = ImbOptions {
             covered_cells: trial.kept().way,
@@ -102,18 +127,30 @@ impl FluidSide {
             kernel: trial.kept().kernel,
             ..setup_of(&units)
         };
-        let mut lattice = GpuLattice::new(gpu, setup, health_of(&units), Some(options))?;
+        let d = Decomposition::new(units.n, scene.periodic_axes(), blocks, comm.rank());
+        let mut lattice = BlockLattice::with_coupling(gpu, setup, health_of(&units), d, Some(options))?;
         if let Some(loaded) = resumed {
-            lattice.restore_raw(&loaded.raw_state(lattice.population_bytes())?);
+            let bytes = lattice.lattice.population_bytes();
+            lattice.lattice.restore_raw(&loaded.raw_state(bytes)?);
         }
         let lubrication = scene
             .coupling
             .lubrication
             .then(|| HeldLubrication::for_lattice(scene, &units));
         let warnings = lattice_warnings(scene, &units, &radii);
-        let fields = FieldOutput::new(scene, &units, out, resumed.map(|l| &l.header.outputs))?;
+        let fields = match comm.rank() {
+            0 => Some(FieldOutput::new(
+                scene,
+                &units,
+                out,
+                resumed.map(|l| &l.header.outputs),
+            )?),
+            _ => None,
+        };
         Ok(FluidSide {
             lattice,
+            comm,
+            has_lines: !scene.output.line.is_empty(),
             units,
             origin: scene.domain.min,
             fluid_density: scene.fluid.density,
@@ -168,7 +205,7 @@ impl FluidSide {
 
     /// The device the lattice runs on.
     pub fn device(&self) -> &str {
-        self.lattice.adapter()
+        self.lattice.lattice.adapter()
     }
 
     /// The fluid as `--verbose` describes it: the lattice's scales, the device, the way the
@@ -185,9 +222,9 @@ impl FluidSide {
             u.tau,
             u.dx,
             u.dt,
-            self.lattice.adapter(),
-            self.lattice.kernel().describe(),
-            self.lattice.covered_cells().describe(),
+            self.lattice.lattice.adapter(),
+            self.lattice.lattice.kernel().describe(),
+            self.lattice.lattice.covered_cells().describe(),
             100.0 * self.covered,
             match self.trial.open() {
                 true => format!("; {}", self.trial.describe()),
@@ -214,19 +251,24 @@ impl FluidSide {
         &self.units
     }
 
-    /// Advances the fluid one step with the particles `states` (SI) and returns their loads (SI):
-    /// the lattice's, buoyancy added (`loads`), then the lubrication correction; then the health
-    /// check where one is due, and the field outputs.
-    pub fn step(&mut self, states: &[ParticleState], out: &mut Vec<ParticleReply>) -> Result<(), String> {
+    /// Advances this rank's fluid one step with the particles `states` (SI) and returns their
+    /// loads (SI; at rank 0, which alone has them): the lattice's, buoyancy added (`loads`), then
+    /// the lubrication correction; then the health check where one is due, and the field outputs.
+    /// (`FluidSide::step` leads the other ranks into it: `ranks.rs`.)
+    pub(super) fn step_here(
+        &mut self,
+        states: &[ParticleState],
+        out: &mut Vec<ParticleReply>,
+    ) -> Result<(), String> {
         self.take_way();
         let not_finite = self.loads(states, out)?;
-        if let Some(lubrication) = &self.lubrication {
+        if let (Some(lubrication), 0) = (&self.lubrication, self.comm.rank()) {
             lubrication.apply(states, out);
         }
         self.steps += 1;
-        if not_finite {
-            let reply = *out.iter().find(|r| !finite_load(r)).expect("a load not finite");
-            return Err(self.not_finite(&reply));
+        // The loads are rank 0's: the ranks agree whether one is not finite.
+        if !crate::parallel::all(&*self.comm, !not_finite) {
+            return Err(self.not_finite(out.iter().find(|r| !finite_load(r))));
         }
         if self.steps.is_multiple_of(self.units.check_interval) {
             self.check()?;
@@ -254,7 +296,8 @@ impl FluidSide {
             std::array::from_fn(|a| units.si_acceleration(units.force[a]) - self.gravity[a]);
         let fluid_density = self.fluid_density;
         let not_finite = AtomicBool::new(false);
-        self.lattice.step_coupled_with(&lattice_states, out, |j, l| {
+        let comm = self.comm.clone();
+        let load = |j: usize, l: crate::lbm::imb::Load| {
             let s = &states[j];
             let volume = 4.0 / 3.0 * std::f64::consts::PI * s.radius.powi(3);
             let reply = ParticleReply {
@@ -268,7 +311,9 @@ impl FluidSide {
                 not_finite.store(true, Ordering::Relaxed);
             }
             reply
-        })?;
+        };
+        self.lattice
+            .step_coupled_with(&lattice_states, out, load, &*comm)?;
         Ok(not_finite.into_inner())
     }
 }

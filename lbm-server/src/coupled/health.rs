@@ -3,7 +3,7 @@
 
 use super::FluidSide;
 use crate::fluid::health_of;
-use crate::lbm::gpu::Unhealthy;
+use crate::parallel::RankUnhealthy;
 use crate::terminal;
 use protocol::ParticleReply;
 
@@ -11,7 +11,7 @@ impl FluidSide {
     /// After the run's last step: the health check and the covers' warning, unless the last step
     /// was a check already (a run shorter than `lattice.check_interval`, or its tail beyond the
     /// last multiple, went unchecked).
-    pub fn check_last_step(&mut self) -> Result<(), String> {
+    pub(super) fn check_last_step_here(&mut self) -> Result<(), String> {
         if self.steps.is_multiple_of(self.units.check_interval) {
             return Ok(());
         }
@@ -22,12 +22,12 @@ impl FluidSide {
     /// last_good.vti), and a warning when cells had more particles than slots: the first time,
     /// with `--verbose` at every check.
     pub(super) fn check(&mut self) -> Result<(), String> {
-        if let Some(bad) = self.lattice.health() {
+        if let Some(bad) = self.lattice.health(&*self.comm) {
             return Err(self.unstable(bad));
         }
         self.lattice.keep_fields();
         self.last_good = Some(self.steps);
-        let lost = self.lattice.lost_covers();
+        let lost = self.lost_covers();
         let (unlisted, dropped) = (lost.unlisted, lost.dropped);
         if unlisted > 0 {
             return Err(format!(
@@ -35,14 +35,15 @@ impl FluidSide {
                  on this device: its storage binding limit / 80 bytes), so their solid term was missing: \
                  use fewer or smaller particles, or a device with a larger binding limit",
                 self.steps,
-                self.lattice.covered_cell_capacity()
+                self.lattice.lattice.covered_cell_capacity()
             ));
         }
-        if dropped > 0 && (terminal::verbose() || !self.said_dropped) {
+        let root = self.comm.rank() == 0;
+        if root && dropped > 0 && (terminal::verbose() || !self.said_dropped) {
             let line = format!(
                 "lbm-server: warning: by step {}, {dropped} particle-cell covers did not fit coupling.slots = {}",
                 self.steps,
-                self.lattice.slots()
+                self.lattice.lattice.slots()
             );
             terminal::say_either(
                 &format!(
@@ -59,36 +60,47 @@ impl FluidSide {
     /// The error of a blow-up found at this step: the step, the cell furthest out of bounds
     /// (`bad`, the first found, where none is further) and its quantities, and the fields of the
     /// last check that passed written as last_good.vti.
-    pub(super) fn unstable(&mut self, bad: Unhealthy) -> String {
-        let bad = self.lattice.furthest_unhealthy().unwrap_or(bad);
-        let what = bad.describe(&health_of(&self.units), |c| {
+    pub(super) fn unstable(&mut self, bad: RankUnhealthy) -> String {
+        let comm = &*self.comm;
+        let bad = self.lattice.furthest_unhealthy(comm).unwrap_or(bad);
+        let what = bad.cell.describe(&health_of(&self.units), |c| {
             self.units.cell_centre(c, self.origin)
         });
+        let rank = match comm.size() {
+            1 => String::new(),
+            _ => format!("rank {}, ", bad.rank),
+        };
         let mut msg = format!(
-            "the fluid became unstable by step {}: furthest out of bounds, {what}",
+            "the fluid became unstable by step {}: furthest out of bounds, {rank}{what}",
             self.steps
         );
-        if let Some((good, fields)) = self.last_good.take().zip(self.lattice.kept_fields()) {
-            msg += &self.fields.write_last_good(good, &fields);
+        let kept = self.lattice.kept_fields(comm);
+        if let Some(fields) = &mut self.fields {
+            if let Some((good, kept)) = self.last_good.take().zip(kept) {
+                msg += &fields.write_last_good(good, &kept);
+            }
+            let _ = fields.flush();
         }
-        let _ = self.fields.flush();
         msg
     }
 
     /// The fluid's blow-up, where the health check finds one now (run when the particles' states
     /// went wrong: the fluid's forces may be why).
-    pub fn unstable_now(&mut self) -> Option<String> {
-        let bad = self.lattice.health()?;
+    pub(super) fn unstable_now_here(&mut self) -> Option<String> {
+        let bad = self.lattice.health(&*self.comm)?;
         Some(self.unstable(bad))
     }
 
     /// The error where a particle's load is not a finite number: the fluid's blow-up where the
     /// health check finds one now (before a NaN reaches the DEM, which would otherwise be
     /// blamed for the state it integrates from it), else the particle and its load.
-    pub(super) fn not_finite(&mut self, reply: &ParticleReply) -> String {
-        if let Some(cause) = self.unstable_now() {
+    pub(super) fn not_finite(&mut self, reply: Option<&ParticleReply>) -> String {
+        if let Some(cause) = self.unstable_now_here() {
             return cause;
         }
+        let Some(reply) = reply else {
+            return format!("rank 0 found a load that is not finite at step {}", self.steps);
+        };
         format!(
             "the fluid's load on particle id {} at step {} is not finite (force {:?} N, torque {:?} N m), \
              though the fluid passed its health check",

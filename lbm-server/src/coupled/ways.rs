@@ -26,13 +26,32 @@ pub(super) fn covered_cells_of(scene: &Scene) -> Result<Vec<CoveredCells>, Strin
 /// CPU driver (lavapipe, `cpu`) "auto" times nothing and takes the quads' kernels and the redo:
 /// building the other kernels there costs about a second each, more than a short run wins back,
 /// and a run busy building them notices a dead DEM late; `coupling.covered_cells = "timed"`
-/// times them on every device.
-pub(super) fn trial(scene: &Scene, kernel: Option<Kernel>, steps: u64, cpu: bool) -> Result<Trial, String> {
+/// times them on every device. On several `ranks` (which step in lockstep) it times nothing and
+/// takes the first kernels and the redo.
+pub(super) fn trial(
+    scene: &Scene,
+    kernel: Option<Kernel>,
+    steps: u64,
+    (cpu, ranks): (bool, usize),
+) -> Result<Trial, String> {
     let mut trial = Trial::new(kernels_of(kernel), covered_cells_of(scene)?, steps);
-    if cpu && scene.coupling.covered_cells != "timed" {
+    if (cpu && scene.coupling.covered_cells != "timed") || ranks > 1 {
         trial.pin_first();
     }
     Ok(trial)
+}
+
+/// On several ranks, what a coupled run cannot take yet, named: the covered cells other than
+/// redone (`coupling.covered_cells` "fused" or "skip"; "auto" and "timed" take the redo there).
+pub fn refuse_on_ranks(scene: &Scene, ranks: usize) -> Result<(), String> {
+    let name = scene.coupling.covered_cells.as_str();
+    if ranks > 1 && covered_cells_of(scene)?.first() != Some(&CoveredCells::Redo) {
+        return Err(format!(
+            "coupling.covered_cells = {name:?} on {ranks} ranks: a run with particles on several \
+             ranks redoes the covered cells (\"redo\", or \"auto\" which takes it there)"
+        ));
+    }
+    Ok(())
 }
 
 impl FluidSide {
@@ -56,6 +75,6 @@ impl FluidSide {
     /// the device does not build is left out of the trial (this step keeps the lattice's).
     pub(super) fn take_way(&mut self) {
         let now = self.made.elapsed().as_secs_f64();
-        self.trial.give_choice(&mut self.lattice, self.steps, now);
+        self.trial.give_choice(&mut self.lattice.lattice, self.steps, now);
     }
 }

@@ -4,10 +4,12 @@
 //! agreed by all ranks. On one rank it is the whole lattice, stepped and read as before.
 
 use super::communicator::{all, Communicator};
+use super::coupled_block::block_options;
 use super::decomposition::Decomposition;
 use super::halo::Halo;
 use crate::lbm::geometry::Setup;
 use crate::lbm::gpu::{furthest_out_of_bounds, out_of_bounds, Gpu, GpuLattice, Health, Unhealthy};
+use crate::lbm::imb::ImbOptions;
 use std::sync::Arc;
 
 /// One rank's block of the lattice.
@@ -16,7 +18,7 @@ pub struct BlockLattice {
     pub decomposition: Decomposition,
     /// The whole lattice (for the cells' coordinates and the gathers).
     whole: Setup,
-    halo: Option<Halo>,
+    pub(super) halo: Option<Halo>,
 }
 
 /// An unhealthy cell of the whole lattice, and the rank that holds it.
@@ -33,13 +35,26 @@ impl BlockLattice {
         health: Health,
         d: Decomposition,
     ) -> Result<BlockLattice, String> {
+        Self::with_coupling(gpu, setup, health, d, None)
+    }
+
+    /// The block `d` of the lattice `setup` on `gpu`, at rest, coupled to particles with
+    /// `options` where given (the block's place in the whole lattice added: `coupled_block.rs`).
+    pub fn with_coupling(
+        gpu: Arc<Gpu>,
+        setup: Setup,
+        health: Health,
+        d: Decomposition,
+        options: Option<ImbOptions>,
+    ) -> Result<BlockLattice, String> {
         let split = d.ranks() > 1;
         let local = if split {
             d.local_setup(&setup)
         } else {
             setup.clone()
         };
-        let lattice = GpuLattice::new(gpu, local, health, None)?;
+        let options = options.map(|o| block_options(o, &d, &setup));
+        let lattice = GpuLattice::new(gpu, local, health, options)?;
         let halo = split.then(|| Halo::new(&lattice, &d, &setup));
         Ok(BlockLattice {
             lattice,
@@ -164,6 +179,45 @@ impl BlockLattice {
             .collect()
     }
 
+    /// The whole lattice's fields at rank 0 (empty elsewhere), gathered from every block's own
+    /// cells, and the first unhealthy cell as [`BlockLattice::own_fields`] finds it: the coupled
+    /// run's snapshots, written whole by rank 0.
+    pub fn fields(&self, comm: &dyn Communicator) -> (Vec<[f32; 4]>, Option<RankUnhealthy>) {
+        let (own, bad) = self.own_fields(comm);
+        if self.halo.is_none() {
+            return (own, bad);
+        }
+        (self.gather(comm, &own), bad)
+    }
+
+    /// The kept fields of the whole lattice, at rank 0 (as [`BlockLattice::fields`]).
+    pub fn kept_fields(&self, comm: &dyn Communicator) -> Option<Vec<[f32; 4]>> {
+        if self.halo.is_none() {
+            return self.lattice.kept_fields();
+        }
+        let own = self
+            .kept_own_fields()
+            .unwrap_or_else(|| vec![[0.0; 4]; self.decomposition.own_cells().len()]);
+        Some(self.gather(comm, &own)).filter(|_| comm.rank() == 0)
+    }
+
+    /// Every block's `own` cells gathered at rank 0 into the whole lattice (empty elsewhere).
+    fn gather(&self, comm: &dyn Communicator, own: &[[f32; 4]]) -> Vec<[f32; 4]> {
+        let pieces = comm.gather(bytemuck::cast_slice(own));
+        if pieces.is_empty() {
+            return Vec::new();
+        }
+        let mut whole = vec![[0f32; 4]; self.whole.cells()];
+        for (rank, piece) in pieces.iter().enumerate() {
+            let d = self.block_of(rank);
+            let values: &[[f32; 4]] = bytemuck::cast_slice(piece);
+            for (&(_, g), v) in d.own_cells().iter().zip(values) {
+                whole[g] = *v;
+            }
+        }
+        whole
+    }
+
     /// The block's own cells of `local` (fields of the block's lattice), x fastest.
     fn own(&self, local: &[[f32; 4]]) -> Vec<[f32; 4]> {
         self.decomposition
@@ -236,4 +290,12 @@ fn read_cell(p: &[u8]) -> Option<(usize, [f32; 4], f64)> {
         let v: [f32; 4] = bytemuck::pod_read_unaligned(&p[8..24]);
         (cell, v, f64::from_le_bytes(p[24..].try_into().expect("8 bytes")))
     })
+}
+
+impl BlockLattice {
+    /// Rank `rank`'s block of the same decomposition.
+    fn block_of(&self, rank: usize) -> Decomposition {
+        let d = &self.decomposition;
+        Decomposition::new(d.n, d.periodic(), d.blocks, rank)
+    }
 }

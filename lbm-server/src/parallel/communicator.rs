@@ -33,6 +33,8 @@ pub trait Communicator {
     fn gather(&self, bytes: &[u8]) -> Vec<Vec<u8>>;
     /// The smallest of the ranks' `value`s, at every rank.
     fn min(&self, value: u64) -> u64;
+    /// Rank 0's `bytes` at every rank (the others' `bytes` are not read).
+    fn broadcast(&self, bytes: Vec<u8>) -> Vec<u8>;
 }
 
 /// When this process was asked to stop (Ctrl-C, SIGTERM: [`interrupted`]).
@@ -101,6 +103,10 @@ impl Communicator for OneRank {
 
     fn min(&self, value: u64) -> u64 {
         value
+    }
+
+    fn broadcast(&self, bytes: Vec<u8>) -> Vec<u8> {
+        bytes
     }
 }
 

@@ -9,6 +9,9 @@
 //! - `pieces.rs`: the field snapshots as ParaView parallel image data, a piece per rank
 //!   ([`FieldPieces`]).
 //! - `hosts.rs`: the ranks' hosts; a run with particles keeps its ranks on rank 0's host.
+//! - `block.rs`: one rank's lattice, stepped, read and checked with the others ([`BlockLattice`]);
+//!   `coupled_block.rs`: its coupled step with particles (the loads made at rank 0 from every
+//!   rank's pairs).
 //! - `summary.rs`: what summary.json says of the ranks.
 //! - `thread_ranks.rs`: ranks as threads of one process (the tests; `bench --thread-ranks`).
 //!
@@ -16,6 +19,9 @@
 
 mod block;
 mod communicator;
+mod coupled_block;
+#[cfg(test)]
+mod coupled_tests;
 mod decomposition;
 mod halo;
 mod hosts;

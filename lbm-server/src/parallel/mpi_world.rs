@@ -9,7 +9,7 @@ use super::communicator::{
 use mpi::collective::SystemOperation;
 use mpi::request::{Request, Scope};
 use mpi::topology::{Communicator as _, SimpleCommunicator};
-use mpi::traits::{CommunicatorCollectives, Destination, Source};
+use mpi::traits::{CommunicatorCollectives, Destination, Root, Source};
 
 /// MPI, initialised for the run (finalised when dropped, unless the process was asked to stop).
 pub struct MpiWorld {
@@ -102,6 +102,15 @@ impl Communicator for MpiWorld {
             self.wait_all(vec![all], "the other ranks' agreement");
         });
         out
+    }
+
+    fn broadcast(&self, mut bytes: Vec<u8>) -> Vec<u8> {
+        let root = self.world.process_at_rank(0);
+        let mut len = bytes.len() as u64;
+        root.broadcast_into(&mut len);
+        bytes.resize(len as usize, 0);
+        root.broadcast_into(&mut bytes[..]);
+        bytes
     }
 }
 

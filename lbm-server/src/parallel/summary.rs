@@ -5,7 +5,7 @@ use serde::Serialize;
 
 /// How the run was spread over ranks: their count, the blocks along x, y and z, and each rank's
 /// host and device (rank order).
-#[derive(Debug, Serialize)]
+#[derive(Debug, Clone, Serialize)]
 pub struct ParallelSummary {
     pub ranks: usize,
     pub blocks: [usize; 3],

@@ -63,12 +63,12 @@ fn check(setup: Setup, blocks: [usize; 3], steps: u64) {
 }
 
 /// Walls, a moving wall, solid cells (some on the cuts), a body force, TRT.
-fn walled() -> Setup {
+pub(super) fn walled() -> Setup {
     crate::lbm::tests::trt_walls_and_solids([8, 6, 8])
 }
 
 /// Periodic, a body force, MRT.
-fn periodic() -> Setup {
+pub(super) fn periodic() -> Setup {
     let rates = Rates::dhumieres(1.0 / 0.8);
     let mut setup = Setup::new([8, 6, 8], [Face::Periodic; 6], 0.8, Operator::Mrt { rates });
     setup.force = [2e-4, 1e-4, -1e-4];

@@ -22,6 +22,7 @@ pub struct ThreadRanks {
 
 const GATHER: i32 = 100;
 const MIN: i32 = 101;
+const BROADCAST: i32 = 102;
 
 impl ThreadRanks {
     /// The `size` ranks of one run, in rank order, each to be moved into its own thread.
@@ -95,5 +96,12 @@ impl Communicator for ThreadRanks {
             .map(|r| u64::from_le_bytes(self.receive(r, MIN).try_into().unwrap()))
             .min()
             .unwrap()
+    }
+    fn broadcast(&self, bytes: Vec<u8>) -> Vec<u8> {
+        if self.rank != 0 {
+            return self.receive(0, BROADCAST);
+        }
+        (1..self.size).for_each(|r| self.send(r, BROADCAST, bytes.clone()));
+        bytes
     }
 }

@@ -116,8 +116,8 @@ fn output_folder(
     Ok(lock)
 }
 
-/// The lattice's blocks on `ranks` ranks (`[parallel] blocks` or chosen); more than one rank
-/// runs a fluid-only scene alone (particles stay on one rank for now).
+/// The lattice's blocks on `ranks` ranks (`[parallel] blocks` or chosen); with particles, what
+/// several ranks cannot take yet refused (`coupled::refuse_on_ranks`).
 fn blocks(scene: &Scene, ranks: usize) -> Result<[usize; 3], String> {
     let given = scene.parallel.blocks();
     let Some(units) = &scene.lattice_units else {
@@ -129,10 +129,8 @@ fn blocks(scene: &Scene, ranks: usize) -> Result<[usize; 3], String> {
         };
     };
     let blocks = blocks_of(units.n, scene.periodic_axes(), given, ranks)?;
-    if ranks > 1 && scene.particle_count() > 0 {
-        return Err(format!(
-            "{ranks} ranks: a scene with particles runs on one rank (fluid-only scenes run on several)"
-        ));
+    if scene.particle_count() > 0 {
+        crate::coupled::refuse_on_ranks(scene, ranks)?;
     }
     Ok(blocks)
 }

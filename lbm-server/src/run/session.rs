@@ -12,10 +12,12 @@ use crate::checkpoint::Checkpoints;
 use crate::coupled::FluidSide;
 use crate::launch::{self, DemStart};
 use crate::output::ParticleOutput;
+use crate::parallel::Communicator;
 use crate::terminal;
 use protocol::transport::LinkOptions;
 use protocol::{FluidLink, Hello, LinkError, Physics};
 use std::process::Child;
+use std::rc::Rc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::Duration;
@@ -46,8 +48,15 @@ pub(super) struct Session {
 
 impl Session {
     /// Runs the whole session and returns the process exit code.
-    pub(super) fn start(p: Prepared, run: &str, dem: DemStart, interrupted: Arc<AtomicBool>) -> u8 {
-        let mut session = match Session::open(p, run, interrupted) {
+    /// On several ranks (`comm`) this is rank 0's; the others follow its fluid side.
+    pub(super) fn start(
+        p: Prepared,
+        run: &str,
+        dem: DemStart,
+        interrupted: Arc<AtomicBool>,
+        comm: Rc<dyn Communicator>,
+    ) -> u8 {
+        let mut session = match Session::open(p, run, interrupted, comm) {
             Ok(session) => session,
             Err(e) => {
                 protocol::say!("lbm-server: error: {e}");
@@ -61,20 +70,47 @@ impl Session {
         session.finish(result)
     }
 
-    /// The run's link (its services, before any DEM connects), particles.csv and the fluid.
-    fn open(p: Prepared, run: &str, interrupted: Arc<AtomicBool>) -> Result<Session, String> {
+    /// The fluid (every rank's block of it), then the run's link (its services, before any DEM
+    /// connects) and particles.csv; where these fail, the other ranks end with the run.
+    fn open(
+        p: Prepared,
+        run: &str,
+        interrupted: Arc<AtomicBool>,
+        comm: Rc<dyn Communicator>,
+    ) -> Result<Session, String> {
+        let resumed = p.resumed.as_ref();
+        let fluid = FluidSide::for_scene(&p.scene, p.steps, &p.out, resumed, (comm, p.blocks))?;
+        Self::open_link(p, run, interrupted, fluid)
+    }
+
+    fn open_link(
+        p: Prepared,
+        run: &str,
+        interrupted: Arc<AtomicBool>,
+        fluid: FluidSide,
+    ) -> Result<Session, String> {
         let options = LinkOptions {
             run: run.to_string(),
             timeout: Duration::from_secs_f64(p.scene.coupling.timeout),
         };
-        let link = FluidLink::create(options, p.scene.capacity() as usize).map_err(|e| e.to_string())?;
-        let vtk = p.scene.dem.output.vtk;
-        let particles = match &p.resumed {
-            Some(loaded) => ParticleOutput::resume(&p.out, vtk, &loaded.header.outputs),
-            None => ParticleOutput::create(&p.out, vtk).map_err(|e| e.to_string()),
-        }
-        .map_err(|e| format!("{}: {e}", p.out.display()))?;
-        let fluid = FluidSide::for_scene(&p.scene, p.steps, &p.out, p.resumed.as_ref())?;
+        let opened = FluidLink::create(options, p.scene.capacity() as usize)
+            .map_err(|e| e.to_string())
+            .and_then(|link| {
+                let vtk = p.scene.dem.output.vtk;
+                let particles = match &p.resumed {
+                    Some(loaded) => ParticleOutput::resume(&p.out, vtk, &loaded.header.outputs),
+                    None => ParticleOutput::create(&p.out, vtk).map_err(|e| e.to_string()),
+                }
+                .map_err(|e| format!("{}: {e}", p.out.display()))?;
+                Ok((link, particles))
+            });
+        let (link, particles) = match opened {
+            Ok(opened) => opened,
+            Err(e) => {
+                fluid.end_ranks(EXIT_FAILURE, 0.0);
+                return Err(e);
+            }
+        };
         let checkpoints = p.checkpoints();
         let first_step = p.resumed.as_ref().map_or(0, |l| l.header.step);
         let mut counters = Counters::new();
@@ -264,7 +300,8 @@ impl Session {
         if code != 0 {
             self.say_resumable();
         }
-        let summary = self.summary(reason, code);
+        let parallel = self.fluid.end_ranks(code, self.counters.wall());
+        let summary = self.summary(reason, code, parallel);
         if let Err(e) = summary.write(&self.p.out.join("summary.json")) {
             // The run's record lost: whatever the run did, it did not end well.
             protocol::say!("lbm-server: error: summary.json: {e}");

@@ -4,6 +4,7 @@
 use super::counters::TimeSplit;
 use super::session::Session;
 use crate::output::LatticeSummary;
+use crate::parallel::ParallelSummary;
 use protocol::Physics;
 use serde::Serialize;
 use std::path::Path;
@@ -51,6 +52,8 @@ pub(super) struct Summary {
     /// The fluid's discretisation.
     pub lattice: LatticeSummary,
     pub peer: Option<PeerInfo>,
+    /// The ranks the lattice was cut over (one on a single process), their blocks and devices.
+    pub parallel: ParallelSummary,
     /// "completed" (exit 0), "interrupted" (Ctrl-C or SIGTERM, exit 130), "stopped by the DEM
     /// client" (its STOP before the last step, exit 130), or "error: ..." (exit 1)
     pub exit_reason: String,
@@ -66,7 +69,7 @@ impl Summary {
 
 impl Session {
     /// The summary of the run so far, ended for `exit_reason` with `exit_code`.
-    pub(super) fn summary(&self, exit_reason: String, exit_code: u8) -> Summary {
+    pub(super) fn summary(&self, exit_reason: String, exit_code: u8, parallel: ParallelSummary) -> Summary {
         let c = &self.counters;
         let wall = c.wall();
         let steps_completed = c.steps_completed();
@@ -93,6 +96,7 @@ impl Session {
             trial: self.fluid.trial_lines().to_vec(),
             lattice: LatticeSummary::of(self.fluid.units()),
             peer: self.peer.clone(),
+            parallel,
             exit_reason,
             exit_code,
         }

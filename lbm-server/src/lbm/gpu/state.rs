@@ -25,7 +25,7 @@ pub struct GpuLattice {
     pub(super) pipeline_layout: wgpu::PipelineLayout,
     pub(super) health: Health,
     /// The coupling's settings (None: a lattice without particles).
-    pub(super) options: Option<ImbOptions>,
+    pub(in crate::lbm) options: Option<ImbOptions>,
     /// Particle coupling (immersed moving boundary), when the scene has particles.
     pub(in crate::lbm) imb: Option<Coupling>,
     /// The ways built so far ([`GpuLattice::set_covered_cells`]), and the one the steps take.

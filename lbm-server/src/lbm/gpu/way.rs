@@ -7,7 +7,7 @@ use super::cell_list::CellList;
 use super::device::Gpu;
 use super::params::{params, Params};
 use super::state::GpuLattice;
-use crate::lbm::imb::{Coupling, CoveredCells, Passes, SolidCollision};
+use crate::lbm::imb::{Coupling, CoveredCells, ImbBlock, Passes, SolidCollision};
 use crate::lbm::kernel::Kernel;
 use crate::lbm::storage::{Storage, StorageOnDevice};
 use wgpu::util::DeviceExt;
@@ -202,7 +202,7 @@ impl GpuLattice {
         let imb = self.options;
         let flag = |on: bool| f64::from(u8::from(on));
         let superposition = imb.is_some_and(|o| o.solid_collision == SolidCollision::Superposition);
-        vec![
+        let mut constants = vec![
             ("OPERATOR", self.setup.operator.code() as f64),
             ("FORCE", flag(self.setup.force != [0.0; 3])),
             ("SLOTS", imb.map_or(2, |o| o.slots) as f64),
@@ -211,7 +211,9 @@ impl GpuLattice {
             ("FUSED", flag(mode.fused())),
             ("SKIP", flag(mode == CoveredCells::Skip)),
             ("BY_POPULATION", flag(self.gpu.list.by_population)),
-        ]
+        ];
+        constants.extend(ImbBlock::constants(imb.and_then(|o| o.block)));
+        constants
     }
 
     /// The kernel `entry` of the lattice's module with a way's `constants` and KIND `kind`.

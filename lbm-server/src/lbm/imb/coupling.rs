@@ -27,6 +27,8 @@ pub struct Coupling {
     pub(super) saved_capacity: u32,
     /// Most covered cells the list may hold (below the device's limit only in tests).
     pub(super) saved_cap: u64,
+    /// The particles and pairs of the step staged last.
+    pub(super) staged: (u32, u64),
 }
 
 impl Coupling {
@@ -58,6 +60,7 @@ impl Coupling {
             slots_per_cell: slots as u32,
             saved_capacity: 0,
             saved_cap: u64::MAX,
+            staged: (0, 0),
         }
     }
 

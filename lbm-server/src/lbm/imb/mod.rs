@@ -7,9 +7,11 @@
 //! the solid term where they cover it (in the fluid kernels or before them), and reduces each
 //! particle's force and torque from its cells (the table of passes at step.rs's `coupled_step`).
 
+mod block;
 mod chunks;
 mod coupling;
 mod cover;
+mod gathered;
 mod loads;
 mod options;
 mod passes;
@@ -18,16 +20,16 @@ mod staging;
 mod step;
 mod timing;
 
+pub use block::ImbBlock;
 #[cfg(test)]
 pub(super) use chunks::CHUNK;
 pub(super) use coupling::Coupling;
 #[cfg(test)]
 pub(super) use cover::box_edge;
 pub use cover::{covered_fraction, solid_reach};
+pub use gathered::merge_pairs;
 pub use options::{CoveredCells, ImbOptions, SolidCollision};
 pub(super) use passes::Passes;
-#[cfg(test)]
-pub(super) use records::Load;
-pub use records::{SolidParticle, SolidParticles};
+pub use records::{Load, LostCovers, SolidParticle, SolidParticles};
 #[cfg(test)]
 pub(super) use staging::into_lattice;

@@ -1,5 +1,8 @@
 //! The coupling's settings: how many particles a cell holds, the weighting and the solid
-//! collision term, and where the covered cells get their solid term.
+//! collision term, where the covered cells get their solid term, and the block of a lattice
+//! decomposed over ranks.
+
+use super::block::ImbBlock;
 
 /// Settings of the coupling.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -12,6 +15,9 @@ pub struct ImbOptions {
     pub solid_collision: SolidCollision,
     /// Where the covered cells get their solid term.
     pub covered_cells: CoveredCells,
+    /// Where the lattice is one block of a lattice decomposed over ranks: where the block lies
+    /// (the particles' coordinates are the whole lattice's).
+    pub block: Option<ImbBlock>,
 }
 
 impl Default for ImbOptions {
@@ -21,6 +27,7 @@ impl Default for ImbOptions {
             seed_weighting: false,
             solid_collision: SolidCollision::NobleTorczynski,
             covered_cells: CoveredCells::Auto,
+            block: None,
         }
     }
 }

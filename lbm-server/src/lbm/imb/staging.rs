@@ -5,7 +5,6 @@
 use super::chunks::{chunk_sizes, for_each_chunk, ChunkSize, CHUNK};
 use super::cover::{box_edge, MAX_BOX_EDGE};
 use super::records::{GpuParticle, SolidParticle, SolidParticles, MAX_PARTICLES, PARTICLE_BYTES};
-use crate::lbm::geometry::Setup;
 use crate::lbm::gpu::{vec4, GpuLattice};
 
 impl GpuLattice {
@@ -19,6 +18,7 @@ impl GpuLattice {
         self.refuse_unfit(particles, &chunks)?;
         let pairs: u64 = chunks.iter().map(|c| c.pairs).sum();
         self.reserve(particles.count() as u64, pairs)?;
+        self.imb.as_mut().expect("coupling").staged = (particles.count() as u32, pairs);
         self.upload_particles(particles, &chunks)?;
         Ok(pairs)
     }
@@ -43,7 +43,7 @@ impl GpuLattice {
         // chunk's thread writes its own records.
         let (mut records, _) = view.slice(..).into_chunks::<{ PARTICLE_BYTES as usize }>();
         let staging = Staging(records.as_raw_element_ptr(), records.len());
-        let periods = Periods::of(&self.setup);
+        let periods = Periods::of(self.particles_lattice());
         for_each_chunk(chunks.iter().collect(), |c, chunk: &ChunkSize| {
             let mut first = chunk.first;
             for j in c * CHUNK..(c * CHUNK + CHUNK).min(particles.count()) {
@@ -81,9 +81,10 @@ impl GpuLattice {
             ));
         }
         let largest = chunks.iter().map(|c| c.largest_edge).max().unwrap_or(0);
+        let (whole, periodic) = self.particles_lattice();
         let shortest_periodic = (0..3)
-            .filter(|&a| self.setup.periodic(a))
-            .map(|a| self.setup.n[a])
+            .filter(|&a| periodic[a])
+            .map(|a| whole[a])
             .min()
             .unwrap_or(usize::MAX);
         if largest <= MAX_BOX_EDGE && largest as usize <= shortest_periodic {
@@ -99,7 +100,7 @@ impl GpuLattice {
         }
         if let Some((j, axis)) = (0..n).find_map(|j| {
             (0..3)
-                .find(|&a| self.setup.periodic(a) && box_edge(radius(j)) as usize > self.setup.n[a])
+                .find(|&a| periodic[a] && box_edge(radius(j)) as usize > whole[a])
                 .map(|a| (j, a))
         }) {
             return Err(format!(
@@ -107,7 +108,7 @@ impl GpuLattice {
                  (its box of {} cells would meet itself)",
                 radius(j),
                 ["x", "y", "z"][axis],
-                self.setup.n[axis],
+                whole[axis],
                 box_edge(radius(j))
             ));
         }
@@ -118,8 +119,8 @@ impl GpuLattice {
 /// The particle with its centre wrapped into the lattice along the periodic axes (a DEM with a
 /// periodic domain may send centres beyond it): its box then lies less than one period outside.
 #[cfg(test)]
-pub(in crate::lbm) fn into_lattice(setup: &Setup, p: &SolidParticle) -> SolidParticle {
-    Periods::of(setup).wrap(p)
+pub(in crate::lbm) fn into_lattice(setup: &crate::lbm::geometry::Setup, p: &SolidParticle) -> SolidParticle {
+    Periods::of((setup.n, std::array::from_fn(|a| setup.periodic(a)))).wrap(p)
 }
 
 /// The lengths of the lattice's periodic axes, 0 along the others: what wraps the centres, looked
@@ -128,14 +129,11 @@ pub(in crate::lbm) fn into_lattice(setup: &Setup, p: &SolidParticle) -> SolidPar
 struct Periods([f64; 3]);
 
 impl Periods {
-    fn of(setup: &Setup) -> Periods {
-        Periods(std::array::from_fn(|a| {
-            if setup.periodic(a) {
-                setup.n[a] as f64
-            } else {
-                0.0
-            }
-        }))
+    /// The periods of a lattice of `n` cells, periodic along `periodic`.
+    fn of((n, periodic): ([usize; 3], [bool; 3])) -> Periods {
+        Periods(std::array::from_fn(
+            |a| if periodic[a] { n[a] as f64 } else { 0.0 },
+        ))
     }
 
     /// `p` with its centre wrapped (`rem_euclid`, a libm `fmod`, only for a centre outside).

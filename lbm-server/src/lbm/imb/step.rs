@@ -69,7 +69,10 @@ impl GpuLattice {
     /// Before the device's passes: the faces' share of velocity (during the ramp), the particles
     /// staged, and this step's pipelines and counts (particles, pairs, room in the list of
     /// covered cells) for the kernels; the count of particles and the pipelines.
-    fn stage<P: SolidParticles + ?Sized>(&mut self, particles: &P) -> Result<(u32, StepPasses), String> {
+    pub(super) fn stage<P: SolidParticles + ?Sized>(
+        &mut self,
+        particles: &P,
+    ) -> Result<(u32, StepPasses), String> {
         self.ramp_faces();
         let pairs = self.stage_particles(particles)?;
         let passes = self.step_passes()?;
@@ -86,7 +89,7 @@ impl GpuLattice {
     /// mask are all 0 here (`reduce` clears them); with the redo and skip the covered cells are
     /// listed by `cover` (status[4], status[8]) and dispatched indirectly (status[5..8],
     /// status[9..12]).
-    fn encode_cover(
+    pub(super) fn encode_cover(
         &self,
         mut encoder: wgpu::CommandEncoder,
         cover: &wgpu::ComputePipeline,
@@ -100,7 +103,7 @@ impl GpuLattice {
 
     /// The collision with the solid term (eq. 7-9): fused, the fluid kernels give the covered
     /// cells theirs (shaders/lbm.wgsl); with the redo and skip, the covered cells collide first.
-    fn encode_collision(
+    pub(super) fn encode_collision(
         &mut self,
         mut encoder: wgpu::CommandEncoder,
         passes: &StepPasses,
@@ -136,7 +139,7 @@ impl GpuLattice {
 
     /// Force and torque per particle (eq. 10-11): each particle's slices of its box summed, then
     /// the slices into the particle's load; the covers cleared for the next step.
-    fn encode_reduce(
+    pub(super) fn encode_reduce(
         &self,
         mut encoder: wgpu::CommandEncoder,
         passes: &StepPasses,
@@ -158,7 +161,7 @@ impl GpuLattice {
     /// (skip: all but the listed ones), and the store (or uncover) over the covered cells go in a
     /// submission of their own: it runs while the host reads the loads back and the DEM takes its
     /// step (docs/imb.md, "The redo").
-    fn submit_fluid_after_loads(&mut self, passes: &StepPasses, split: Split) {
+    pub(super) fn submit_fluid_after_loads(&mut self, passes: &StepPasses, split: Split) {
         let Some(covered) = &passes.covered else {
             return;
         };
@@ -175,7 +178,11 @@ impl GpuLattice {
 
     /// The `n` particles' loads copied where the host reads them, at the end of the passes so
     /// far, which go to the device: the loads' bytes and that submission.
-    fn submit_with_loads(&self, mut encoder: wgpu::CommandEncoder, n: u32) -> (u64, wgpu::SubmissionIndex) {
+    pub(super) fn submit_with_loads(
+        &self,
+        mut encoder: wgpu::CommandEncoder,
+        n: u32,
+    ) -> (u64, wgpu::SubmissionIndex) {
         let bytes = n as u64 * LOAD_BYTES;
         let coupling = self.imb.as_ref().expect("coupling");
         if bytes > 0 {

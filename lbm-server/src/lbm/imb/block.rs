@@ -1,0 +1,54 @@
+//! The coupling of one block of a lattice decomposed over ranks ([`ImbBlock`], `crate::parallel`):
+//! the particles stay in the whole lattice's coordinates, and the block covers its own cells
+//! alone (a sphere that spans a block face is covered on both sides, each side by its rank).
+
+use crate::lbm::gpu::GpuLattice;
+
+/// Where a lattice's block lies in the whole lattice.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ImbBlock {
+    /// The whole lattice's cells along each axis, and its periodic axes.
+    pub whole: [usize; 3],
+    pub periodic: [bool; 3],
+    /// The block's own cells, from `own_lo` to `own_hi` (excluded), in whole-lattice coordinates.
+    pub own_lo: [usize; 3],
+    pub own_hi: [usize; 3],
+    /// The whole-lattice coordinates of the block lattice's cell (0, 0, 0): `own_lo`, one less
+    /// along an axis with a ghost layer below (-1 where that layer wraps).
+    pub base: [i64; 3],
+}
+
+impl ImbBlock {
+    /// The shaders' override constants of the block (imb.wgsl's BLOCK, WHOLE_*, OWN_*, BASE_*);
+    /// without one, BLOCK false and the lattice is the whole.
+    pub fn constants(block: Option<ImbBlock>) -> Vec<(&'static str, f64)> {
+        let Some(b) = block else {
+            return vec![("BLOCK", 0.0)];
+        };
+        let axes = |names: [&'static str; 3], v: [f64; 3]| names.into_iter().zip(v);
+        let periodic = (0..3).map(|a| u32::from(b.periodic[a]) << a).sum::<u32>();
+        let mut c = vec![("BLOCK", 1.0), ("WHOLE_PERIODIC", f64::from(periodic))];
+        c.extend(axes(["WHOLE_X", "WHOLE_Y", "WHOLE_Z"], b.whole.map(|v| v as f64)));
+        c.extend(axes(
+            ["OWN_LO_X", "OWN_LO_Y", "OWN_LO_Z"],
+            b.own_lo.map(|v| v as f64),
+        ));
+        c.extend(axes(
+            ["OWN_HI_X", "OWN_HI_Y", "OWN_HI_Z"],
+            b.own_hi.map(|v| v as f64),
+        ));
+        c.extend(axes(["BASE_X", "BASE_Y", "BASE_Z"], b.base.map(|v| v as f64)));
+        c
+    }
+}
+
+impl GpuLattice {
+    /// The lattice the particles' coordinates refer to: its cells along each axis and its
+    /// periodic axes (the whole lattice's where this lattice is a block of it).
+    pub(super) fn particles_lattice(&self) -> ([usize; 3], [bool; 3]) {
+        match self.options.and_then(|o| o.block) {
+            Some(b) => (b.whole, b.periodic),
+            None => (self.setup.n, std::array::from_fn(|a| self.setup.periodic(a))),
+        }
+    }
+}

@@ -1,0 +1,93 @@
+//! A coupled lattice cut into blocks against the same lattice on one rank: the particles' loads
+//! (at rank 0) and the fields bit for bit, with spheres across the cuts, the periodic wraps and
+//! an edge and a corner of the blocks; ranks as threads (`tests.rs`), without MPI.
+
+use super::tests::{periodic, walled};
+use super::ThreadRanks;
+use super::{BlockLattice, Decomposition};
+use crate::lbm::geometry::Setup;
+use crate::lbm::gpu::{Gpu, GpuLattice, Health};
+use crate::lbm::imb::{CoveredCells, ImbOptions, Load, SolidParticle};
+use std::sync::Arc;
+
+/// The particles at step `t` (on the 8 x 6 x 8 lattices of `tests.rs`): one on the edge where the
+/// cuts at x = 4 and z = 4 meet, one across the periodic x faces, moving and turning.
+fn particles(t: u64) -> Vec<SolidParticle> {
+    let t = t as f64;
+    vec![
+        SolidParticle {
+            position: [4.0 + 0.05 * t, 4.02, 3.97 - 0.03 * t],
+            radius: 1.8,
+            velocity: [0.05, 0.0, -0.03],
+            angular_velocity: [0.0, 0.01, 0.02],
+        },
+        SolidParticle {
+            position: [0.3 - 0.04 * t, 2.0, 5.8],
+            radius: 1.5,
+            velocity: [-0.04, 0.01, 0.0],
+            angular_velocity: [0.03, 0.0, 0.0],
+        },
+    ]
+}
+
+/// The loads of `steps` coupled steps (covered cells redone) and the fields after them, on one
+/// lattice and cut into `blocks` on threads: the same bits.
+fn check(setup: Setup, blocks: [usize; 3], steps: u64) {
+    let gpu = Arc::new(Gpu::new().expect("a wgpu adapter (lavapipe in CI)"));
+    let options = Some(ImbOptions {
+        covered_cells: CoveredCells::Redo,
+        ..ImbOptions::default()
+    });
+    let mut one = GpuLattice::new(gpu.clone(), setup.clone(), Health::default(), options).unwrap();
+    let want: Vec<Vec<Load>> = (0..steps)
+        .map(|t| one.step_coupled(&particles(t)).unwrap())
+        .collect();
+    let want_fields = one.fields().0;
+    let ranks: usize = blocks.iter().product();
+    let periodic: [bool; 3] = std::array::from_fn(|a| setup.periodic(a));
+    let (loads, fields) = std::thread::scope(|s| {
+        let handles: Vec<_> = ThreadRanks::world(ranks)
+            .into_iter()
+            .enumerate()
+            .map(|(rank, comm)| {
+                let (gpu, setup) = (gpu.clone(), setup.clone());
+                s.spawn(move || {
+                    let d = Decomposition::new(setup.n, periodic, blocks, rank);
+                    let mut block =
+                        BlockLattice::with_coupling(gpu, setup, Health::default(), d, options).unwrap();
+                    let loads: Vec<Vec<Load>> = (0..steps)
+                        .map(|t| {
+                            let mut out = Vec::new();
+                            block
+                                .step_coupled_with(&particles(t)[..], &mut out, |_, l| l, &comm)
+                                .unwrap();
+                            out
+                        })
+                        .collect();
+                    (loads, block.fields(&comm).0)
+                })
+            })
+            .collect();
+        let mut all: Vec<_> = handles.into_iter().map(|h| h.join().unwrap()).collect();
+        all.swap_remove(0)
+    });
+    assert!(
+        want.iter().flatten().any(|l| l.force != [0.0; 3]),
+        "the particles feel the fluid"
+    );
+    for (t, (w, h)) in want.iter().zip(&loads).enumerate() {
+        assert_eq!(w, h, "blocks {blocks:?}, step {t}: the loads differ");
+    }
+    let differ = (0..want_fields.len())
+        .filter(|&k| want_fields[k] != fields[k])
+        .count();
+    assert_eq!(differ, 0, "blocks {blocks:?}: {differ} cells' fields differ");
+}
+
+/// Two and four blocks (an edge of the cuts, the periodic x faces between ranks); few, since
+/// each block builds its kernels (seconds on lavapipe).
+#[test]
+fn a_coupled_lattice_cut_into_blocks_gives_the_single_lattices_loads_bit_for_bit() {
+    check(walled(), [1, 1, 2], 4);
+    check(periodic(), [2, 1, 2], 3);
+}
