@@ -313,7 +313,9 @@ fn a_coupled_run_on_ranks_refuses_the_covered_cells_it_cannot_take() {
     let text_ = coupled_scene("coupled-fused", false)
         .replace("timeout = 10.0", "timeout = 10.0\ncovered_cells = \"fused\"");
     let scene = write_scene(&dir, &text_);
-    let o = run_on(&mpirun, 2, &scene, &dir.join("out"));
+    let o = mpirun_command(&mpirun, 2, &scene, &dir.join("out"))
+        .output()
+        .unwrap();
     if text(&o).contains("built without MPI") {
         eprintln!("skipped: lbm-server is built without MPI");
         return;
