@@ -23,6 +23,9 @@ pub struct SqueezeFilms {
     pub periods: V3,
     /// The candidate pairs, by particle id.
     pairs: Vec<(usize, usize)>,
+    /// The same pairs by atom row (those with both atoms present), kept until the rows change,
+    /// with each pair's effective radius r_i r_j / (r_i + r_j).
+    rows: Vec<(u32, u32, f64)>,
 }
 
 impl SqueezeFilms {
@@ -33,29 +36,46 @@ impl SqueezeFilms {
             walls,
             periods,
             pairs: Vec::new(),
+            rows: Vec::new(),
         }
     }
 
     /// The pairs (by id) that can come within the cut-off while each sphere moves up to `travel`.
     pub fn candidates(&mut self, ids: &[usize], x: &[V3], radius: &[f64], travel: f64) {
         let pairs = near_pairs(x, radius, self.cutoff + 2.0 * travel, self.periods);
-        self.pairs = pairs.into_iter().map(|(i, j)| (ids[i], ids[j])).collect();
+        self.pairs = pairs.iter().map(|&(i, j)| (ids[i], ids[j])).collect();
+        self.rows = pairs
+            .into_iter()
+            .map(|(i, j)| (i as u32, j as u32, effective_radius(radius[i], radius[j])))
+            .collect();
     }
 
-    /// Adds the film force on each sphere (rows as `x`; `row_of_id` maps a particle id to its
-    /// row, `usize::MAX` where absent) for the present gaps and velocities to `f`.
-    pub fn add_forces(&self, row_of_id: &[usize], x: &[V3], v: &[V3], radius: &[f64], f: &mut [V3]) {
+    /// Re-resolves the pairs' rows after the atoms changed rows (`row_of_id` maps a particle id
+    /// to its row, `usize::MAX` where absent; a pair with an absent atom is left out).
+    pub fn remap(&mut self, row_of_id: &[usize], radius: &[f64]) {
+        self.rows.clear();
         for &(a, b) in &self.pairs {
             let (i, j) = (row_of_id[a], row_of_id[b]);
-            if i == usize::MAX || j == usize::MAX {
+            if i != usize::MAX && j != usize::MAX {
+                self.rows.push((i as u32, j as u32, effective_radius(radius[i], radius[j])));
+            }
+        }
+    }
+
+    /// Adds the film force on each sphere (rows as `x`, the rows of the last `candidates` or
+    /// `remap`) for the present gaps and velocities to `f`. A pair clearly in contact or clearly
+    /// beyond the cut-off (its squared distance a margin of 1e-9 past the bounds, which
+    /// `film_damping` gives 0) is skipped before its square root.
+    pub fn add_forces(&self, x: &[V3], v: &[V3], radius: &[f64], f: &mut [V3]) {
+        for &(i, j, r_eff) in &self.rows {
+            let (i, j) = (i as usize, j as usize);
+            let d = separation(sub(x[i], x[j]), self.periods);
+            let (touch, reach) = (radius[i] + radius[j], radius[i] + radius[j] + self.cutoff);
+            let d2 = dot(d, d);
+            if d2 <= touch * touch * (1.0 - 1e-9) || d2 >= reach * reach * (1.0 + 1e-9) {
                 continue;
             }
-            let pair = self.pair_force(
-                separation(sub(x[i], x[j]), self.periods),
-                sub(v[i], v[j]),
-                radius[i],
-                radius[j],
-            );
+            let pair = self.pair_force(d, sub(v[i], v[j]), r_eff, radius[i], radius[j]);
             crate::vec3::add_to(&mut f[i], pair);
             f[j] = sub(f[j], pair);
         }
@@ -69,16 +89,20 @@ impl SqueezeFilms {
     }
 
     /// The film force on sphere i of a pair: `d` = x_i - x_j, `dv` = v_i - v_j.
-    fn pair_force(&self, d: V3, dv: V3, ri: f64, rj: f64) -> V3 {
+    fn pair_force(&self, d: V3, dv: V3, r_eff: f64, ri: f64, rj: f64) -> V3 {
         let dist = norm(d);
         let normal = scale(d, 1.0 / if dist > 0.0 { dist } else { 1.0 });
-        let r_eff = ri * rj / (ri + rj);
         let approach = -dot(dv, normal);
         scale(
             normal,
             film_damping(self.viscosity, r_eff, dist - ri - rj, self.cutoff) * approach,
         )
     }
+}
+
+/// The effective radius of a pair of spheres, r_i r_j / (r_i + r_j).
+fn effective_radius(ri: f64, rj: f64) -> f64 {
+    ri * rj / (ri + rj)
 }
 
 /// x_i - x_j at the nearest image along the axes with a period > 0.
@@ -283,7 +307,7 @@ mod tests {
         let (v, radius) = ([[0.01, 0.0, 0.0], [0.0, 0.0, -0.01]], [0.001, 0.001]);
         films.candidates(&[0, 1], &x, &radius, 0.0);
         let mut f = [[0.0; 3]; 2];
-        films.add_forces(&[0, 1], &x, &v, &radius, &mut f);
+        films.add_forces(&x, &v, &radius, &mut f);
         let c = film_damping(0.1, 0.0005, 0.0021 - 0.001 - 0.001, 0.001);
         assert_eq!(f[0][0], -c * 0.01, "the pair's film on sphere 0");
         assert_eq!(f[1][0], c * 0.01);

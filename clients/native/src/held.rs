@@ -124,7 +124,6 @@ impl Loads {
         self.spin.resize(self.rows.len(), [0.0; 3]);
         within.loads(
             &self.rows,
-            &self.row_of_id,
             0.0,
             &kin,
             |_| ([0.0; 3], [0.0; 3]),
@@ -223,7 +222,7 @@ impl Loads {
         if self.rows.len() != tags.len() || self.rows.iter().zip(tags).any(|(&r, &t)| r + 1 != t as usize) {
             let size = self.force.len();
             self.map_rows(tags, size)?;
-            self.grow(self.row_of_id.len());
+            self.remap(self.row_of_id.len(), atoms.radius);
         }
         let within = self.within.as_mut().expect("within");
         let kin = Kinematics {
@@ -237,7 +236,6 @@ impl Loads {
         self.spin.resize(tags.len(), [0.0; 3]);
         within.loads(
             &self.rows,
-            &self.row_of_id,
             (step - self.first_step) as f64 * dt,
             &kin,
             |i| (sub(f[i], scale(g, mass[i])), torque[i]),
@@ -253,14 +251,15 @@ impl Loads {
         Ok(())
     }
 
-    /// Grows the held tables (and the following loads' tables) to `size` ids.
-    fn grow(&mut self, size: usize) {
+    /// Grows the held tables (and the following loads' tables) to `size` ids; the films' pairs
+    /// take the atoms' new rows (`radius` by row).
+    fn remap(&mut self, size: usize, radius: &[f64]) {
         if size > self.force.len() {
             self.force.resize(size, [0.0; 3]);
             self.torque.resize(size, [0.0; 3]);
         }
         if let Some(w) = &mut self.within {
-            w.grow(size);
+            w.remap(size, &self.row_of_id, radius);
         }
     }
 }

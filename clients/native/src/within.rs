@@ -85,15 +85,14 @@ impl SubstepLoads {
         }
     }
 
-    /// The loads at time `s` into the step on the atoms (`rows[i]` the id of atom i, `row_of_id`
-    /// its inverse), written to `force` and `torque`; the atoms' contact loads of this evaluation
+    /// The loads at time `s` into the step on the atoms (`rows[i]` the id of atom i; the films'
+    /// pairs resolved to these rows by `hold` or `remap`), written to `force` and `torque`; the atoms' contact loads of this evaluation
     /// (`contact`, `contact_torque`) add `substep` times themselves (the films' force with the
     /// contact force) to the impulses.
     #[allow(clippy::too_many_arguments)]
     pub fn loads(
         &mut self,
         rows: &[usize],
-        row_of_id: &[usize],
         s: f64,
         atoms: &Kinematics,
         contact: impl Fn(usize) -> (V3, V3),
@@ -108,7 +107,7 @@ impl SubstepLoads {
             force[i] = [0.0; 3];
         }
         if let Some(films) = &self.films {
-            films.add_forces(row_of_id, atoms.x, atoms.v, atoms.radius, force);
+            films.add_forces(atoms.x, atoms.v, atoms.radius, force);
         }
         for (i, &id) in rows.iter().enumerate() {
             let film = force[i];
@@ -135,8 +134,12 @@ impl SubstepLoads {
         ]
     }
 
-    /// Grows the tables to `size` ids (zero loads for ids that were not in the reply).
-    pub fn grow(&mut self, size: usize) {
+    /// Grows the tables to `size` ids (zero loads for ids that were not in the reply) and
+    /// re-resolves the films' pairs for the atoms' new rows (`row_of_id`; `radius` by row).
+    pub fn remap(&mut self, size: usize, row_of_id: &[usize], radius: &[f64]) {
+        if let Some(films) = &mut self.films {
+            films.remap(row_of_id, radius);
+        }
         for t in self.tables() {
             if t.len() < size {
                 t.resize(size, [0.0; 3]);
