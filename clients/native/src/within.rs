@@ -86,9 +86,10 @@ impl SubstepLoads {
     }
 
     /// The loads at time `s` into the step on the atoms (`rows[i]` the id of atom i; the films'
-    /// pairs resolved to these rows by `hold` or `remap`), written to `force` and `torque`; the atoms' contact loads of this evaluation
-    /// (`contact`, `contact_torque`) add `substep` times themselves (the films' force with the
-    /// contact force) to the impulses.
+    /// pairs resolved to these rows by `hold` or `remap`), written to `force` and `torque`, the
+    /// films first, then the drag in one pass over the atoms; the atoms' contact loads of this
+    /// evaluation (`contact`, `contact_torque`) add `substep` times themselves (the films' force
+    /// with the contact force) to the impulses.
     #[allow(clippy::too_many_arguments)]
     pub fn loads(
         &mut self,
@@ -100,18 +101,15 @@ impl SubstepLoads {
         force: &mut [V3],
         torque: &mut [V3],
     ) {
-        for (i, &id) in rows.iter().enumerate() {
-            let (_, c_r) = substep_drag(self.rate, atoms.radius[i]);
-            let spin_lag = sub(sub(atoms.omega[i], self.w0[id]), scale(self.spin_accel[id], s));
-            torque[i] = sub(self.torque[id], scale(spin_lag, c_r));
-            force[i] = [0.0; 3];
-        }
+        force.fill([0.0; 3]);
         if let Some(films) = &self.films {
             films.add_forces(atoms.x, atoms.v, atoms.radius, force);
         }
         for (i, &id) in rows.iter().enumerate() {
             let film = force[i];
-            let (c, _) = substep_drag(self.rate, atoms.radius[i]);
+            let (c, c_r) = substep_drag(self.rate, atoms.radius[i]);
+            let spin_lag = sub(sub(atoms.omega[i], self.w0[id]), scale(self.spin_accel[id], s));
+            torque[i] = sub(self.torque[id], scale(spin_lag, c_r));
             let lag = sub(sub(atoms.v[i], self.v0[id]), scale(self.accel[id], s));
             let (contact_force, contact_torque) = contact(i);
             add_to(&mut self.impulse[id], scale(add(contact_force, film), substep));
