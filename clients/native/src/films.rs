@@ -90,6 +90,7 @@ impl SqueezeFilms {
     /// The film force on sphere i of each lane's pair (every lane of the chunk: those past its
     /// pairs hold an earlier chunk's, unused): `pair_force` without branches, which the compiler
     /// turns into vector instructions, the same operations in the same order lane by lane.
+    #[allow(clippy::needless_range_loop)] // one index across the lanes' arrays
     fn lane_forces(&self, l: &Lanes, out: &mut [[f64; CHUNK]; 3]) {
         let inv_cutoff = 1.0 / self.cutoff;
         for k in 0..CHUNK {
@@ -140,9 +141,11 @@ impl Default for Lanes {
 impl Lanes {
     /// The lanes of `pairs` (rows of `x`, `v`, `radius`; at most CHUNK).
     fn gather(&mut self, pairs: &[(u32, u32, f64)], x: &[V3], v: &[V3], radius: &[f64], periods: V3) {
+        let periodic = periods.iter().any(|&p| p > 0.0);
         for (k, &(i, j, r_eff)) in pairs.iter().enumerate() {
             let (i, j) = (i as usize, j as usize);
-            let d = separation(sub(x[i], x[j]), periods);
+            let d = sub(x[i], x[j]);
+            let d = if periodic { separation(d, periods) } else { d };
             let dv = sub(v[i], v[j]);
             for a in 0..3 {
                 self.d[a][k] = d[a];
@@ -182,7 +185,9 @@ pub fn near_pairs(x: &[V3], radius: &[f64], reach: f64, periods: V3) -> Vec<(usi
                     continue;
                 }
                 let d = separation(sub(x[i], x[j]), periods);
-                if norm(d) - radius[i] - radius[j] < reach {
+                // the square root only where the squared distance is not clearly beyond
+                let far = radius[i] + radius[j] + reach;
+                if dot(d, d) < far * far * (1.0 + 1e-9) && norm(d) - radius[i] - radius[j] < reach {
                     pairs.push((i, j));
                 }
             }
