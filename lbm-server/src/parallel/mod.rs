@@ -39,7 +39,7 @@ use communicator::OneRank;
 pub use communicator::{all, interrupted, Communicator};
 pub use decomposition::{check_blocks, choose_blocks, Decomposition};
 pub use hosts::{dem_hosts, hosts};
-pub use pieces::FieldPieces;
+pub use pieces::{write_last_good_of_ranks, write_snapshot_of_ranks, FieldPieces};
 pub use summary::ParallelSummary;
 pub use thread_ranks::ThreadRanks;
 
