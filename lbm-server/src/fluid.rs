@@ -7,8 +7,8 @@ use crate::lbm::geometry::Setup;
 use crate::lbm::gpu::{Gpu, GpuLattice};
 use crate::output::LatticeSummary;
 use crate::parallel::{
-    all, write_last_good_of_ranks, write_snapshot_of_ranks, BlockLattice, Communicator,
-    Decomposition, FieldPieces, ParallelSummary, RankUnhealthy,
+    all, write_last_good_of_ranks, write_snapshot_of_ranks, BlockLattice, Communicator, Decomposition,
+    FieldPieces, ParallelSummary, RankUnhealthy,
 };
 use crate::terminal::Progress;
 use crate::trials::{kernels_of, Trial};

@@ -130,8 +130,8 @@ impl FluidSide {
             ..setup_of(&units)
         };
         let d = Decomposition::new(units.n, scene.periodic_axes(), blocks, comm.rank());
-        let pieces = (comm.size() > 1)
-            .then(|| FieldPieces::new(scene, &units, out.to_path_buf(), &d, comm.rank()));
+        let pieces =
+            (comm.size() > 1).then(|| FieldPieces::new(scene, &units, out.to_path_buf(), &d, comm.rank()));
         let mut lattice = BlockLattice::with_coupling(gpu, setup, health_of(&units), d, Some(options))?;
         if let Some(loaded) = resumed {
             let bytes = lattice.lattice.population_bytes();
