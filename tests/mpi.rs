@@ -1,7 +1,7 @@
 //! A run decomposed over MPI ranks (`mpirun -np N lbm-server run`), against the same run in one
 //! process, walled and periodic, on 2 and 4 ranks: a fluid-only run's probe lines and every field
-//! snapshot byte for byte; a coupled run's particles.csv byte for byte, spheres across the cuts;
-//! and the refusals of blocks and settings that cannot be. The runs need mpirun
+//! snapshot byte for byte; a coupled run's particles.csv and snapshots byte for byte, spheres
+//! across the cuts; and the refusals of blocks and settings that cannot be. The runs need mpirun
 //! and an lbm-server built with `--features mpi`; where either is missing they say so and pass.
 
 mod common;
@@ -23,9 +23,18 @@ fn outputs(out: &Path) -> Vec<(String, Vec<u8>)> {
         .iter()
         .map(|f| (f.to_string(), read(f)))
         .collect();
+    files.extend(snapshots(out, &["6", "12"]));
+    files
+}
+
+/// fields.pvd (a snapshot named .vti on one rank, .pvti on several) and the cells of the
+/// snapshots after `steps`, density then velocity, as the bytes of its .vti (one rank) or of its
+/// pieces put together (several).
+fn snapshots(out: &Path, steps: &[&str]) -> Vec<(String, Vec<u8>)> {
+    let read = |f: &str| std::fs::read(out.join(f)).unwrap_or_else(|e| panic!("{f}: {e}"));
     let pvd = String::from_utf8(read("fields.pvd")).unwrap();
-    files.push(("fields.pvd".into(), pvd.replace(".pvti\"", ".vti\"").into_bytes()));
-    for step in ["6", "12"] {
+    let mut files = vec![("fields.pvd".into(), pvd.replace(".pvti\"", ".vti\"").into_bytes())];
+    for step in steps {
         let name = format!("fields/step{step:0>9}");
         let cells = match out.join(format!("{name}.pvti")).is_file() {
             true => pieces_put_together(&out.join(format!("{name}.pvti"))),
@@ -227,7 +236,8 @@ fn a_build_without_mpi_refuses_to_run_as_one_of_several_ranks() {
     assert!(text(&o).contains("built without MPI"), "{}", text(&o));
 }
 
-/// A coupled scene of 24 steps (1 mm cells, TRT), particles.csv every 4 steps: in a walled box
+/// A coupled scene of 24 steps (1 mm cells, TRT), particles.csv every 4 steps, a snapshot every
+/// 12: in a walled box
 /// of 12 x 12 x 16 mm two falling spheres, one across the cuts of 2 blocks (z = 8 mm) and of 4
 /// (y = 6 mm too: across an edge); `periodic`, in a periodic box of 16 x 14 x 16 mm driven by a
 /// body force, the first across the periodic x faces as well (the cuts of [2, 1, 2] blocks).
@@ -253,6 +263,7 @@ dynamic_viscosity = 0.2
 steps = 24
 [output]
 interval = 4
+fields_interval = 12
 [coupling]
 timeout = 10.0
 [particles]
@@ -276,17 +287,20 @@ check_interval = 8
     )
 }
 
-/// The outputs of a coupled run that must not depend on the ranks: particles.csv.
-fn particles_csv(out: &Path) -> Vec<(String, Vec<u8>)> {
+/// The outputs of a coupled run that must not depend on the ranks: particles.csv, fields.pvd and
+/// the snapshots' cells (their pieces put together on several ranks).
+fn coupled_outputs(out: &Path) -> Vec<(String, Vec<u8>)> {
     let bytes = std::fs::read(out.join("particles.csv")).unwrap();
     assert_eq!(csv_steps(out).len(), 7, "steps 0, 4, ..., 20 and the last");
-    vec![("particles.csv".into(), bytes)]
+    let mut files = vec![("particles.csv".into(), bytes)];
+    files.extend(snapshots(out, &["12", "24"]));
+    files
 }
 
 #[test]
 fn a_coupled_walled_run_on_2_and_4_ranks_writes_the_single_process_particles_byte_for_byte() {
     let scene = coupled_scene("coupled-walled", false);
-    same_on_ranks("mpi-coupled-walled", &scene, &[(2, ""), (4, "")], particles_csv);
+    same_on_ranks("mpi-coupled-walled", &scene, &[(2, ""), (4, "")], coupled_outputs);
 }
 
 #[test]
@@ -297,7 +311,7 @@ fn a_coupled_periodic_run_on_2_and_4_ranks_writes_the_single_process_particles_b
         "mpi-coupled-periodic",
         &scene,
         &[(2, ""), (4, blocks)],
-        particles_csv,
+        coupled_outputs,
     );
 }
 

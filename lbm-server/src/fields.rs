@@ -102,13 +102,6 @@ impl FieldOutput {
         last_good_line(good, written.map(|()| path))
     }
 
-    /// A row per cell of each probe line after `step` steps, from the whole lattice's `fields`.
-    pub fn write_lines(&mut self, step: u64, fields: &[[f32; 4]]) -> Result<(), String> {
-        let cells = self.probes.iter().flat_map(|(c, _, _)| c.iter());
-        let values: Vec<[f32; 4]> = cells.map(|&c| fields[c]).collect();
-        self.write_line_values(step, &values)
-    }
-
     /// A row per cell of each probe line after `step` steps, from the `values` of its cells
     /// ([`probe_cells`], in that order).
     pub fn write_line_values(&mut self, step: u64, values: &[[f32; 4]]) -> Result<(), String> {

@@ -2,12 +2,13 @@
 //! VTK snapshots, probe lines and a summary.
 
 use crate::checkpoint::{Checkpoints, Loaded, OutputPositions};
-use crate::fields::{last_good_line, probe_cells, snapshot_name, FieldOutput};
+use crate::fields::{probe_cells, FieldOutput};
 use crate::lbm::geometry::Setup;
 use crate::lbm::gpu::{Gpu, GpuLattice};
 use crate::output::LatticeSummary;
 use crate::parallel::{
-    all, BlockLattice, Communicator, Decomposition, FieldPieces, ParallelSummary, RankUnhealthy,
+    all, write_last_good_of_ranks, write_snapshot_of_ranks, BlockLattice, Communicator, Decomposition,
+    FieldPieces, ParallelSummary, RankUnhealthy,
 };
 use crate::terminal::Progress;
 use crate::trials::{kernels_of, Trial};
@@ -454,19 +455,10 @@ impl<'a> FluidRun<'a> {
         Ok(())
     }
 
-    /// The snapshot of `step`: on one rank the whole .vti, on several a .pvti of every rank's
-    /// piece; listed in fields.pvd.
+    /// The snapshot of `step` (`write_snapshot_of_ranks`), listed in fields.pvd.
     fn write_snapshot(&mut self, step: u64, own: &[[f32; 4]]) -> Result<(), String> {
-        let Some(pieces) = &self.pieces else {
-            return self
-                .fields
-                .as_mut()
-                .map_or(Ok(()), |f| f.write_snapshot(step, own));
-        };
-        let name = pieces.write(self.comm, &snapshot_name(step), own)?;
-        self.fields
-            .as_mut()
-            .map_or(Ok(()), |f| f.add_snapshot(step, &name))
+        let outputs = (self.fields.as_mut(), self.pieces.as_ref());
+        write_snapshot_of_ranks(self.comm, outputs, step, own)
     }
 
     fn flush(&mut self) -> Result<(), String> {
@@ -513,16 +505,10 @@ impl<'a> FluidRun<'a> {
         Stop::Failed(msg)
     }
 
-    /// The snapshot of the last check that passed (step `good`, this block's `own` fields then):
-    /// last_good.vti, on several ranks last_good.pvti and its pieces; a line for the error.
+    /// The snapshot of the last check that passed (`write_last_good_of_ranks`); a line for the
+    /// error.
     fn write_last_good(&mut self, good: u64, own: &[[f32; 4]]) -> String {
-        match (&self.pieces, &self.fields) {
-            (Some(pieces), _) => {
-                let written = pieces.write(self.comm, "last_good", own);
-                last_good_line(good, written.map(|name| pieces.path(&name)))
-            }
-            (None, Some(out)) => out.write_last_good(good, own),
-            (None, None) => String::new(),
-        }
+        let outputs = (self.fields.as_ref(), self.pieces.as_ref());
+        write_last_good_of_ranks(self.comm, outputs, good, own)
     }
 }

@@ -27,7 +27,7 @@ mod welcome;
 
 use crate::checkpoint::OutputPositions;
 use crate::launch::{self, DemStart};
-use crate::parallel::Communicator;
+use crate::parallel::{wait_for_rank_0, Communicator};
 use crate::terminal::Progress;
 use exchange::SiStates;
 use prepare::prepare;
@@ -156,18 +156,16 @@ pub fn main(args: RunArgs) -> ExitCode {
     let comm: Rc<dyn Communicator> = Rc::from(comm);
     let Some(dem) = dem.expect("agreed") else {
         let p = &prepared;
-        return ExitCode::from(crate::coupled::follow(
-            &p.scene,
-            p.steps,
-            &p.out,
-            (comm, p.blocks),
-        ));
+        let code = crate::coupled::follow(&p.scene, p.steps, &p.out, (comm.clone(), p.blocks));
+        wait_for_rank_0(&*comm);
+        return ExitCode::from(code);
     };
     protocol::cleanup::remove_stale_runs();
     let run = new_run_name();
     let _ = RUN.set(run.clone());
-    let code = Session::start(prepared, &run, dem, interrupted, comm);
+    let code = Session::start(prepared, &run, dem, interrupted, comm.clone());
     protocol::cleanup::remove_run(&run);
+    wait_for_rank_0(&*comm);
     ExitCode::from(code)
 }
 

@@ -4,6 +4,7 @@
 use super::FluidSide;
 use crate::checkpoint::{Checkpoints, OutputPositions};
 use crate::fields::FieldOutput;
+use crate::parallel::write_snapshot_of_ranks;
 
 impl FluidSide {
     /// The field outputs due after this step: a snapshot every `output.fields_interval` steps
@@ -61,25 +62,27 @@ impl FluidSide {
     }
 
     /// Writes a snapshot and the probe lines (where the scene has any) of this step; `last`
-    /// flushes the lines. The fields are gathered from every rank; rank 0 writes them, and the
-    /// ranks agree whether it could.
+    /// flushes the lines. Rank 0 writes the lines (their cells gathered), every rank its piece
+    /// of the snapshot (on one rank, the whole .vti); the ranks agree whether all could.
     fn write_outputs(&mut self, snapshot: bool, lines: bool, last: bool) -> Result<(), String> {
-        let lines = lines && self.has_lines;
+        let lines = lines && !self.line_cells.is_empty();
         if snapshot || lines {
-            let (fields, bad) = self.lattice.fields(&*self.comm);
+            let (own, bad) = self.lattice.own_fields(&*self.comm);
             if let Some(bad) = bad {
                 return Err(self.unstable(bad));
             }
-            let step = self.steps;
-            let written = self.fields.as_mut().map_or(Ok(()), |out| {
-                if lines {
-                    out.write_lines(step, &fields)?;
+            let (step, comm) = (self.steps, &*self.comm);
+            let mut written = Ok(());
+            if lines {
+                let values = self.lattice.gather_cells(comm, &own, &self.line_cells);
+                if let Some(out) = &mut self.fields {
+                    written = out.write_line_values(step, &values);
                 }
-                if snapshot {
-                    out.write_snapshot(step, &fields)?;
-                }
-                Ok(())
-            });
+            }
+            if snapshot {
+                let outputs = (self.fields.as_mut(), self.pieces.as_ref());
+                written = written.and(write_snapshot_of_ranks(comm, outputs, step, &own));
+            }
             self.agreed(written)?;
         }
         if last {

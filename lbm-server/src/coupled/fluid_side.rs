@@ -14,13 +14,13 @@ use super::states::LatticeStates;
 use super::warnings::lattice_warnings;
 use super::ways::trial;
 use crate::checkpoint::{Loaded, OutputPositions};
-use crate::fields::FieldOutput;
+use crate::fields::{probe_cells, FieldOutput};
 use crate::fluid::{health_of, setup_of};
 use crate::lbm::geometry::Setup;
 use crate::lbm::gpu::Gpu;
 use crate::lbm::imb::{covered_fraction, ImbOptions, SolidCollision};
 use crate::lubrication::HeldLubrication;
-use crate::parallel::{BlockLattice, Communicator, Decomposition};
+use crate::parallel::{BlockLattice, Communicator, Decomposition, FieldPieces};
 use crate::terminal::Warning;
 use crate::trials::Trial;
 use protocol::{ParticleReply, ParticleState, Physics};
@@ -56,8 +56,10 @@ pub struct FluidSide {
     /// The run's field outputs: those the scene asks for (`output.fields_interval` above 0,
     /// `output.line`), and last_good.vti where the fluid blows up (rank 0's; none elsewhere).
     pub(super) fields: Option<FieldOutput>,
-    /// Whether the scene has probe lines (`output.line`).
-    pub(super) has_lines: bool,
+    /// On several ranks, every rank's pieces of the snapshots (and of last_good).
+    pub(super) pieces: Option<FieldPieces>,
+    /// The probe lines' cells (`output.line`; indices of the whole lattice), on every rank.
+    pub(super) line_cells: Vec<usize>,
     /// The step of the last health check that passed (its fields kept on the device).
     pub(super) last_good: Option<u64>,
     /// `output.fields_interval` and `output.interval` (the probe lines'), in steps.
@@ -128,6 +130,8 @@ impl FluidSide {
             ..setup_of(&units)
         };
         let d = Decomposition::new(units.n, scene.periodic_axes(), blocks, comm.rank());
+        let pieces =
+            (comm.size() > 1).then(|| FieldPieces::new(scene, &units, out.to_path_buf(), &d, comm.rank()));
         let mut lattice = BlockLattice::with_coupling(gpu, setup, health_of(&units), d, Some(options))?;
         if let Some(loaded) = resumed {
             let bytes = lattice.lattice.population_bytes();
@@ -150,7 +154,7 @@ impl FluidSide {
         Ok(FluidSide {
             lattice,
             comm,
-            has_lines: !scene.output.line.is_empty(),
+            line_cells: probe_cells(scene, &units),
             units,
             origin: scene.domain.min,
             fluid_density: scene.fluid.density,
@@ -162,6 +166,7 @@ impl FluidSide {
             covered,
             made: std::time::Instant::now(),
             fields,
+            pieces,
             last_good: None,
             fields_every: scene.output.fields_interval,
             lines_every: scene.output.interval,

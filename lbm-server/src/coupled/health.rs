@@ -1,9 +1,10 @@
 //! The health of a coupled run's fluid: the lattice's checks, the loads that are not finite, and
-//! the blow-up's error (with the fields of the last check that passed as last_good.vti).
+//! the blow-up's error (with the fields of the last check that passed as last_good.vti, on several
+//! ranks last_good.pvti and its pieces).
 
 use super::FluidSide;
 use crate::fluid::health_of;
-use crate::parallel::RankUnhealthy;
+use crate::parallel::{write_last_good_of_ranks, RankUnhealthy};
 use crate::terminal;
 use protocol::ParticleReply;
 
@@ -74,11 +75,12 @@ impl FluidSide {
             "the fluid became unstable by step {}: furthest out of bounds, {rank}{what}",
             self.steps
         );
-        let kept = self.lattice.kept_fields(comm);
+        let kept = self.lattice.kept_own_fields();
+        if let Some((good, own)) = self.last_good.take().zip(kept) {
+            let outputs = (self.fields.as_ref(), self.pieces.as_ref());
+            msg += &write_last_good_of_ranks(comm, outputs, good, &own);
+        }
         if let Some(fields) = &mut self.fields {
-            if let Some((good, kept)) = self.last_good.take().zip(kept) {
-                msg += &fields.write_last_good(good, &kept);
-            }
             let _ = fields.flush();
         }
         msg

@@ -179,45 +179,6 @@ impl BlockLattice {
             .collect()
     }
 
-    /// The whole lattice's fields at rank 0 (empty elsewhere), gathered from every block's own
-    /// cells, and the first unhealthy cell as [`BlockLattice::own_fields`] finds it: the coupled
-    /// run's snapshots, written whole by rank 0.
-    pub fn fields(&self, comm: &dyn Communicator) -> (Vec<[f32; 4]>, Option<RankUnhealthy>) {
-        let (own, bad) = self.own_fields(comm);
-        if self.halo.is_none() {
-            return (own, bad);
-        }
-        (self.gather(comm, &own), bad)
-    }
-
-    /// The kept fields of the whole lattice, at rank 0 (as [`BlockLattice::fields`]).
-    pub fn kept_fields(&self, comm: &dyn Communicator) -> Option<Vec<[f32; 4]>> {
-        if self.halo.is_none() {
-            return self.lattice.kept_fields();
-        }
-        let own = self
-            .kept_own_fields()
-            .unwrap_or_else(|| vec![[0.0; 4]; self.decomposition.own_cells().len()]);
-        Some(self.gather(comm, &own)).filter(|_| comm.rank() == 0)
-    }
-
-    /// Every block's `own` cells gathered at rank 0 into the whole lattice (empty elsewhere).
-    fn gather(&self, comm: &dyn Communicator, own: &[[f32; 4]]) -> Vec<[f32; 4]> {
-        let pieces = comm.gather(bytemuck::cast_slice(own));
-        if pieces.is_empty() {
-            return Vec::new();
-        }
-        let mut whole = vec![[0f32; 4]; self.whole.cells()];
-        for (rank, piece) in pieces.iter().enumerate() {
-            let d = self.block_of(rank);
-            let values: &[[f32; 4]] = bytemuck::cast_slice(piece);
-            for (&(_, g), v) in d.own_cells().iter().zip(values) {
-                whole[g] = *v;
-            }
-        }
-        whole
-    }
-
     /// The block's own cells of `local` (fields of the block's lattice), x fastest.
     fn own(&self, local: &[[f32; 4]]) -> Vec<[f32; 4]> {
         self.decomposition
@@ -290,12 +251,4 @@ fn read_cell(p: &[u8]) -> Option<(usize, [f32; 4], f64)> {
         let v: [f32; 4] = bytemuck::pod_read_unaligned(&p[8..24]);
         (cell, v, f64::from_le_bytes(p[24..].try_into().expect("8 bytes")))
     })
-}
-
-impl BlockLattice {
-    /// Rank `rank`'s block of the same decomposition.
-    fn block_of(&self, rank: usize) -> Decomposition {
-        let d = &self.decomposition;
-        Decomposition::new(d.n, d.periodic(), d.blocks, rank)
-    }
 }

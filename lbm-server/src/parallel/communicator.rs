@@ -64,6 +64,17 @@ pub fn past_stop_deadline() -> bool {
     INTERRUPTED.get().is_some_and(|t| t.elapsed() > STOP_DEADLINE)
 }
 
+/// Every rank waits here for rank 0 (no deadline): where a run's end leaves rank 0 more to do
+/// than the others (its DEM ended, summary.json, its shared-memory files removed), they end only
+/// once it is done, since a launcher (mpirun) kills every rank as soon as one exits with a code
+/// other than 0, and would cut rank 0 short.
+pub fn wait_for_rank_0(comm: &dyn Communicator) {
+    if comm.size() > 1 {
+        // A byte: MPI refuses a broadcast of none.
+        comm.broadcast(vec![0]);
+    }
+}
+
 /// The ranks agree: true where every rank's `ok` is.
 pub fn all(comm: &dyn Communicator, ok: bool) -> bool {
     comm.min(u64::from(ok)) == 1

@@ -2,7 +2,7 @@
 //! (at rank 0) and the fields bit for bit, with spheres across the cuts, the periodic wraps and
 //! an edge and a corner of the blocks; ranks as threads (`tests.rs`), without MPI.
 
-use super::tests::{periodic, walled};
+use super::tests::{periodic, put_together, walled};
 use super::ThreadRanks;
 use super::{BlockLattice, Decomposition};
 use crate::lbm::geometry::Setup;
@@ -64,12 +64,14 @@ fn check(setup: Setup, blocks: [usize; 3], steps: u64) {
                             out
                         })
                         .collect();
-                    (loads, block.fields(&comm).0)
+                    (loads, block.own_fields(&comm).0)
                 })
             })
             .collect();
-        let mut all: Vec<_> = handles.into_iter().map(|h| h.join().unwrap()).collect();
-        all.swap_remove(0)
+        let all: Vec<_> = handles.into_iter().map(|h| h.join().unwrap()).collect();
+        let own: Vec<&[[f32; 4]]> = all.iter().map(|(_, f)| &f[..]).collect();
+        let fields = put_together(&setup, blocks, &own);
+        (all[0].0.clone(), fields)
     });
     assert!(
         want.iter().flatten().any(|l| l.force != [0.0; 3]),

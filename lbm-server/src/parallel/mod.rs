@@ -36,10 +36,10 @@ mod thread_ranks;
 pub use block::{BlockLattice, RankUnhealthy};
 pub use communicator::launched_ranks;
 use communicator::OneRank;
-pub use communicator::{all, interrupted, Communicator};
+pub use communicator::{all, interrupted, wait_for_rank_0, Communicator};
 pub use decomposition::{check_blocks, choose_blocks, Decomposition};
 pub use hosts::{dem_hosts, hosts};
-pub use pieces::FieldPieces;
+pub use pieces::{write_last_good_of_ranks, write_snapshot_of_ranks, FieldPieces};
 pub use summary::ParallelSummary;
 pub use thread_ranks::ThreadRanks;
 

@@ -4,7 +4,7 @@
 //! the pieces, so that ParaView opens the whole field. Nothing of the field crosses to rank 0.
 
 use super::{all, Communicator, Decomposition};
-use crate::fields::si_fields;
+use crate::fields::{last_good_line, si_fields, snapshot_name, FieldOutput};
 use crate::vtk::{write_pvti, write_vti_piece, Extent, Grid};
 use scene::lattice::LatticeUnits;
 use scene::Scene;
@@ -88,6 +88,39 @@ impl FieldPieces {
         let (density, velocity) = si_fields(own, self.fluid_density, &self.units);
         let extent = self.blocks[self.rank];
         write_vti_piece(&self.out.join(&file), &self.grid, extent, &density, &velocity).map_err(io)
+    }
+}
+
+/// The snapshot of `step` from this rank's `own` fields: on one rank (no `pieces`) the whole
+/// .vti, on several a .pvti of every rank's piece; listed in fields.pvd by rank 0 (`fields`).
+pub fn write_snapshot_of_ranks(
+    comm: &dyn Communicator,
+    (fields, pieces): (Option<&mut FieldOutput>, Option<&FieldPieces>),
+    step: u64,
+    own: &[[f32; 4]],
+) -> Result<(), String> {
+    let Some(pieces) = pieces else {
+        return fields.map_or(Ok(()), |f| f.write_snapshot(step, own));
+    };
+    let name = pieces.write(comm, &snapshot_name(step), own)?;
+    fields.map_or(Ok(()), |f| f.add_snapshot(step, &name))
+}
+
+/// The snapshot of the last check that passed (step `good`, this block's `own` fields then):
+/// last_good.vti, on several ranks last_good.pvti and its pieces; a line for the error.
+pub fn write_last_good_of_ranks(
+    comm: &dyn Communicator,
+    (fields, pieces): (Option<&FieldOutput>, Option<&FieldPieces>),
+    good: u64,
+    own: &[[f32; 4]],
+) -> String {
+    match (pieces, fields) {
+        (Some(pieces), _) => {
+            let written = pieces.write(comm, "last_good", own);
+            last_good_line(good, written.map(|name| pieces.path(&name)))
+        }
+        (None, Some(out)) => out.write_last_good(good, own),
+        (None, None) => String::new(),
     }
 }
 

@@ -38,14 +38,8 @@ fn check(setup: Setup, blocks: [usize; 3], steps: u64) {
         handles.into_iter().map(|h| h.join().unwrap()).collect()
     });
     let whole = |parity: usize| {
-        let mut whole = vec![[f32::NAN; 4]; setup.cells()];
-        for (rank, pieces) in got.iter().enumerate() {
-            let d = Decomposition::new(setup.n, periodic, blocks, rank);
-            for (&(_, g), v) in d.own_cells().iter().zip(&pieces[parity]) {
-                whole[g] = *v;
-            }
-        }
-        whole
+        let pieces: Vec<&[[f32; 4]]> = got.iter().map(|p| &p[parity][..]).collect();
+        put_together(&setup, blocks, &pieces)
     };
     let got = [whole(0), whole(1)];
     for (parity, (want, have)) in expected.iter().zip(&got).enumerate() {
@@ -60,6 +54,20 @@ fn check(setup: Setup, blocks: [usize; 3], steps: u64) {
             have[differ[0]]
         );
     }
+}
+
+/// The whole lattice `setup` from every rank's own fields (`pieces`, rank order) of the
+/// decomposition into `blocks` (NaN where none gave a cell).
+pub(super) fn put_together(setup: &Setup, blocks: [usize; 3], pieces: &[&[[f32; 4]]]) -> Vec<[f32; 4]> {
+    let periodic: [bool; 3] = std::array::from_fn(|a| setup.periodic(a));
+    let mut whole = vec![[f32::NAN; 4]; setup.cells()];
+    for (rank, piece) in pieces.iter().enumerate() {
+        let d = Decomposition::new(setup.n, periodic, blocks, rank);
+        for (&(_, g), v) in d.own_cells().iter().zip(piece.iter()) {
+            whole[g] = *v;
+        }
+    }
+    whole
 }
 
 /// Walls, a moving wall, solid cells (some on the cuts), a body force, TRT.
