@@ -57,7 +57,8 @@ impl SqueezeFilms {
         for &(a, b) in &self.pairs {
             let (i, j) = (row_of_id[a], row_of_id[b]);
             if i != usize::MAX && j != usize::MAX {
-                self.rows.push((i as u32, j as u32, effective_radius(radius[i], radius[j])));
+                self.rows
+                    .push((i as u32, j as u32, effective_radius(radius[i], radius[j])));
             }
         }
     }
@@ -348,7 +349,12 @@ mod tests {
     fn pair_force(films: &SqueezeFilms, d: V3, dv: V3, ri: f64, rj: f64) -> V3 {
         let dist = norm(d);
         let normal = scale(d, 1.0 / if dist > 0.0 { dist } else { 1.0 });
-        let damping = film_damping(films.viscosity, effective_radius(ri, rj), dist - ri - rj, films.cutoff);
+        let damping = film_damping(
+            films.viscosity,
+            effective_radius(ri, rj),
+            dist - ri - rj,
+            films.cutoff,
+        );
         scale(normal, damping * -dot(dv, normal))
     }
 
@@ -358,7 +364,13 @@ mod tests {
         let (x, v) = (cloud(2 * CHUNK, 3), cloud(2 * CHUNK, 5));
         let radius: Vec<f64> = (0..x.len()).map(|i| 0.0004 + 1e-5 * (i % 7) as f64).collect();
         let rows: Vec<(u32, u32, f64)> = (0..CHUNK)
-            .map(|k| (k as u32, (k + CHUNK) as u32, effective_radius(radius[k], radius[k + CHUNK])))
+            .map(|k| {
+                (
+                    k as u32,
+                    (k + CHUNK) as u32,
+                    effective_radius(radius[k], radius[k + CHUNK]),
+                )
+            })
             .collect();
         let mut x = x;
         for k in 0..CHUNK {
