@@ -65,30 +65,9 @@ pub fn run(
 ) -> u8 {
     let units = scene.lattice_units.as_ref().expect("fluid scenes have a lattice");
     let root = comm.rank() == 0;
-    // On several ranks every rank steps in lockstep: no trial, the first kernels open.
-    let mut trial = Trial::new(kernels_of(units.kernel), Vec::new(), steps);
-    if comm.size() > 1 {
-        trial.pin_first();
-    }
-    let started = start_lattice(
-        scene,
-        units,
-        (comm, blocks),
-        &mut trial,
-        checkpoints.resumed.as_ref(),
-    );
-    if !all(comm, started.is_ok()) {
-        if let Err(e) = &started {
-            let rank = if comm.size() > 1 {
-                format!("rank {}: ", comm.rank())
-            } else {
-                String::new()
-            };
-            protocol::say!("lbm-server: error: {rank}{e}");
-        }
+    let Some((gpu, mut lattice, trial)) = open(scene, steps, (comm, blocks), &checkpoints) else {
         return 1;
-    }
-    let (gpu, mut lattice) = started.expect("started on every rank");
+    };
     let started = Instant::now();
     let from = lattice.time();
     let at = checkpoints.resumed.as_ref().map(|l| l.header.outputs.clone());
@@ -105,14 +84,7 @@ pub fn run(
         Ok(mut run) => (run.steps(&mut lattice, steps, &interrupted), run.trial),
         Err(e) => (Err(e), trial),
     };
-    let result = match result {
-        Ok(()) => checkpoints.wait().map_err(Stop::Failed),
-        Err(Stop::Interrupted) => {
-            let _ = checkpoints.wait();
-            Err(Stop::Interrupted)
-        }
-        failed => failed,
-    };
+    let result = checkpoints_written(result, &mut checkpoints);
     let wall = started.elapsed().as_secs_f64();
     let (reason, code) = match &result {
         Ok(()) => ("completed".to_string(), 0),
@@ -139,6 +111,50 @@ pub fn run(
     // ends the other ranks as soon as one exits with a code other than 0.
     comm.min(0);
     code
+}
+
+/// The run's kernels (a trial on one rank; on several every rank steps in lockstep: no trial, the
+/// first kernels) and its lattice on this rank's device; None where any rank failed to start it
+/// (each says why).
+fn open(
+    scene: &Scene,
+    steps: u64,
+    (comm, blocks): (&dyn Communicator, [usize; 3]),
+    checkpoints: &Checkpoints,
+) -> Option<(Arc<Gpu>, BlockLattice, Trial)> {
+    let units = scene.lattice_units.as_ref().expect("fluid scenes have a lattice");
+    let mut trial = Trial::new(kernels_of(units.kernel), Vec::new(), steps);
+    if comm.size() > 1 {
+        trial.pin_first();
+    }
+    let resumed = checkpoints.resumed.as_ref();
+    let started = start_lattice(scene, units, (comm, blocks), &mut trial, resumed);
+    if !all(comm, started.is_ok()) {
+        if let Err(e) = &started {
+            let rank = if comm.size() > 1 {
+                format!("rank {}: ", comm.rank())
+            } else {
+                String::new()
+            };
+            protocol::say!("lbm-server: error: {rank}{e}");
+        }
+        return None;
+    }
+    let (gpu, lattice) = started.expect("started on every rank");
+    Some((gpu, lattice, trial))
+}
+
+/// The steps' `result`, once the checkpoint being written is done (its failure the run's, where
+/// the steps went well).
+fn checkpoints_written(result: Result<(), Stop>, checkpoints: &mut Checkpoints) -> Result<(), Stop> {
+    match result {
+        Ok(()) => checkpoints.wait().map_err(Stop::Failed),
+        Err(Stop::Interrupted) => {
+            let _ = checkpoints.wait();
+            Err(Stop::Interrupted)
+        }
+        failed => failed,
+    }
 }
 
 /// How a fluid run ended (`from`: the step it started from).
