@@ -239,11 +239,7 @@ fn simulate(
         }
         energy.write(step, &world)?;
         if step % interval == 0 || step == p.steps {
-            csv.write(step, &world)?;
-            energy.commit()?;
-            if let Some(v) = vtk.as_mut() {
-                v.write(step, &world)?;
-            }
+            write_output_step(step, &world, (&mut csv, &mut energy, vtk.as_mut()))?;
         }
         if step == p.steps || stop {
             break;
@@ -252,15 +248,32 @@ fn simulate(
         done += 1;
     }
     energy.commit()?;
-    let wall = started.elapsed().as_secs_f64();
-    let particle_steps = (done * k) as f64 * world.bodies.len() as f64;
+    say_done(&world, done * k, started.elapsed().as_secs_f64());
+    Ok(first + done == p.steps)
+}
+
+/// Writes an output step's rows: the particles, the energy rows so far, the particle .vtp.
+fn write_output_step(
+    step: u64,
+    world: &World,
+    (csv, energy, vtk): (&mut ParticleCsv, &mut EnergyCsv, Option<&mut Vtk>),
+) -> Result<(), Failure> {
+    csv.write(step, world)?;
+    energy.commit()?;
+    if let Some(v) = vtk {
+        v.write(step, world)?;
+    }
+    Ok(())
+}
+
+/// Says how many DEM steps ran in `wall` seconds and how the world ended.
+fn say_done(world: &World, dem_steps: u64, wall: f64) {
+    let particle_steps = dem_steps as f64 * world.bodies.len() as f64;
     protocol::say!(
-        "dem-client: {} DEM steps in {wall:.2} s: {:.3e} particle-steps/s; {} contacts, kinetic energy {:.3e} J, {} neighbour-list builds",
-        done * k,
+        "dem-client: {dem_steps} DEM steps in {wall:.2} s: {:.3e} particle-steps/s; {} contacts, kinetic energy {:.3e} J, {} neighbour-list builds",
         particle_steps / wall.max(1e-9),
         world.contact_count(),
         world.kinetic_energy(),
         world.builds
     );
-    Ok(first + done == p.steps)
 }

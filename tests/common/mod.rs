@@ -195,6 +195,29 @@ pub fn server(scene: &Path, out: &Path, extra: &[&str]) -> Command {
 }
 
 /// `lbm-server run SCENE --dem external`: the running server and the run name it printed.
+/// Writes the scene `text` into a fresh temporary folder named after `tag`, runs `lbm-server run`
+/// on it: (exit code, stderr, the output folder).
+pub fn run_scene(tag: &str, text: &str) -> (Option<i32>, String, std::path::PathBuf) {
+    run_scene_with(tag, text, &[])
+}
+
+/// `run_scene` with `--verbose`: the whole explanations, the run's settings and the DEM's figures.
+pub fn run_scene_verbose(tag: &str, text: &str) -> (Option<i32>, String, std::path::PathBuf) {
+    run_scene_with(tag, text, &["--verbose"])
+}
+
+pub fn run_scene_with(tag: &str, text: &str, extra: &[&str]) -> (Option<i32>, String, std::path::PathBuf) {
+    let dir = temp_dir(tag);
+    let scene = write_scene(&dir, text);
+    let out = dir.join("out");
+    let result = server(&scene, &out, extra).output().unwrap();
+    (
+        result.status.code(),
+        String::from_utf8_lossy(&result.stderr).into_owned(),
+        out,
+    )
+}
+
 pub fn start_external(scene: &Path, out: &Path) -> (Proc, String) {
     let server = start(server(scene, out, &["--dem", "external"]));
     let line = Proc::wait_line(&server.stdout, "DEM service:", Duration::from_secs(20));
