@@ -1,6 +1,7 @@
 //! A coupled lattice cut into blocks against the same lattice on one rank: the particles' loads
 //! (at rank 0) and the fields bit for bit, with spheres across the cuts, the periodic wraps and
-//! an edge and a corner of the blocks; ranks as threads (`tests.rs`), without MPI.
+//! an edge and a corner of the blocks, and spheres within one block each (their loads reduced by
+//! that block's rank); ranks as threads (`tests.rs`), without MPI.
 
 use super::coupled_block::block_options;
 use super::tests::{periodic, put_together, walled};
