@@ -79,10 +79,7 @@ fn ended(run: &mut Proc, processes: &[u32]) -> (Option<i32>, String) {
         while !is_gone(pid) && std::time::Instant::now() < deadline {
             std::thread::sleep(Duration::from_millis(50));
         }
-        assert!(
-            is_gone(pid),
-            "pid {pid} left running {ENDED_WITHIN_S} s after"
-        );
+        assert!(is_gone(pid), "pid {pid} left running {ENDED_WITHIN_S} s after");
     }
     (code, Proc::drain(&run.stderr) + &Proc::drain(&run.stdout))
 }

@@ -112,8 +112,8 @@ impl ParticleBox {
     }
 
     /// The pairs (indices into the step's pairs) of the box's cells that the block at `coords`
-    /// holds, in the box's order (x fastest).
-    pub(super) fn pairs_in(&self, block: &ImbBlock, coords: [usize; 3]) -> impl Iterator<Item = u64> {
+    /// holds, in the box's order (x fastest), added to `into`.
+    pub(super) fn pairs_in(&self, block: &ImbBlock, coords: [usize; 3], into: &mut Vec<u64>) {
         let along = |a: usize| -> Vec<u64> {
             self.offsets(a)
                 .filter(|&(_, q)| block.block_along(a, q) == Some(coords[a]))
@@ -121,13 +121,12 @@ impl ParticleBox {
                 .collect()
         };
         let (xs, ys, zs) = (along(0), along(1), along(2));
-        let (m, first) = (self.edge as u64, self.first);
-        zs.into_iter().flat_map(move |z| {
-            let xs = xs.clone();
-            ys.clone()
-                .into_iter()
-                .flat_map(move |y| xs.clone().into_iter().map(move |x| first + x + m * (y + m * z)))
-        })
+        let m = self.edge as u64;
+        for z in &zs {
+            for y in &ys {
+                into.extend(xs.iter().map(|x| self.first + x + m * (y + m * z)));
+            }
+        }
     }
 }
 
@@ -191,7 +190,9 @@ mod tests {
         let m = b.edge as u64;
         let mut held = vec![0; m.pow(3) as usize];
         for rank in 0..4 {
-            for t in b.pairs_in(&boxes.block, boxes.block.coords_of(rank)) {
+            let mut cells = Vec::new();
+            b.pairs_in(&boxes.block, boxes.block.coords_of(rank), &mut cells);
+            for t in cells {
                 held[t as usize] += 1;
             }
         }

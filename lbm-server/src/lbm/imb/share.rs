@@ -8,16 +8,14 @@
 //!    only as covered or not.
 
 use super::box_ranks::{BoxRanks, StepBoxes};
-use super::records::GpuLoad;
+use super::records::{GpuLoad, LOAD_BYTES};
 
-/// Bytes of a load as sent (force and torque, f32).
-const LOAD_BYTES: usize = 24;
 /// Bytes of a covered cell's momentum as sent.
 const MOMENTUM_BYTES: usize = 12;
 
 /// The share of `rank` (not 0): from its `loads` (every particle's, or none where it holds no
-/// box alone) and its `pairs` (to the last box across a cut, or none where it holds none of
-/// theirs), as little-endian bytes.
+/// box alone) and its `pairs` (to the last box across a cut, or none where no box crosses one), as
+/// little-endian bytes.
 pub(super) fn share_of(boxes: &StepBoxes, rank: usize, loads: &[GpuLoad], pairs: &[[f32; 4]]) -> Vec<u8> {
     let mut share = Vec::new();
     for (j, ranks) in boxes.ranks().enumerate() {
@@ -53,7 +51,7 @@ impl Share<'_> {
         for (j, ranks) in boxes.ranks().enumerate() {
             if ranks == BoxRanks::One(self.rank) {
                 loads[j] = std::array::from_fn(|k| f32_at(self.bytes, at + 4 * k));
-                at += LOAD_BYTES;
+                at += LOAD_BYTES as usize;
             }
         }
     }
@@ -62,7 +60,7 @@ impl Share<'_> {
     /// cut).
     pub(super) fn place_pairs(&self, boxes: &StepBoxes, pairs: &mut [[f32; 4]]) {
         let alone = boxes.ranks().filter(|&r| r == BoxRanks::One(self.rank)).count();
-        let from = alone * LOAD_BYTES;
+        let from = alone * LOAD_BYTES as usize;
         let cells = cells_across_cuts(boxes, self.rank);
         let mut at = from + cells.len().div_ceil(8);
         for (i, &c) in cells.iter().enumerate() {
@@ -80,10 +78,11 @@ impl Share<'_> {
 /// box by box in the particles' order.
 fn cells_across_cuts(boxes: &StepBoxes, rank: usize) -> Vec<u64> {
     let coords = boxes.block.coords_of(rank);
-    boxes
-        .several()
-        .flat_map(|b| b.pairs_in(&boxes.block, coords))
-        .collect()
+    let mut cells = Vec::new();
+    for b in boxes.several() {
+        b.pairs_in(&boxes.block, coords, &mut cells);
+    }
+    cells
 }
 
 /// The little-endian f32 at byte `at`.
