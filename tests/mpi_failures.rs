@@ -1,7 +1,7 @@
 //! A run on MPI ranks that fails or is stopped ends on every rank: a blow-up in rank 1's block
 //! stops all ranks with the rank, steps, cell and quantity; Ctrl-C to mpirun stops every rank in
-//! order (summary written, exit 130); a rank killed (kill -9) ends the others within seconds with
-//! mpirun's message naming it. The runs need mpirun and an lbm-server built with
+//! order (summary written, exit 130), a coupled run's DEM too, its shared memory removed; a rank
+//! killed (kill -9) ends the others within seconds with mpirun's message naming it. The runs need mpirun and an lbm-server built with
 //! `--features mpi`; where either is missing they say so and pass.
 
 mod common;
@@ -37,7 +37,12 @@ fn started_long_run(tag: &str) -> Option<(Proc, Vec<u32>, PathBuf)> {
     let text = scene("long", WALLED, "[parallel]\nblocks = [1, 1, 2]")
         .replace("steps = 12", "steps = 100000000")
         .replace("interval = 6\n", "interval = 100000000\n");
-    let (mpirun, scene_file, out) = setup(tag, &text)?;
+    started_run_of(tag, &text)
+}
+
+/// The scene `text` (of 2 blocks) run on 2 ranks, started; the pids of its ranks once they step.
+fn started_run_of(tag: &str, text: &str) -> Option<(Proc, Vec<u32>, PathBuf)> {
+    let (mpirun, scene_file, out) = setup(tag, text)?;
     let run = start(mpirun_command(&mpirun, 2, &scene_file, &out));
     Proc::wait_line(&run.stderr, "lbm-server: step ", Duration::from_secs(120));
     let ranks = ranks_of(run.child.id());
@@ -63,21 +68,18 @@ fn ranks_of(pid: u32) -> Vec<u32> {
     ranks.into_iter().map(|(_, pid)| pid).collect()
 }
 
-/// mpirun and every rank have ended within [`ENDED_WITHIN_S`]; its exit code and the
-/// lines it and the ranks wrote.
-fn ended(run: &mut Proc, ranks: &[u32]) -> (Option<i32>, String) {
+/// mpirun and every one of `processes` (the ranks, a DEM) have ended within [`ENDED_WITHIN_S`];
+/// its exit code and the lines it and the ranks wrote.
+fn ended(run: &mut Proc, processes: &[u32]) -> (Option<i32>, String) {
     let (code, waited) = run.wait_exit(Duration::from_secs(60));
     assert!(waited < ENDED_WITHIN_S, "mpirun ended {waited:.1} s after");
     // mpirun may end a moment before a rank it signalled has finished ending.
     let deadline = std::time::Instant::now() + Duration::from_secs_f64(ENDED_WITHIN_S - waited);
-    for &pid in ranks {
+    for &pid in processes {
         while !is_gone(pid) && std::time::Instant::now() < deadline {
             std::thread::sleep(Duration::from_millis(50));
         }
-        assert!(
-            is_gone(pid),
-            "rank pid {pid} left running {ENDED_WITHIN_S} s after"
-        );
+        assert!(is_gone(pid), "pid {pid} left running {ENDED_WITHIN_S} s after");
     }
     (code, Proc::drain(&run.stderr) + &Proc::drain(&run.stdout))
 }
@@ -128,5 +130,36 @@ fn a_rank_killed_ends_every_rank_within_seconds_naming_it() {
     assert!(
         text.contains("process rank 1") && text.contains("signal 9"),
         "mpirun names the rank killed: {text}"
+    );
+}
+
+/// Ctrl-C to mpirun on a coupled run on 2 ranks: every process (the ranks and rank 0's DEM) ends
+/// within seconds, summary.json says interrupted (130), and nothing of the run is left in shared
+/// memory (the other ranks end only once rank 0 has removed it: `parallel::wait_for_rank_0`).
+#[test]
+fn ctrl_c_to_mpirun_ends_a_coupled_run_its_dem_and_its_shared_memory() {
+    let text = scene_text("coupled-ctrl-c", [2, 2, 2], 100_000_000, 100_000_000, 10.0)
+        + "[parallel]\nblocks = [1, 1, 2]\n";
+    let Some((mut run, ranks, out)) = started_run_of("mpi-coupled-ctrl-c", &text) else {
+        return;
+    };
+    let dem = child_pid(ranks[0]);
+    let name = std::fs::read_to_string(format!("/proc/{dem}/comm")).unwrap_or_default();
+    assert_eq!(name.trim(), "dem-client", "rank 0's child {dem}");
+    let files = format!("lbmdem_{}_", ranks[0]);
+    assert!(
+        !leftover_files(&files).is_empty(),
+        "the run's files in shared memory while it runs"
+    );
+    signal(run.child.id(), libc::SIGINT);
+    let (_, text) = ended(&mut run, &[ranks[0], ranks[1], dem]);
+    assert!(text.contains("lbm-server: interrupted after "), "{text}");
+    let s = summary(&out);
+    assert_eq!(s["exit_reason"], "interrupted", "{s}");
+    assert_eq!(s["exit_code"], 130, "{s}");
+    assert!(
+        leftover_files(&files).is_empty(),
+        "the run's files left: {:?}",
+        leftover_files(&files)
     );
 }

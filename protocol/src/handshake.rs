@@ -26,7 +26,7 @@ pub const KIND_WELCOME: u32 = 2;
 pub const TEXT_LEN: usize = 64;
 
 /// The units a side speaks, each as its size in SI. All wire quantities are in the DEM side's units.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 #[repr(C)]
 pub struct Units {
     pub length_m: f64,
@@ -130,7 +130,7 @@ impl Physics {
 }
 
 /// DEM -> fluid, once, before step 0 (144 bytes in version 1).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 #[repr(C)]
 pub struct Hello {
     pub magic: u32,
@@ -196,7 +196,7 @@ impl Status {
 
 /// Fluid -> DEM, once, in answer to `Hello` (360 bytes in version 2, the first 344 in version 1).
 /// Quantities in the DEM's units.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 #[repr(C)]
 pub struct Welcome {
     pub magic: u32,
@@ -274,7 +274,7 @@ pub fn read_prefix(bytes: &[u8]) -> Result<(u32, u32, u32, u32), DecodeError> {
 
 /// Plain-old-data messages that travel as bytes: in version v, the first `size_in(v)` bytes of
 /// the struct (a later version only appends fields).
-pub trait Message: Copy {
+pub trait Message: bytemuck::Pod {
     const KIND: u32;
 
     /// The message's size in `version`.
@@ -282,10 +282,7 @@ pub trait Message: Copy {
 
     /// The message's bytes, as many as its `size` field (its prefix's third word) says.
     fn to_bytes(&self) -> Vec<u8> {
-        // SAFETY: implementors are #[repr(C)] structs of integers, floats and byte arrays, with
-        // no implicit padding (checked by the layout tests), so every byte is initialised.
-        let ptr = self as *const Self as *const u8;
-        let all = unsafe { core::slice::from_raw_parts(ptr, size_of::<Self>()) };
+        let all = bytemuck::bytes_of(self);
         let size = u32::from_le_bytes(all[8..12].try_into().unwrap()) as usize;
         all[..size.min(all.len())].to_vec()
     }
@@ -309,8 +306,7 @@ pub trait Message: Copy {
         }
         let mut full = vec![0u8; size_of::<Self>()];
         full[..expected].copy_from_slice(&bytes[..expected]);
-        // SAFETY: `full` holds the whole struct; every bit pattern is valid for these field types.
-        Ok(unsafe { core::ptr::read_unaligned(full.as_ptr() as *const Self) })
+        Ok(bytemuck::pod_read_unaligned(&full))
     }
 }
 

@@ -1,9 +1,10 @@
-//! Per-step messages: `#[repr(C)]`, 8-byte aligned, no padding, so any language can map them.
+//! Per-step messages: `#[repr(C)]`, 8-byte aligned, no padding, so any language can map them
+//! (and Rust cast them to and from bytes: bytemuck's `Pod`, whose derive refuses padding).
 
 use iceoryx2::prelude::ZeroCopySend;
 
 /// The state of one particle at the start of a step, sent DEM -> fluid (88 bytes).
-#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend, bytemuck::Pod, bytemuck::Zeroable)]
 #[type_name("ParticleState")]
 #[repr(C)]
 pub struct ParticleState {
@@ -16,7 +17,7 @@ pub struct ParticleState {
 }
 
 /// The hydrodynamic load on one particle, sent fluid -> DEM (56 bytes), in the order of the states.
-#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend, bytemuck::Pod, bytemuck::Zeroable)]
 #[type_name("ParticleReply")]
 #[repr(C)]
 pub struct ParticleReply {
@@ -27,7 +28,7 @@ pub struct ParticleReply {
 }
 
 /// User header of both per-step messages (32 bytes).
-#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend, bytemuck::Pod, bytemuck::Zeroable)]
 #[type_name("StepHeader")]
 #[repr(C)]
 pub struct StepHeader {

@@ -27,12 +27,12 @@ impl RoundTrip for SocketBench {
         let io = |e: std::io::Error| format!("Unix socket, step {step}: {e}");
         write_parts(
             &mut self.stream,
-            [bytes(std::slice::from_ref(&header)), bytes(&self.states)],
+            [bytemuck::bytes_of(&header), bytemuck::cast_slice(&self.states)],
         )
         .map_err(io)?;
         let mut back = StepHeader::default();
         self.stream
-            .read_exact(bytes_mut(std::slice::from_mut(&mut back)))
+            .read_exact(bytemuck::bytes_of_mut(&mut back))
             .map_err(io)?;
         if back.step != step || back.count != n as u64 {
             return Err(format!(
@@ -40,7 +40,9 @@ impl RoundTrip for SocketBench {
                 back.step, back.count
             ));
         }
-        self.stream.read_exact(bytes_mut(&mut self.replies)).map_err(io)?;
+        self.stream
+            .read_exact(bytemuck::cast_slice_mut(&mut self.replies))
+            .map_err(io)?;
         touch_replies(&self.replies, n)
     }
 }
@@ -116,7 +118,7 @@ pub(super) fn serve_socket(path: &Path, args: &PeerArgs) -> Result<(), String> {
     let mut replies = Vec::with_capacity(args.capacity);
     let mut header = StepHeader::default();
     loop {
-        match stream.read_exact(bytes_mut(std::slice::from_mut(&mut header))) {
+        match stream.read_exact(bytemuck::bytes_of_mut(&mut header)) {
             Err(e) if e.kind() == std::io::ErrorKind::UnexpectedEof => return Ok(()),
             other => other.map_err(|e| format!("reading a step header: {e}"))?,
         }
@@ -129,13 +131,16 @@ pub(super) fn serve_socket(path: &Path, args: &PeerArgs) -> Result<(), String> {
         }
         states.resize(n, ParticleState::default());
         stream
-            .read_exact(bytes_mut(&mut states))
+            .read_exact(bytemuck::cast_slice_mut(&mut states))
             .map_err(|e| format!("reading step {}: {e}", header.step))?;
         replies.clear();
         replies.extend(states.iter().map(reply_for));
         let back = StepHeader::new(header.step, header.time, n, 0);
-        write_parts(&mut stream, [bytes(std::slice::from_ref(&back)), bytes(&replies)])
-            .map_err(|e| format!("answering step {}: {e}", header.step))?;
+        write_parts(
+            &mut stream,
+            [bytemuck::bytes_of(&back), bytemuck::cast_slice(&replies)],
+        )
+        .map_err(|e| format!("answering step {}: {e}", header.step))?;
     }
 }
 
@@ -152,26 +157,6 @@ fn write_parts(stream: &mut UnixStream, parts: [&[u8]; 2]) -> std::io::Result<()
         }
     }
     Ok(())
-}
-
-/// Wire structs that can be viewed as bytes and filled from bytes.
-///
-/// # Safety
-/// Implementors are `#[repr(C)]`, made only of `u64` and `f64` fields, without padding (see the
-/// layout tests in `protocol::wire`): every byte is initialised and every byte pattern is valid.
-unsafe trait Plain: Copy {}
-unsafe impl Plain for ParticleState {}
-unsafe impl Plain for ParticleReply {}
-unsafe impl Plain for StepHeader {}
-
-fn bytes<T: Plain>(items: &[T]) -> &[u8] {
-    // SAFETY: see `Plain`; the length is the slice's size in bytes.
-    unsafe { std::slice::from_raw_parts(items.as_ptr().cast(), std::mem::size_of_val(items)) }
-}
-
-fn bytes_mut<T: Plain>(items: &mut [T]) -> &mut [u8] {
-    // SAFETY: see `Plain`; any bytes written leave valid values.
-    unsafe { std::slice::from_raw_parts_mut(items.as_mut_ptr().cast(), std::mem::size_of_val(items)) }
 }
 
 /// A private folder for the socket, removed on drop.
@@ -198,8 +183,8 @@ mod tests {
     #[test]
     fn plain_views_cover_the_whole_struct() {
         let mut header = StepHeader::new(3, 0.5, 7, 0);
-        assert_eq!(bytes(std::slice::from_ref(&header)).len(), 32);
-        bytes_mut(std::slice::from_mut(&mut header))[..8].copy_from_slice(&9u64.to_ne_bytes());
+        assert_eq!(bytemuck::bytes_of(&header).len(), 32);
+        bytemuck::bytes_of_mut(&mut header)[..8].copy_from_slice(&9u64.to_ne_bytes());
         assert_eq!(header.step, 9);
     }
 }

@@ -23,17 +23,15 @@ const EARLY_END: u8 = 3;
 /// With the run's exit code as its second byte.
 const END: u8 = 4;
 
-/// The numbers of one state as sent (id, position, velocity, angular velocity, radius).
-const STATE_WORDS: usize = 11;
-
 impl FluidSide {
     /// Advances the fluid one step with the particles `states` (SI) and returns their loads (SI):
     /// the lattice's, buoyancy added, then the lubrication correction; then the health check
     /// where one is due, and the field outputs (`step_here`). The other ranks step with it.
     pub fn step(&mut self, states: &[ParticleState], out: &mut Vec<ParticleReply>) -> Result<(), String> {
         if self.comm.size() > 1 {
+            // The states as the DEM sent them (PROTOCOL.md 3.1): the same bits on every rank.
             let mut command = vec![STEP];
-            command.extend(states.iter().flat_map(state_bytes));
+            command.extend_from_slice(bytemuck::cast_slice(states));
             self.comm.broadcast(command);
         }
         self.step_here(states, out)
@@ -144,7 +142,11 @@ pub fn follow(
         match command[0] {
             STEP => {
                 states.clear();
-                states.extend(command[1..].chunks_exact(8 * STATE_WORDS).map(state_of));
+                states.extend(
+                    command[1..]
+                        .chunks_exact(size_of::<ParticleState>())
+                        .map(bytemuck::pod_read_unaligned::<ParticleState>),
+                );
                 let _ = fluid.step_here(&states, &mut replies);
             }
             CHECK_LAST => {
@@ -164,34 +166,6 @@ pub fn follow(
     }
 }
 
-/// A state's numbers as sent, little-endian (the bits the DEM sent: the same on every rank).
-fn state_bytes(s: &ParticleState) -> Vec<u8> {
-    let values = s
-        .position
-        .iter()
-        .chain(&s.velocity)
-        .chain(&s.angular_velocity)
-        .chain([&s.radius])
-        .map(|v| v.to_bits());
-    std::iter::once(s.id)
-        .chain(values)
-        .flat_map(u64::to_le_bytes)
-        .collect()
-}
-
-/// The state of [`state_bytes`].
-fn state_of(bytes: &[u8]) -> ParticleState {
-    let word = |i: usize| u64::from_le_bytes(bytes[8 * i..8 * i + 8].try_into().expect("8 bytes"));
-    let value = |i: usize| f64::from_bits(word(i));
-    ParticleState {
-        id: word(0),
-        position: [value(1), value(2), value(3)],
-        velocity: [value(4), value(5), value(6)],
-        angular_velocity: [value(7), value(8), value(9)],
-        radius: value(10),
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -205,9 +179,9 @@ mod tests {
             angular_velocity: [0.3, f64::EPSILON, 9.0],
             radius: 0.002,
         };
-        let bytes = state_bytes(&s);
-        assert_eq!(bytes.len(), 8 * STATE_WORDS);
-        let back = state_of(&bytes);
+        let bytes: &[u8] = bytemuck::bytes_of(&s);
+        assert_eq!(bytes.len(), 88, "PROTOCOL.md 3.1's layout");
+        let back: ParticleState = bytemuck::pod_read_unaligned(bytes);
         assert_eq!(back, s);
         assert_eq!(back.position[1].to_bits(), (-0.0f64).to_bits());
     }

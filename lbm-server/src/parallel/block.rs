@@ -4,7 +4,7 @@
 //! agreed by all ranks. On one rank it is the whole lattice, stepped and read as before.
 
 use super::communicator::{all, Communicator};
-use super::coupled_block::block_options;
+use super::coupled_block::{block_options, SharesSent};
 use super::decomposition::Decomposition;
 use super::halo::Halo;
 use crate::lbm::geometry::Setup;
@@ -19,6 +19,8 @@ pub struct BlockLattice {
     /// The whole lattice (for the cells' coordinates and the gathers).
     whole: Setup,
     pub(super) halo: Option<Halo>,
+    /// What this rank sent rank 0 for the particles' loads (`coupled_block.rs`).
+    pub(super) shares_sent: SharesSent,
 }
 
 /// An unhealthy cell of the whole lattice, and the rank that holds it.
@@ -61,6 +63,7 @@ impl BlockLattice {
             decomposition: d,
             whole: setup,
             halo,
+            shares_sent: SharesSent::default(),
         })
     }
 
@@ -75,6 +78,12 @@ impl BlockLattice {
         self.halo
             .as_ref()
             .map_or((0, 0.0), |h| (h.bytes_per_step, h.time.as_secs_f64()))
+    }
+
+    /// The bytes this rank sent rank 0 per coupled step for the particles' loads, the mean over
+    /// its coupled steps (none on one rank, nor from rank 0).
+    pub fn shares_per_step(&self) -> usize {
+        self.shares_sent.per_step()
     }
 
     /// Advances `steps` steps, exchanging the halo after each.

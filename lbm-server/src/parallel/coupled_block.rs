@@ -1,14 +1,15 @@
 //! The coupled step of one rank's block ([`BlockLattice::step_coupled_with`]): every rank steps
 //! the same particles (rank 0 sends them their states: `coupled/ranks.rs`), in the whole lattice's
-//! coordinates, over its own cells; the halo is exchanged; every rank's pairs (each particle's
-//! momentum per cell of its box) are gathered at rank 0, which reduces the loads from them in the
-//! single process's order (`lbm/imb/gathered.rs`): the same bits as one process.
+//! coordinates, over its own cells; the halo is exchanged; each rank other than 0 sends rank 0 its
+//! share of the loads (`lbm/imb/share.rs`: the loads of the particles whose box it holds alone,
+//! the covered cells it holds of those across a cut), from which rank 0 makes every particle's
+//! load in the single process's order (`lbm/imb/gathered.rs`): the same bits as one process.
 
 use super::block::BlockLattice;
 use super::communicator::Communicator;
 use super::decomposition::Decomposition;
 use crate::lbm::geometry::Setup;
-use crate::lbm::imb::{merge_pairs, ImbBlock, ImbOptions, SolidParticles};
+use crate::lbm::imb::{ImbBlock, ImbOptions, SolidParticles};
 
 /// The coupling's `options` for the block `d` of the lattice `whole`: on several ranks, where the
 /// block lies (its own cells covered alone, the particles in the whole lattice's coordinates).
@@ -30,6 +31,20 @@ pub(super) fn block_options(options: ImbOptions, d: &Decomposition, whole: &Setu
     }
 }
 
+/// The bytes a rank sent rank 0 for the particles' loads (its shares), over its coupled steps.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct SharesSent {
+    pub bytes: u64,
+    pub steps: u64,
+}
+
+impl SharesSent {
+    /// Bytes per coupled step, the mean over the steps (0 before the first).
+    pub fn per_step(&self) -> usize {
+        self.bytes.checked_div(self.steps).unwrap_or(0) as usize
+    }
+}
+
 impl BlockLattice {
     /// One coupled step with `particles` (the same on every rank), and at rank 0 `load(j, load of
     /// j)` for each particle j in `out` (replaced; emptied elsewhere). On one rank the single
@@ -44,13 +59,19 @@ impl BlockLattice {
         let Some(halo) = &mut self.halo else {
             return self.lattice.step_coupled_with(particles, out, load);
         };
-        self.lattice.step_coupled_unread(particles)?;
+        let step = self.lattice.step_coupled_unread(particles)?;
         halo.exchange(&self.lattice, comm);
-        let pieces = comm.gather(&self.lattice.step_pairs());
+        let share = match comm.rank() {
+            0 => Vec::new(),
+            _ => self.lattice.share(&step)?,
+        };
+        self.shares_sent.bytes += share.len() as u64;
+        self.shares_sent.steps += 1;
+        let shares = comm.gather(&share);
         if comm.rank() != 0 {
             out.clear();
             return Ok(());
         }
-        self.lattice.reduce_gathered(&merge_pairs(&pieces), out, load)
+        self.lattice.loads_from_shares(&step, &shares, out, load)
     }
 }

@@ -1,13 +1,15 @@
 //! A coupled lattice cut into blocks against the same lattice on one rank: the particles' loads
 //! (at rank 0) and the fields bit for bit, with spheres across the cuts, the periodic wraps and
-//! an edge and a corner of the blocks; ranks as threads (`tests.rs`), without MPI.
+//! an edge and a corner of the blocks, and spheres within one block each (their loads reduced by
+//! that block's rank); ranks as threads (`tests.rs`), without MPI.
 
+use super::coupled_block::block_options;
 use super::tests::{periodic, put_together, walled};
 use super::ThreadRanks;
 use super::{BlockLattice, Decomposition};
 use crate::lbm::geometry::Setup;
 use crate::lbm::gpu::{Gpu, GpuLattice, Health};
-use crate::lbm::imb::{CoveredCells, ImbOptions, Load, SolidParticle};
+use crate::lbm::imb::{box_edge, BoxRanks, CoveredCells, ImbOptions, Load, SolidParticle, StepBoxes};
 use std::sync::Arc;
 
 /// The particles at step `t` (on the 8 x 6 x 8 lattices of `tests.rs`): one on the edge where the
@@ -33,6 +35,17 @@ fn particles(t: u64) -> Vec<SolidParticle> {
 /// The loads of `steps` coupled steps (covered cells redone) and the fields after them, on one
 /// lattice and cut into `blocks` on threads: the same bits.
 fn check(setup: Setup, blocks: [usize; 3], steps: u64) {
+    check_with(particles, setup, blocks, steps);
+}
+
+/// [`check`] with the particles of `particles` at each step; the bytes each rank sent rank 0 per
+/// step for the loads (rank order).
+fn check_with(
+    particles: fn(u64) -> Vec<SolidParticle>,
+    setup: Setup,
+    blocks: [usize; 3],
+    steps: u64,
+) -> Vec<usize> {
     let gpu = Arc::new(Gpu::new().expect("a wgpu adapter (lavapipe in CI)"));
     let options = Some(ImbOptions {
         covered_cells: CoveredCells::Redo,
@@ -45,6 +58,7 @@ fn check(setup: Setup, blocks: [usize; 3], steps: u64) {
     let want_fields = one.fields().0;
     let ranks: usize = blocks.iter().product();
     let periodic: [bool; 3] = std::array::from_fn(|a| setup.periodic(a));
+    let mut sent = Vec::new();
     let (loads, fields) = std::thread::scope(|s| {
         let handles: Vec<_> = ThreadRanks::world(ranks)
             .into_iter()
@@ -64,13 +78,14 @@ fn check(setup: Setup, blocks: [usize; 3], steps: u64) {
                             out
                         })
                         .collect();
-                    (loads, block.own_fields(&comm).0)
+                    (loads, block.own_fields(&comm).0, block.shares_per_step())
                 })
             })
             .collect();
         let all: Vec<_> = handles.into_iter().map(|h| h.join().unwrap()).collect();
-        let own: Vec<&[[f32; 4]]> = all.iter().map(|(_, f)| &f[..]).collect();
+        let own: Vec<&[[f32; 4]]> = all.iter().map(|(_, f, _)| &f[..]).collect();
         let fields = put_together(&setup, blocks, &own);
+        sent = all.iter().map(|(_, _, s)| *s).collect();
         (all[0].0.clone(), fields)
     });
     assert!(
@@ -84,6 +99,7 @@ fn check(setup: Setup, blocks: [usize; 3], steps: u64) {
         .filter(|&k| want_fields[k] != fields[k])
         .count();
     assert_eq!(differ, 0, "blocks {blocks:?}: {differ} cells' fields differ");
+    sent
 }
 
 /// Two and four blocks (an edge of the cuts, the periodic x faces between ranks); few, since
@@ -92,4 +108,56 @@ fn check(setup: Setup, blocks: [usize; 3], steps: u64) {
 fn a_coupled_lattice_cut_into_blocks_gives_the_single_lattices_loads_bit_for_bit() {
     check(walled(), [1, 1, 2], 4);
     check(periodic(), [2, 1, 2], 3);
+}
+
+/// The particles at step `t` on the 8 x 6 x 8 lattice cut into [2, 1, 2] blocks (x and z cut at
+/// 4): three within one block each (ranks 3, 1 and 0), one across the x cut, one across the
+/// periodic x faces and the z cut, one within rank 2's block; all barely moving.
+fn alone_and_across(t: u64) -> Vec<SolidParticle> {
+    let t = t as f64;
+    let sphere = |position: [f64; 3], radius: f64| SolidParticle {
+        position,
+        radius,
+        velocity: [0.01, -0.01, 0.005],
+        angular_velocity: [0.0, 0.01, 0.02],
+    };
+    vec![
+        sphere([6.0 + 0.01 * t, 3.0, 6.0], 1.2),
+        sphere([5.9, 2.5 + 0.01 * t, 2.1], 1.2),
+        sphere([2.0, 3.0, 2.0 - 0.01 * t], 1.2),
+        sphere([4.0 + 0.02 * t, 3.0, 6.0], 1.5),
+        sphere([0.2, 2.0, 4.0 - 0.02 * t], 1.5),
+        sphere([2.1, 2.9, 6.0], 1.2),
+    ]
+}
+
+/// Particles whose box one rank other than 0 holds alone (their loads reduced there and sent)
+/// beside particles across the cuts (their covered cells gathered): rank 0's loads are the single
+/// lattice's bit for bit, and each rank sends less than the 16 bytes per cell of every box it
+/// sent before.
+#[test]
+fn particles_within_one_block_and_across_the_cuts_give_the_single_lattices_loads_bit_for_bit() {
+    let setup = periodic();
+    let blocks = [2, 1, 2];
+    let options = ImbOptions {
+        covered_cells: CoveredCells::Redo,
+        ..ImbOptions::default()
+    };
+    let d = Decomposition::new(setup.n, [true; 3], blocks, 0);
+    let block = block_options(options, &d, &setup).block.unwrap();
+    let ranks: Vec<BoxRanks> = StepBoxes::of(&alone_and_across(0)[..], block).ranks().collect();
+    use BoxRanks::{One, Several};
+    assert_eq!(ranks, [One(3), One(1), One(0), Several, Several, One(2)]);
+    let sent = check_with(alone_and_across, setup, blocks, 4);
+    let every_box: usize = alone_and_across(0)
+        .iter()
+        .map(|p| 16 * (box_edge(p.radius) as usize).pow(3))
+        .sum();
+    assert_eq!(sent[0], 0, "rank 0 sends nothing");
+    for (rank, &bytes) in sent.iter().enumerate().skip(1) {
+        assert!(
+            bytes > 0 && bytes < every_box / 4,
+            "rank {rank}: {bytes} bytes per step"
+        );
+    }
 }

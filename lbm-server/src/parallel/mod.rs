@@ -11,7 +11,8 @@
 //! - `hosts.rs`: the ranks' hosts; a run with particles keeps its ranks on rank 0's host.
 //! - `block.rs`: one rank's lattice, stepped, read and checked with the others ([`BlockLattice`]);
 //!   `coupled_block.rs`: its coupled step with particles (the loads made at rank 0 from every
-//!   rank's pairs).
+//!   rank's share: the loads of the particles within its block, the covered cells it holds of
+//!   those across a cut).
 //! - `summary.rs`: what summary.json says of the ranks.
 //! - `thread_ranks.rs`: ranks as threads of one process (the tests; `bench --thread-ranks`).
 //!

@@ -14,6 +14,9 @@ pub struct ParallelSummary {
     /// exchange took.
     pub halo_bytes_per_step: Vec<usize>,
     pub halo_share: Vec<f64>,
+    /// Bytes each rank sent rank 0 per coupled step for the particles' loads (rank order; the
+    /// mean over the run's steps; none from rank 0, none without particles).
+    pub loads_bytes_per_step: Vec<usize>,
 }
 
 impl ParallelSummary {
@@ -25,7 +28,13 @@ impl ParallelSummary {
         wall: f64,
     ) -> ParallelSummary {
         let (bytes, time) = lattice.halo_cost();
-        let mine = format!("{}\t{}\t{bytes}\t{}", comm.host(), device, time / wall.max(1e-9));
+        let loads = lattice.shares_per_step();
+        let mine = format!(
+            "{}\t{}\t{bytes}\t{}\t{loads}",
+            comm.host(),
+            device,
+            time / wall.max(1e-9)
+        );
         let rows: Vec<Vec<String>> = comm
             .gather(mine.as_bytes())
             .iter()
@@ -37,6 +46,7 @@ impl ParallelSummary {
             devices: rows.iter().map(|r| format!("{}: {}", r[0], r[1])).collect(),
             halo_bytes_per_step: rows.iter().map(|r| r[2].parse().unwrap_or(0)).collect(),
             halo_share: rows.iter().map(|r| r[3].parse().unwrap_or(0.0)).collect(),
+            loads_bytes_per_step: rows.iter().map(|r| r[4].parse().unwrap_or(0)).collect(),
         }
     }
 }

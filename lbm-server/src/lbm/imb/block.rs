@@ -40,6 +40,51 @@ impl ImbBlock {
         c.extend(axes(["BASE_X", "BASE_Y", "BASE_Z"], b.base.map(|v| v as f64)));
         c
     }
+
+    /// The cells of a block along axis `a` (every block of the lattice has as many).
+    fn size(&self, a: usize) -> usize {
+        self.own_hi[a] - self.own_lo[a]
+    }
+
+    /// This block's position among the blocks along each axis.
+    pub(super) fn coords(&self) -> [usize; 3] {
+        std::array::from_fn(|a| self.own_lo[a] / self.size(a))
+    }
+
+    /// The blocks along each axis.
+    fn blocks(&self) -> [usize; 3] {
+        std::array::from_fn(|a| self.whole[a] / self.size(a))
+    }
+
+    /// The rank of the block at `coords` among the blocks (x fastest, as
+    /// `parallel::Decomposition` numbers them).
+    pub(super) fn rank_at(&self, coords: [usize; 3]) -> usize {
+        let blocks = self.blocks();
+        coords[0] + blocks[0] * (coords[1] + blocks[1] * coords[2])
+    }
+
+    /// The position among the blocks of rank `rank`'s block.
+    pub(super) fn coords_of(&self, rank: usize) -> [usize; 3] {
+        let blocks = self.blocks();
+        [
+            rank % blocks[0],
+            (rank / blocks[0]) % blocks[1],
+            rank / (blocks[0] * blocks[1]),
+        ]
+    }
+
+    /// The position along axis `a` of the block that holds whole-lattice coordinate `q` (as
+    /// imb.wgsl's `lattice_cell` finds the cell: wrapped along a periodic axis); none outside the
+    /// lattice along a closed axis.
+    pub(super) fn block_along(&self, a: usize, q: i64) -> Option<usize> {
+        let n = self.whole[a] as i64;
+        let g = match self.periodic[a] {
+            true => q.rem_euclid(n),
+            false if (0..n).contains(&q) => q,
+            false => return None,
+        };
+        Some(g as usize / self.size(a))
+    }
 }
 
 impl GpuLattice {

@@ -8,6 +8,7 @@
 //! particle's force and torque from its cells (the table of passes at step.rs's `coupled_step`).
 
 mod block;
+mod box_ranks;
 mod chunks;
 mod coupling;
 mod cover;
@@ -16,18 +17,20 @@ mod loads;
 mod options;
 mod passes;
 mod records;
+mod share;
 mod staging;
 mod step;
 mod timing;
 
 pub use block::ImbBlock;
 #[cfg(test)]
+pub use box_ranks::{BoxRanks, StepBoxes};
+#[cfg(test)]
 pub(super) use chunks::CHUNK;
 pub(super) use coupling::Coupling;
 #[cfg(test)]
-pub(super) use cover::box_edge;
+pub(crate) use cover::box_edge;
 pub use cover::{covered_fraction, solid_reach};
-pub use gathered::merge_pairs;
 pub use options::{CoveredCells, ImbOptions, SolidCollision};
 pub(super) use passes::Passes;
 pub use records::{Load, LostCovers, SolidParticle, SolidParticles};

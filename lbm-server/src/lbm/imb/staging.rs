@@ -126,18 +126,18 @@ pub(in crate::lbm) fn into_lattice(setup: &crate::lbm::geometry::Setup, p: &Soli
 /// The lengths of the lattice's periodic axes, 0 along the others: what wraps the centres, looked
 /// up once per step rather than per particle.
 #[derive(Debug, Clone, Copy)]
-struct Periods([f64; 3]);
+pub(super) struct Periods([f64; 3]);
 
 impl Periods {
     /// The periods of a lattice of `n` cells, periodic along `periodic`.
-    fn of((n, periodic): ([usize; 3], [bool; 3])) -> Periods {
+    pub(super) fn of((n, periodic): ([usize; 3], [bool; 3])) -> Periods {
         Periods(std::array::from_fn(
             |a| if periodic[a] { n[a] as f64 } else { 0.0 },
         ))
     }
 
     /// `p` with its centre wrapped (`rem_euclid`, a libm `fmod`, only for a centre outside).
-    fn wrap(&self, p: &SolidParticle) -> SolidParticle {
+    pub(super) fn wrap(&self, p: &SolidParticle) -> SolidParticle {
         let position = std::array::from_fn(|a| {
             let (x, period) = (p.position[a], self.0[a]);
             if period > 0.0 && !(0.0..period).contains(&x) {
