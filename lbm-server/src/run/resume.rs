@@ -20,7 +20,8 @@ use std::path::Path;
 /// once all have made theirs: `parallel::resume_blocks`).
 pub(super) fn prepare_resume(args: &RunArgs, out: &Path, comm: &dyn Communicator) -> Result<Prepared, String> {
     let scene_copy = out.join("scene.toml");
-    let scene = Scene::load(&scene_copy).map_err(|e| e.to_string())?;
+    let mut scene = Scene::load(&scene_copy).map_err(|e| e.to_string())?;
+    other_cut(&mut scene, comm);
     let text = std::fs::read_to_string(&scene_copy).map_err(|e| format!("{}: {e}", scene_copy.display()))?;
     let units = scene
         .lattice_units
@@ -98,4 +99,27 @@ fn checked_checkpoint(
         out.display()
     );
     Ok((lock, loaded))
+}
+
+/// A scene whose `[parallel] blocks` are a cut for another number of ranks than `comm`'s: the
+/// run chooses its own (a checkpoint does not depend on the cut), and rank 0 says so.
+fn other_cut(scene: &mut Scene, comm: &dyn Communicator) {
+    let Some(b) = scene.parallel.blocks() else {
+        return;
+    };
+    let ranks = b.iter().product::<usize>();
+    if ranks == comm.size() {
+        return;
+    }
+    if comm.rank() == 0 {
+        protocol::say!(
+            "lbm-server: note: the scene's parallel.blocks = [{}, {}, {}] cut the lattice for \
+             {ranks} ranks; resumed on {}, the run chooses its own blocks",
+            b[0],
+            b[1],
+            b[2],
+            comm.size()
+        );
+    }
+    scene.parallel.blocks = None;
 }
