@@ -9,7 +9,7 @@ mod common;
 use common::mpi::{coupled_outputs, coupled_scene, fluid_outputs, mpirun, mpirun_run, scene, text};
 use common::mpi::{SOLID, WALLED};
 use common::*;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 /// A file's bytes.
@@ -68,15 +68,17 @@ fn resume(mpirun: &Path, ranks: usize, out: &Path) -> Command {
 /// The scene `text_` run through on one process, and to `stop` on 2 ranks and on one process
 /// (checkpoints every `every` steps): the same checkpoint at `stop`; the 2 ranks' run then
 /// resumed on 1, 2 and 4 ranks: the same `outputs` and last checkpoint as the run through.
+/// mpirun and the 2 ranks' output folder, as they stopped (None where the runs cannot be made:
+/// said why).
 fn resumed_on_ranks(
     tag: &str,
     text_: &str,
     (stop, every): (&str, &str),
     outputs: fn(&Path) -> Vec<(String, Vec<u8>)>,
-) {
+) -> Option<(PathBuf, PathBuf)> {
     let Some(mpirun) = mpirun() else {
         eprintln!("skipped: mpirun is not installed (apt-get install openmpi-bin libopenmpi-dev)");
-        return;
+        return None;
     };
     let dir = temp_dir(tag);
     let scene_file = write_scene(&dir, text_);
@@ -88,7 +90,7 @@ fn resumed_on_ranks(
     let o = cmd.output().unwrap();
     if text(&o).contains("built without MPI") {
         eprintln!("skipped: lbm-server is built without MPI (cargo build -p lbm-server --features mpi)");
-        return;
+        return None;
     }
     assert_eq!(o.status.code(), Some(0), "2 ranks to step {stop}: {}", text(&o));
     let (through, one_stop) = (dir.join("through"), dir.join("one-stop"));
@@ -107,6 +109,7 @@ fn resumed_on_ranks(
         same(&want, &outputs(&out), &what);
         same(&want_checkpoint, &checkpoint_files(&out), &format!("{what}: the last checkpoint"));
     }
+    Some((mpirun, part))
 }
 
 /// A walled box with solid cells across the cuts, stopped after step 7 (odd: the AA pattern's
@@ -118,9 +121,44 @@ fn a_fluid_run_checkpointed_on_2_ranks_resumes_on_1_2_and_4_as_one_process_runs_
 }
 
 /// Two spheres, one across the cuts of 2 and 4 blocks, stopped after step 10 (even); the DEM's
-/// half of the checkpoint (dem.bin) too.
+/// half of the checkpoint (dem.bin) too. Resumed on 2 ranks with a DEM that cannot checkpoint
+/// (the Python example: no CHECKPOINT in its Hello), it is refused in the Welcome as on one
+/// process: every rank ends, the DEM is told why (CANNOT_RESUME), OUT is left as it was.
 #[test]
 fn a_coupled_run_checkpointed_on_2_ranks_resumes_on_1_2_and_4_as_one_process_runs_through() {
     let text_ = coupled_scene("mpi-ckpt-coupled", false);
-    resumed_on_ranks("mpi-ckpt-coupled", &text_, ("10", "8"), coupled_outputs);
+    let Some((mpirun, part)) = resumed_on_ranks("mpi-ckpt-coupled", &text_, ("10", "8"), coupled_outputs)
+    else {
+        return;
+    };
+    let Some(python) = python_with_iceoryx2() else {
+        eprintln!("skipped the refusal: python3 has no iceoryx2 (pip install iceoryx2==0.10.0)");
+        return;
+    };
+    let before = files_under(&part);
+    let script = concat!(env!("CARGO_MANIFEST_DIR"), "/clients/python/example_dem.py");
+    let line = format!("exec {python} {script} --particles 2");
+    let o = resume(&mpirun, 2, &part)
+        .args(["--dem-command", &line])
+        .output()
+        .unwrap();
+    let said = text(&o);
+    assert_ne!(o.status.code(), Some(0), "{said}");
+    assert!(said.contains("does not declare the CHECKPOINT capability"), "{said}");
+    assert!(said.contains("CANNOT_RESUME"), "the DEM is told why: {said}");
+    let after = files_under(&part);
+    assert_eq!(before.keys().collect::<Vec<_>>(), after.keys().collect::<Vec<_>>());
+    for (path, bytes) in &before {
+        assert!(&after[path] == bytes, "{} changed", path.display());
+    }
+}
+
+/// The interpreter `python3` names here, where it has the iceoryx2 binding: named by its path,
+/// since mpirun started by its own path puts its folder (/usr/bin) first on the ranks' PATH.
+fn python_with_iceoryx2() -> Option<String> {
+    let o = Command::new("python3")
+        .args(["-c", "import sys, iceoryx2; print(sys.executable)"])
+        .output()
+        .ok()?;
+    o.status.success().then(|| String::from_utf8_lossy(&o.stdout).trim().to_string())
 }
