@@ -6,8 +6,8 @@
 
 mod common;
 use common::mpi::{
-    coupled_outputs, coupled_scene, fluid_outputs, mpirun, mpirun_command, scene, text, PERIODIC, SOLID,
-    WALLED,
+    coupled_outputs, coupled_scene, fluid_outputs, mpirun, mpirun_command, scene, text, Files, PERIODIC,
+    SOLID, WALLED,
 };
 use common::*;
 use std::path::Path;
@@ -15,12 +15,7 @@ use std::path::Path;
 /// The scene on one process, then on each of `runs`' ranks with its `[parallel]` section (or
 /// none): the same `outputs` byte for byte, and the summary names the ranks and blocks. False
 /// where the runs cannot be made (said why).
-fn same_on_ranks(
-    tag: &str,
-    text_: &str,
-    runs: &[(usize, &str)],
-    outputs: fn(&Path) -> Vec<(String, Vec<u8>)>,
-) -> bool {
+fn same_on_ranks(tag: &str, text_: &str, runs: &[(usize, &str)], outputs: fn(&Path) -> Files) -> bool {
     let Some(mpirun) = mpirun() else {
         eprintln!("skipped: mpirun is not installed (apt-get install openmpi-bin libopenmpi-dev)");
         return false;

@@ -7,7 +7,7 @@
 
 mod common;
 use common::mpi::{coupled_outputs, coupled_scene, fluid_outputs, mpirun, mpirun_run, scene, text};
-use common::mpi::{SOLID, WALLED};
+use common::mpi::{Files, SOLID, WALLED};
 use common::*;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -19,7 +19,7 @@ fn read(path: &Path) -> Vec<u8> {
 
 /// The checkpoint in `out`, as it must not depend on the ranks: every file header.json lists,
 /// and header.json with the snapshots named as one process names them (a .pvti on several ranks).
-fn checkpoint_files(out: &Path) -> Vec<(String, Vec<u8>)> {
+fn checkpoint_files(out: &Path) -> Files {
     let dir = out.join("checkpoint");
     let header = String::from_utf8(read(&dir.join("header.json"))).unwrap();
     let listed: serde_json::Value = serde_json::from_str(&header).unwrap();
@@ -74,7 +74,7 @@ fn resumed_on_ranks(
     tag: &str,
     text_: &str,
     (stop, every): (&str, &str),
-    outputs: fn(&Path) -> Vec<(String, Vec<u8>)>,
+    outputs: fn(&Path) -> Files,
 ) -> Option<(PathBuf, PathBuf)> {
     let Some(mpirun) = mpirun() else {
         eprintln!("skipped: mpirun is not installed (apt-get install openmpi-bin libopenmpi-dev)");
@@ -95,19 +95,32 @@ fn resumed_on_ranks(
     assert_eq!(o.status.code(), Some(0), "2 ranks to step {stop}: {}", text(&o));
     let (through, one_stop) = (dir.join("through"), dir.join("one-stop"));
     ok(&mut server(&scene_file, &through, &interval), "one process");
-    ok(&mut server(&scene_file, &one_stop, &stopped), "one process to the stop");
+    ok(
+        &mut server(&scene_file, &one_stop, &stopped),
+        "one process to the stop",
+    );
     let what = format!("the checkpoint at step {stop} written on 2 ranks");
     same(&checkpoint_files(&one_stop), &checkpoint_files(&part), &what);
     let (want, want_checkpoint) = (outputs(&through), checkpoint_files(&through));
     for ranks in [1, 2, 4] {
         let out = dir.join(format!("resumed-on-{ranks}"));
         ok(Command::new("cp").arg("-a").arg(&part).arg(&out), "cp");
-        let o = ok(&mut resume(&mpirun, ranks, &out), &format!("resumed on {ranks} rank(s)"));
+        let o = ok(
+            &mut resume(&mpirun, ranks, &out),
+            &format!("resumed on {ranks} rank(s)"),
+        );
         let said = text(&o);
-        assert!(said.contains(&format!("from its checkpoint at step {stop} ")), "{said}");
+        assert!(
+            said.contains(&format!("from its checkpoint at step {stop} ")),
+            "{said}"
+        );
         let what = format!("written on 2 ranks, resumed on {ranks}");
         same(&want, &outputs(&out), &what);
-        same(&want_checkpoint, &checkpoint_files(&out), &format!("{what}: the last checkpoint"));
+        same(
+            &want_checkpoint,
+            &checkpoint_files(&out),
+            &format!("{what}: the last checkpoint"),
+        );
     }
     Some((mpirun, part))
 }
@@ -144,10 +157,16 @@ fn a_coupled_run_checkpointed_on_2_ranks_resumes_on_1_2_and_4_as_one_process_run
         .unwrap();
     let said = text(&o);
     assert_ne!(o.status.code(), Some(0), "{said}");
-    assert!(said.contains("does not declare the CHECKPOINT capability"), "{said}");
+    assert!(
+        said.contains("does not declare the CHECKPOINT capability"),
+        "{said}"
+    );
     assert!(said.contains("CANNOT_RESUME"), "the DEM is told why: {said}");
     let after = files_under(&part);
-    assert_eq!(before.keys().collect::<Vec<_>>(), after.keys().collect::<Vec<_>>());
+    assert_eq!(
+        before.keys().collect::<Vec<_>>(),
+        after.keys().collect::<Vec<_>>()
+    );
     for (path, bytes) in &before {
         assert!(&after[path] == bytes, "{} changed", path.display());
     }
@@ -160,5 +179,7 @@ fn python_with_iceoryx2() -> Option<String> {
         .args(["-c", "import sys, iceoryx2; print(sys.executable)"])
         .output()
         .ok()?;
-    o.status.success().then(|| String::from_utf8_lossy(&o.stdout).trim().to_string())
+    o.status
+        .success()
+        .then(|| String::from_utf8_lossy(&o.stdout).trim().to_string())
 }

@@ -493,7 +493,9 @@ impl<'a> FluidRun<'a> {
         }
         if !all(self.comm, staged.is_ok()) {
             return Err(Stop::Failed(
-                staged.err().unwrap_or_else(|| "rank 0 could not write the checkpoint".into()),
+                staged
+                    .err()
+                    .unwrap_or_else(|| "rank 0 could not write the checkpoint".into()),
             ));
         }
         let time = lattice.time() as f64 * self.units.dt;

@@ -49,6 +49,9 @@ pub const PERIODIC: &str =
 /// Solid cells on both sides of the cuts of 2 and 4 blocks.
 pub const SOLID: &str = "[[lattice.solid_box]]\nmin = [0.002, 0.003, 0.003]\nmax = [0.005, 0.005, 0.005]";
 
+/// Output files that must not depend on the ranks: each name and its bytes (as compared).
+pub type Files = Vec<(String, Vec<u8>)>;
+
 /// mpirun, where it is installed.
 pub fn mpirun() -> Option<PathBuf> {
     let path = std::env::var_os("PATH")?;
@@ -88,7 +91,7 @@ pub fn text(o: &Output) -> String {
 /// fields.pvd (a snapshot named .vti on one rank, .pvti on several) and the cells of the
 /// snapshots after `steps`, density then velocity, as the bytes of its .vti (one rank) or of its
 /// pieces put together (several).
-pub fn snapshots(out: &Path, steps: &[&str]) -> Vec<(String, Vec<u8>)> {
+pub fn snapshots(out: &Path, steps: &[&str]) -> Files {
     let read = |f: &str| std::fs::read(out.join(f)).unwrap_or_else(|e| panic!("{f}: {e}"));
     let pvd = String::from_utf8(read("fields.pvd")).unwrap();
     let mut files = vec![("fields.pvd".into(), pvd.replace(".pvti\"", ".vti\"").into_bytes())];
@@ -228,7 +231,7 @@ check_interval = 8
 /// The outputs of a fluid run that must not depend on the ranks: the probe lines, fields.pvd (a
 /// snapshot named .vti on one rank, .pvti on several) and each snapshot's cells, density then
 /// velocity, as the bytes of its .vti (one rank) or of its pieces put together (several).
-pub fn fluid_outputs(out: &Path) -> Vec<(String, Vec<u8>)> {
+pub fn fluid_outputs(out: &Path) -> Files {
     let read = |f: &str| std::fs::read(out.join(f)).unwrap_or_else(|e| panic!("{f}: {e}"));
     let mut files: Vec<(String, Vec<u8>)> = ["line0.csv", "line1.csv"]
         .iter()
@@ -240,7 +243,7 @@ pub fn fluid_outputs(out: &Path) -> Vec<(String, Vec<u8>)> {
 
 /// The outputs of a coupled run that must not depend on the ranks: particles.csv, fields.pvd and
 /// the snapshots' cells (their pieces put together on several ranks).
-pub fn coupled_outputs(out: &Path) -> Vec<(String, Vec<u8>)> {
+pub fn coupled_outputs(out: &Path) -> Files {
     let bytes = std::fs::read(out.join("particles.csv")).unwrap();
     assert_eq!(csv_steps(out).len(), 7, "steps 0, 4, ..., 20 and the last");
     let mut files = vec![("particles.csv".into(), bytes)];

@@ -95,7 +95,9 @@ pub(super) fn restore_whole(
         Clock::At(time, face_scale) => (time, face_scale),
     };
     let pieces = match &whole {
-        Some(Ok(state)) => (0..d.ranks()).map(|r| block_of(&d.of_rank(r), state, b)).collect(),
+        Some(Ok(state)) => (0..d.ranks())
+            .map(|r| block_of(&d.of_rank(r), state, b))
+            .collect(),
         _ => Vec::new(),
     };
     let mine = comm.scatter(pieces);
@@ -134,7 +136,12 @@ fn clock_of_rank_0(comm: &dyn Communicator, whole: &Option<Result<RawState, Stri
     let said = match whole {
         None => vec![0],
         Some(Err(_)) => vec![1],
-        Some(Ok(s)) => [vec![2], s.time.to_le_bytes().to_vec(), s.face_scale.to_le_bytes().to_vec()].concat(),
+        Some(Ok(s)) => [
+            vec![2],
+            s.time.to_le_bytes().to_vec(),
+            s.face_scale.to_le_bytes().to_vec(),
+        ]
+        .concat(),
     };
     let said = comm.broadcast(said);
     let number = |at: usize| said[at..at + 8].try_into().expect("8 bytes");
@@ -169,7 +176,8 @@ fn own_populations(d: &Decomposition, populations: &[Vec<u8>], b: usize) -> Vec<
     let own = d.own_cells();
     let mut bytes = Vec::with_capacity(19 * own.len() * b + 4 * STATUS_WORDS);
     for p in populations {
-        own.iter().for_each(|&(l, _)| bytes.extend_from_slice(&p[l * b..(l + 1) * b]));
+        own.iter()
+            .for_each(|&(l, _)| bytes.extend_from_slice(&p[l * b..(l + 1) * b]));
     }
     bytes
 }
@@ -201,7 +209,9 @@ fn block_of(d: &Decomposition, state: &RawState, b: usize) -> Vec<u8> {
         .map(|k| d.whole_index(d.global(d.local_coords(k))))
         .collect();
     for p in &state.populations {
-        whole.iter().for_each(|&g| bytes.extend_from_slice(&p[g * b..(g + 1) * b]));
+        whole
+            .iter()
+            .for_each(|&g| bytes.extend_from_slice(&p[g * b..(g + 1) * b]));
     }
     bytes.extend(status_bytes(&block_status(d, &words(&state.status))));
     bytes

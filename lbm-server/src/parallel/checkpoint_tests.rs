@@ -84,9 +84,17 @@ fn check(setup: Setup, coupled: bool, (written, resumed): ([usize; 3], [usize; 3
     let what = format!("written on {written:?} at step {at}");
     same(&one_at, &run(&setup, coupled, written, None, (0, at)), &what);
     let what = format!("resumed on {resumed:?} at step {at}, at step {end}");
-    same(&one_end, &run(&setup, coupled, resumed, Some(&one_at), (at, end)), &what);
+    same(
+        &one_end,
+        &run(&setup, coupled, resumed, Some(&one_at), (at, end)),
+        &what,
+    );
     let through = run(&setup, coupled, [1, 1, 1], None, (0, end));
-    same(&through, &one_end, "one lattice resumed against one that went through");
+    same(
+        &through,
+        &one_end,
+        "one lattice resumed against one that went through",
+    );
 }
 
 #[test]

@@ -110,7 +110,11 @@ impl Communicator for ThreadRanks {
             return self.receive(0, SCATTER);
         }
         let first = std::mem::take(&mut pieces[0]);
-        pieces.into_iter().enumerate().skip(1).for_each(|(r, p)| self.send(r, SCATTER, p));
+        pieces
+            .into_iter()
+            .enumerate()
+            .skip(1)
+            .for_each(|(r, p)| self.send(r, SCATTER, p));
         first
     }
 }

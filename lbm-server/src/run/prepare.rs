@@ -167,7 +167,13 @@ impl Prepared {
         let given = ours.given().map_or(Vec::new(), |n| n.to_le_bytes().to_vec());
         let given = comm.broadcast(given);
         let every = given.try_into().ok().map(u64::from_le_bytes);
-        Checkpoints::new(&self.out, &self.scene, &self.scene_text, every, self.resumed.clone())
+        Checkpoints::new(
+            &self.out,
+            &self.scene,
+            &self.scene_text,
+            every,
+            self.resumed.clone(),
+        )
     }
 }
 

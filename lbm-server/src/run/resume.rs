@@ -18,7 +18,11 @@ use std::path::Path;
 /// number, whatever the number it was written on): every rank reads the scene, rank 0 alone
 /// locks the output folder and finds and checks the checkpoint (it sends each rank its block
 /// once all have made theirs: `parallel::resume_blocks`).
-pub(super) fn prepare_resume(args: &RunArgs, out: &Path, comm: &dyn Communicator) -> Result<Prepared, String> {
+pub(super) fn prepare_resume(
+    args: &RunArgs,
+    out: &Path,
+    comm: &dyn Communicator,
+) -> Result<Prepared, String> {
     let scene_copy = out.join("scene.toml");
     let mut scene = Scene::load(&scene_copy).map_err(|e| e.to_string())?;
     other_cut(&mut scene, comm);

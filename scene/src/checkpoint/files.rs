@@ -231,7 +231,8 @@ fn remove_later_snapshots(out: &Path, at: &super::OutputPositions) -> std::io::R
         for entry in entries {
             let entry = entry?;
             let name = entry.file_name().to_string_lossy().into_owned();
-            if !step_of(&name).is_some_and(|s| last.is_none_or(|l| s > l)) {
+            let later = step_of(&name).is_some_and(|s| last.is_none_or(|l| s > l));
+            if !later {
                 continue;
             }
             match entry.file_type()? {
