@@ -66,14 +66,15 @@ fn resume(mpirun: &Path, ranks: usize, out: &Path) -> Command {
 }
 
 /// The scene `text_` run through on one process, and to `stop` on 2 ranks and on one process
-/// (checkpoints every `every` steps): the same checkpoint at `stop`; the 2 ranks' run then
-/// resumed on 1, 2 and 4 ranks: the same `outputs` and last checkpoint as the run through.
+/// (checkpoints as the scene says, or every `every` steps where given): the same checkpoint at
+/// `stop`; the 2 ranks' run then resumed on 1, 2 and 4 ranks: the same `outputs` and last
+/// checkpoint as the run through.
 /// mpirun and the 2 ranks' output folder, as they stopped (None where the runs cannot be made:
 /// said why).
 fn resumed_on_ranks(
     tag: &str,
     text_: &str,
-    (stop, every): (&str, &str),
+    (stop, every): (&str, Option<&str>),
     outputs: fn(&Path) -> Files,
 ) -> Option<(PathBuf, PathBuf)> {
     let Some(mpirun) = mpirun() else {
@@ -82,7 +83,7 @@ fn resumed_on_ranks(
     };
     let dir = temp_dir(tag);
     let scene_file = write_scene(&dir, text_);
-    let interval = ["--checkpoint-interval", every];
+    let interval = every.map_or(vec![], |n| vec!["--checkpoint-interval", n]);
     let stopped = [&interval[..], &["--steps", stop]].concat();
     let part = dir.join("part");
     let mut cmd = mpirun_run(&mpirun, 2);
@@ -125,22 +126,28 @@ fn resumed_on_ranks(
     Some((mpirun, part))
 }
 
-/// A walled box with solid cells across the cuts, stopped after step 7 (odd: the AA pattern's
-/// odd phase).
+/// A walled box with solid cells across the cuts, checkpoints every 4 steps (the scene's),
+/// stopped after step 7 (odd: the AA pattern's odd phase).
 #[test]
 fn a_fluid_run_checkpointed_on_2_ranks_resumes_on_1_2_and_4_as_one_process_runs_through() {
-    let text_ = scene("mpi-ckpt-fluid", WALLED, SOLID);
-    resumed_on_ranks("mpi-ckpt-fluid", &text_, ("7", "4"), fluid_outputs);
+    let text_ = scene("mpi-ckpt-fluid", WALLED, SOLID).replace(
+        "fields_interval = 6",
+        "fields_interval = 6\ncheckpoint_interval = 4",
+    );
+    assert!(text_.contains("checkpoint_interval = 4"));
+    resumed_on_ranks("mpi-ckpt-fluid", &text_, ("7", None), fluid_outputs);
 }
 
-/// Two spheres, one across the cuts of 2 and 4 blocks, stopped after step 10 (even); the DEM's
+/// Two spheres, one across the cuts of 2 and 4 blocks, checkpoints every 8 steps
+/// (`--checkpoint-interval`, kept by the resumed runs), stopped after step 10 (even); the DEM's
 /// half of the checkpoint (dem.bin) too. Resumed on 2 ranks with a DEM that cannot checkpoint
 /// (the Python example: no CHECKPOINT in its Hello), it is refused in the Welcome as on one
 /// process: every rank ends, the DEM is told why (CANNOT_RESUME), OUT is left as it was.
 #[test]
 fn a_coupled_run_checkpointed_on_2_ranks_resumes_on_1_2_and_4_as_one_process_runs_through() {
     let text_ = coupled_scene("mpi-ckpt-coupled", false);
-    let Some((mpirun, part)) = resumed_on_ranks("mpi-ckpt-coupled", &text_, ("10", "8"), coupled_outputs)
+    let Some((mpirun, part)) =
+        resumed_on_ranks("mpi-ckpt-coupled", &text_, ("10", Some("8")), coupled_outputs)
     else {
         return;
     };

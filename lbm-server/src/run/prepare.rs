@@ -164,9 +164,13 @@ impl Prepared {
         if comm.size() == 1 {
             return ours;
         }
-        let given = ours.given().map_or(Vec::new(), |n| n.to_le_bytes().to_vec());
+        // A flag byte first: MPI refuses a broadcast of none.
+        let given = match ours.given() {
+            Some(n) => [&[1][..], &n.to_le_bytes()].concat(),
+            None => vec![0],
+        };
         let given = comm.broadcast(given);
-        let every = given.try_into().ok().map(u64::from_le_bytes);
+        let every = given[1..].try_into().ok().map(u64::from_le_bytes);
         Checkpoints::new(
             &self.out,
             &self.scene,
