@@ -190,20 +190,6 @@ fn a_coupled_run_killed_and_resumed_writes_the_same_particles() {
     same_file(&full.join("checkpoint/dem.bin"), &part.join("checkpoint/dem.bin"));
 }
 
-/// Every file under `dir` but the lock (which holds the pid of the last run) and its bytes.
-fn files_under(dir: &Path) -> std::collections::BTreeMap<std::path::PathBuf, Vec<u8>> {
-    let mut files = std::collections::BTreeMap::new();
-    for entry in std::fs::read_dir(dir).unwrap().map(Result::unwrap) {
-        let path = entry.path();
-        if path.is_dir() {
-            files.extend(files_under(&path));
-        } else if entry.file_name() != ".lock" {
-            files.insert(path.clone(), std::fs::read(&path).unwrap());
-        }
-    }
-    files
-}
-
 /// A coupled run resumed with a DEM that cannot checkpoint (the Python example: no CHECKPOINT
 /// in its Hello) is refused in the Welcome: exit 2, a message naming the DEM and the capability,
 /// and OUT exactly as it was (particles.csv's rows after the checkpoint, the snapshots,

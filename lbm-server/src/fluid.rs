@@ -1,14 +1,14 @@
 //! A fluid-only scene (a `[lattice]` and no particles): the GPU lattice alone, with health checks,
 //! VTK snapshots, probe lines and a summary.
 
-use crate::checkpoint::{Checkpoints, Loaded, OutputPositions};
+use crate::checkpoint::{Checkpoints, OutputPositions};
 use crate::fields::{probe_cells, FieldOutput};
 use crate::lbm::geometry::Setup;
 use crate::lbm::gpu::{Gpu, GpuLattice};
 use crate::output::LatticeSummary;
 use crate::parallel::{
-    all, write_last_good_of_ranks, write_snapshot_of_ranks, BlockLattice, Communicator, Decomposition,
-    FieldPieces, ParallelSummary, RankUnhealthy,
+    all, checkpoint_due, resume_blocks, write_last_good_of_ranks, write_snapshot_of_ranks, BlockLattice,
+    Communicator, Decomposition, FieldPieces, ParallelSummary, RankUnhealthy,
 };
 use crate::terminal::Progress;
 use crate::trials::{kernels_of, Trial};
@@ -114,8 +114,8 @@ pub fn run(
 }
 
 /// The run's kernels (a trial on one rank; on several every rank steps in lockstep: no trial, the
-/// first kernels) and its lattice on this rank's device; None where any rank failed to start it
-/// (each says why).
+/// first kernels) and its lattice on this rank's device, in the state of the checkpoint it resumes
+/// from where it does; None where any rank failed to start it (each says why).
 fn open(
     scene: &Scene,
     steps: u64,
@@ -127,20 +127,24 @@ fn open(
     if comm.size() > 1 {
         trial.pin_first();
     }
-    let resumed = checkpoints.resumed.as_ref();
-    let started = start_lattice(scene, units, (comm, blocks), &mut trial, resumed);
+    let started = start_lattice(scene, units, (comm, blocks), &mut trial);
+    let say = |e: &str| {
+        let rank = match comm.size() {
+            1 => String::new(),
+            _ => format!("rank {}: ", comm.rank()),
+        };
+        protocol::say!("lbm-server: error: {rank}{e}");
+    };
     if !all(comm, started.is_ok()) {
-        if let Err(e) = &started {
-            let rank = if comm.size() > 1 {
-                format!("rank {}: ", comm.rank())
-            } else {
-                String::new()
-            };
-            protocol::say!("lbm-server: error: {rank}{e}");
-        }
+        started.err().inspect(|e| say(e));
         return None;
     }
-    let (gpu, lattice) = started.expect("started on every rank");
+    let (gpu, mut lattice) = started.expect("started on every rank");
+    // Every rank, once all have made their block (rank 0 sends each its part).
+    if let Err(e) = resume_blocks(&mut lattice, comm, checkpoints.resumed.as_ref()) {
+        say(&e);
+        return None;
+    }
     Some((gpu, lattice, trial))
 }
 
@@ -227,13 +231,12 @@ fn report(
 
 /// This rank's device and block of the scene's lattice on it, the run's first line said (by rank
 /// 0) once it is ready to step (and a warning where its tau is near 1/2, or its storage was
-/// measured to fail); its state the checkpoint's where `resumed`.
+/// measured to fail).
 fn start_lattice(
     scene: &Scene,
     units: &LatticeUnits,
     (comm, blocks): (&dyn Communicator, [usize; 3]),
     trial: &mut Trial,
-    resumed: Option<&Loaded>,
 ) -> Result<(Arc<Gpu>, BlockLattice), String> {
     let gpu = Arc::new(Gpu::for_local_rank(comm.local_rank())?);
     // On a CPU driver the kernels are not timed (coupled/ways.rs, `trial`).
@@ -245,11 +248,7 @@ fn start_lattice(
         kernel: trial.kept().kernel,
         ..setup_of(units)
     };
-    let mut lattice = BlockLattice::new(gpu.clone(), setup, health_of(units), d)?;
-    if let Some(loaded) = resumed {
-        let bytes = lattice.lattice.population_bytes();
-        lattice.lattice.restore_raw(&loaded.raw_state(bytes)?);
-    }
+    let lattice = BlockLattice::new(gpu.clone(), setup, health_of(units), d)?;
     crate::run::started();
     if comm.rank() != 0 {
         return Ok((gpu, lattice));
@@ -419,7 +418,8 @@ impl<'a> FluidRun<'a> {
             due(self.scene.output.interval),
             due(self.scene.output.fields_interval),
         );
-        let checkpoint = self.checkpoints.enabled() && (last || self.checkpoints.schedule.due(step));
+        let schedule = &self.checkpoints.schedule;
+        let checkpoint = self.checkpoints.enabled() && (last || checkpoint_due(self.comm, schedule, step));
         // The whole field crosses the bus only when something is written from it; a check
         // alone reads the status and, if it fails, one cell.
         if lines || snapshot || last {
@@ -429,13 +429,13 @@ impl<'a> FluidRun<'a> {
             }
             self.write(lattice, step, &own, lines, snapshot)?;
             if checkpoint {
-                self.checkpoint(&lattice.lattice)?;
+                self.checkpoint(lattice)?;
             }
             self.write(lattice, step, &own, last && !lines, last && !snapshot)?;
         } else if let Some(bad) = lattice.health(self.comm) {
             return Err(self.blow_up(lattice, step, bad));
         } else if checkpoint {
-            self.checkpoint(&lattice.lattice)?;
+            self.checkpoint(lattice)?;
         }
         lattice.keep_fields();
         self.last_good = Some(step);
@@ -481,15 +481,25 @@ impl<'a> FluidRun<'a> {
         self.fields.as_mut().map_or(Ok(()), FieldOutput::flush)
     }
 
-    /// A checkpoint of the lattice as it is now (one rank), and of where the outputs stand.
-    fn checkpoint(&mut self, lattice: &GpuLattice) -> Result<(), Stop> {
+    /// A checkpoint of the lattice as it is now (every rank's block), and of where the outputs
+    /// stand: rank 0 stages and writes it, once the one before is written (the ranks agree that
+    /// it could).
+    fn checkpoint(&mut self, lattice: &BlockLattice) -> Result<(), Stop> {
         let mut at = OutputPositions::default();
+        let mut staged = Ok(());
         if let Some(fields) = &mut self.fields {
-            fields.positions(&mut at).map_err(Stop::Failed)?;
+            staged = fields.positions(&mut at);
+            staged = staged.and_then(|()| self.checkpoints.stage().map(drop));
         }
-        self.checkpoints.stage().map_err(Stop::Failed)?;
-        let time = lattice.time as f64 * self.units.dt;
-        self.checkpoints.hold(lattice, time, 0, at, None);
+        if !all(self.comm, staged.is_ok()) {
+            return Err(Stop::Failed(
+                staged
+                    .err()
+                    .unwrap_or_else(|| "rank 0 could not write the checkpoint".into()),
+            ));
+        }
+        let time = lattice.time() as f64 * self.units.dt;
+        self.checkpoints.hold((lattice, self.comm), time, 0, at, None);
         self.checkpoints.release();
         Ok(())
     }

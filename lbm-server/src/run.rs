@@ -130,7 +130,7 @@ pub fn main(args: RunArgs) -> ExitCode {
     let prepared = prepared.expect("prepared on every rank");
     if prepared.scene.lattice.is_some() && prepared.scene.particle_count() == 0 {
         let p = &prepared;
-        let checkpoints = p.checkpoints();
+        let checkpoints = p.checkpoints_on(&*comm);
         return ExitCode::from(crate::fluid::run(
             &p.scene,
             &p.scene_file,

@@ -374,3 +374,17 @@ spacing = 0.005
 radius = [0.0017, 0.002]
 jitter = 0.0004
 "#;
+
+/// Every file under `dir` but the lock (which holds the pid of the last run) and its bytes.
+pub fn files_under(dir: &Path) -> std::collections::BTreeMap<std::path::PathBuf, Vec<u8>> {
+    let mut files = std::collections::BTreeMap::new();
+    for entry in std::fs::read_dir(dir).unwrap().map(Result::unwrap) {
+        let path = entry.path();
+        if path.is_dir() {
+            files.extend(files_under(&path));
+        } else if entry.file_name() != ".lock" {
+            files.insert(path.clone(), std::fs::read(&path).unwrap());
+        }
+    }
+    files
+}

@@ -4,7 +4,7 @@
 
 use super::read::Loaded;
 use super::write::{Snapshot, Writer};
-use crate::lbm::gpu::GpuLattice;
+use crate::parallel::{BlockLattice, Communicator};
 use scene::checkpoint::{Header, OutputPositions, Schedule, FORMAT, VERSION};
 use std::path::{Path, PathBuf};
 
@@ -43,6 +43,11 @@ impl Checkpoints {
         }
     }
 
+    /// `--checkpoint-interval`, given to this run or to the one it resumed.
+    pub fn given(&self) -> Option<u64> {
+        self.given
+    }
+
     /// Whether the run writes checkpoints.
     pub fn enabled(&self) -> bool {
         self.schedule.enabled()
@@ -65,26 +70,32 @@ impl Checkpoints {
         }
     }
 
-    /// The lattice's state, copied off the device, and its header (`particles` at simulated time
-    /// `time_s`, the outputs standing `at`), held until the DEM's part is complete (`release`
-    /// hands them to the writer, which writes them into the staging folder on a thread).
+    /// The lattice's state, copied off every rank's device and put together at rank 0
+    /// (`BlockLattice::whole_state`), and its header (`particles` at simulated time `time_s`, the
+    /// outputs standing `at`), held at rank 0 until the DEM's part is complete (`release` hands
+    /// them to the writer, which writes them into the staging folder on a thread). Every rank
+    /// takes part.
     pub fn hold(
         &mut self,
-        lattice: &GpuLattice,
+        (lattice, comm): (&BlockLattice, &dyn Communicator),
         time_s: f64,
         particles: u64,
         at: OutputPositions,
         covered_cells: Option<String>,
     ) {
         let started = std::time::Instant::now();
-        let state = lattice.raw_state();
+        let whole = lattice.whole_state(comm);
         let readback_s = started.elapsed().as_secs_f64();
+        self.schedule.written();
+        let Some(state) = whole else {
+            return;
+        };
         let header = Header {
             format: FORMAT.into(),
             version: VERSION,
             scene_hash: self.scene_hash.clone(),
-            lattice: lattice.setup.n,
-            storage: lattice.storage().name().into(),
+            lattice: lattice.decomposition.n,
+            storage: lattice.lattice.storage().name().into(),
             step: state.time,
             time_s,
             particles,
@@ -100,7 +111,6 @@ impl Checkpoints {
             state,
             readback_s,
         });
-        self.schedule.written();
     }
 
     /// Waits for the checkpoint being written.

@@ -1,6 +1,7 @@
 //! The field outputs of a coupled run's fluid: snapshots (fields/, fields.pvd) and probe lines
 //! (line<N>.csv), after the steps the scene asks for and at the run's end.
 
+use super::ranks::CHECKPOINT;
 use super::FluidSide;
 use crate::checkpoint::{Checkpoints, OutputPositions};
 use crate::fields::FieldOutput;
@@ -46,11 +47,18 @@ impl FluidSide {
     }
 
     /// Takes the lattice's state for a checkpoint (`checkpoints`), with the outputs standing `at`
-    /// and the run's `particles`.
+    /// and the run's `particles`: every rank's block (the others send theirs:
+    /// [`FluidSide::send_checkpoint_block`]).
     pub fn checkpoint(&self, checkpoints: &mut Checkpoints, at: OutputPositions, particles: u64) {
+        self.lead(CHECKPOINT);
         let time = self.steps as f64 * self.units.dt;
         let way = Some(self.lattice.lattice.covered_cells().name().to_string());
-        checkpoints.hold(&self.lattice.lattice, time, particles, at, way);
+        checkpoints.hold((&self.lattice, &*self.comm), time, particles, at, way);
+    }
+
+    /// A rank other than 0: its block's part of the checkpoint rank 0 takes, sent to rank 0.
+    pub(super) fn send_checkpoint_block(&self) {
+        self.lattice.whole_state(&*self.comm);
     }
 
     /// Where a run ends before its last step (Ctrl-C, the DEM's STOP): the field outputs a last

@@ -20,7 +20,7 @@ use crate::lbm::geometry::Setup;
 use crate::lbm::gpu::Gpu;
 use crate::lbm::imb::{covered_fraction, ImbOptions, SolidCollision};
 use crate::lubrication::HeldLubrication;
-use crate::parallel::{BlockLattice, Communicator, Decomposition, FieldPieces};
+use crate::parallel::{resume_blocks, BlockLattice, Communicator, Decomposition, FieldPieces};
 use crate::terminal::Warning;
 use crate::trials::Trial;
 use protocol::{ParticleReply, ParticleState, Physics};
@@ -79,8 +79,9 @@ pub struct FluidSide {
 
 impl FluidSide {
     /// The fluid a scene asks for, for a run of `steps` steps writing its field outputs into `out`;
-    /// resumed, in the state of the checkpoint `resumed`; on the ranks of `comm`, this rank's
-    /// block of the lattice cut into `blocks` (the ranks agree that each made its own).
+    /// resumed, in the state of the checkpoint `resumed` (rank 0's: it sends the other ranks
+    /// theirs); on the ranks of `comm`, this rank's block of the lattice cut into `blocks` (the
+    /// ranks agree that each made its own).
     pub fn for_scene(
         scene: &Scene,
         steps: u64,
@@ -89,12 +90,16 @@ impl FluidSide {
         (comm, blocks): (Rc<dyn Communicator>, [usize; 3]),
     ) -> Result<FluidSide, String> {
         let made = Self::make(scene, steps, out, resumed, (comm.clone(), blocks));
-        if crate::parallel::all(&*comm, made.is_ok()) {
-            return made;
+        if !crate::parallel::all(&*comm, made.is_ok()) {
+            return Err(made.err().unwrap_or_else(|| {
+                "another rank could not start its block of the fluid (its error above)".into()
+            }));
         }
-        Err(made.err().unwrap_or_else(|| {
-            "another rank could not start its block of the fluid (its error above)".into()
-        }))
+        // Every rank, once all have made their block (rank 0 sends each its part).
+        let mut fluid = made?;
+        resume_blocks(&mut fluid.lattice, &*comm, resumed)?;
+        fluid.steps = fluid.lattice.time();
+        Ok(fluid)
     }
 
     fn make(
@@ -132,11 +137,7 @@ impl FluidSide {
         let d = Decomposition::new(units.n, scene.periodic_axes(), blocks, comm.rank());
         let pieces =
             (comm.size() > 1).then(|| FieldPieces::new(scene, &units, out.to_path_buf(), &d, comm.rank()));
-        let mut lattice = BlockLattice::with_coupling(gpu, setup, health_of(&units), d, Some(options))?;
-        if let Some(loaded) = resumed {
-            let bytes = lattice.lattice.population_bytes();
-            lattice.lattice.restore_raw(&loaded.raw_state(bytes)?);
-        }
+        let lattice = BlockLattice::with_coupling(gpu, setup, health_of(&units), d, Some(options))?;
         let lubrication = scene
             .coupling
             .lubrication
@@ -161,7 +162,8 @@ impl FluidSide {
             gravity: scene.gravity,
             lubrication,
             deficit_product,
-            steps: resumed.map_or(0, |l| l.header.step),
+            // The checkpoint's, where the run resumes (`for_scene`).
+            steps: 0,
             trial,
             covered,
             made: std::time::Instant::now(),

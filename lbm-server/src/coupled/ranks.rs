@@ -1,10 +1,10 @@
 //! A coupled run on several ranks: rank 0 joins the DEM (as on one process) and leads, and every
 //! other rank follows it ([`follow`]). Each of rank 0's calls into its [`FluidSide`] that the
 //! others take part in (`step`, `check_last_step`, `unstable_now`, `write_fields_of_early_end`,
-//! `end_ranks`) first broadcasts a command, the step's with the DEM's states (the bytes the
-//! fluid reads); each rank then runs the same code on its block of the lattice, with the same
-//! particles in the whole lattice's coordinates, and meets the others where they gather (the
-//! step's pairs, the health checks, the fields). On one rank nothing is sent.
+//! `checkpoint`, `end_ranks`) first broadcasts a command, the step's with the DEM's states (the
+//! bytes the fluid reads); each rank then runs the same code on its block of the lattice, with
+//! the same particles in the whole lattice's coordinates, and meets the others where they gather
+//! (the step's pairs, the health checks, the fields). On one rank nothing is sent.
 
 use super::FluidSide;
 use crate::lbm::imb::LostCovers;
@@ -22,6 +22,8 @@ const UNSTABLE_NOW: u8 = 2;
 const EARLY_END: u8 = 3;
 /// With the run's exit code as its second byte.
 const END: u8 = 4;
+/// Every rank sends rank 0 its block for a checkpoint (`field_outputs.rs`).
+pub(super) const CHECKPOINT: u8 = 5;
 
 impl FluidSide {
     /// Advances the fluid one step with the particles `states` (SI) and returns their loads (SI):
@@ -72,7 +74,7 @@ impl FluidSide {
     }
 
     /// Rank 0 tells the others to do what it does next.
-    fn lead(&self, command: u8) {
+    pub(super) fn lead(&self, command: u8) {
         if self.comm.size() > 1 {
             self.comm.broadcast(vec![command]);
         }
@@ -158,6 +160,7 @@ pub fn follow(
             EARLY_END => {
                 let _ = fluid.write_fields_of_early_end_here();
             }
+            CHECKPOINT => fluid.send_checkpoint_block(),
             _ => {
                 fluid.parallel_summary(started.elapsed().as_secs_f64());
                 return command[1];

@@ -1,5 +1,6 @@
 //! What the ranks say to one another ([`Communicator`]): halo messages, results gathered on rank
-//! 0 in rank order, and agreement on a number. One process is a
+//! 0 in rank order, rank 0's bytes sent to every rank (the same, or each its own), and agreement
+//! on a number. One process is a
 //! communicator of one rank ([`OneRank`]); MPI's world another (`mpi_world.rs`, `--features mpi`).
 
 /// A message of populations to the rank `peer`, tagged `tag` (read by MPI's world alone).
@@ -35,6 +36,8 @@ pub trait Communicator {
     fn min(&self, value: u64) -> u64;
     /// Rank 0's `bytes` at every rank (the others' `bytes` are not read).
     fn broadcast(&self, bytes: Vec<u8>) -> Vec<u8>;
+    /// Rank 0's `pieces[r]` at rank r (the others' `pieces` are not read).
+    fn scatter(&self, pieces: Vec<Vec<u8>>) -> Vec<u8>;
 }
 
 /// When this process was asked to stop (Ctrl-C, SIGTERM: [`interrupted`]).
@@ -118,6 +121,10 @@ impl Communicator for OneRank {
 
     fn broadcast(&self, bytes: Vec<u8>) -> Vec<u8> {
         bytes
+    }
+
+    fn scatter(&self, mut pieces: Vec<Vec<u8>>) -> Vec<u8> {
+        pieces.swap_remove(0)
     }
 }
 

@@ -14,7 +14,7 @@ use std::sync::Arc;
 
 /// The particles at step `t` (on the 8 x 6 x 8 lattices of `tests.rs`): one on the edge where the
 /// cuts at x = 4 and z = 4 meet, one across the periodic x faces, moving and turning.
-fn particles(t: u64) -> Vec<SolidParticle> {
+pub(super) fn particles(t: u64) -> Vec<SolidParticle> {
     let t = t as f64;
     vec![
         SolidParticle {

@@ -13,12 +13,18 @@
 //!   `coupled_block.rs`: its coupled step with particles (the loads made at rank 0 from every
 //!   rank's share: the loads of the particles within its block, the covered cells it holds of
 //!   those across a cut).
+//! - `checkpoint.rs`: a checkpoint of the blocks, the same as one process's: written from every
+//!   rank's own cells gathered at rank 0, resumed on any number of ranks (rank 0 sends each rank
+//!   its block with its ghost layers).
 //! - `summary.rs`: what summary.json says of the ranks.
 //! - `thread_ranks.rs`: ranks as threads of one process (the tests; `bench --thread-ranks`).
 //!
 //! Every rank runs the same code, one rank included: a run on one rank is the single-process run.
 
 mod block;
+mod checkpoint;
+#[cfg(test)]
+mod checkpoint_tests;
 mod communicator;
 mod coupled_block;
 #[cfg(test)]
@@ -35,6 +41,7 @@ mod tests;
 mod thread_ranks;
 
 pub use block::{BlockLattice, RankUnhealthy};
+pub use checkpoint::{checkpoint_due, resume_blocks};
 pub use communicator::launched_ranks;
 use communicator::OneRank;
 pub use communicator::{all, interrupted, wait_for_rank_0, Communicator};

@@ -1,6 +1,7 @@
 //! MPI's world as the run's [`Communicator`] (`--features mpi`): point-to-point messages started
-//! together (Isend / Irecv) for the halos, gathers in rank order and an all-reduce (Iallreduce);
-//! the non-blocking ones waited for with a deadline once the process is asked to stop.
+//! together (Isend / Irecv) for the halos, gathers and scatters in rank order and an all-reduce
+//! (Iallreduce); the non-blocking ones waited for with a deadline once the process is asked to
+//! stop.
 
 use super::communicator::{
     host_name, launched_local_rank, past_stop_deadline, was_interrupted, Communicator, Expected, Message,
@@ -27,8 +28,9 @@ impl Drop for MpiWorld {
     }
 }
 
-/// The tag of the gathers' messages (the halos' tags are the faces, 0-5).
+/// The tags of the gathers' and scatters' messages (the halos' tags are the faces, 0-5).
 const GATHER_TAG: i32 = 100;
+const SCATTER_TAG: i32 = 101;
 
 impl MpiWorld {
     /// Initialises MPI (once per process).
@@ -111,6 +113,18 @@ impl Communicator for MpiWorld {
         bytes.resize(len as usize, 0);
         root.broadcast_into(&mut bytes[..]);
         bytes
+    }
+
+    fn scatter(&self, mut pieces: Vec<Vec<u8>>) -> Vec<u8> {
+        if self.rank() != 0 {
+            let from = self.world.process_at_rank(0);
+            return from.receive_vec_with_tag::<u8>(SCATTER_TAG).0;
+        }
+        for (r, piece) in pieces.iter().enumerate().skip(1) {
+            let to = self.world.process_at_rank(r as i32);
+            to.send_with_tag(&piece[..], SCATTER_TAG);
+        }
+        pieces.swap_remove(0)
     }
 }
 

@@ -23,6 +23,7 @@ pub struct ThreadRanks {
 const GATHER: i32 = 100;
 const MIN: i32 = 101;
 const BROADCAST: i32 = 102;
+const SCATTER: i32 = 103;
 
 impl ThreadRanks {
     /// The `size` ranks of one run, in rank order, each to be moved into its own thread.
@@ -103,5 +104,17 @@ impl Communicator for ThreadRanks {
         }
         (1..self.size).for_each(|r| self.send(r, BROADCAST, bytes.clone()));
         bytes
+    }
+    fn scatter(&self, mut pieces: Vec<Vec<u8>>) -> Vec<u8> {
+        if self.rank != 0 {
+            return self.receive(0, SCATTER);
+        }
+        let first = std::mem::take(&mut pieces[0]);
+        pieces
+            .into_iter()
+            .enumerate()
+            .skip(1)
+            .for_each(|(r, p)| self.send(r, SCATTER, p));
+        first
     }
 }

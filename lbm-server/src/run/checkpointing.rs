@@ -51,10 +51,11 @@ impl Session {
         }
     }
 
-    /// A resumed run refused the DEM in its Welcome (`resume_refusal`): the DEM ended, `why` said,
-    /// nothing in OUT written (not even summary.json); exit 2.
+    /// A resumed run refused the DEM in its Welcome (`resume_refusal`): the DEM and the other
+    /// ranks ended, `why` said, nothing in OUT written (not even summary.json); exit 2.
     pub(super) fn refuse_resume(mut self, why: &str) -> u8 {
         self.end_dem(true);
+        self.fluid.end_ranks(EXIT_BAD_INPUT, 0.0);
         protocol::say!("lbm-server: error: {why}");
         protocol::say!(
             "lbm-server: nothing in {} was changed; its checkpoint needs a DEM that can \

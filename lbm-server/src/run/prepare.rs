@@ -34,13 +34,7 @@ pub(super) struct Prepared {
 /// output folder.
 pub(super) fn prepare(args: &RunArgs, comm: &dyn Communicator) -> Result<Prepared, String> {
     if let Some(out) = &args.resume {
-        if comm.size() > 1 {
-            return Err(format!(
-                "--resume on {} ranks: a run resumes on one rank",
-                comm.size()
-            ));
-        }
-        return super::resume::prepare_resume(args, out);
+        return super::resume::prepare_resume(args, out, comm);
     }
     let (scene, scene_file, text) = match &args.scene {
         Some(path) => {
@@ -65,13 +59,6 @@ pub(super) fn prepare(args: &RunArgs, comm: &dyn Communicator) -> Result<Prepare
         crate::parallel::dem_hosts(&crate::parallel::hosts(comm))?;
     }
     let blocks = blocks(&scene, comm.size())?;
-    if comm.size() > 1 && scene::checkpoint::Schedule::new(&scene, args.checkpoint_interval).enabled() {
-        return Err(format!(
-            "checkpoints on {} ranks: a run writes checkpoints on one rank (drop \
-             --checkpoint-interval and output.checkpoint_*, or run on one rank)",
-            comm.size()
-        ));
-    }
     if let Some(units) = &scene.lattice_units {
         let block: [usize; 3] = std::array::from_fn(|a| units.n[a] / blocks[a]);
         fits_the_device(block)?;
@@ -118,7 +105,7 @@ fn output_folder(
 
 /// The lattice's blocks on `ranks` ranks (`[parallel] blocks` or chosen); with particles, what
 /// several ranks cannot take yet refused (`coupled::refuse_on_ranks`).
-fn blocks(scene: &Scene, ranks: usize) -> Result<[usize; 3], String> {
+pub(super) fn blocks(scene: &Scene, ranks: usize) -> Result<[usize; 3], String> {
     let given = scene.parallel.blocks();
     let Some(units) = &scene.lattice_units else {
         return match ranks {
@@ -167,6 +154,30 @@ impl Prepared {
         let resumed = self.resumed.clone();
         let every = self.checkpoint_interval;
         Checkpoints::new(&self.out, &self.scene, &self.scene_text, every, resumed)
+    }
+
+    /// The run's checkpoints on every rank of `comm`, when all have prepared the run: on
+    /// several, every `--checkpoint-interval` steps as rank 0 has it (a resumed run's, where
+    /// not given, is its checkpoint's, which rank 0 alone read).
+    pub(super) fn checkpoints_on(&self, comm: &dyn Communicator) -> Checkpoints {
+        let ours = self.checkpoints();
+        if comm.size() == 1 {
+            return ours;
+        }
+        // A flag byte first: MPI refuses a broadcast of none.
+        let given = match ours.given() {
+            Some(n) => [&[1][..], &n.to_le_bytes()].concat(),
+            None => vec![0],
+        };
+        let given = comm.broadcast(given);
+        let every = given[1..].try_into().ok().map(u64::from_le_bytes);
+        Checkpoints::new(
+            &self.out,
+            &self.scene,
+            &self.scene_text,
+            every,
+            self.resumed.clone(),
+        )
     }
 }
 

@@ -203,16 +203,22 @@ fn keep_listed(path: &Path, listed: &[(f64, String)]) -> std::io::Result<()> {
     Ok(())
 }
 
-/// Removes the snapshot files a run wrote after its checkpoint `at` (those of `fields/step*.vti`
-/// and `particles_*.vtp` that the checkpoint's .pvd entries do not list, from a later step than
-/// the last they list): a resumed run writes again those it is due to. Returns how many.
+/// Removes the snapshot files a run wrote after its checkpoint `at` (those of `fields/step*.vti`,
+/// `fields/step*.pvti` with the folder of their pieces, and `particles_*.vtp` that the
+/// checkpoint's .pvd entries do not list, from a later step than the last they list): a resumed
+/// run writes again those it is due to, on whatever number of ranks. Returns how many.
 fn remove_later_snapshots(out: &Path, at: &super::OutputPositions) -> std::io::Result<usize> {
     let mut removed = 0;
-    for (folder, head, tail, listed) in [
-        ("fields", "step", ".vti", &at.fields_pvd),
-        ("", "particles_", ".vtp", &at.particles_pvd),
+    for (folder, head, tails, listed) in [
+        ("fields", "step", &[".vti", ".pvti", ""][..], &at.fields_pvd),
+        ("", "particles_", &[".vtp"][..], &at.particles_pvd),
     ] {
-        let step_of = |name: &str| name.strip_prefix(head)?.strip_suffix(tail)?.parse::<u64>().ok();
+        let step_of = |name: &str| {
+            let rest = name.strip_prefix(head)?;
+            tails
+                .iter()
+                .find_map(|t| rest.strip_suffix(t)?.parse::<u64>().ok())
+        };
         let last = listed
             .iter()
             .filter_map(|(_, f)| step_of(f.rsplit('/').next()?))
@@ -226,10 +232,15 @@ fn remove_later_snapshots(out: &Path, at: &super::OutputPositions) -> std::io::R
             let entry = entry?;
             let name = entry.file_name().to_string_lossy().into_owned();
             let later = step_of(&name).is_some_and(|s| last.is_none_or(|l| s > l));
-            if later && entry.file_type()?.is_file() {
-                std::fs::remove_file(entry.path())?;
-                removed += 1;
+            if !later {
+                continue;
             }
+            match entry.file_type()? {
+                t if t.is_file() => std::fs::remove_file(entry.path())?,
+                t if t.is_dir() && !folder.is_empty() => std::fs::remove_dir_all(entry.path())?,
+                _ => continue,
+            }
+            removed += 1;
         }
     }
     Ok(removed)

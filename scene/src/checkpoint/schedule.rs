@@ -37,6 +37,11 @@ impl Schedule {
         by_steps || self.wall.is_some_and(|w| self.last.elapsed() >= w)
     }
 
+    /// Whether one is due by the wall clock (`output.checkpoint_wall_interval`).
+    pub fn by_wall_clock(&self) -> bool {
+        self.wall.is_some()
+    }
+
     /// The step interval (0: none), for the fluid's chunks of steps.
     pub fn every(&self) -> u64 {
         self.every
