@@ -17,8 +17,8 @@
 //   (the AA pattern: a cell reads and writes the same 19 slots, which no other cell touches in
 //   that step, so the second write simply replaces the first);
 // - SKIP: as the redo, but `collide_covered` stores the covered cells in place, `cover` sets their
-//   bits of the cover mask, the fluid kernels leave those cells alone, and `uncover_listed` clears
-//   the bits after them.
+//   bits of the cover mask, the fluid kernels leave those cells alone, and the mask is cleared
+//   after them (a buffer clear: every bit of it is a covered cell's of this step).
 //
 // The seed's equations: the solid fraction that B weighs in `solid_fraction`, B in `weighting`,
 // the covered cell's collision (eq. 7) in `immersed_boundary`, the solid term Omega (eq. 8) at the
@@ -62,13 +62,21 @@ struct Particle {
 // `box_cell`): xyz the momentum the fluid gave the particle in that cell during the step (0 where
 // it holds no slot), w 1 where the particle covers the cell, 0 elsewhere.
 @group(0) @binding(25) var<storage, read_write> pairs: array<vec4<f32>>;
-// Per cell: how many particles cover it this step; then (FUSED) the cover mask, bit k % 32 of word
-// cells + k / 32 set when cell k is covered.
+// Per cell: how many particles cover it this step; then (FUSED, SKIP) the cover mask, bit k % 32
+// of word cells + k / 32 set when cell k is covered.
 @group(0) @binding(26) var<storage, read_write> covered: array<atomic<u32>>;
 // Per cell: the particles covering it (SLOTS entries), as keys (`slot_key`, 0: empty), largest
 // first: the SLOTS largest solid fractions, whatever the order in which `cover`'s invocations
 // arrive (see `hold_slot`).
 @group(0) @binding(27) var<storage, read_write> slots: array<atomic<u32>>;
+// The same two buffers as `cover` left them, read without atomics by the passes after it (the
+// fluid kernels, `collide_covered`): on llvmpipe an atomic load is a sequentially consistent
+// load per SIMD lane, which keeps the compiler from moving the kernel's other loads and stores
+// across it (skip's fluid kernels, which read one mask word per quad, ran 8-10% slower than
+// the redo's). An entry point uses either view of a buffer, never both (naga checks the bindings
+// per entry point).
+@group(0) @binding(26) var<storage, read_write> cover_words: array<u32>;
+@group(0) @binding(27) var<storage, read_write> slot_keys: array<u32>;
 // particles, pairs, -, capacity of `saved`
 @group(0) @binding(28) var<storage, read> imb_info: vec4<u32>;
 // The covered cells of this step, each once, in the order `cover` found them, over the `fields`
@@ -299,7 +307,7 @@ fn join_list(k: u32, list: u32) {
 }
 
 // The covered cells' workgroups for the indirect dispatches over the list (`collide_covered`, then
-// `store_covered` or `uncover_listed`):
+// with the redo `store_covered`):
 // status[5..8] (x, y, z; 2D beyond 65535 workgroups) for the front of the list, status[9..12] for
 // the back. One invocation; covered cells beyond the capacity are counted in status[2] (the run
 // stops: their solid term would be missing).
@@ -450,20 +458,11 @@ fn kept(e: u32) -> Kept {
     return c;
 }
 
-// SKIP, after the fluid step: the listed cells' bits of the cover mask back to zero.
-@compute @workgroup_size(64)
-fn uncover_listed(at: Invocation) {
-    let e = listed(at);
-    if e == NO_CELL { return; }
-    let k = saved_word(list_cell(e));
-    atomicAnd(&covered[mask_word(k)], ~mask_bit(k));
-}
-
 // In the fluid kernels (lbm.wgsl): whether cell k is left alone, `collide_covered` having updated
 // it already (SKIP, its bit of the cover mask set). One mask word serves 32 consecutive cells.
 fn skipped(k: u32) -> bool {
     if SKIP {
-        return (atomicLoad(&covered[mask_word(k)]) & mask_bit(k)) != 0u;
+        return (cover_words[mask_word(k)] & mask_bit(k)) != 0u;
     }
     return false;
 }
@@ -500,7 +499,7 @@ fn store_covered(at: Invocation) {
 // fluid kernels leave alone.
 fn skipped_lanes(q: u32) -> vec4<bool> {
     if SKIP {
-        let bits = atomicLoad(&covered[mask_word(4u * q)]) >> ((q & 7u) * 4u);
+        let bits = cover_words[mask_word(4u * q)] >> ((q & 7u) * 4u);
         return (vec4<u32>(bits) & vec4<u32>(1u, 2u, 4u, 8u)) != vec4<u32>(0u);
     }
     return vec4<bool>(false);
@@ -519,7 +518,7 @@ fn mask_bit(k: u32) -> u32 {
 // and particles cover the cell. One mask word serves 32 consecutive cells: a warp reads it once.
 fn solid_term(k: u32, f: array<f32, 19>, m: Moments, post: array<f32, 19>) -> array<f32, 19> {
     if FUSED {
-        if (atomicLoad(&covered[mask_word(k)]) & mask_bit(k)) != 0u {
+        if (cover_words[mask_word(k)] & mask_bit(k)) != 0u {
             return immersed_boundary(k, f, m, post);
         }
     }
@@ -534,7 +533,7 @@ fn solid_term(k: u32, f: array<f32, 19>, m: Moments, post: array<f32, 19>) -> ar
 // two particles cover) are looked up again for each, since an array indexed by slot would live in
 // memory on llvmpipe, each access a loop over the SIMD lanes.
 fn immersed_boundary(k: u32, f: array<f32, 19>, m: Moments, post: array<f32, 19>) -> array<f32, 19> {
-    let count = min(atomicLoad(&covered[k]), SLOTS);
+    let count = min(cover_words[k], SLOTS);
     if count == 0u { return post; }
     let first = slot_cover(k, 0u);
     var eps_total = first.eps;
@@ -573,7 +572,7 @@ struct Cover {
 // function of the same values: the cell centre in the particle's box, one period away where the
 // box wraps).
 fn slot_cover(k: u32, s: u32) -> Cover {
-    let p = particles[slot_particle(atomicLoad(&slots[k * SLOTS + s]))];
+    let p = particles[slot_particle(slot_keys[k * SLOTS + s])];
     let t = box_offset(k, p);
     let x = vec3<f32>(box_origin(p) + t) + 0.5;
     return Cover(p, t, x, solid_fraction(x, p.pos_r.xyz, p.pos_r.w));
