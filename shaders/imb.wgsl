@@ -69,14 +69,6 @@ struct Particle {
 // first: the SLOTS largest solid fractions, whatever the order in which `cover`'s invocations
 // arrive (see `hold_slot`).
 @group(0) @binding(27) var<storage, read_write> slots: array<atomic<u32>>;
-// The same two buffers as `cover` left them, read without atomics by the passes after it (the
-// fluid kernels, `collide_covered`): on llvmpipe an atomic load is a sequentially consistent
-// load per SIMD lane, which keeps the compiler from moving the kernel's other loads and stores
-// across it (skip's fluid kernels, which read one mask word per quad, ran 8-10% slower than
-// the redo's). An entry point uses either view of a buffer, never both (naga checks the bindings
-// per entry point).
-@group(0) @binding(26) var<storage, read_write> cover_words: array<u32>;
-@group(0) @binding(27) var<storage, read_write> slot_keys: array<u32>;
 // particles, pairs, -, capacity of `saved`
 @group(0) @binding(28) var<storage, read> imb_info: vec4<u32>;
 // The covered cells of this step, each once, in the order `cover` found them, over the `fields`
@@ -462,7 +454,7 @@ fn kept(e: u32) -> Kept {
 // it already (SKIP, its bit of the cover mask set). One mask word serves 32 consecutive cells.
 fn skipped(k: u32) -> bool {
     if SKIP {
-        return (cover_words[mask_word(k)] & mask_bit(k)) != 0u;
+        return (atomicLoad(&covered[mask_word(k)]) & mask_bit(k)) != 0u;
     }
     return false;
 }
@@ -499,7 +491,7 @@ fn store_covered(at: Invocation) {
 // fluid kernels leave alone.
 fn skipped_lanes(q: u32) -> vec4<bool> {
     if SKIP {
-        let bits = cover_words[mask_word(4u * q)] >> ((q & 7u) * 4u);
+        let bits = atomicLoad(&covered[mask_word(4u * q)]) >> ((q & 7u) * 4u);
         return (vec4<u32>(bits) & vec4<u32>(1u, 2u, 4u, 8u)) != vec4<u32>(0u);
     }
     return vec4<bool>(false);
@@ -518,7 +510,7 @@ fn mask_bit(k: u32) -> u32 {
 // and particles cover the cell. One mask word serves 32 consecutive cells: a warp reads it once.
 fn solid_term(k: u32, f: array<f32, 19>, m: Moments, post: array<f32, 19>) -> array<f32, 19> {
     if FUSED {
-        if (cover_words[mask_word(k)] & mask_bit(k)) != 0u {
+        if (atomicLoad(&covered[mask_word(k)]) & mask_bit(k)) != 0u {
             return immersed_boundary(k, f, m, post);
         }
     }
@@ -529,22 +521,31 @@ fn solid_term(k: u32, f: array<f32, 19>, m: Moments, post: array<f32, 19>) -> ar
 // operator's relaxation and source) is weighted by 1 - sum B, and each particle adds B_s Omega_s
 // (`solid_collision`). The particles in the order of their keys (`hold_slot`'s order: the sums do
 // not depend on the order of arrival), their weights B (eq. 7) from their solid fractions with the
-// total capped at 1. The first particle is held through the three sums; the others (few: a cell
-// two particles cover) are looked up again for each, since an array indexed by slot would live in
-// memory on llvmpipe, each access a loop over the SIMD lanes.
+// total capped at 1. The first two particles are held through the three sums (the second read
+// once, where the cell has one); the others (slots 3 and 4: rare) are looked up again for each,
+// since an array indexed by slot would live in memory on llvmpipe, each access a loop over the
+// SIMD lanes. No loop over the slots bounded by the cell's count: llvmpipe runs a loop's body at
+// least once, masked, so each such loop cost every covered cell a particle's lookup and, the
+// third, a solid collision, where most cells have one particle.
 fn immersed_boundary(k: u32, f: array<f32, 19>, m: Moments, post: array<f32, 19>) -> array<f32, 19> {
-    let count = min(cover_words[k], SLOTS);
+    let count = min(atomicLoad(&covered[k]), SLOTS);
     if count == 0u { return post; }
     let first = slot_cover(k, 0u);
-    var eps_total = first.eps;
-    for (var s = 1u; s < count; s++) {
-        eps_total += slot_cover(k, s).eps;
+    var second = first;
+    if count > 1u {
+        second = slot_cover(k, 1u);
     }
-    let scale = select(1.0, 1.0 / eps_total, eps_total > 1.0);
+    let scale = slot_scale(k, count, first.eps, second.eps);
     let b_first = weighting(first.eps * scale);
+    let b_second = weighting(second.eps * scale);
     var b_total = b_first;
-    for (var s = 1u; s < count; s++) {
-        b_total += weighting(slot_cover(k, s).eps * scale);
+    if count > 1u {
+        b_total += b_second;
+    }
+    for (var s = 2u; s < SLOTS; s++) {
+        if s < count {
+            b_total += weighting(slot_cover(k, s).eps * scale);
+        }
     }
     var out: array<f32, 19>;
     //#for i
@@ -552,11 +553,31 @@ fn immersed_boundary(k: u32, f: array<f32, 19>, m: Moments, post: array<f32, 19>
     //#end
     let own = own_collision(f, m, post);
     out = solid_collision(first.p, first.t, first.x, b_first, f, m, own, out);
-    for (var s = 1u; s < count; s++) {
-        let c = slot_cover(k, s);
-        out = solid_collision(c.p, c.t, c.x, weighting(c.eps * scale), f, m, own, out);
+    if count > 1u {
+        out = solid_collision(second.p, second.t, second.x, b_second, f, m, own, out);
+    }
+    for (var s = 2u; s < SLOTS; s++) {
+        if s < count {
+            let c = slot_cover(k, s);
+            out = solid_collision(c.p, c.t, c.x, weighting(c.eps * scale), f, m, own, out);
+        }
     }
     return out;
+}
+
+// The factor that caps the total solid fraction of cell k's `count` particles at 1 (the first
+// two's fractions given), the fractions summed in slot order.
+fn slot_scale(k: u32, count: u32, first: f32, second: f32) -> f32 {
+    var eps_total = first;
+    if count > 1u {
+        eps_total += second;
+    }
+    for (var s = 2u; s < SLOTS; s++) {
+        if s < count {
+            eps_total += slot_cover(k, s).eps;
+        }
+    }
+    return select(1.0, 1.0 / eps_total, eps_total > 1.0);
 }
 
 // A particle covering a cell, with the cell's offset in its box, the cell's centre there and the
@@ -572,7 +593,7 @@ struct Cover {
 // function of the same values: the cell centre in the particle's box, one period away where the
 // box wraps).
 fn slot_cover(k: u32, s: u32) -> Cover {
-    let p = particles[slot_particle(slot_keys[k * SLOTS + s])];
+    let p = particles[slot_particle(atomicLoad(&slots[k * SLOTS + s]))];
     let t = box_offset(k, p);
     let x = vec3<f32>(box_origin(p) + t) + 0.5;
     return Cover(p, t, x, solid_fraction(x, p.pos_r.xyz, p.pos_r.w));
