@@ -17,8 +17,8 @@
 //   (the AA pattern: a cell reads and writes the same 19 slots, which no other cell touches in
 //   that step, so the second write simply replaces the first);
 // - SKIP: as the redo, but `collide_covered` stores the covered cells in place, `cover` sets their
-//   bits of the cover mask, the fluid kernels leave those cells alone, and `uncover_listed` clears
-//   the bits after them.
+//   bits of the cover mask, the fluid kernels leave those cells alone, and the mask is cleared
+//   after them (a buffer clear: every bit of it is a covered cell's of this step).
 //
 // The seed's equations: the solid fraction that B weighs in `solid_fraction`, B in `weighting`,
 // the covered cell's collision (eq. 7) in `immersed_boundary`, the solid term Omega (eq. 8) at the
@@ -62,8 +62,8 @@ struct Particle {
 // `box_cell`): xyz the momentum the fluid gave the particle in that cell during the step (0 where
 // it holds no slot), w 1 where the particle covers the cell, 0 elsewhere.
 @group(0) @binding(25) var<storage, read_write> pairs: array<vec4<f32>>;
-// Per cell: how many particles cover it this step; then (FUSED) the cover mask, bit k % 32 of word
-// cells + k / 32 set when cell k is covered.
+// Per cell: how many particles cover it this step; then (FUSED, SKIP) the cover mask, bit k % 32
+// of word cells + k / 32 set when cell k is covered.
 @group(0) @binding(26) var<storage, read_write> covered: array<atomic<u32>>;
 // Per cell: the particles covering it (SLOTS entries), as keys (`slot_key`, 0: empty), largest
 // first: the SLOTS largest solid fractions, whatever the order in which `cover`'s invocations
@@ -299,7 +299,7 @@ fn join_list(k: u32, list: u32) {
 }
 
 // The covered cells' workgroups for the indirect dispatches over the list (`collide_covered`, then
-// `store_covered` or `uncover_listed`):
+// with the redo `store_covered`):
 // status[5..8] (x, y, z; 2D beyond 65535 workgroups) for the front of the list, status[9..12] for
 // the back. One invocation; covered cells beyond the capacity are counted in status[2] (the run
 // stops: their solid term would be missing).
@@ -450,15 +450,6 @@ fn kept(e: u32) -> Kept {
     return c;
 }
 
-// SKIP, after the fluid step: the listed cells' bits of the cover mask back to zero.
-@compute @workgroup_size(64)
-fn uncover_listed(at: Invocation) {
-    let e = listed(at);
-    if e == NO_CELL { return; }
-    let k = saved_word(list_cell(e));
-    atomicAnd(&covered[mask_word(k)], ~mask_bit(k));
-}
-
 // In the fluid kernels (lbm.wgsl): whether cell k is left alone, `collide_covered` having updated
 // it already (SKIP, its bit of the cover mask set). One mask word serves 32 consecutive cells.
 fn skipped(k: u32) -> bool {
@@ -530,22 +521,31 @@ fn solid_term(k: u32, f: array<f32, 19>, m: Moments, post: array<f32, 19>) -> ar
 // operator's relaxation and source) is weighted by 1 - sum B, and each particle adds B_s Omega_s
 // (`solid_collision`). The particles in the order of their keys (`hold_slot`'s order: the sums do
 // not depend on the order of arrival), their weights B (eq. 7) from their solid fractions with the
-// total capped at 1. The first particle is held through the three sums; the others (few: a cell
-// two particles cover) are looked up again for each, since an array indexed by slot would live in
-// memory on llvmpipe, each access a loop over the SIMD lanes.
+// total capped at 1. The first two particles are held through the three sums (the second read
+// once, where the cell has one); the others (slots 3 and 4: rare) are looked up again for each,
+// since an array indexed by slot would live in memory on llvmpipe, each access a loop over the
+// SIMD lanes. No loop over the slots bounded by the cell's count: llvmpipe runs a loop's body at
+// least once, masked, so each such loop cost every covered cell a particle's lookup and, the
+// third, a solid collision, where most cells have one particle.
 fn immersed_boundary(k: u32, f: array<f32, 19>, m: Moments, post: array<f32, 19>) -> array<f32, 19> {
     let count = min(atomicLoad(&covered[k]), SLOTS);
     if count == 0u { return post; }
     let first = slot_cover(k, 0u);
-    var eps_total = first.eps;
-    for (var s = 1u; s < count; s++) {
-        eps_total += slot_cover(k, s).eps;
+    var second = first;
+    if count > 1u {
+        second = slot_cover(k, 1u);
     }
-    let scale = select(1.0, 1.0 / eps_total, eps_total > 1.0);
+    let scale = slot_scale(k, count, first.eps, second.eps);
     let b_first = weighting(first.eps * scale);
+    let b_second = weighting(second.eps * scale);
     var b_total = b_first;
-    for (var s = 1u; s < count; s++) {
-        b_total += weighting(slot_cover(k, s).eps * scale);
+    if count > 1u {
+        b_total += b_second;
+    }
+    for (var s = 2u; s < SLOTS; s++) {
+        if s < count {
+            b_total += weighting(slot_cover(k, s).eps * scale);
+        }
     }
     var out: array<f32, 19>;
     //#for i
@@ -553,11 +553,31 @@ fn immersed_boundary(k: u32, f: array<f32, 19>, m: Moments, post: array<f32, 19>
     //#end
     let own = own_collision(f, m, post);
     out = solid_collision(first.p, first.t, first.x, b_first, f, m, own, out);
-    for (var s = 1u; s < count; s++) {
-        let c = slot_cover(k, s);
-        out = solid_collision(c.p, c.t, c.x, weighting(c.eps * scale), f, m, own, out);
+    if count > 1u {
+        out = solid_collision(second.p, second.t, second.x, b_second, f, m, own, out);
+    }
+    for (var s = 2u; s < SLOTS; s++) {
+        if s < count {
+            let c = slot_cover(k, s);
+            out = solid_collision(c.p, c.t, c.x, weighting(c.eps * scale), f, m, own, out);
+        }
     }
     return out;
+}
+
+// The factor that caps the total solid fraction of cell k's `count` particles at 1 (the first
+// two's fractions given), the fractions summed in slot order.
+fn slot_scale(k: u32, count: u32, first: f32, second: f32) -> f32 {
+    var eps_total = first;
+    if count > 1u {
+        eps_total += second;
+    }
+    for (var s = 2u; s < SLOTS; s++) {
+        if s < count {
+            eps_total += slot_cover(k, s).eps;
+        }
+    }
+    return select(1.0, 1.0 / eps_total, eps_total > 1.0);
 }
 
 // A particle covering a cell, with the cell's offset in its box, the cell's centre there and the

@@ -13,13 +13,13 @@ pub(in crate::lbm) struct Passes {
 }
 
 /// The passes of [`CoveredCells::Redo`] and [`CoveredCells::Skip`]: `covered_groups`, then
-/// `collide_covered` (before the fluid kernels) and after them `store_covered` (the redo) or
-/// `uncover_listed` (skip), named, for each KIND (bit 0 the parity, bit 1 the covered cells with a
-/// link that leaves the fluid).
+/// `collide_covered` (before the fluid kernels) and, with the redo, `store_covered` after them
+/// (skip's fluid kernels clear the cover mask as they read it), for each KIND (bit 0 the parity,
+/// bit 1 the covered cells with a link that leaves the fluid).
 struct Redo {
     groups: wgpu::ComputePipeline,
     collide: [wgpu::ComputePipeline; 4],
-    after: (&'static str, [wgpu::ComputePipeline; 4]),
+    store: Option<[wgpu::ComputePipeline; 4]>,
 }
 
 impl Passes {
@@ -29,15 +29,10 @@ impl Passes {
         mode: CoveredCells,
         make: &dyn Fn(&str, u32) -> wgpu::ComputePipeline,
     ) -> Passes {
-        let after = if mode == CoveredCells::Skip {
-            "uncover_listed"
-        } else {
-            "store_covered"
-        };
         let redo = (mode != CoveredCells::Fused).then(|| Redo {
             groups: make("covered_groups", 0),
             collide: [0, 1, 2, 3].map(|kind| make("collide_covered", kind)),
-            after: (after, [0, 1, 2, 3].map(|kind| make(after, kind))),
+            store: (mode != CoveredCells::Skip).then(|| [0, 1, 2, 3].map(|kind| make("store_covered", kind))),
         });
         Passes {
             cover: make("cover", 0),
@@ -52,7 +47,7 @@ impl Passes {
         let mut all = vec![&self.cover, &self.reduce, &self.sum_loads];
         if let Some(r) = &self.redo {
             all.push(&r.groups);
-            all.extend(r.collide.iter().chain(&r.after.1));
+            all.extend(r.collide.iter().chain(r.store.iter().flatten()));
         }
         all
     }
@@ -71,9 +66,8 @@ pub(super) struct StepPasses {
 pub(super) struct CoveredPasses {
     pub(super) groups: wgpu::ComputePipeline,
     pub(super) collide: [wgpu::ComputePipeline; 2],
-    /// "store_covered" (the redo) or "uncover_listed" (skip), and its pipelines.
-    pub(super) after: &'static str,
-    pub(super) after_pipelines: [wgpu::ComputePipeline; 2],
+    /// The redo's `store_covered` (skip: none).
+    pub(super) store: Option<[wgpu::ComputePipeline; 2]>,
 }
 
 impl GpuLattice {
@@ -93,8 +87,7 @@ impl GpuLattice {
             covered: passes.redo.as_ref().map(|r| CoveredPasses {
                 groups: r.groups.clone(),
                 collide: [0, 1].map(|list| r.collide[kind(list)].clone()),
-                after: r.after.0,
-                after_pipelines: [0, 1].map(|list| r.after.1[kind(list)].clone()),
+                store: r.store.as_ref().map(|s| [0, 1].map(|list| s[kind(list)].clone())),
             }),
         })
     }

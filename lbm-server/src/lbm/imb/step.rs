@@ -44,8 +44,9 @@ impl GpuLattice {
     ///    (fused) or over the covered cells before them (the redo and skip);
     /// 4. `encode_reduce`: each particle's force and torque (eq. 10-11), the covers cleared;
     /// 5. `submit_with_loads`: the loads copied for the host, and the passes so far submitted;
-    /// 6. `submit_fluid_after_loads`: with the redo and skip, the fluid kernels and the store (or
-    ///    uncover) over the covered cells, which run while the host reads the loads;
+    /// 6. `submit_fluid_after_loads`: with the redo and skip, the fluid kernels and the redo's store
+    ///    over the covered cells (skip: the cover mask cleared), which run while the host reads the
+    ///    loads;
     /// 7. `read_loads`: the loads, once on the host, handed to `read`.
     pub(super) fn coupled_step<P: SolidParticles + ?Sized>(
         &mut self,
@@ -157,10 +158,10 @@ impl GpuLattice {
         split("reduce", encoder)
     }
 
-    /// With the redo and skip (else nothing) the fluid kernels, which update every cell as without particles
-    /// (skip: all but the listed ones), and the store (or uncover) over the covered cells go in a
-    /// submission of their own: it runs while the host reads the loads back and the DEM takes its
-    /// step (docs/imb.md, "The redo").
+    /// With the redo and skip (else nothing) the fluid kernels, which update every cell as without
+    /// particles (skip: all but the listed ones), and the redo's store over the covered cells (skip:
+    /// the cover mask cleared) go in a submission of their own: it runs while the host reads the
+    /// loads back and the DEM takes its step (docs/imb.md, "The redo").
     pub(super) fn submit_fluid_after_loads(&mut self, passes: &StepPasses, split: Split) {
         let Some(covered) = &passes.covered else {
             return;
@@ -169,11 +170,28 @@ impl GpuLattice {
         let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
         self.encode_step(&mut encoder);
         encoder = split("fluid", encoder);
-        for (offset, pipeline) in [0, 16].into_iter().zip(&covered.after_pipelines) {
-            self.dispatch_indirect(&mut encoder, pipeline, parity, offset);
+        match &covered.store {
+            Some(store) => {
+                for (offset, pipeline) in [0, 16].into_iter().zip(store) {
+                    self.dispatch_indirect(&mut encoder, pipeline, parity, offset);
+                }
+                encoder = split("store_covered", encoder);
+            }
+            None => {
+                self.clear_cover_mask(&mut encoder);
+                encoder = split("uncover", encoder);
+            }
         }
-        encoder = split(covered.after, encoder);
         self.gpu.queue.submit([encoder.finish()]);
+    }
+
+    /// Skip, after the fluid kernels: every bit of the cover mask back to zero (a bit set is a
+    /// covered cell's of this step: a buffer clear of one bit per cell, where a pass over the
+    /// covered cells took an atomic per cell).
+    fn clear_cover_mask(&self, encoder: &mut wgpu::CommandEncoder) {
+        let cells = self.setup.cells() as u64;
+        let covered = &self.imb.as_ref().expect("coupling").covered;
+        encoder.clear_buffer(covered, cells * 4, Some(cells.div_ceil(32) * 4));
     }
 
     /// The `n` particles' loads copied where the host reads them, at the end of the passes so
