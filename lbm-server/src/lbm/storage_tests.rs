@@ -15,7 +15,7 @@ use super::storage::{Storage, StorageOnDevice};
 use super::tests::immersed_boundary::{trt_under_a_moving_lid, two_particles};
 use super::tests::{bgk_periodic_with_force, gpu, mrt_inlet_outlet_and_solids, trt_walls_and_solids};
 
-/// FP32 kernels' bound for one step (lbm/tests.rs's TOLERANCE).
+/// FP32 kernels' bound for one step (lbm/tests/mod.rs's TOLERANCE).
 const TOLERANCE: f64 = 64.0 * f32::EPSILON as f64 * 0.35;
 
 /// Largest |got - want| beyond what storing `want` in `storage` may round.
