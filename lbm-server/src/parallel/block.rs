@@ -1,5 +1,6 @@
 //! One rank's block of a decomposed lattice ([`BlockLattice`]): its lattice on the rank's device,
-//! stepped with the halo exchange after every step, its own cells' fields read (each rank writes
+//! stepped with the halo exchange in every step (overlapped with the interior's update, or after
+//! the step), its own cells' fields read (each rank writes
 //! its piece of a snapshot), the probe lines' cells gathered on rank 0 and its health checks
 //! agreed by all ranks. On one rank it is the whole lattice, stepped and read as before.
 
@@ -19,6 +20,9 @@ pub struct BlockLattice {
     /// The whole lattice (for the cells' coordinates and the gathers).
     whole: Setup,
     pub(super) halo: Option<Halo>,
+    /// Whether [`BlockLattice::step`] overlaps the halo exchange with the interior's update
+    /// (`[parallel] overlap`, on by default), or exchanges after the whole step (exposed).
+    overlap: bool,
 }
 
 /// An unhealthy cell of the whole lattice, and the rank that holds it.
@@ -54,14 +58,33 @@ impl BlockLattice {
             setup.clone()
         };
         let options = options.map(|o| block_options(o, &d, &setup));
-        let lattice = GpuLattice::new(gpu, local, health, options)?;
+        let mut lattice = GpuLattice::new(gpu, local, health, options)?;
         let halo = split.then(|| Halo::new(&lattice, &d, &setup));
+        // The coupled step keeps the exposed exchange (`coupled_block.rs`).
+        let overlap = split && options.is_none();
+        if overlap {
+            let (regions, region_of) = Halo::regions(&d, d.local_n());
+            lattice.set_regions(regions, region_of);
+        }
         Ok(BlockLattice {
             lattice,
             decomposition: d,
             whole: setup,
             halo,
+            overlap,
         })
+    }
+
+    /// Makes [`BlockLattice::step`] overlap the halo exchange with the interior's update (`on`,
+    /// the default where the lattice is decomposed and has no particles), or exchange after the
+    /// whole step; the same bits either way.
+    pub fn set_overlap(&mut self, on: bool) {
+        self.overlap = on && self.lattice.regions() > 0;
+    }
+
+    /// Whether the steps overlap the halo exchange with the interior's update.
+    pub fn overlaps(&self) -> bool {
+        self.overlap
     }
 
     /// Completed steps.
@@ -77,15 +100,20 @@ impl BlockLattice {
             .map_or((0, 0.0), |h| (h.bytes_per_step, h.time.as_secs_f64()))
     }
 
-    /// Advances `steps` steps, exchanging the halo after each.
+    /// Advances `steps` steps, exchanging the halo in each: overlapped with the interior's update
+    /// ([`Halo::step_overlapped`]) or after the whole step ([`Halo::exchange`]).
     pub fn step(&mut self, steps: u64, comm: &dyn Communicator) {
         let Some(halo) = &mut self.halo else {
             self.lattice.step(steps);
             return;
         };
         for _ in 0..steps {
-            self.lattice.step(1);
-            halo.exchange(&self.lattice, comm);
+            if self.overlap {
+                halo.step_overlapped(&mut self.lattice, comm);
+            } else {
+                self.lattice.step(1);
+                halo.exchange(&self.lattice, comm);
+            }
         }
     }
 

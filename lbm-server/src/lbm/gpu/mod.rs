@@ -8,6 +8,7 @@ mod device;
 mod halo;
 mod health;
 mod params;
+mod region;
 mod snapshot;
 mod state;
 mod step;

@@ -6,6 +6,7 @@ use super::bindings::{make_bind_group, storage_buffer};
 use super::cell_list::CellList;
 use super::device::Gpu;
 use super::params::{params, Params};
+use super::region::Regions;
 use super::state::GpuLattice;
 use crate::lbm::imb::{Coupling, CoveredCells, ImbBlock, Passes, SolidCollision};
 use crate::lbm::kernel::Kernel;
@@ -39,6 +40,8 @@ pub(in crate::lbm) struct Way {
     pub(super) macroscopic: wgpu::ComputePipeline,
     /// The coupling's passes, when the lattice has particles.
     pub(in crate::lbm) passes: Option<Passes>,
+    /// The regions a step is split into, where the lattice has them (`region.rs`).
+    pub(super) regions: Option<Regions>,
 }
 
 /// The pipelines of a [`Kernel`].
@@ -143,11 +146,7 @@ impl GpuLattice {
     /// The kernels, cell classes, parameters and bind groups of one way.
     fn build_way(&self, kernel: Kernel, mode: CoveredCells) -> Way {
         let d = &self.gpu.device;
-        // Fused, the quads' kernels give the covered cells their solid term one cell at a time,
-        // without the four-cell quads (the term would be compiled into them four times); skip's
-        // quads leave their covered cells as they are (`skipped_lanes`). The quads' vector
-        // accesses move four f32 populations: FP32 only.
-        let quads = kernel == Kernel::Quads && self.setup.storage == Storage::Fp32 && !mode.fuses();
+        let quads = self.takes_quads(kernel, mode);
         let classes = CellList::new(&self.setup, quads);
         // The per-cell kernel reads no cell list.
         let list: &[u32] = match kernel {
@@ -183,7 +182,7 @@ impl GpuLattice {
             },
             Kernel::Cells => FluidKernels::Cells(pipeline("stream_collide_cells")),
         };
-        Way {
+        let mut way = Way {
             mode,
             kernel,
             fluid,
@@ -193,12 +192,26 @@ impl GpuLattice {
             cell_list,
             params,
             bind_groups,
+            regions: None,
+        };
+        if self.region_of.is_some() {
+            way.regions = Some(self.build_regions(&way));
         }
+        way
+    }
+
+    /// Whether the way of `kernel` and `mode` takes the four-cell quads. Fused, the quads'
+    /// kernels give the covered cells their solid term one cell at a time, without the four-cell
+    /// quads (the term would be compiled into them four times); skip's quads leave their covered
+    /// cells as they are (`skipped_lanes`). The quads' vector accesses move four f32
+    /// populations: FP32 only.
+    pub(super) fn takes_quads(&self, kernel: Kernel, mode: CoveredCells) -> bool {
+        kernel == Kernel::Quads && self.setup.storage == Storage::Fp32 && !mode.fuses()
     }
 
     /// The shaders' override constants of a way: the operator, the forcing, the coupling's
     /// settings and `mode`.
-    fn way_constants(&self, mode: CoveredCells) -> Vec<(&'static str, f64)> {
+    pub(super) fn way_constants(&self, mode: CoveredCells) -> Vec<(&'static str, f64)> {
         let imb = self.options;
         let flag = |on: bool| f64::from(u8::from(on));
         let superposition = imb.is_some_and(|o| o.solid_collision == SolidCollision::Superposition);
@@ -217,7 +230,7 @@ impl GpuLattice {
     }
 
     /// The kernel `entry` of the lattice's module with a way's `constants` and KIND `kind`.
-    fn pipeline(&self, entry: &str, constants: &[(&str, f64)], kind: u32) -> wgpu::ComputePipeline {
+    pub(super) fn pipeline(&self, entry: &str, constants: &[(&str, f64)], kind: u32) -> wgpu::ComputePipeline {
         let mut constants = constants.to_vec();
         constants.push(("KIND", f64::from(kind)));
         #[cfg(test)]
@@ -245,7 +258,7 @@ impl GpuLattice {
     /// compile a kernel at its first dispatch: without this the first steps of a run stalled for
     /// seconds with a cold shader cache (5-9 s on this 2-core machine for 16^3 cells with
     /// particles), while the run should be watching its peer (`tests/failures.rs`).
-    fn compile_kernels(&self, way: &Way) {
+    pub(super) fn compile_kernels(&self, way: &Way) {
         let d = &self.gpu.device;
         let empty = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("params: no cell"),
@@ -271,6 +284,7 @@ impl GpuLattice {
         let mut kernels = way.fluid.pipelines();
         kernels.push(&way.macroscopic);
         kernels.extend(way.passes.iter().flat_map(|p| p.kernels()));
+        kernels.extend(way.regions.iter().flat_map(|r| &r.cells_listed));
         let mut encoder = d.create_command_encoder(&Default::default());
         for kernel in kernels {
             let mut pass = encoder.begin_compute_pass(&Default::default());
