@@ -246,6 +246,7 @@ fn start_lattice(
         ..setup_of(units)
     };
     let mut lattice = BlockLattice::new(gpu.clone(), setup, health_of(units), d)?;
+    lattice.set_overlap(scene.parallel.overlap());
     if let Some(loaded) = resumed {
         let bytes = lattice.lattice.population_bytes();
         lattice.lattice.restore_raw(&loaded.raw_state(bytes)?);

@@ -11,9 +11,13 @@ pub struct ParallelSummary {
     pub blocks: [usize; 3],
     pub devices: Vec<String>,
     /// Bytes each rank's halo sent per step (rank order), and the share of the wall time its
-    /// exchange took.
+    /// host spent in the exchange (overlapped: from the interior's submission on, part of it
+    /// hidden behind the interior's update).
     pub halo_bytes_per_step: Vec<usize>,
     pub halo_share: Vec<f64>,
+    /// Whether the exchange overlapped the interior's update (`[parallel] overlap`; a coupled
+    /// run's exchange follows the whole step).
+    pub halo_overlapped: bool,
 }
 
 impl ParallelSummary {
@@ -37,6 +41,7 @@ impl ParallelSummary {
             devices: rows.iter().map(|r| format!("{}: {}", r[0], r[1])).collect(),
             halo_bytes_per_step: rows.iter().map(|r| r[2].parse().unwrap_or(0)).collect(),
             halo_share: rows.iter().map(|r| r[3].parse().unwrap_or(0.0)).collect(),
+            halo_overlapped: lattice.overlaps(),
         }
     }
 }

@@ -3,10 +3,10 @@
 
 use super::{BlockLattice, Communicator, Decomposition, ThreadRanks};
 use crate::lbm::geometry::{Cell, Face, Operator, Setup};
-use crate::lbm::kernel::Kernel;
-use crate::lbm::storage::Storage;
 use crate::lbm::gpu::{Gpu, GpuLattice, Health};
+use crate::lbm::kernel::Kernel;
 use crate::lbm::mrt::Rates;
+use crate::lbm::storage::Storage;
 use std::sync::Arc;
 
 /// Runs `steps` steps of `setup` from rest on one lattice, and cut into `blocks` on threads;

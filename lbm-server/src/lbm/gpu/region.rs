@@ -32,7 +32,10 @@ impl GpuLattice {
     /// built and to be built.
     pub fn set_regions(&mut self, regions: usize, region_of: Vec<u8>) {
         assert_eq!(region_of.len(), self.setup.cells(), "a region per cell");
-        assert!(region_of.iter().all(|&r| (r as usize) < regions), "regions 0 to {regions}");
+        assert!(
+            region_of.iter().all(|&r| (r as usize) < regions),
+            "regions 0 to {regions}"
+        );
         self.region_of = Some((regions, region_of));
         let built: Vec<Regions> = self.ways.iter().map(|w| self.build_regions(w)).collect();
         for (way, regions) in self.ways.iter_mut().zip(built) {
@@ -60,7 +63,12 @@ impl GpuLattice {
         let region = &regions.regions[r];
         let bound = &region.bind_groups[(self.time % 2) as usize];
         let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
-        self.encode_cells(&mut encoder, &region.classes, bound, regions.cells_listed.as_ref());
+        self.encode_cells(
+            &mut encoder,
+            &region.classes,
+            bound,
+            regions.cells_listed.as_ref(),
+        );
         self.gpu.queue.submit([encoder.finish()])
     }
 
@@ -74,7 +82,11 @@ impl GpuLattice {
         let (count, region_of) = self.region_of.as_ref().expect("a split into regions");
         let quads = self.takes_quads(way.kernel, way.mode);
         let regions = (0..*count)
-            .map(|r| self.region(&CellList::within(&self.setup, quads, &|k| region_of[k] as usize == r)))
+            .map(|r| {
+                self.region(&CellList::within(&self.setup, quads, &|k| {
+                    region_of[k] as usize == r
+                }))
+            })
             .collect();
         let cells_listed = matches!(way.fluid, FluidKernels::Cells(_)).then(|| {
             let constants = self.way_constants(way.mode);
@@ -127,10 +139,11 @@ impl GpuLattice {
             .ways
             .iter()
             .map(|w| {
-                w.regions.iter().flat_map(|r| &r.regions).map(|r| {
-                    [0, 1].map(|parity| self.bind_group(&r.params[parity], &r.cell_list))
-                })
-                .collect()
+                w.regions
+                    .iter()
+                    .flat_map(|r| &r.regions)
+                    .map(|r| [0, 1].map(|parity| self.bind_group(&r.params[parity], &r.cell_list)))
+                    .collect()
             })
             .collect();
         for (way, groups) in self.ways.iter_mut().zip(bound) {

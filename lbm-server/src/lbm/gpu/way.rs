@@ -230,7 +230,12 @@ impl GpuLattice {
     }
 
     /// The kernel `entry` of the lattice's module with a way's `constants` and KIND `kind`.
-    pub(super) fn pipeline(&self, entry: &str, constants: &[(&str, f64)], kind: u32) -> wgpu::ComputePipeline {
+    pub(super) fn pipeline(
+        &self,
+        entry: &str,
+        constants: &[(&str, f64)],
+        kind: u32,
+    ) -> wgpu::ComputePipeline {
         let mut constants = constants.to_vec();
         constants.push(("KIND", f64::from(kind)));
         #[cfg(test)]
