@@ -1,6 +1,8 @@
 //! The coupled step of one rank's block ([`BlockLattice::step_coupled_with`]): every rank steps
 //! the same particles (rank 0 sends them their states: `coupled/ranks.rs`), in the whole lattice's
-//! coordinates, over its own cells; the halo is exchanged; every rank's pairs (each particle's
+//! coordinates, over its own cells; the halo is exchanged after the whole step (not overlapped:
+//! the redo's passes over the covered cells write into the shell's slots after the fluid kernels,
+//! docs/imb.md); every rank's pairs (each particle's
 //! momentum per cell of its box) are gathered at rank 0, which reduces the loads from them in the
 //! single process's order (`lbm/imb/gathered.rs`): the same bits as one process.
 

@@ -1,5 +1,7 @@
-//! The halo exchange between the blocks of a decomposed lattice, after every step, of only the
-//! populations that cross each block face (5 per face in D3Q19).
+//! The halo exchange between the blocks of a decomposed lattice, in every step, of only the
+//! populations that cross each block face (5 per face in D3Q19): after the whole step
+//! ([`Halo::exchange`]), or overlapped with the update of the block's interior
+//! ([`Halo::step_overlapped`]).
 //!
 //! The AA pattern stores the populations in place (lbm.wgsl). After an even step each cell holds
 //! its own post-collision populations, reversed, in its own slots; the next (odd) step of a cell
@@ -16,6 +18,15 @@
 //! A population whose link leaves the fluid on the other side (into a solid cell, or across a
 //! wall of the whole lattice) is left out: the cell bounced it back into its own slot itself,
 //! and no ghost cell's value may overwrite it.
+//!
+//! The overlap: the slots the exchange reads and writes are, after an even step, those of the
+//! cells next to each cut face and of its ghost layer; after an odd step, those of the ghost layer
+//! that the cells next to the face stream into, and those of the cells next to the face that the
+//! ghost layer streams into. Within a step every slot is read and written by one cell's update
+//! alone (the AA pattern), and a cell two layers or more from every cut face (the interior) reads
+//! and writes none of those slots, in either parity. So the step updates the shell (each cut
+//! face's ghost layer and the layer next to it) first, packs, and the interior's update may run
+//! before or after the unpack lands; the next step's shell comes after both.
 //!
 //! Edges and corners: axis by axis (x, then y, then z), each layer spanning the other axes' ghost
 //! layers, so that what crosses an edge or corner reaches the diagonal neighbour in two or three
