@@ -18,7 +18,11 @@ the latency run on the host and the network while the device updates the part: s
 over the cut axes of (staging + max(interior part, link + latency)), the exposed exchange per axis
 staging + max(0, link + latency - interior part).
 
+With --copies-beside the staging's copies run beside the interior's kernels too (a device whose
+copy engines take them: not what one wgpu queue promises).
+
 Usage: python3 validation/scaling/model.py [--block 256] [--mlups 18100] [--latency-us 30]
+       [--copies-beside]
 """
 import argparse
 
@@ -51,11 +55,14 @@ def cells(block, cut):
     return local, local - interior
 
 
-def step_times(block, ranks, stage, link, latency, cell_time):
+def step_times(block, ranks, stage, link, latency, cell_time, copies_beside=False):
     """Seconds per step of one rank, exposed and overlapped. Overlapped, each axis's staging stays
     on the device's queue (the pack's copy to the host before the interior part, the upload after
-    it); the link and the latency hide behind the interior part."""
+    it), unless `copies_beside` (copy engines running them beside the interior's kernels); the
+    link and the latency hide behind the interior part."""
     staging, wire, cut, _ = halo_time(block, ranks, stage, link, latency)
+    if copies_beside:
+        staging, wire = 0.0, wire + staging
     local, shell = cells(block, cut)
     exposed = local * cell_time + cut * (staging + wire)
     part = (local - shell) * cell_time / cut
@@ -68,6 +75,8 @@ def main():
     p.add_argument("--block", type=int, default=256, help="cells per block edge")
     p.add_argument("--mlups", type=float, default=18100.0, help="one GPU's MLUPS (H200 FP32, BENCHMARKS.md)")
     p.add_argument("--latency-us", type=float, default=30.0, help="fixed cost per cut axis and step [us]")
+    p.add_argument("--copies-beside", action="store_true",
+                   help="the staging copies run beside the interior's kernels (copy engines)")
     a = p.parse_args()
     cell_time = 1 / (a.mlups * 1e6)
     compute = a.block**3 * cell_time
@@ -81,7 +90,7 @@ def main():
     for name, stage, link in paths:
         row = []
         for n in ranks:
-            exposed, overlapped = step_times(a.block, n, stage, link, latency, cell_time)
+            exposed, overlapped = step_times(a.block, n, stage, link, latency, cell_time, a.copies_beside)
             row.append(f"{100 * compute / exposed:5.0f}% |{100 * compute / overlapped:4.0f}%")
         print(f"{name:48}" + "".join(f"{c:>14}" for c in row))
     staging, wire, cut, sent = halo_time(a.block, 8, PCIE["PCIe 4 x16"], LINKS["same node (host memory)"], latency)

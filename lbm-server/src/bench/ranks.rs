@@ -1,6 +1,8 @@
 //! `lbm-server bench` on several ranks (under mpirun or srun, or `--thread-ranks N`: threads of
 //! one process): the lattice cut into blocks, one per rank, stepped with the halo exchange; MLUPS
-//! per rank and in total, the halo's bytes per step and the exchange's share of the step.
+//! per rank and in total, the halo's bytes per step and the exchange's share of the step, and per
+//! way of exchanging (`--exchange`: overlapped, exposed) the exposed exchange against the blocks
+//! stepped without it.
 
 use super::{parse_faces, parse_grid, parse_operator, BenchArgs};
 use crate::lbm::geometry::Setup;
@@ -223,6 +225,14 @@ fn print(args: &BenchArgs, n: [usize; 3], blocks: [usize; 3], rows: &[RankTime],
         cells as f64 * steps / slowest(0) / 1e6,
         100.0 * share(0)
     );
+    print_exchanges(steps, rows, modes);
+}
+
+/// Per way of exchanging timed, its time per step against the compute alone's (the last of
+/// `modes`), the exposed exchange (their difference) and the host's share of the step in it.
+fn print_exchanges(steps: f64, rows: &[RankTime], modes: &[Stepping]) {
+    let slowest = |m: usize| rows.iter().map(|r| r.times[m].0).fold(0.0, f64::max);
+    let share = |m: usize| rows.iter().map(|r| r.times[m].1 / r.times[m].0).sum::<f64>() / rows.len() as f64;
     let alone = slowest(modes.len() - 1) / steps;
     for (m, mode) in modes.iter().enumerate().take(modes.len() - 1) {
         let per_step = slowest(m) / steps;
