@@ -20,24 +20,11 @@ fn check(setup: Setup, blocks: [usize; 3], steps: u64) {
     expected.push(one.fields().0);
     one.step(1);
     expected.push(one.fields().0);
-    let ranks: usize = blocks.iter().product();
-    let periodic: [bool; 3] = std::array::from_fn(|a| setup.periodic(a));
-    let got: Vec<Vec<Vec<[f32; 4]>>> = std::thread::scope(|s| {
-        let handles: Vec<_> = ThreadRanks::world(ranks)
-            .into_iter()
-            .map(|comm| {
-                let (gpu, setup) = (gpu.clone(), setup.clone());
-                s.spawn(move || {
-                    let d = Decomposition::new(setup.n, periodic, blocks, comm.rank());
-                    let mut block = BlockLattice::new(gpu, setup, Health::default(), d).unwrap();
-                    block.step(steps - 1, &comm);
-                    let first = block.own_fields(&comm).0;
-                    block.step(1, &comm);
-                    vec![first, block.own_fields(&comm).0]
-                })
-            })
-            .collect();
-        handles.into_iter().map(|h| h.join().unwrap()).collect()
+    let got = on_ranks(&gpu, &setup, blocks, |block, comm| {
+        block.step(steps - 1, comm);
+        let first = block.own_fields(comm).0;
+        block.step(1, comm);
+        vec![first, block.own_fields(comm).0]
     });
     let whole = |parity: usize| {
         let pieces: Vec<&[[f32; 4]]> = got.iter().map(|p| &p[parity][..]).collect();
@@ -112,7 +99,24 @@ fn lattices_cut_along_two_and_three_axes_are_the_single_lattice_bit_for_bit() {
 /// interior's update (`overlap`) or after each whole step.
 fn block_populations(setup: &Setup, blocks: [usize; 3], steps: u64, overlap: bool) -> Vec<Vec<Cell>> {
     let gpu = Arc::new(Gpu::new().expect("a wgpu adapter (lavapipe in CI)"));
+    on_ranks(&gpu, setup, blocks, |block, comm| {
+        block.set_overlap(overlap);
+        assert_eq!(block.overlaps(), overlap, "the exchange asked for");
+        block.step(steps, comm);
+        block.lattice.populations()
+    })
+}
+
+/// `run(block, rank)` on each rank of `setup` from rest cut into `blocks`, the ranks threads on
+/// `gpu`; the results in rank order.
+fn on_ranks<T: Send>(
+    gpu: &Arc<Gpu>,
+    setup: &Setup,
+    blocks: [usize; 3],
+    run: impl Fn(&mut BlockLattice, &ThreadRanks) -> T + Sync,
+) -> Vec<T> {
     let periodic: [bool; 3] = std::array::from_fn(|a| setup.periodic(a));
+    let run = &run;
     std::thread::scope(|s| {
         let handles: Vec<_> = ThreadRanks::world(blocks.iter().product())
             .into_iter()
@@ -121,10 +125,7 @@ fn block_populations(setup: &Setup, blocks: [usize; 3], steps: u64, overlap: boo
                 s.spawn(move || {
                     let d = Decomposition::new(setup.n, periodic, blocks, comm.rank());
                     let mut block = BlockLattice::new(gpu, setup, Health::default(), d).unwrap();
-                    block.set_overlap(overlap);
-                    assert_eq!(block.overlaps(), overlap, "the exchange asked for");
-                    block.step(steps, &comm);
-                    block.lattice.populations()
+                    run(&mut block, &comm)
                 })
             })
             .collect();

@@ -7,10 +7,8 @@
 //! kernels (its own cell list by class, or the per-cell kernel over its list: cells.wgsl, KIND 1).
 
 use super::cell_list::CellList;
-use super::params::params;
 use super::state::GpuLattice;
 use super::way::{FluidKernels, Way};
-use wgpu::util::DeviceExt;
 
 /// One region of one way: its cell list, parameters and bind groups.
 pub(super) struct Region {
@@ -100,27 +98,12 @@ impl GpuLattice {
 
     /// The buffers and bind groups of the region whose cells `classes` lists.
     fn region(&self, classes: &CellList) -> Region {
-        let d = &self.gpu.device;
         let list: &[u32] = if classes.list.is_empty() {
             &[0]
         } else {
             &classes.list
         };
-        let cell_list = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("region's cell list"),
-            contents: bytemuck::cast_slice(list),
-            usage: wgpu::BufferUsages::STORAGE,
-        });
-        let params: Vec<wgpu::Buffer> = (0..2)
-            .map(|parity| {
-                let p = params(&self.setup, parity, self.health, classes, self.face_scale);
-                d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                    label: Some("region's params"),
-                    contents: bytemuck::bytes_of(&p),
-                    usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-                })
-            })
-            .collect();
+        let (cell_list, params) = self.list_and_params(list, classes);
         let bind_groups = [0, 1].map(|parity| self.bind_group(&params[parity], &cell_list));
         Region {
             classes: CellList {

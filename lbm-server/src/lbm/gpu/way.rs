@@ -145,7 +145,6 @@ impl GpuLattice {
 
     /// The kernels, cell classes, parameters and bind groups of one way.
     fn build_way(&self, kernel: Kernel, mode: CoveredCells) -> Way {
-        let d = &self.gpu.device;
         let quads = self.takes_quads(kernel, mode);
         let classes = CellList::new(&self.setup, quads);
         // The per-cell kernel reads no cell list.
@@ -153,21 +152,7 @@ impl GpuLattice {
             Kernel::Quads if !classes.list.is_empty() => &classes.list,
             _ => &[0u32],
         };
-        let cell_list = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("cell list"),
-            contents: bytemuck::cast_slice(list),
-            usage: wgpu::BufferUsages::STORAGE,
-        });
-        let params: Vec<wgpu::Buffer> = (0..2)
-            .map(|parity| {
-                let p = params(&self.setup, parity, self.health, &classes, self.face_scale);
-                d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                    label: Some("params"),
-                    contents: bytemuck::bytes_of(&p),
-                    usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-                })
-            })
-            .collect();
+        let (cell_list, params) = self.list_and_params(list, &classes);
         let constants = self.way_constants(mode);
         let pipeline_kind = |entry: &str, kind: u32| self.pipeline(entry, &constants, kind);
         let pipeline = |entry: &str| pipeline_kind(entry, 0);
@@ -198,6 +183,32 @@ impl GpuLattice {
             way.regions = Some(self.build_regions(&way));
         }
         way
+    }
+
+    /// The cell list `list` on the device, and the parameters of each parity with the cells'
+    /// `classes` (a way's, or a region's: `region.rs`).
+    pub(super) fn list_and_params(
+        &self,
+        list: &[u32],
+        classes: &CellList,
+    ) -> (wgpu::Buffer, Vec<wgpu::Buffer>) {
+        let d = &self.gpu.device;
+        let cell_list = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("cell list"),
+            contents: bytemuck::cast_slice(list),
+            usage: wgpu::BufferUsages::STORAGE,
+        });
+        let params: Vec<wgpu::Buffer> = (0..2)
+            .map(|parity| {
+                let p = params(&self.setup, parity, self.health, classes, self.face_scale);
+                d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some("params"),
+                    contents: bytemuck::bytes_of(&p),
+                    usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                })
+            })
+            .collect();
+        (cell_list, params)
     }
 
     /// Whether the way of `kernel` and `mode` takes the four-cell quads. Fused, the quads'
