@@ -8,6 +8,10 @@
 // kernels: every kernel leaves the same populations, bit for bit, whatever the storage or the way
 // of the covered cells (the fused solid term, the redo's, or the skip's `skipped`).
 //
+// KIND 1 takes the cells of the cell list instead of every cell: one region of a step split into
+// regions (the shell and the interior of a block whose halo exchange overlaps the interior's
+// update), each cell computed as in KIND 0, bit for bit.
+//
 // Where a CPU driver such as lavapipe runs both sides of every branch, the quads' kernels
 // (lbm.wgsl, quads.wgsl), split by cell class into branch-free dispatches, are the faster ones;
 // the run's start-up trial (lbm-server/src/trials.rs) times both on the device.
@@ -18,8 +22,14 @@ fn stream_collide_cells(
     @builtin(num_workgroups) nwg: vec3<u32>,
     @builtin(local_invocation_index) local: u32,
 ) {
-    let k = cell_index(wg, nwg, local);
-    if k >= cell_count() { return; }
+    var k = cell_index(wg, nwg, local);
+    if KIND == 1u {
+        // A region of the step (lbm-server/src/lbm/gpu/region.rs): the cells of its list.
+        if k >= params.ranges.x + params.ranges.y + params.ranges.z { return; }
+        k = cell_list[k];
+    } else if k >= cell_count() {
+        return;
+    }
     let flag = flags[k];
     if (flag & SOLID) != 0u || skipped(k) { return; }
     if (flag & (WRAPS | 0x7ffffu)) != 0u {

@@ -68,6 +68,12 @@ pub struct BenchArgs {
     /// the exchange's share, as under mpirun. 1 is the same code on one block (the baseline).
     #[arg(long)]
     thread_ranks: Option<usize>,
+    /// On several ranks: the halo exchange timed, "overlapped" with the interior's update (the
+    /// default, as `[parallel] overlap`), "exposed" (after the whole step) or "both", in
+    /// alternating rounds; each round also steps the blocks without the exchange, the compute
+    /// alone, so that the exposed exchange per step is the difference.
+    #[arg(long, default_value = "overlapped")]
+    exchange: String,
     /// Timed rounds, ours and the naive kernel alternating (best round reported).
     #[arg(long, default_value_t = 3)]
     rounds: u32,

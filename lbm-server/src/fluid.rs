@@ -248,7 +248,8 @@ fn start_lattice(
         kernel: trial.kept().kernel,
         ..setup_of(units)
     };
-    let lattice = BlockLattice::new(gpu.clone(), setup, health_of(units), d)?;
+    let mut lattice = BlockLattice::new(gpu.clone(), setup, health_of(units), d)?;
+    lattice.set_overlap(scene.parallel.overlap());
     crate::run::started();
     if comm.rank() != 0 {
         return Ok((gpu, lattice));

@@ -159,6 +159,7 @@ x_min = { type = "velocity_inlet", velocity = [0.001, 0.0, 0.0] }
 x_max = { type = "pressure_outlet", pressure = 0.0 }
 [parallel]
 blocks = [1, 1, 2]
+overlap = false
 "#;
 
 /// A granular scene alone: `time.dt` and a linear contact from its contact time.

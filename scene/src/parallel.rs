@@ -1,5 +1,6 @@
 //! `[parallel]`: how `lbm-server` cuts the lattice into blocks, one per MPI rank (`mpirun -np N
-//! lbm-server run SCENE`). Optional: without it the blocks are chosen for the fewest halo cells.
+//! lbm-server run SCENE`), and whether the halo exchange overlaps the interior's update.
+//! Optional: without it the blocks are chosen for the fewest halo cells, and the exchange overlaps.
 
 use crate::numbers::fail;
 use crate::{Scene, SceneError, AXES};
@@ -15,12 +16,21 @@ pub struct Parallel {
     /// Blocks along x, y and z: each divides the lattice's cells along its axis, and the run has
     /// their product of ranks.
     pub blocks: Option<[u64; 3]>,
+    /// Whether each rank's halo exchange overlaps the update of its block's interior (true, the
+    /// default), or follows the whole step (false: exposed, for timing the two side by side);
+    /// the same results either way, bit for bit.
+    pub overlap: Option<bool>,
 }
 
 impl Parallel {
     /// The blocks, where the scene gives them.
     pub fn blocks(&self) -> Option<[usize; 3]> {
         self.blocks.map(|b| b.map(|v| v as usize))
+    }
+
+    /// Whether the halo exchange overlaps the interior's update (`overlap`, true by default).
+    pub fn overlap(&self) -> bool {
+        self.overlap.unwrap_or(true)
     }
 }
 

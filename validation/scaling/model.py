@@ -2,14 +2,27 @@
 """Weak-scaling model of lbm-server's fluid on several GPUs, from its halo bytes and link bandwidths.
 
 Each rank holds a block of B^3 cells (periodic box, blocks as `choose_blocks` cuts them: 2 ranks
-1x1x2, 4 ranks 1x2x2, 8 ranks 2x2x2, 16 ranks 2x2x4, 64 ranks 4x4x4). Per step and cut axis the
-halo moves 5 populations of 4 bytes per face cell across each of the block's two faces
-(lbm-server/src/parallel/halo.rs). Staged through the host, as lbm-server does it, a face goes
-device -> host (PCIe), rank -> rank (the link) and host -> device (PCIe), one axis after the other,
-each axis paying a fixed latency (a submission, a map and an MPI round). Overlapped, the exchange
-hides behind the interior's update where it is shorter (not yet done by lbm-server).
+1x1x2, 4 ranks 1x2x2, 8 ranks 2x2x2, 16 ranks 2x2x4, 64 ranks 4x4x4), and a ghost layer at each cut
+face, which it updates too. Per step and cut axis the halo moves 5 populations of 4 bytes per face
+cell across each of the block's two faces (lbm-server/src/parallel/halo.rs). Staged through the
+host, as lbm-server does it, a face goes device -> host (PCIe), rank -> rank (the link) and host ->
+device (PCIe), one axis after the other, each axis paying a fixed latency (a submission, a map and
+an MPI round).
+
+Exposed (`[parallel] overlap = false`), the exchange follows the whole step: step = compute +
+exchange. Overlapped (the default), the shell (each cut face's ghost layer and the layer next to
+it) is updated first, then per cut axis the exchange runs while the device updates one part of the
+interior (the interior cut into as many parts as cut axes). The staging's copies stay on the
+device's queue (the pack's copy to the host before the part, the upload after it); the link and
+the latency run on the host and the network while the device updates the part: step = shell + sum
+over the cut axes of (staging + max(interior part, link + latency)), the exposed exchange per axis
+staging + max(0, link + latency - interior part).
+
+With --copies-beside the staging's copies run beside the interior's kernels too (a device whose
+copy engines take them: not what one wgpu queue promises).
 
 Usage: python3 validation/scaling/model.py [--block 256] [--mlups 18100] [--latency-us 30]
+       [--copies-beside]
 """
 import argparse
 
@@ -26,11 +39,35 @@ BLOCKS = {1: (1, 1, 1), 2: (1, 1, 2), 4: (1, 2, 2), 8: (2, 2, 2), 16: (2, 2, 4),
 
 
 def halo_time(block, ranks, stage, link, latency):
-    """Seconds per step of the halo exchange of one rank: per cut axis, two faces."""
+    """Seconds per step and cut axis of one rank's halo exchange (two faces): the staging through
+    the host (device -> host and host -> device, on the device's queue) and the rest (the link
+    and the fixed latency, on the host); the cut axes, and the bytes a rank sends per step."""
     face_bytes = 5 * 4 * block * block
     cut = sum(1 for b in BLOCKS[ranks] if b > 1)
-    per_axis = 2 * face_bytes / stage + face_bytes / link + 2 * face_bytes / stage if stage else face_bytes / link
-    return cut * (per_axis + latency), cut * 2 * face_bytes
+    staging = 4 * face_bytes / stage if stage else 0.0
+    return staging, face_bytes / link + latency, cut, cut * 2 * face_bytes
+
+
+def cells(block, cut):
+    """A rank's cells with its ghost layers, and those of the shell (ghost and next layers)."""
+    local = block ** (3 - cut) * (block + 2) ** cut
+    interior = block ** (3 - cut) * (block - 2) ** cut
+    return local, local - interior
+
+
+def step_times(block, ranks, stage, link, latency, cell_time, copies_beside=False):
+    """Seconds per step of one rank, exposed and overlapped. Overlapped, each axis's staging stays
+    on the device's queue (the pack's copy to the host before the interior part, the upload after
+    it), unless `copies_beside` (copy engines running them beside the interior's kernels); the
+    link and the latency hide behind the interior part."""
+    staging, wire, cut, _ = halo_time(block, ranks, stage, link, latency)
+    if copies_beside:
+        staging, wire = 0.0, wire + staging
+    local, shell = cells(block, cut)
+    exposed = local * cell_time + cut * (staging + wire)
+    part = (local - shell) * cell_time / cut
+    overlapped = shell * cell_time + cut * (staging + max(part, wire))
+    return exposed, overlapped
 
 
 def main():
@@ -38,26 +75,32 @@ def main():
     p.add_argument("--block", type=int, default=256, help="cells per block edge")
     p.add_argument("--mlups", type=float, default=18100.0, help="one GPU's MLUPS (H200 FP32, BENCHMARKS.md)")
     p.add_argument("--latency-us", type=float, default=30.0, help="fixed cost per cut axis and step [us]")
+    p.add_argument("--copies-beside", action="store_true",
+                   help="the staging copies run beside the interior's kernels (copy engines)")
     a = p.parse_args()
-    compute = a.block**3 / (a.mlups * 1e6)
+    cell_time = 1 / (a.mlups * 1e6)
+    compute = a.block**3 * cell_time
     latency = a.latency_us * 1e-6
     print(f"block {a.block}^3 per GPU, {a.mlups:.0f} MLUPS per GPU: {compute * 1e3:.3f} ms per step")
-    print("weak-scaling efficiency (one GPU's time per step / the rank's), staged | overlapped")
+    print("weak-scaling efficiency (one GPU's time per step / the rank's), exposed | overlapped")
     ranks = [2, 4, 8, 16, 64]
     print(f"{'path':48}" + "".join(f"{n:>14}" for n in ranks))
     paths = [(f"{pcie} + {name}", PCIE[pcie], bw) for pcie in PCIE for name, bw in LINKS.items()]
     paths.append(("NVLink 4 device to device (no staging)", None, NVLINK))
     for name, stage, link in paths:
-        cells = []
+        row = []
         for n in ranks:
-            halo, _ = halo_time(a.block, n, stage, link, latency)
-            staged = compute / (compute + halo)
-            overlapped = compute / max(compute, halo + latency)
-            cells.append(f"{100 * staged:5.0f}% |{100 * overlapped:4.0f}%")
-        print(f"{name:48}" + "".join(f"{c:>14}" for c in cells))
-    _, sent = halo_time(a.block, 8, None, 1, 0)
-    print(f"halo sent per rank and step at 8 ranks (2x2x2): {sent / 1e6:.2f} MB")
-
+            exposed, overlapped = step_times(a.block, n, stage, link, latency, cell_time, a.copies_beside)
+            row.append(f"{100 * compute / exposed:5.0f}% |{100 * compute / overlapped:4.0f}%")
+        print(f"{name:48}" + "".join(f"{c:>14}" for c in row))
+    staging, wire, cut, sent = halo_time(a.block, 8, PCIE["PCIe 4 x16"], LINKS["same node (host memory)"], latency)
+    local, shell = cells(a.block, cut)
+    part = (local - shell) * cell_time / cut
+    print(
+        f"at 8 ranks (2x2x2): {sent / 1e6:.2f} MB sent per rank and step; over PCIe 4 on one node per "
+        f"cut axis {staging * 1e3:.3f} ms of staging and {wire * 1e3:.3f} ms of link and latency, "
+        f"against {part * 1e3:.3f} ms of interior part"
+    )
 
 if __name__ == "__main__":
     main()

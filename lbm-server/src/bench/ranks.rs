@@ -1,6 +1,8 @@
 //! `lbm-server bench` on several ranks (under mpirun or srun, or `--thread-ranks N`: threads of
 //! one process): the lattice cut into blocks, one per rank, stepped with the halo exchange; MLUPS
-//! per rank and in total, the halo's bytes per step and the exchange's share of the step.
+//! per rank and in total, the halo's bytes per step and the exchange's share of the step, and per
+//! way of exchanging (`--exchange`: overlapped, exposed) the exposed exchange against the blocks
+//! stepped without it.
 
 use super::{parse_faces, parse_grid, parse_operator, BenchArgs};
 use crate::lbm::geometry::Setup;
@@ -9,20 +11,59 @@ use crate::parallel::{all, choose_blocks, BlockLattice, Communicator, Decomposit
 use std::sync::Arc;
 use std::time::Instant;
 
-/// One rank's measurement: its device, own cells, best round's time [s] and exchange time [s].
+/// One rank's measurement: its device, own cells, halo bytes per step, and for each way of
+/// stepping timed (`Stepping`) its best round's time [s] and the host's exchange time in it [s].
 struct RankTime {
     device: String,
     cells: usize,
-    seconds: f64,
-    exchange: f64,
     halo_bytes: usize,
+    times: Vec<(f64, f64)>,
 }
 
-/// Times `args.steps` steps of the grid cut over the ranks of `comm`, best of `args.rounds`
-/// rounds (each ended when every rank is done), and prints, at rank 0, each rank's and the total.
+/// A way of stepping the blocks in the bench.
+#[derive(Clone, Copy, PartialEq)]
+enum Stepping {
+    /// The halo exchange overlapped with the interior's update.
+    Overlapped,
+    /// The halo exchange after the whole step.
+    Exposed,
+    /// No exchange, a submission per step: the compute alone (its results are not the run's).
+    Alone,
+}
+
+impl Stepping {
+    fn name(self) -> &'static str {
+        match self {
+            Stepping::Overlapped => "overlapped",
+            Stepping::Exposed => "exposed",
+            Stepping::Alone => "without the exchange",
+        }
+    }
+}
+
+/// The ways of stepping `--exchange` asks to time, then the compute alone.
+fn steppings(exchange: &str) -> Result<Vec<Stepping>, String> {
+    let mut timed = match exchange {
+        "overlapped" => vec![Stepping::Overlapped],
+        "exposed" => vec![Stepping::Exposed],
+        "both" => vec![Stepping::Overlapped, Stepping::Exposed],
+        other => {
+            return Err(format!(
+                "--exchange = {other:?}: expected overlapped, exposed or both"
+            ))
+        }
+    };
+    timed.push(Stepping::Alone);
+    Ok(timed)
+}
+
+/// Times `args.steps` steps of the grid cut over the ranks of `comm` each way `--exchange` asks
+/// for and without the exchange, in alternating rounds (each ended when every rank is done), best
+/// of `args.rounds` each, and prints, at rank 0, each rank's and the total.
 pub fn run(args: &BenchArgs, comm: &dyn Communicator) -> Result<(), String> {
     let n = parse_grid(&args.grid)?;
     let faces = parse_faces(&args.faces)?;
+    let modes = steppings(&args.exchange)?;
     let tau = 0.6;
     let setup = Setup::new(n, faces, tau, parse_operator(&args.operator, tau)?);
     let periodic: [bool; 3] = std::array::from_fn(|a| setup.periodic(a));
@@ -36,30 +77,54 @@ pub fn run(args: &BenchArgs, comm: &dyn Communicator) -> Result<(), String> {
     let (gpu, mut lattice) = started.expect("started");
     lattice.step(20, comm);
     let _ = lattice.health(comm);
-    let mut best = (f64::INFINITY, 0.0);
-    for _ in 0..args.rounds.max(1) {
-        comm.min(0);
-        let (t0, x0) = (Instant::now(), lattice.halo_cost().1);
-        lattice.step(args.steps, comm);
-        // The health check reads the device's status: the steps are done.
-        let _ = lattice.health(comm);
-        let round = (t0.elapsed().as_secs_f64(), lattice.halo_cost().1 - x0);
-        if round.0 < best.0 {
-            best = round;
-        }
-    }
     let mine = RankTime {
         device: format!("{}: {}", comm.host(), gpu.adapter.name),
         cells: lattice.decomposition.size.iter().product(),
-        seconds: best.0,
-        exchange: best.1,
         halo_bytes: lattice.halo_cost().0,
+        times: time_rounds(args, &mut lattice, comm, &modes),
     };
     let rows = gather(comm, &mine);
     if comm.rank() == 0 {
-        print(args, n, blocks, &rows);
+        print(args, n, blocks, &rows, &modes);
     }
     Ok(())
+}
+
+/// Per way of stepping in `modes`, its best round of `args.rounds` (the ways alternating): time
+/// [s] and the host's exchange time in it [s].
+fn time_rounds(
+    args: &BenchArgs,
+    lattice: &mut BlockLattice,
+    comm: &dyn Communicator,
+    modes: &[Stepping],
+) -> Vec<(f64, f64)> {
+    let mut best = vec![(f64::INFINITY, 0.0); modes.len()];
+    for _ in 0..args.rounds.max(1) {
+        for (m, &mode) in modes.iter().enumerate() {
+            comm.min(0);
+            let (t0, x0) = (Instant::now(), lattice.halo_cost().1);
+            step(lattice, comm, mode, args.steps);
+            // The health check reads the device's status: the steps are done.
+            let _ = lattice.health(comm);
+            let round = (t0.elapsed().as_secs_f64(), lattice.halo_cost().1 - x0);
+            if round.0 < best[m].0 {
+                best[m] = round;
+            }
+        }
+    }
+    best
+}
+
+/// `steps` steps of `lattice` the way `mode` says.
+fn step(lattice: &mut BlockLattice, comm: &dyn Communicator, mode: Stepping, steps: u64) {
+    if mode == Stepping::Alone {
+        for _ in 0..steps {
+            lattice.lattice.step(1);
+        }
+        return;
+    }
+    lattice.set_overlap(mode == Stepping::Overlapped);
+    lattice.step(steps, comm);
 }
 
 /// [`run`] on `--thread-ranks N` threads of this process, one rank each; the first rank's error.
@@ -98,30 +163,34 @@ fn start(
 
 /// Every rank's measurement at rank 0, in rank order.
 fn gather(comm: &dyn Communicator, mine: &RankTime) -> Vec<RankTime> {
+    let times: Vec<String> = mine.times.iter().map(|(s, x)| format!("{s}\t{x}")).collect();
     let line = format!(
-        "{}\t{}\t{}\t{}\t{}",
-        mine.device, mine.cells, mine.seconds, mine.exchange, mine.halo_bytes
+        "{}\t{}\t{}\t{}",
+        mine.device,
+        mine.cells,
+        mine.halo_bytes,
+        times.join("\t")
     );
     comm.gather(line.as_bytes())
         .iter()
         .map(|r| {
             let text = String::from_utf8_lossy(r);
             let f: Vec<&str> = text.split('\t').collect();
+            let number = |v: &str| v.parse().unwrap_or(f64::NAN);
             RankTime {
                 device: f[0].to_string(),
                 cells: f[1].parse().unwrap_or(0),
-                seconds: f[2].parse().unwrap_or(f64::NAN),
-                exchange: f[3].parse().unwrap_or(f64::NAN),
-                halo_bytes: f[4].parse().unwrap_or(0),
+                halo_bytes: f[2].parse().unwrap_or(0),
+                times: f[3..].chunks(2).map(|t| (number(t[0]), number(t[1]))).collect(),
             }
         })
         .collect()
 }
 
-fn print(args: &BenchArgs, n: [usize; 3], blocks: [usize; 3], rows: &[RankTime]) {
+fn print(args: &BenchArgs, n: [usize; 3], blocks: [usize; 3], rows: &[RankTime], modes: &[Stepping]) {
     let steps = args.steps as f64;
     println!(
-        "grid {}x{}x{} ({}, {}) on {} ranks in {}x{}x{} blocks, {} steps, best of {} rounds",
+        "grid {}x{}x{} ({}, {}) on {} ranks in {}x{}x{} blocks, {} steps, best of {} rounds, exchange {}",
         n[0],
         n[1],
         n[2],
@@ -132,26 +201,50 @@ fn print(args: &BenchArgs, n: [usize; 3], blocks: [usize; 3], rows: &[RankTime])
         blocks[1],
         blocks[2],
         args.steps,
-        args.rounds.max(1)
+        args.rounds.max(1),
+        modes[0].name()
     );
     println!("rank  cells      MLUPS   halo bytes/step  exchange share  device");
     for (rank, r) in rows.iter().enumerate() {
+        let (seconds, exchange) = r.times[0];
         println!(
             "{rank:>4}  {:>9}  {:>7.2}  {:>15}  {:>13.1}%  {}",
             r.cells,
-            r.cells as f64 * steps / r.seconds / 1e6,
+            r.cells as f64 * steps / seconds / 1e6,
             r.halo_bytes,
-            100.0 * r.exchange / r.seconds,
+            100.0 * exchange / seconds,
             r.device
         );
     }
     let cells: usize = rows.iter().map(|r| r.cells).sum();
-    let slowest = rows.iter().map(|r| r.seconds).fold(0.0, f64::max);
     let bytes: usize = rows.iter().map(|r| r.halo_bytes).sum();
-    let share = rows.iter().map(|r| r.exchange / r.seconds).sum::<f64>() / rows.len() as f64;
+    let slowest = |m: usize| rows.iter().map(|r| r.times[m].0).fold(0.0, f64::max);
+    let share = |m: usize| rows.iter().map(|r| r.times[m].1 / r.times[m].0).sum::<f64>() / rows.len() as f64;
     println!(
         "total {cells:>9}  {:>7.2} MLUPS, halo {bytes} bytes per step, exchange {:.1}% of the step (mean over ranks)",
-        cells as f64 * steps / slowest / 1e6,
-        100.0 * share
+        cells as f64 * steps / slowest(0) / 1e6,
+        100.0 * share(0)
     );
+    print_exchanges(steps, rows, modes);
+}
+
+/// Per way of exchanging timed, its time per step against the compute alone's (the last of
+/// `modes`), the exposed exchange (their difference) and the host's share of the step in it.
+fn print_exchanges(steps: f64, rows: &[RankTime], modes: &[Stepping]) {
+    let slowest = |m: usize| rows.iter().map(|r| r.times[m].0).fold(0.0, f64::max);
+    let share = |m: usize| rows.iter().map(|r| r.times[m].1 / r.times[m].0).sum::<f64>() / rows.len() as f64;
+    let alone = slowest(modes.len() - 1) / steps;
+    for (m, mode) in modes.iter().enumerate().take(modes.len() - 1) {
+        let per_step = slowest(m) / steps;
+        println!(
+            "exchange {}: {:.3} ms per step against {:.3} ms without it: exposed {:.3} ms per step \
+             ({:.1}%); the host in the exchange {:.1}% of the step",
+            mode.name(),
+            1e3 * per_step,
+            1e3 * alone,
+            1e3 * (per_step - alone),
+            100.0 * (per_step - alone) / per_step,
+            100.0 * share(m)
+        );
+    }
 }

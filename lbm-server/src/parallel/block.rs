@@ -1,5 +1,6 @@
 //! One rank's block of a decomposed lattice ([`BlockLattice`]): its lattice on the rank's device,
-//! stepped with the halo exchange after every step, its own cells' fields read (each rank writes
+//! stepped with the halo exchange in every step (overlapped with the interior's update, or after
+//! the step), its own cells' fields read (each rank writes
 //! its piece of a snapshot), the probe lines' cells gathered on rank 0 and its health checks
 //! agreed by all ranks. On one rank it is the whole lattice, stepped and read as before.
 
@@ -21,6 +22,9 @@ pub struct BlockLattice {
     pub(super) halo: Option<Halo>,
     /// What this rank sent rank 0 for the particles' loads (`coupled_block.rs`).
     pub(super) shares_sent: SharesSent,
+    /// Whether [`BlockLattice::step`] overlaps the halo exchange with the interior's update
+    /// (`[parallel] overlap`, on by default), or exchanges after the whole step (exposed).
+    overlap: bool,
 }
 
 /// An unhealthy cell of the whole lattice, and the rank that holds it.
@@ -56,15 +60,34 @@ impl BlockLattice {
             setup.clone()
         };
         let options = options.map(|o| block_options(o, &d, &setup));
-        let lattice = GpuLattice::new(gpu, local, health, options)?;
+        let mut lattice = GpuLattice::new(gpu, local, health, options)?;
         let halo = split.then(|| Halo::new(&lattice, &d, &setup));
+        // The coupled step keeps the exposed exchange (`coupled_block.rs`).
+        let overlap = split && options.is_none();
+        if overlap {
+            let (regions, region_of) = Halo::regions(&d, d.local_n());
+            lattice.set_regions(regions, region_of);
+        }
         Ok(BlockLattice {
             lattice,
             decomposition: d,
             whole: setup,
             halo,
             shares_sent: SharesSent::default(),
+            overlap,
         })
+    }
+
+    /// Makes [`BlockLattice::step`] overlap the halo exchange with the interior's update (`on`,
+    /// the default where the lattice is decomposed and has no particles), or exchange after the
+    /// whole step; the same bits either way.
+    pub fn set_overlap(&mut self, on: bool) {
+        self.overlap = on && self.lattice.regions() > 0;
+    }
+
+    /// Whether the steps overlap the halo exchange with the interior's update.
+    pub fn overlaps(&self) -> bool {
+        self.overlap
     }
 
     /// Completed steps.
@@ -86,15 +109,20 @@ impl BlockLattice {
         self.shares_sent.per_step()
     }
 
-    /// Advances `steps` steps, exchanging the halo after each.
+    /// Advances `steps` steps, exchanging the halo in each: overlapped with the interior's update
+    /// ([`Halo::step_overlapped`]) or after the whole step ([`Halo::exchange`]).
     pub fn step(&mut self, steps: u64, comm: &dyn Communicator) {
         let Some(halo) = &mut self.halo else {
             self.lattice.step(steps);
             return;
         };
         for _ in 0..steps {
-            self.lattice.step(1);
-            halo.exchange(&self.lattice, comm);
+            if self.overlap {
+                halo.step_overlapped(&mut self.lattice, comm);
+            } else {
+                self.lattice.step(1);
+                halo.exchange(&self.lattice, comm);
+            }
         }
     }
 

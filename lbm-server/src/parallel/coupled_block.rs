@@ -1,9 +1,11 @@
 //! The coupled step of one rank's block ([`BlockLattice::step_coupled_with`]): every rank steps
 //! the same particles (rank 0 sends them their states: `coupled/ranks.rs`), in the whole lattice's
-//! coordinates, over its own cells; the halo is exchanged; each rank other than 0 sends rank 0 its
-//! share of the loads (`lbm/imb/share.rs`: the loads of the particles whose box it holds alone,
-//! the covered cells it holds of those across a cut), from which rank 0 makes every particle's
-//! load in the single process's order (`lbm/imb/gathered.rs`): the same bits as one process.
+//! coordinates, over its own cells; the halo is exchanged after the whole step (not overlapped:
+//! the redo's passes over the covered cells write into the shell's slots after the fluid kernels,
+//! docs/imb.md); each rank other than 0 sends rank 0 its share of the loads
+//! (`lbm/imb/share.rs`: the loads of the particles whose box it holds alone, the covered cells it
+//! holds of those across a cut), from which rank 0 makes every particle's load in the single
+//! process's order (`lbm/imb/gathered.rs`): the same bits as one process.
 
 use super::block::BlockLattice;
 use super::communicator::Communicator;

@@ -1,5 +1,7 @@
-//! The halo exchange between the blocks of a decomposed lattice, after every step, of only the
-//! populations that cross each block face (5 per face in D3Q19).
+//! The halo exchange between the blocks of a decomposed lattice, in every step, of only the
+//! populations that cross each block face (5 per face in D3Q19): after the whole step
+//! ([`Halo::exchange`]), or overlapped with the update of the block's interior
+//! ([`Halo::step_overlapped`]).
 //!
 //! The AA pattern stores the populations in place (lbm.wgsl). After an even step each cell holds
 //! its own post-collision populations, reversed, in its own slots; the next (odd) step of a cell
@@ -16,6 +18,15 @@
 //! A population whose link leaves the fluid on the other side (into a solid cell, or across a
 //! wall of the whole lattice) is left out: the cell bounced it back into its own slot itself,
 //! and no ghost cell's value may overwrite it.
+//!
+//! The overlap: the slots the exchange reads and writes are, after an even step, those of the
+//! cells next to each cut face and of its ghost layer; after an odd step, those of the ghost layer
+//! that the cells next to the face stream into, and those of the cells next to the face that the
+//! ghost layer streams into. Within a step every slot is read and written by one cell's update
+//! alone (the AA pattern), and a cell two layers or more from every cut face (the interior) reads
+//! and writes none of those slots, in either parity. So the step updates the shell (each cut
+//! face's ghost layer and the layer next to it) first, packs, and the interior's update may run
+//! before or after the unpack lands; the next step's shell comes after both.
 //!
 //! Edges and corners: axis by axis (x, then y, then z), each layer spanning the other axes' ghost
 //! layers, so that what crosses an edge or corner reaches the diagonal neighbour in two or three
@@ -81,59 +92,140 @@ impl Halo {
         }
     }
 
-    /// Exchanges the halo after a step: `lattice.time` odd (an even step done) sends the cells
-    /// next to each face into the neighbour's ghost layer, even (an odd step done) the ghost layer
-    /// into the neighbour's cells.
+    /// Exchanges the halo after a step, the whole step done first (exposed): `lattice.time` odd
+    /// (an even step done) sends the cells next to each face into the neighbour's ghost layer,
+    /// even (an odd step done) the ghost layer into the neighbour's cells.
     pub fn exchange(&mut self, lattice: &GpuLattice, comm: &dyn Communicator) {
         // The step done first (the pack would wait for it): the time counted is the exchange's.
         lattice.finish();
         let started = Instant::now();
         let after_even = lattice.time % 2 == 1;
-        for axis in 0..3 {
-            let faces: Vec<&HaloFace> = self.faces.iter().filter(|f| f.face / 2 == axis).collect();
-            if faces.is_empty() {
-                continue;
-            }
-            let (send, receive): (Vec<&HaloLayer>, Vec<&HaloLayer>) = faces
-                .iter()
-                .map(|f| {
-                    if after_even {
-                        (&f.inward, &f.outward)
-                    } else {
-                        (&f.outward, &f.inward)
-                    }
-                })
-                .unzip();
+        for axis in self.axes() {
+            let (faces, send, receive) = self.sides(axis, after_even);
             let packed = lattice.pack_halo(&self.kernels, &send);
-            let messages: Vec<Message> = faces
-                .iter()
-                .zip(&packed)
-                .map(|(f, values)| Message {
-                    peer: f.peer,
-                    tag: f.face as i32,
-                    values,
-                })
-                .collect();
-            // The message across face f arrives across the neighbour's opposite face, f ^ 1.
-            let expected: Vec<Expected> = faces
-                .iter()
-                .zip(&receive)
-                .map(|(f, layer)| Expected {
-                    peer: f.peer,
-                    tag: (f.face ^ 1) as i32,
-                    len: layer.len(),
-                })
-                .collect();
-            let received = comm.exchange(&messages, &expected);
-            let unpack: Vec<(&HaloLayer, &[f32])> = receive
-                .iter()
-                .copied()
-                .zip(received.iter().map(|v| &v[..]))
-                .collect();
-            lattice.unpack_halo(&self.kernels, &unpack);
+            let received = comm.exchange(&messages(&faces, &packed), &expected(&faces, &receive));
+            lattice.unpack_halo(&self.kernels, &unpacked(&receive, &received));
         }
         self.time += started.elapsed();
     }
+
+    /// One step of `lattice` with the exchange overlapped with the interior's update: the shell
+    /// (region 0: [`Halo::regions`]) first; then per cut axis the pack of its faces, the next
+    /// part of the interior submitted behind it, and while the device updates that part the pack
+    /// read back, sent and received, and unpacked. Each slot the exchange reads or writes is one
+    /// the shell's cells alone read and write in the step (the module's account), so the interior
+    /// may be updated before or after the unpack; the next step's shell comes after it.
+    pub fn step_overlapped(&mut self, lattice: &mut GpuLattice, comm: &dyn Communicator) {
+        let after_even = lattice.time.is_multiple_of(2);
+        lattice.step_region(0);
+        for (part, axis) in self.axes().into_iter().enumerate() {
+            let (faces, send, receive) = self.sides(axis, after_even);
+            let packed = lattice.submit_pack(&self.kernels, &send);
+            lattice.step_region(1 + part);
+            // The host's time in the exchange: from here (the device on the interior).
+            let started = Instant::now();
+            let packed = lattice.read_packed(&send, packed);
+            let received = comm.exchange(&messages(&faces, &packed), &expected(&faces, &receive));
+            lattice.unpack_halo(&self.kernels, &unpacked(&receive, &received));
+            self.time += started.elapsed();
+        }
+        lattice.end_split_step();
+    }
+
+    /// The cut axes, in the order of the exchange (x, y, z).
+    fn axes(&self) -> Vec<usize> {
+        let mut axes: Vec<usize> = self.faces.iter().map(|f| f.face / 2).collect();
+        axes.dedup();
+        axes
+    }
+
+    /// The faces across `axis`, and the layers each sends and receives after an even step
+    /// (`after_even`) or an odd one.
+    fn sides(&self, axis: usize, after_even: bool) -> (Vec<&HaloFace>, Vec<&HaloLayer>, Vec<&HaloLayer>) {
+        let faces: Vec<&HaloFace> = self.faces.iter().filter(|f| f.face / 2 == axis).collect();
+        let (send, receive) = faces
+            .iter()
+            .map(|f| {
+                if after_even {
+                    (&f.inward, &f.outward)
+                } else {
+                    (&f.outward, &f.inward)
+                }
+            })
+            .unzip();
+        (faces, send, receive)
+    }
+
+    /// The regions of a step split for the overlapped exchange, and each cell's, in the block `d` of
+    /// `n` cells (ghost layers included): 0, the shell, the cells of each cut face's ghost layer
+    /// and of the layer next to it (those whose slots the exchange reads or writes); then the
+    /// interior cut into as many parts as there are cut axes (whole, in memory order), the part
+    /// `p` updated while the exchange across the `p`-th axis runs.
+    pub fn regions(d: &Decomposition, n: [usize; 3]) -> (usize, Vec<u8>) {
+        let cut: Vec<usize> = (0..6).filter(|&f| d.neighbour(f).is_some()).collect();
+        let in_shell = |x: [usize; 3]| {
+            cut.iter().any(|&f| {
+                let a = f / 2;
+                let from_face = if f % 2 == 1 { n[a] - 1 - x[a] } else { x[a] };
+                from_face < 2
+            })
+        };
+        let cells = n.iter().product::<usize>();
+        let shell: Vec<bool> = (0..cells)
+            .map(|k| in_shell([k % n[0], (k / n[0]) % n[1], k / (n[0] * n[1])]))
+            .collect();
+        let mut axes: Vec<usize> = cut.iter().map(|f| f / 2).collect();
+        axes.dedup();
+        let interior = shell.iter().filter(|s| !**s).count().max(1);
+        let mut seen = 0;
+        let region_of = shell
+            .iter()
+            .map(|&s| {
+                if s {
+                    return 0;
+                }
+                seen += 1;
+                (1 + (seen - 1) * axes.len() / interior) as u8
+            })
+            .collect();
+        (1 + axes.len(), region_of)
+    }
+}
+
+/// The message of each of `faces` with its `packed` values.
+fn messages<'a>(faces: &[&HaloFace], packed: &'a [Vec<f32>]) -> Vec<Message<'a>> {
+    faces
+        .iter()
+        .zip(packed)
+        .map(|(f, values)| Message {
+            peer: f.peer,
+            tag: f.face as i32,
+            values,
+        })
+        .collect()
+}
+
+/// The message awaited across each of `faces` into its layer of `receive`: the message across
+/// face f arrives across the neighbour's opposite face, f ^ 1.
+fn expected(faces: &[&HaloFace], receive: &[&HaloLayer]) -> Vec<Expected> {
+    faces
+        .iter()
+        .zip(receive)
+        .map(|(f, layer)| Expected {
+            peer: f.peer,
+            tag: (f.face ^ 1) as i32,
+            len: layer.len(),
+        })
+        .collect()
+}
+
+/// Each layer of `receive` with its values `received`.
+fn unpacked<'a>(receive: &[&'a HaloLayer], received: &'a [Vec<f32>]) -> Vec<(&'a HaloLayer, &'a [f32])> {
+    receive
+        .iter()
+        .copied()
+        .zip(received.iter().map(|v| &v[..]))
+        .collect()
 }
 
 /// The populations of the layer of cells at coordinate `at` along axis `a` of a block lattice of

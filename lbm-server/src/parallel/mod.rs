@@ -4,7 +4,8 @@
 //! - `communicator.rs`: what the ranks say to one another ([`Communicator`]); one process is a
 //!   communicator of one rank, MPI's world another (`mpi_world.rs`, built with `--features mpi`).
 //! - `decomposition.rs`: the blocks, chosen or given by the scene, and one rank's block.
-//! - `halo.rs`: the exchange of the populations that cross the block faces, after every step.
+//! - `halo.rs`: the exchange of the populations that cross the block faces, in every step,
+//!   overlapped with the interior's update or after the whole step.
 //! - `block.rs`: one rank's lattice, stepped, read and checked with the others ([`BlockLattice`]).
 //! - `pieces.rs`: the field snapshots as ParaView parallel image data, a piece per rank
 //!   ([`FieldPieces`]).

@@ -11,12 +11,16 @@ pub struct ParallelSummary {
     pub blocks: [usize; 3],
     pub devices: Vec<String>,
     /// Bytes each rank's halo sent per step (rank order), and the share of the wall time its
-    /// exchange took.
+    /// host spent in the exchange (overlapped: from the interior's submission on, part of it
+    /// hidden behind the interior's update).
     pub halo_bytes_per_step: Vec<usize>,
     pub halo_share: Vec<f64>,
     /// Bytes each rank sent rank 0 per coupled step for the particles' loads (rank order; the
     /// mean over the run's steps; none from rank 0, none without particles).
     pub loads_bytes_per_step: Vec<usize>,
+    /// Whether the exchange overlapped the interior's update (`[parallel] overlap`; a coupled
+    /// run's exchange follows the whole step).
+    pub halo_overlapped: bool,
 }
 
 impl ParallelSummary {
@@ -47,6 +51,7 @@ impl ParallelSummary {
             halo_bytes_per_step: rows.iter().map(|r| r[2].parse().unwrap_or(0)).collect(),
             halo_share: rows.iter().map(|r| r[3].parse().unwrap_or(0.0)).collect(),
             loads_bytes_per_step: rows.iter().map(|r| r[4].parse().unwrap_or(0)).collect(),
+            halo_overlapped: lattice.overlaps(),
         }
     }
 }

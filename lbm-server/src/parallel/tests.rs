@@ -2,9 +2,11 @@
 //! one process ([`ThreadRanks`]), on one device, so that these run without MPI.
 
 use super::{BlockLattice, Communicator, Decomposition, ThreadRanks};
-use crate::lbm::geometry::{Face, Operator, Setup};
+use crate::lbm::geometry::{Cell, Face, Operator, Setup};
 use crate::lbm::gpu::{Gpu, GpuLattice, Health};
+use crate::lbm::kernel::Kernel;
 use crate::lbm::mrt::Rates;
+use crate::lbm::storage::Storage;
 use std::sync::Arc;
 
 /// Runs `steps` steps of `setup` from rest on one lattice, and cut into `blocks` on threads;
@@ -18,24 +20,11 @@ fn check(setup: Setup, blocks: [usize; 3], steps: u64) {
     expected.push(one.fields().0);
     one.step(1);
     expected.push(one.fields().0);
-    let ranks: usize = blocks.iter().product();
-    let periodic: [bool; 3] = std::array::from_fn(|a| setup.periodic(a));
-    let got: Vec<Vec<Vec<[f32; 4]>>> = std::thread::scope(|s| {
-        let handles: Vec<_> = ThreadRanks::world(ranks)
-            .into_iter()
-            .map(|comm| {
-                let (gpu, setup) = (gpu.clone(), setup.clone());
-                s.spawn(move || {
-                    let d = Decomposition::new(setup.n, periodic, blocks, comm.rank());
-                    let mut block = BlockLattice::new(gpu, setup, Health::default(), d).unwrap();
-                    block.step(steps - 1, &comm);
-                    let first = block.own_fields(&comm).0;
-                    block.step(1, &comm);
-                    vec![first, block.own_fields(&comm).0]
-                })
-            })
-            .collect();
-        handles.into_iter().map(|h| h.join().unwrap()).collect()
+    let got = on_ranks(&gpu, &setup, blocks, |block, comm| {
+        block.step(steps - 1, comm);
+        let first = block.own_fields(comm).0;
+        block.step(1, comm);
+        vec![first, block.own_fields(comm).0]
     });
     let whole = |parity: usize| {
         let pieces: Vec<&[[f32; 4]]> = got.iter().map(|p| &p[parity][..]).collect();
@@ -77,8 +66,13 @@ pub(super) fn walled() -> Setup {
 
 /// Periodic, a body force, MRT.
 pub(super) fn periodic() -> Setup {
+    periodic_of([8, 6, 8])
+}
+
+/// Periodic, a body force, MRT, `n` cells.
+fn periodic_of(n: [usize; 3]) -> Setup {
     let rates = Rates::dhumieres(1.0 / 0.8);
-    let mut setup = Setup::new([8, 6, 8], [Face::Periodic; 6], 0.8, Operator::Mrt { rates });
+    let mut setup = Setup::new(n, [Face::Periodic; 6], 0.8, Operator::Mrt { rates });
     setup.force = [2e-4, 1e-4, -1e-4];
     setup
 }
@@ -98,4 +92,87 @@ fn a_periodic_lattice_cut_along_one_axis_is_the_single_lattice_bit_for_bit() {
 fn lattices_cut_along_two_and_three_axes_are_the_single_lattice_bit_for_bit() {
     check(walled(), [2, 3, 1], 6);
     check(periodic(), [2, 2, 2], 5);
+}
+
+/// Every rank's populations (its block's lattice, ghost layers included) after `steps` steps of
+/// `setup` from rest cut into `blocks` on threads, the halo exchange overlapped with the
+/// interior's update (`overlap`) or after each whole step.
+fn block_populations(setup: &Setup, blocks: [usize; 3], steps: u64, overlap: bool) -> Vec<Vec<Cell>> {
+    let gpu = Arc::new(Gpu::new().expect("a wgpu adapter (lavapipe in CI)"));
+    on_ranks(&gpu, setup, blocks, |block, comm| {
+        block.set_overlap(overlap);
+        assert_eq!(block.overlaps(), overlap, "the exchange asked for");
+        block.step(steps, comm);
+        block.lattice.populations()
+    })
+}
+
+/// `run(block, rank)` on each rank of `setup` from rest cut into `blocks`, the ranks threads on
+/// `gpu`; the results in rank order.
+fn on_ranks<T: Send>(
+    gpu: &Arc<Gpu>,
+    setup: &Setup,
+    blocks: [usize; 3],
+    run: impl Fn(&mut BlockLattice, &ThreadRanks) -> T + Sync,
+) -> Vec<T> {
+    let periodic: [bool; 3] = std::array::from_fn(|a| setup.periodic(a));
+    let run = &run;
+    std::thread::scope(|s| {
+        let handles: Vec<_> = ThreadRanks::world(blocks.iter().product())
+            .into_iter()
+            .map(|comm| {
+                let (gpu, setup) = (gpu.clone(), setup.clone());
+                s.spawn(move || {
+                    let d = Decomposition::new(setup.n, periodic, blocks, comm.rank());
+                    let mut block = BlockLattice::new(gpu, setup, Health::default(), d).unwrap();
+                    run(&mut block, &comm)
+                })
+            })
+            .collect();
+        handles.into_iter().map(|h| h.join().unwrap()).collect()
+    })
+}
+
+/// The overlapped exchange (the step split into the shell and the interior's parts) leaves every
+/// population of every block, ghost layers included, as the exposed exchange after the whole
+/// step does: walls, a moving wall during the faces' ramp, solid cells, a body force, cuts along
+/// one, two and three axes, the quads' kernels, the per-cell kernel and 16-bit storage, after
+/// an even and an odd number of steps.
+#[test]
+fn the_overlapped_exchange_gives_the_exposed_exchanges_bits() {
+    let mut walled = crate::lbm::tests::trt_walls_and_solids([16, 12, 12]);
+    walled.ramp_steps = 4.0;
+    let setups = [
+        (walled.clone(), [2, 1, 1], 5),
+        (walled.clone(), [2, 2, 1], 6),
+        (
+            Setup {
+                kernel: Kernel::Cells,
+                ..walled.clone()
+            },
+            [1, 2, 2],
+            5,
+        ),
+        (
+            Setup {
+                storage: Storage::Fp16s,
+                ..periodic_of([16, 12, 12])
+            },
+            [2, 2, 2],
+            6,
+        ),
+    ];
+    for (setup, blocks, steps) in setups {
+        let overlapped = block_populations(&setup, blocks, steps, true);
+        let exposed = block_populations(&setup, blocks, steps, false);
+        for (rank, (a, b)) in overlapped.iter().zip(&exposed).enumerate() {
+            let differ = a.iter().zip(b).filter(|(p, q)| p != q).count();
+            assert!(
+                differ == 0,
+                "{:?} {:?} blocks {blocks:?}, rank {rank}: {differ} cells differ",
+                setup.kernel,
+                setup.storage
+            );
+        }
+    }
 }

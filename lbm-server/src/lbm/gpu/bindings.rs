@@ -194,6 +194,7 @@ impl GpuLattice {
         for (way, groups) in self.ways.iter_mut().zip(bound) {
             way.bind_groups = groups;
         }
+        self.rebind_regions();
     }
 
     /// The lattice's buffers bound with `params` and a way's `cell_list`.

@@ -71,7 +71,17 @@ impl CellList {
     /// The cell list, with the quads when `quads` (without, every interior and wrapping cell goes
     /// through `stream_collide_fluid`).
     pub fn new(setup: &Setup, quads: bool) -> CellList {
-        let classes: Vec<u32> = cell_flags(setup).into_iter().map(class).collect();
+        Self::within(setup, quads, &|_| true)
+    }
+
+    /// The cell list of the cells `keep` keeps alone (a region of the step: `region.rs`), each
+    /// quad's four cells kept together or left to the other kernels.
+    pub fn within(setup: &Setup, quads: bool, keep: &dyn Fn(usize) -> bool) -> CellList {
+        let classes: Vec<u32> = cell_flags(setup)
+            .into_iter()
+            .enumerate()
+            .map(|(k, flag)| if keep(k) { class(flag) } else { LEFT_OUT })
+            .collect();
         let cells = classes.len();
         let (quads, interior_quads) = find_quads(setup, &classes, quads);
         let membership = membership(cells, &quads, &interior_quads);
@@ -107,10 +117,13 @@ impl CellList {
     }
 }
 
+/// The class of a solid cell, or of one the list leaves out: in no class.
+const LEFT_OUT: u32 = 3;
+
 /// A cell's class from its flags: 0 interior, 1 wrapping, 2 boundary, 3 solid.
 fn class(flag: u32) -> u32 {
     if flag & SOLID_FLAG != 0 {
-        3
+        LEFT_OUT
     } else if flag & 0x7ffff != 0 {
         2
     } else if flag & WRAPS_FLAG != 0 {

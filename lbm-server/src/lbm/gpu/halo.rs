@@ -112,16 +112,30 @@ impl GpuLattice {
 
     /// The populations of each layer, packed and read back (one submission, one wait).
     pub fn pack_halo(&self, kernels: &HaloKernels, layers: &[&HaloLayer]) -> Vec<Vec<f32>> {
+        let packed = self.submit_pack(kernels, layers);
+        self.read_packed(layers, packed)
+    }
+
+    /// Packs the populations of each layer and copies them where the host reads them, in a
+    /// submission of their own (returned), their read-back asked for: what the device does next
+    /// may run while the host waits for them alone ([`GpuLattice::read_packed`]).
+    pub fn submit_pack(&self, kernels: &HaloKernels, layers: &[&HaloLayer]) -> wgpu::SubmissionIndex {
         let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
         for layer in layers {
             self.dispatch_halo(&mut encoder, &kernels.pack, layer);
             encoder.copy_buffer_to_buffer(&layer.values, 0, &layer.readback, 0, layer.readback.size());
         }
-        self.gpu.queue.submit([encoder.finish()]);
+        let packed = self.gpu.queue.submit([encoder.finish()]);
         for layer in layers {
             layer.readback.slice(..).map_async(wgpu::MapMode::Read, |_| {});
         }
-        self.gpu.wait();
+        packed
+    }
+
+    /// The layers' populations that the submission `packed` ([`GpuLattice::submit_pack`])
+    /// packed, once it is done (later submissions may still run).
+    pub fn read_packed(&self, layers: &[&HaloLayer], packed: wgpu::SubmissionIndex) -> Vec<Vec<f32>> {
+        self.gpu.wait_for(packed);
         layers
             .iter()
             .map(|layer| {

@@ -1,6 +1,7 @@
 //! The lattice on the GPU (wgpu): the device, the lattice's state and its ways of stepping, the
 //! buffers and bindings its kernels share, its parameters, the cell list, the step loop (AA
-//! pattern), the health check and the state a checkpoint holds.
+//! pattern), a step split into regions (a decomposed lattice's overlapped halo exchange), the
+//! health check and the state a checkpoint holds.
 
 mod bindings;
 mod cell_list;
@@ -8,6 +9,7 @@ mod device;
 mod halo;
 mod health;
 mod params;
+mod region;
 mod snapshot;
 mod state;
 mod step;

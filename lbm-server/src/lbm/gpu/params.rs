@@ -103,7 +103,9 @@ impl GpuLattice {
         self.face_scale = scale;
         let values = face_values(&self.setup.faces, scale);
         let offset = std::mem::offset_of!(Params, face_value) as u64;
-        for params in self.ways.iter().flat_map(|w| &w.params) {
+        let regions = self.ways.iter().flat_map(|w| &w.regions);
+        let of_regions = regions.flat_map(|r| &r.regions).flat_map(|r| &r.params);
+        for params in self.ways.iter().flat_map(|w| &w.params).chain(of_regions) {
             self.gpu
                 .queue
                 .write_buffer(params, offset, bytemuck::cast_slice(&values));

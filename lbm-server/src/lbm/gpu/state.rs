@@ -31,6 +31,8 @@ pub struct GpuLattice {
     /// The ways built so far ([`GpuLattice::set_covered_cells`]), and the one the steps take.
     pub(super) ways: Vec<Way>,
     pub(super) active: usize,
+    /// The regions, and each cell's, where the steps may be split into regions (`region.rs`).
+    pub(super) region_of: Option<(usize, Vec<u8>)>,
     /// Completed steps; its parity selects the AA phase.
     pub time: u64,
     /// The share of their velocity the velocity inlets and moving walls have now
@@ -88,6 +90,7 @@ impl GpuLattice {
             imb: Some(coupling),
             ways: Vec::new(),
             active: 0,
+            region_of: None,
             time: 0,
             face_scale: 1.0,
             kept: None,

@@ -1,6 +1,7 @@
 //! The fluid's step: stream and collide (seed eq. 1) over the cells by class, batched into
 //! submissions, in the AA pattern's alternating phases.
 
+use super::cell_list::CellList;
 use super::state::GpuLattice;
 use super::way::FluidKernels;
 
@@ -56,52 +57,100 @@ impl GpuLattice {
         parity: u64,
         groups: u32,
     ) {
-        if groups == 0 {
-            return;
-        }
-        let x = groups.min(MAX_GROUPS);
-        let mut pass = encoder.begin_compute_pass(&Default::default());
-        pass.set_pipeline(pipeline);
-        pass.set_bind_group(0, &self.way().bind_groups[parity as usize], &[]);
-        pass.dispatch_workgroups(x, groups.div_ceil(x), 1);
+        let bound = &self.way().bind_groups[parity as usize];
+        dispatch_bound(encoder, pipeline, bound, groups);
     }
 
     /// Adds one stream-collide step to `encoder`: the per-cell kernel over every cell, or the
     /// fluid cells by class (one or two dispatches), then the boundary cells.
     pub(in crate::lbm) fn encode_step(&mut self, encoder: &mut wgpu::CommandEncoder) {
-        let parity = self.time % 2;
-        match &self.way().fluid {
-            FluidKernels::Cells(cells) => self.dispatch(encoder, cells, parity),
-            FluidKernels::Quads {
-                stream_collide,
-                stream_collide_fluid,
-                stream_collide_quads,
-                stream_collide_quads_odd,
-            } => {
-                let c = &self.way().classes;
-                let [interior, wrapping, boundary] = c.sizes;
-                let groups = |cells: u32| cells.div_ceil(WORKGROUP);
-                let fluid = stream_collide_fluid;
-                if parity == 0 {
-                    if let Some(quads) = stream_collide_quads {
-                        self.dispatch_groups(encoder, quads, parity, groups(c.quads));
-                    }
-                    let rest = interior + wrapping - c.in_quads[0] - c.in_quads[1];
-                    self.dispatch_groups(encoder, &fluid[0], parity, groups(rest));
-                } else {
-                    if let Some(quads) = stream_collide_quads_odd {
-                        self.dispatch_groups(encoder, quads, parity, groups(c.interior_quads));
-                    }
-                    if c.interior_quads == 0 {
-                        self.dispatch_groups(encoder, &fluid[1], parity, groups(interior));
-                    }
-                    self.dispatch_groups(encoder, &fluid[2], parity, groups(c.wrapped().1));
-                }
-                self.dispatch_groups(encoder, stream_collide, parity, groups(boundary));
-            }
-        }
+        let way = self.way();
+        let bound = &way.bind_groups[(self.time % 2) as usize];
+        self.encode_cells(encoder, &way.classes, bound, None);
         self.time += 1;
     }
+
+    /// The fluid kernels of this step's parity over the cells that `classes` lists, bound by
+    /// `bound` (the way's whole list, or a region's: `region.rs`): the per-cell kernel over every
+    /// cell, or with `listed` (its KIND 1) over the listed cells; or the quads' kernels by class.
+    pub(super) fn encode_cells(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        classes: &CellList,
+        bound: &wgpu::BindGroup,
+        listed: Option<&wgpu::ComputePipeline>,
+    ) {
+        let groups = |cells: u32| cells.div_ceil(WORKGROUP);
+        match (&self.way().fluid, listed) {
+            (FluidKernels::Cells(_), Some(listed)) => {
+                let [interior, wrapping, boundary] = classes.sizes;
+                dispatch_bound(encoder, listed, bound, groups(interior + wrapping + boundary));
+            }
+            (FluidKernels::Cells(cells), None) => {
+                dispatch_bound(encoder, cells, bound, groups(self.setup.cells() as u32));
+            }
+            (quads @ FluidKernels::Quads { .. }, _) => {
+                encode_quads(encoder, quads, classes, bound, self.time % 2);
+            }
+        }
+    }
+}
+
+/// The quads' kernels of step parity `parity` over the fluid cells of `c` by class (one or two
+/// dispatches), then the boundary cells, bound by `bound`.
+fn encode_quads(
+    encoder: &mut wgpu::CommandEncoder,
+    kernels: &FluidKernels,
+    c: &CellList,
+    bound: &wgpu::BindGroup,
+    parity: u64,
+) {
+    let FluidKernels::Quads {
+        stream_collide,
+        stream_collide_fluid: fluid,
+        stream_collide_quads,
+        stream_collide_quads_odd,
+    } = kernels
+    else {
+        unreachable!("the quads' kernels")
+    };
+    let [interior, wrapping, boundary] = c.sizes;
+    let mut dispatch = |pipeline: &wgpu::ComputePipeline, cells: u32| {
+        dispatch_bound(encoder, pipeline, bound, cells.div_ceil(WORKGROUP));
+    };
+    if parity == 0 {
+        if let Some(quads) = stream_collide_quads {
+            dispatch(quads, c.quads);
+        }
+        dispatch(&fluid[0], interior + wrapping - c.in_quads[0] - c.in_quads[1]);
+    } else {
+        if let Some(quads) = stream_collide_quads_odd {
+            dispatch(quads, c.interior_quads);
+        }
+        if c.interior_quads == 0 {
+            dispatch(&fluid[1], interior);
+        }
+        dispatch(&fluid[2], c.wrapped().1);
+    }
+    dispatch(stream_collide, boundary);
+}
+
+/// Dispatches `groups` workgroups of `pipeline` bound by `bound` (2D beyond the per-dimension
+/// limit).
+pub(super) fn dispatch_bound(
+    encoder: &mut wgpu::CommandEncoder,
+    pipeline: &wgpu::ComputePipeline,
+    bound: &wgpu::BindGroup,
+    groups: u32,
+) {
+    if groups == 0 {
+        return;
+    }
+    let x = groups.min(MAX_GROUPS);
+    let mut pass = encoder.begin_compute_pass(&Default::default());
+    pass.set_pipeline(pipeline);
+    pass.set_bind_group(0, bound, &[]);
+    pass.dispatch_workgroups(x, groups.div_ceil(x), 1);
 }
 
 /// The quad kernels (four cells per invocation) against the f64 reference step: the other tests'

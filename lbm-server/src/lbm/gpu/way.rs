@@ -6,6 +6,7 @@ use super::bindings::{make_bind_group, storage_buffer};
 use super::cell_list::CellList;
 use super::device::Gpu;
 use super::params::{params, Params};
+use super::region::Regions;
 use super::state::GpuLattice;
 use crate::lbm::imb::{Coupling, CoveredCells, ImbBlock, Passes, SolidCollision};
 use crate::lbm::kernel::Kernel;
@@ -39,6 +40,8 @@ pub(in crate::lbm) struct Way {
     pub(super) macroscopic: wgpu::ComputePipeline,
     /// The coupling's passes, when the lattice has particles.
     pub(in crate::lbm) passes: Option<Passes>,
+    /// The regions a step is split into, where the lattice has them (`region.rs`).
+    pub(super) regions: Option<Regions>,
 }
 
 /// The pipelines of a [`Kernel`].
@@ -142,33 +145,14 @@ impl GpuLattice {
 
     /// The kernels, cell classes, parameters and bind groups of one way.
     fn build_way(&self, kernel: Kernel, mode: CoveredCells) -> Way {
-        let d = &self.gpu.device;
-        // Fused, the quads' kernels give the covered cells their solid term one cell at a time,
-        // without the four-cell quads (the term would be compiled into them four times); skip's
-        // quads leave their covered cells as they are (`skipped_lanes`). The quads' vector
-        // accesses move four f32 populations: FP32 only.
-        let quads = kernel == Kernel::Quads && self.setup.storage == Storage::Fp32 && !mode.fuses();
+        let quads = self.takes_quads(kernel, mode);
         let classes = CellList::new(&self.setup, quads);
         // The per-cell kernel reads no cell list.
         let list: &[u32] = match kernel {
             Kernel::Quads if !classes.list.is_empty() => &classes.list,
             _ => &[0u32],
         };
-        let cell_list = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("cell list"),
-            contents: bytemuck::cast_slice(list),
-            usage: wgpu::BufferUsages::STORAGE,
-        });
-        let params: Vec<wgpu::Buffer> = (0..2)
-            .map(|parity| {
-                let p = params(&self.setup, parity, self.health, &classes, self.face_scale);
-                d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                    label: Some("params"),
-                    contents: bytemuck::bytes_of(&p),
-                    usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-                })
-            })
-            .collect();
+        let (cell_list, params) = self.list_and_params(list, &classes);
         let constants = self.way_constants(mode);
         let pipeline_kind = |entry: &str, kind: u32| self.pipeline(entry, &constants, kind);
         let pipeline = |entry: &str| pipeline_kind(entry, 0);
@@ -183,7 +167,7 @@ impl GpuLattice {
             },
             Kernel::Cells => FluidKernels::Cells(pipeline("stream_collide_cells")),
         };
-        Way {
+        let mut way = Way {
             mode,
             kernel,
             fluid,
@@ -193,12 +177,52 @@ impl GpuLattice {
             cell_list,
             params,
             bind_groups,
+            regions: None,
+        };
+        if self.region_of.is_some() {
+            way.regions = Some(self.build_regions(&way));
         }
+        way
+    }
+
+    /// The cell list `list` on the device, and the parameters of each parity with the cells'
+    /// `classes` (a way's, or a region's: `region.rs`).
+    pub(super) fn list_and_params(
+        &self,
+        list: &[u32],
+        classes: &CellList,
+    ) -> (wgpu::Buffer, Vec<wgpu::Buffer>) {
+        let d = &self.gpu.device;
+        let cell_list = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("cell list"),
+            contents: bytemuck::cast_slice(list),
+            usage: wgpu::BufferUsages::STORAGE,
+        });
+        let params: Vec<wgpu::Buffer> = (0..2)
+            .map(|parity| {
+                let p = params(&self.setup, parity, self.health, classes, self.face_scale);
+                d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some("params"),
+                    contents: bytemuck::bytes_of(&p),
+                    usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                })
+            })
+            .collect();
+        (cell_list, params)
+    }
+
+    /// Whether the way of `kernel` and `mode` takes the four-cell quads. Fused, the quads'
+    /// kernels give the covered cells their solid term one cell at a time, without the four-cell
+    /// quads (the term would be compiled into them four times); skip's quads leave their covered
+    /// cells as they are (`skipped_lanes`). The quads' vector accesses move four f32
+    /// populations: FP32 only.
+    pub(super) fn takes_quads(&self, kernel: Kernel, mode: CoveredCells) -> bool {
+        kernel == Kernel::Quads && self.setup.storage == Storage::Fp32 && !mode.fuses()
     }
 
     /// The shaders' override constants of a way: the operator, the forcing, the coupling's
     /// settings and `mode`.
-    fn way_constants(&self, mode: CoveredCells) -> Vec<(&'static str, f64)> {
+    pub(super) fn way_constants(&self, mode: CoveredCells) -> Vec<(&'static str, f64)> {
         let imb = self.options;
         let flag = |on: bool| f64::from(u8::from(on));
         let superposition = imb.is_some_and(|o| o.solid_collision == SolidCollision::Superposition);
@@ -217,7 +241,12 @@ impl GpuLattice {
     }
 
     /// The kernel `entry` of the lattice's module with a way's `constants` and KIND `kind`.
-    fn pipeline(&self, entry: &str, constants: &[(&str, f64)], kind: u32) -> wgpu::ComputePipeline {
+    pub(super) fn pipeline(
+        &self,
+        entry: &str,
+        constants: &[(&str, f64)],
+        kind: u32,
+    ) -> wgpu::ComputePipeline {
         let mut constants = constants.to_vec();
         constants.push(("KIND", f64::from(kind)));
         #[cfg(test)]
@@ -245,7 +274,7 @@ impl GpuLattice {
     /// compile a kernel at its first dispatch: without this the first steps of a run stalled for
     /// seconds with a cold shader cache (5-9 s on this 2-core machine for 16^3 cells with
     /// particles), while the run should be watching its peer (`tests/failures.rs`).
-    fn compile_kernels(&self, way: &Way) {
+    pub(super) fn compile_kernels(&self, way: &Way) {
         let d = &self.gpu.device;
         let empty = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("params: no cell"),
@@ -271,6 +300,7 @@ impl GpuLattice {
         let mut kernels = way.fluid.pipelines();
         kernels.push(&way.macroscopic);
         kernels.extend(way.passes.iter().flat_map(|p| p.kernels()));
+        kernels.extend(way.regions.iter().flat_map(|r| &r.cells_listed));
         let mut encoder = d.create_command_encoder(&Default::default());
         for kernel in kernels {
             let mut pass = encoder.begin_compute_pass(&Default::default());
