@@ -12,7 +12,7 @@
 # system.txt, bench_kernels.txt (LBM-only, 256^3, BGK: the per-cell kernel and the quads', each
 # with the populations in fp32, fp16s and fp16c, beside the copy bandwidth and the naive kernel),
 # bench_{trt,mrt}.txt (the same in FP32, both kernels), bench_ranks_{1,2,4}.txt (256^3 cut over
-# 1, 2 and 4 ranks sharing the device), bench_walls.txt and bench_periodic.txt (the Ten Cate
+# 1, 2 and 4 ranks sharing the device, the exchange overlapped and exposed), bench_walls.txt and bench_periodic.txt (the Ten Cate
 # grid at 16 cells, 224 x 224 x 256, closed and periodic, one sphere, both ways of treating the
 # covered cells, each pass timed: what a closed box costs), coupled_trt.txt (256 x 256 x 512, 1 to
 # 32^3 particles, ratio to LBM-only, time per pass, the covered cells fused, redone and skipped),
@@ -140,10 +140,14 @@ for op in trt mrt; do
 done
 # Ranks sharing the device (issue 37): the same lattice cut over 1, 2 and 4 ranks that are threads
 # of one process (no MPI on the device machine), each with its own device handle, the halos through
-# the host as between MPI ranks: what the exchange costs on a GPU (halo bytes, share of the step).
-for r in 1 2 4; do
-    step bench_ranks_$r 15 45 $bin/lbm-server bench --grid $cube --operator bgk --steps $kernel_steps --rounds 2 \
-        --thread-ranks $r
+# the host as between MPI ranks: what the exchange costs on a GPU (halo bytes, share of the step),
+# overlapped with the interior's update and exposed after the whole step, each beside the blocks
+# stepped without the exchange (`--exchange both`: the exposed exchange per step of each).
+step bench_ranks_1 15 45 $bin/lbm-server bench --grid $cube --operator bgk --steps $kernel_steps --rounds 2 \
+    --thread-ranks 1
+for r in 2 4; do
+    step bench_ranks_$r 20 60 $bin/lbm-server bench --grid $cube --operator bgk --steps $kernel_steps --rounds 2 \
+        --thread-ranks $r --exchange both
 done
 # A closed box against a periodic one on the Ten Cate grid at 16 cells, one sphere, both ways of
 # treating the covered cells, by pass (2026-12-04: the whole program's fluid step ran at 2200
