@@ -121,23 +121,12 @@ impl FluidSide {
             units.operator.name(),
             units.tau,
         )?;
-        let gpu = Arc::new(Gpu::for_local_rank(comm.local_rank())?);
         let radii: Vec<f64> = scene.initial_particles().iter().map(|p| p.radius).collect();
-        let cpu = gpu.adapter.device_type == wgpu::DeviceType::Cpu;
-        let trial = trial(scene, units.kernel, steps, (cpu, comm.size()))?;
         let covered = covered_fraction(radii.iter().map(|&r| units.cells(r)), units.n.iter().product());
-        let options = ImbOptions {
-            covered_cells: trial.kept().way,
-            ..imb_options(scene)?
-        };
-        let setup = Setup {
-            kernel: trial.kept().kernel,
-            ..setup_of(&units)
-        };
-        let d = Decomposition::new(units.n, scene.periodic_axes(), blocks, comm.rank());
+        let (lattice, trial) = coupled_block(scene, &units, steps, (&*comm, blocks))?;
+        let d = &lattice.decomposition;
         let pieces =
-            (comm.size() > 1).then(|| FieldPieces::new(scene, &units, out.to_path_buf(), &d, comm.rank()));
-        let lattice = BlockLattice::with_coupling(gpu, setup, health_of(&units), d, Some(options))?;
+            (comm.size() > 1).then(|| FieldPieces::new(scene, &units, out.to_path_buf(), d, comm.rank()));
         let lubrication = scene
             .coupling
             .lubrication
@@ -337,4 +326,28 @@ fn imb_options(scene: &Scene) -> Result<ImbOptions, String> {
         })?,
         ..ImbOptions::default()
     })
+}
+
+/// This rank's block of the scene's lattice cut into `blocks`, coupled to particles, on this rank's
+/// device, with the start-up trial that chose its kernel and way of treating the covered cells.
+fn coupled_block(
+    scene: &Scene,
+    units: &LatticeUnits,
+    steps: u64,
+    (comm, blocks): (&dyn Communicator, [usize; 3]),
+) -> Result<(BlockLattice, Trial), String> {
+    let gpu = Arc::new(Gpu::for_local_rank(comm.local_rank())?);
+    let cpu = gpu.adapter.device_type == wgpu::DeviceType::Cpu;
+    let trial = trial(scene, units.kernel, steps, (cpu, comm.size()))?;
+    let options = ImbOptions {
+        covered_cells: trial.kept().way,
+        ..imb_options(scene)?
+    };
+    let setup = Setup {
+        kernel: trial.kept().kernel,
+        ..setup_of(units)
+    };
+    let d = Decomposition::new(units.n, scene.periodic_axes(), blocks, comm.rank());
+    let lattice = BlockLattice::with_coupling(gpu, setup, health_of(units), d, Some(options))?;
+    Ok((lattice, trial))
 }
