@@ -44,6 +44,8 @@ use std::time::{Duration, Instant};
 pub struct Halo {
     kernels: HaloKernels,
     faces: Vec<HaloFace>,
+    /// The cut axes, in the order of the exchange (x, y, z).
+    axes: Vec<usize>,
     /// Bytes sent per step, and the time spent exchanging (from the step's end on the device).
     pub bytes_per_step: usize,
     pub time: Duration,
@@ -87,6 +89,7 @@ impl Halo {
         Halo {
             kernels,
             faces,
+            axes: cut_axes(d),
             bytes_per_step,
             time: Duration::ZERO,
         }
@@ -100,7 +103,7 @@ impl Halo {
         lattice.finish();
         let started = Instant::now();
         let after_even = lattice.time % 2 == 1;
-        for axis in self.axes() {
+        for &axis in &self.axes {
             let (faces, send, receive) = self.sides(axis, after_even);
             let packed = lattice.pack_halo(&self.kernels, &send);
             let received = comm.exchange(&messages(&faces, &packed), &expected(&faces, &receive));
@@ -118,7 +121,7 @@ impl Halo {
     pub fn step_overlapped(&mut self, lattice: &mut GpuLattice, comm: &dyn Communicator) {
         let after_even = lattice.time.is_multiple_of(2);
         lattice.step_region(0);
-        for (part, axis) in self.axes().into_iter().enumerate() {
+        for (part, &axis) in self.axes.iter().enumerate() {
             let (faces, send, receive) = self.sides(axis, after_even);
             let packed = lattice.submit_pack(&self.kernels, &send);
             lattice.step_region(1 + part);
@@ -130,13 +133,6 @@ impl Halo {
             self.time += started.elapsed();
         }
         lattice.end_split_step();
-    }
-
-    /// The cut axes, in the order of the exchange (x, y, z).
-    fn axes(&self) -> Vec<usize> {
-        let mut axes: Vec<usize> = self.faces.iter().map(|f| f.face / 2).collect();
-        axes.dedup();
-        axes
     }
 
     /// The faces across `axis`, and the layers each sends and receives after an even step
@@ -174,8 +170,7 @@ impl Halo {
         let shell: Vec<bool> = (0..cells)
             .map(|k| in_shell([k % n[0], (k / n[0]) % n[1], k / (n[0] * n[1])]))
             .collect();
-        let mut axes: Vec<usize> = cut.iter().map(|f| f / 2).collect();
-        axes.dedup();
+        let axes = cut_axes(d);
         let interior = shell.iter().filter(|s| !**s).count().max(1);
         let mut seen = 0;
         let region_of = shell
@@ -190,6 +185,16 @@ impl Halo {
             .collect();
         (1 + axes.len(), region_of)
     }
+}
+
+/// The axes the block `d` is cut across, in the order of the exchange (x, y, z).
+fn cut_axes(d: &Decomposition) -> Vec<usize> {
+    let mut axes: Vec<usize> = (0..6)
+        .filter(|&f| d.neighbour(f).is_some())
+        .map(|f| f / 2)
+        .collect();
+    axes.dedup();
+    axes
 }
 
 /// The message of each of `faces` with its `packed` values.
