@@ -28,12 +28,21 @@
 
 //#for i
 fn load{i}(k: u32) -> f32 {
-    return decode16((atomicLoad(&f{i}[k >> 1u]) >> ((k & 1u) * 16u)) & 0xffffu);
+    return decode16(load_bits{i}(k));
 }
 
 fn store{i}(k: u32, value: f32) {
+    store_bits{i}(k, encode16(value));
+}
+
+// The stored 16 bits of a population (the halo exchange moves them: halo.wgsl).
+fn load_bits{i}(k: u32) -> u32 {
+    return (atomicLoad(&f{i}[k >> 1u]) >> ((k & 1u) * 16u)) & 0xffffu;
+}
+
+fn store_bits{i}(k: u32, bits: u32) {
     let shift = (k & 1u) * 16u;
     atomicAnd(&f{i}[k >> 1u], ~(0xffffu << shift));
-    atomicOr(&f{i}[k >> 1u], encode16(value) << shift);
+    atomicOr(&f{i}[k >> 1u], bits << shift);
 }
 //#end

@@ -51,4 +51,13 @@ fn load{i}(k: u32) -> f32 {
 fn store{i}(k: u32, value: f32) {
     f{i}[k] = value;
 }
+
+// The stored bits of a population (the halo exchange moves them: halo.wgsl).
+fn load_bits{i}(k: u32) -> u32 {
+    return bitcast<u32>(f{i}[k]);
+}
+
+fn store_bits{i}(k: u32, bits: u32) {
+    f{i}[k] = bitcast<f32>(bits);
+}
 //#end

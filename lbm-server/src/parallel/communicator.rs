@@ -3,15 +3,16 @@
 //! on a number. One process is a
 //! communicator of one rank ([`OneRank`]); MPI's world another (`mpi_world.rs`, `--features mpi`).
 
-/// A message of populations to the rank `peer`, tagged `tag` (read by MPI's world alone).
+/// A message of populations (their stored bits, in words: `lbm::gpu::halo`) to the rank `peer`,
+/// tagged `tag` (read by MPI's world alone).
 #[cfg_attr(not(feature = "mpi"), allow(dead_code))]
 pub struct Message<'a> {
     pub peer: usize,
     pub tag: i32,
-    pub values: &'a [f32],
+    pub words: &'a [u32],
 }
 
-/// A message awaited from rank `peer`, tagged `tag`, of `len` values (read by MPI's world alone).
+/// A message awaited from rank `peer`, tagged `tag`, of `len` words (read by MPI's world alone).
 #[cfg_attr(not(feature = "mpi"), allow(dead_code))]
 pub struct Expected {
     pub peer: usize,
@@ -28,8 +29,8 @@ pub trait Communicator {
     /// The name of this rank's host.
     fn host(&self) -> String;
     /// Sends `sends` and receives `expected`, all started at once (non-blocking), and waits for
-    /// all of them; the received values in the order of `expected`.
-    fn exchange(&self, sends: &[Message], expected: &[Expected]) -> Vec<Vec<f32>>;
+    /// all of them; the received words in the order of `expected`.
+    fn exchange(&self, sends: &[Message], expected: &[Expected]) -> Vec<Vec<u32>>;
     /// Every rank's `bytes` at rank 0, in rank order (empty elsewhere).
     fn gather(&self, bytes: &[u8]) -> Vec<Vec<u8>>;
     /// The smallest of the ranks' `value`s, at every rank.
@@ -103,7 +104,7 @@ impl Communicator for OneRank {
         host_name()
     }
 
-    fn exchange(&self, sends: &[Message], expected: &[Expected]) -> Vec<Vec<f32>> {
+    fn exchange(&self, sends: &[Message], expected: &[Expected]) -> Vec<Vec<u32>> {
         assert!(
             sends.is_empty() && expected.is_empty(),
             "one rank has no neighbour to exchange with"

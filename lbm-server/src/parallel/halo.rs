@@ -85,7 +85,7 @@ impl Halo {
                 })
             })
             .collect();
-        let bytes_per_step = faces.iter().map(|f| f.inward.len() * 4).sum();
+        let bytes_per_step = faces.iter().map(|f| f.inward.words() * 4).sum();
         Halo {
             kernels,
             faces,
@@ -197,15 +197,15 @@ fn cut_axes(d: &Decomposition) -> Vec<usize> {
     axes
 }
 
-/// The message of each of `faces` with its `packed` values.
-fn messages<'a>(faces: &[&HaloFace], packed: &'a [Vec<f32>]) -> Vec<Message<'a>> {
+/// The message of each of `faces` with its `packed` words.
+fn messages<'a>(faces: &[&HaloFace], packed: &'a [Vec<u32>]) -> Vec<Message<'a>> {
     faces
         .iter()
         .zip(packed)
-        .map(|(f, values)| Message {
+        .map(|(f, words)| Message {
             peer: f.peer,
             tag: f.face as i32,
-            values,
+            words,
         })
         .collect()
 }
@@ -219,13 +219,13 @@ fn expected(faces: &[&HaloFace], receive: &[&HaloLayer]) -> Vec<Expected> {
         .map(|(f, layer)| Expected {
             peer: f.peer,
             tag: (f.face ^ 1) as i32,
-            len: layer.len(),
+            len: layer.words(),
         })
         .collect()
 }
 
-/// Each layer of `receive` with its values `received`.
-fn unpacked<'a>(receive: &[&'a HaloLayer], received: &'a [Vec<f32>]) -> Vec<(&'a HaloLayer, &'a [f32])> {
+/// Each layer of `receive` with its words `received`.
+fn unpacked<'a>(receive: &[&'a HaloLayer], received: &'a [Vec<u32>]) -> Vec<(&'a HaloLayer, &'a [u32])> {
     receive
         .iter()
         .copied()

@@ -62,8 +62,8 @@ impl Communicator for MpiWorld {
         mpi::environment::processor_name().unwrap_or_else(|_| host_name())
     }
 
-    fn exchange(&self, sends: &[Message], expected: &[Expected]) -> Vec<Vec<f32>> {
-        let mut received: Vec<Vec<f32>> = expected.iter().map(|e| vec![0f32; e.len]).collect();
+    fn exchange(&self, sends: &[Message], expected: &[Expected]) -> Vec<Vec<u32>> {
+        let mut received: Vec<Vec<u32>> = expected.iter().map(|e| vec![0u32; e.len]).collect();
         mpi::request::scope(|scope| {
             let mut receives = Vec::new();
             for (e, buffer) in expected.iter().zip(received.iter_mut()) {
@@ -72,7 +72,7 @@ impl Communicator for MpiWorld {
             }
             for m in sends {
                 let to = self.world.process_at_rank(m.peer as i32);
-                receives.push(to.immediate_send_with_tag(scope, m.values, m.tag));
+                receives.push(to.immediate_send_with_tag(scope, m.words, m.tag));
             }
             let peers: Vec<usize> = expected.iter().map(|e| e.peer).collect();
             self.wait_all(receives, &format!("the halo of rank(s) {peers:?}"));

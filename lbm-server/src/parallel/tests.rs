@@ -94,6 +94,30 @@ fn lattices_cut_along_two_and_three_axes_are_the_single_lattice_bit_for_bit() {
     check(periodic(), [2, 2, 2], 5);
 }
 
+/// 16-bit storage: the halo's messages carry the stored 16 bits, two populations to a word (the
+/// last word of an odd layer half used): the same bits as one lattice, in half the bytes.
+#[test]
+fn sixteen_bit_storages_cut_are_the_single_lattice_bit_for_bit_in_half_the_bytes() {
+    let fp16 = |storage: Storage, setup: Setup| Setup { storage, ..setup };
+    check(fp16(Storage::Fp16c, walled()), [2, 1, 1], 6);
+    check(fp16(Storage::Fp16s, periodic_of([7, 6, 6])), [1, 2, 2], 5);
+    let setup = periodic_of([7, 6, 6]);
+    let bytes = |storage: Storage| {
+        let gpu = Arc::new(Gpu::new().expect("a wgpu adapter (lavapipe in CI)"));
+        on_ranks(&gpu, &fp16(storage, setup.clone()), [1, 2, 2], |block, _| {
+            block.halo_cost().0
+        })
+    };
+    let (words16, words32) = (bytes(Storage::Fp16s), bytes(Storage::Fp32));
+    for (rank, (b16, b32)) in words16.iter().zip(&words32).enumerate() {
+        // Four cut faces, each layer's last word perhaps half used.
+        assert!(
+            2 * b16 >= *b32 && 2 * b16 <= b32 + 4 * 8,
+            "rank {rank}: {b16} bytes per step in FP16, {b32} in FP32"
+        );
+    }
+}
+
 /// Every rank's populations (its block's lattice, ghost layers included) after `steps` steps of
 /// `setup` from rest cut into `blocks` on threads, the halo exchange overlapped with the
 /// interior's update (`overlap`) or after each whole step.

@@ -71,14 +71,14 @@ impl Communicator for ThreadRanks {
     fn host(&self) -> String {
         format!("{} (thread)", host_name())
     }
-    fn exchange(&self, sends: &[Message], expected: &[Expected]) -> Vec<Vec<f32>> {
+    fn exchange(&self, sends: &[Message], expected: &[Expected]) -> Vec<Vec<u32>> {
         for m in sends {
-            self.send(m.peer, m.tag, bytemuck::cast_slice(m.values).to_vec());
+            self.send(m.peer, m.tag, bytemuck::cast_slice(m.words).to_vec());
         }
         expected
             .iter()
             .map(|e| {
-                let v: Vec<f32> = bytemuck::pod_collect_to_vec(&self.receive(e.peer, e.tag));
+                let v: Vec<u32> = bytemuck::pod_collect_to_vec(&self.receive(e.peer, e.tag));
                 assert_eq!(v.len(), e.len, "message length");
                 v
             })

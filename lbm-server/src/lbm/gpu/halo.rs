@@ -1,6 +1,8 @@
-//! The halo kernels of a lattice decomposed over ranks (halo.wgsl): the populations of one layer
-//! of cells packed into a flat buffer and read back, or written from one. Which populations, and
-//! where they go, is `crate::parallel::halo`'s business.
+//! The halo kernels of a lattice decomposed over ranks (halo.wgsl): the stored bits of the
+//! populations of one layer of cells packed into a flat buffer of words and read back, or written
+//! from one (a population a word with 32-bit storage, two with 16-bit storage: a message carries
+//! what the storage holds, bit for bit, in as few bytes). Which populations, and where they go, is
+//! `crate::parallel::halo`'s business.
 
 use super::bindings::{storage_buffer, storage_entry};
 use super::state::GpuLattice;
@@ -16,21 +18,23 @@ pub struct HaloKernels {
     layout: wgpu::BindGroupLayout,
     pack: wgpu::ComputePipeline,
     unpack: wgpu::ComputePipeline,
+    /// Populations per word of a message (`PER_WORD` in halo.wgsl): 4 bytes over the storage's.
+    per_word: u32,
 }
 
-/// One layer's populations: their list of (cell, direction), the values on the device, and a
+/// One layer's populations: their list of (cell, direction), their words on the device, and a
 /// buffer to read them back through.
 pub struct HaloLayer {
-    len: u32,
+    words: u32,
     values: wgpu::Buffer,
     readback: wgpu::Buffer,
     bind_group: wgpu::BindGroup,
 }
 
 impl HaloLayer {
-    /// Populations in the layer.
-    pub fn len(&self) -> usize {
-        self.len as usize
+    /// Words of the layer's message (its populations' stored bits, packed).
+    pub fn words(&self) -> usize {
+        self.words as usize
     }
 }
 
@@ -52,6 +56,7 @@ impl GpuLattice {
             label: Some("halo.wgsl"),
             source: wgpu::ShaderSource::Wgsl(crate::lbm::unroll::unroll(&source).into()),
         });
+        let per_word = (4 / self.setup.storage.bytes()) as u32;
         let pipeline = |unpack: bool| {
             d.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
                 label: Some(if unpack { "halo unpack" } else { "halo pack" }),
@@ -59,7 +64,10 @@ impl GpuLattice {
                 module: &module,
                 entry_point: Some("halo"),
                 compilation_options: wgpu::PipelineCompilationOptions {
-                    constants: &[("UNPACK", f64::from(u8::from(unpack)))],
+                    constants: &[
+                        ("UNPACK", f64::from(u8::from(unpack))),
+                        ("PER_WORD", f64::from(per_word)),
+                    ],
                     ..Default::default()
                 },
                 cache: None,
@@ -69,6 +77,7 @@ impl GpuLattice {
             pack: pipeline(false),
             unpack: pipeline(true),
             layout,
+            per_word,
         }
     }
 
@@ -80,8 +89,9 @@ impl GpuLattice {
             contents: bytemuck::cast_slice(entries),
             usage: wgpu::BufferUsages::STORAGE,
         });
-        let bytes = (entries.len() * 4).max(4) as u64;
-        let values = storage_buffer(d, "halo values", bytes);
+        let words = (entries.len() as u32).div_ceil(kernels.per_word);
+        let bytes = (words as u64 * 4).max(4);
+        let values = storage_buffer(d, "halo words", bytes);
         let readback = d.create_buffer(&wgpu::BufferDescriptor {
             label: Some("halo readback"),
             size: bytes,
@@ -103,7 +113,7 @@ impl GpuLattice {
             ],
         });
         HaloLayer {
-            len: entries.len() as u32,
+            words,
             values,
             readback,
             bind_group,
@@ -111,7 +121,7 @@ impl GpuLattice {
     }
 
     /// The populations of each layer, packed and read back (one submission, one wait).
-    pub fn pack_halo(&self, kernels: &HaloKernels, layers: &[&HaloLayer]) -> Vec<Vec<f32>> {
+    pub fn pack_halo(&self, kernels: &HaloKernels, layers: &[&HaloLayer]) -> Vec<Vec<u32>> {
         let packed = self.submit_pack(kernels, layers);
         self.read_packed(layers, packed)
     }
@@ -132,34 +142,34 @@ impl GpuLattice {
         packed
     }
 
-    /// The layers' populations that the submission `packed` ([`GpuLattice::submit_pack`])
-    /// packed, once it is done (later submissions may still run).
-    pub fn read_packed(&self, layers: &[&HaloLayer], packed: wgpu::SubmissionIndex) -> Vec<Vec<f32>> {
+    /// The layers' words that the submission `packed` ([`GpuLattice::submit_pack`]) packed,
+    /// once it is done (later submissions may still run).
+    pub fn read_packed(&self, layers: &[&HaloLayer], packed: wgpu::SubmissionIndex) -> Vec<Vec<u32>> {
         self.gpu.wait_for(packed);
         layers
             .iter()
             .map(|layer| {
                 let slice = layer.readback.slice(..);
-                let values: Vec<f32> = {
+                let words: Vec<u32> = {
                     let bytes = slice.get_mapped_range().expect("mapped");
-                    bytemuck::cast_slice(&bytes)[..layer.len()].to_vec()
+                    bytemuck::cast_slice(&bytes)[..layer.words()].to_vec()
                 };
                 layer.readback.unmap();
-                values
+                words
             })
             .collect()
     }
 
-    /// Writes `values` into each layer's populations (submitted, not waited for: the next step
+    /// Writes `words` into each layer's populations (submitted, not waited for: the next step
     /// or pack follows it in the queue).
-    pub fn unpack_halo(&self, kernels: &HaloKernels, layers: &[(&HaloLayer, &[f32])]) {
+    pub fn unpack_halo(&self, kernels: &HaloKernels, layers: &[(&HaloLayer, &[u32])]) {
         let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
-        for (layer, values) in layers {
-            assert_eq!(values.len(), layer.len(), "a halo message of the layer's length");
-            if !values.is_empty() {
+        for (layer, words) in layers {
+            assert_eq!(words.len(), layer.words(), "a halo message of the layer's length");
+            if !words.is_empty() {
                 self.gpu
                     .queue
-                    .write_buffer(&layer.values, 0, bytemuck::cast_slice(values));
+                    .write_buffer(&layer.values, 0, bytemuck::cast_slice(words));
             }
             self.dispatch_halo(&mut encoder, &kernels.unpack, layer);
         }
@@ -172,7 +182,7 @@ impl GpuLattice {
         pipeline: &wgpu::ComputePipeline,
         layer: &HaloLayer,
     ) {
-        let groups = layer.len.div_ceil(WORKGROUP);
+        let groups = layer.words.div_ceil(WORKGROUP);
         if groups == 0 {
             return;
         }
