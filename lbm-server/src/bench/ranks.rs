@@ -2,11 +2,13 @@
 //! one process): the lattice cut into blocks, one per rank, stepped with the halo exchange; MLUPS
 //! per rank and in total, the halo's bytes per step and the exchange's share of the step, and per
 //! way of exchanging (`--exchange`: overlapped, exposed) the exposed exchange against the blocks
-//! stepped without it.
+//! stepped without it; one storage of the populations (`--storage`, fp32 by default: the halo's
+//! messages carry its bits).
 
 use super::{parse_faces, parse_grid, parse_operator, BenchArgs};
 use crate::lbm::geometry::Setup;
 use crate::lbm::gpu::{Gpu, Health};
+use crate::lbm::storage::Storage;
 use crate::parallel::{all, choose_blocks, BlockLattice, Communicator, Decomposition, ThreadRanks};
 use std::sync::Arc;
 use std::time::Instant;
@@ -65,7 +67,10 @@ pub fn run(args: &BenchArgs, comm: &dyn Communicator) -> Result<(), String> {
     let faces = parse_faces(&args.faces)?;
     let modes = steppings(&args.exchange)?;
     let tau = 0.6;
-    let setup = Setup::new(n, faces, tau, parse_operator(&args.operator, tau)?);
+    let setup = Setup {
+        storage: one_storage(&args.storage)?,
+        ..Setup::new(n, faces, tau, parse_operator(&args.operator, tau)?)
+    };
     let periodic: [bool; 3] = std::array::from_fn(|a| setup.periodic(a));
     let blocks = choose_blocks(n, periodic, comm.size())?;
     let started = start(&setup, blocks, comm);
@@ -88,6 +93,15 @@ pub fn run(args: &BenchArgs, comm: &dyn Communicator) -> Result<(), String> {
         print(args, n, blocks, &rows, &modes);
     }
     Ok(())
+}
+
+/// The storage `--storage` names (fp32 where it names none): one on ranks.
+fn one_storage(names: &[String]) -> Result<Storage, String> {
+    match super::storage::parse_storages(names)?[..] {
+        [] => Ok(Storage::Fp32),
+        [one] => Ok(one),
+        _ => Err(format!("--storage = {:?}: one storage on several ranks", names.join(","))),
+    }
 }
 
 /// Per way of stepping in `modes`, its best round of `args.rounds` (the ways alternating): time
@@ -190,12 +204,13 @@ fn gather(comm: &dyn Communicator, mine: &RankTime) -> Vec<RankTime> {
 fn print(args: &BenchArgs, n: [usize; 3], blocks: [usize; 3], rows: &[RankTime], modes: &[Stepping]) {
     let steps = args.steps as f64;
     println!(
-        "grid {}x{}x{} ({}, {}) on {} ranks in {}x{}x{} blocks, {} steps, best of {} rounds, exchange {}",
+        "grid {}x{}x{} ({}, {}, {}) on {} ranks in {}x{}x{} blocks, {} steps, best of {} rounds, exchange {}",
         n[0],
         n[1],
         n[2],
         args.operator,
         args.faces,
+        one_storage(&args.storage).unwrap_or(Storage::Fp32),
         rows.len(),
         blocks[0],
         blocks[1],
