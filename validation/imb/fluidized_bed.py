@@ -36,7 +36,9 @@ import sys
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
 import results as compact  # noqa: E402
-import ten_cate  # noqa: E402  (lbm-server, LBM_SERVER and how a scene is run)
+import ten_cate_analysis  # noqa: E402  (validation/imb/ten_cate.py's parts: a drag law's terminal velocity)
+import ten_cate_runs  # noqa: E402  (lbm-server, LBM_SERVER and how a scene is run)
+import ten_cate_scenes  # noqa: E402  (the superposition solid term's table)
 
 ROOT = os.path.dirname(os.path.dirname(HERE))
 SCENE = os.path.join(ROOT, "validation", "scenes", "fluidized-bed.toml")
@@ -103,7 +105,7 @@ ROWS_ACROSS = {4: 3, 8: 7}
 MAX_TAU_MINUS = 1.0
 
 
-# "mrts": MRT with the superposition solid term (ten_cate.SUPERPOSITION; docs/imb.md, "The
+# "mrts": MRT with the superposition solid term (ten_cate_scenes.SUPERPOSITION; docs/imb.md, "The
 # solid collision"), which drags a lone sphere at Re 200-300 less than Noble & Torczynski's.
 
 
@@ -200,7 +202,7 @@ def scene_text(operator, re_, depth, cells=CELLS):
         if n != 1:
             raise SystemExit("%s: no line matches %r" % (SCENE, pattern))
     text = with_smooth_sides(with_sides(text, operator), operator)
-    return text + (ten_cate.SUPERPOSITION if operator == "mrts" else "")
+    return text + (ten_cate_scenes.SUPERPOSITION if operator == "mrts" else "")
 
 
 def time_step(re_, cells):
@@ -216,7 +218,7 @@ def lattice_tau(re_, cells):
 def settling_reynolds():
     """(Archimedes number, Re_t of one grain settling alone by Schiller-Naumann's drag)."""
     ar = G * D**3 * (RHO_P / RHO_F - 1.0) / NU**2
-    u_t = ten_cate.terminal_velocity(RHO_F, MU, RHO_P, D, "sn", 0.1)
+    u_t = ten_cate_analysis.terminal_velocity(RHO_F, MU, RHO_P, D, "sn", 0.1)
     return ar, u_t * D / NU
 
 
@@ -369,7 +371,7 @@ def held_scene_text(cells, operator=HELD_FROM[0]):
 
 def run_held(cells, operator=HELD_FROM[0]):
     out = os.path.join(OUT, held_name(cells, operator))
-    code, work = ten_cate.run_scene(out, held_scene_text(cells, operator))
+    code, work = ten_cate_runs.run_scene(out, held_scene_text(cells, operator))
     keep(out, work, code)
     shutil.rmtree(work, ignore_errors=True)
     distil([out])
@@ -473,7 +475,7 @@ def held_rows(opening):
 
 def run(operator, re_, depth, cells=CELLS):
     out = os.path.join(OUT, name(operator, re_, depth, cells))
-    code, work = ten_cate.run_scene(out, scene_text(operator, re_, depth, cells))
+    code, work = ten_cate_runs.run_scene(out, scene_text(operator, re_, depth, cells))
     keep(out, work, code)
     shutil.rmtree(work, ignore_errors=True)
     distil([out])
