@@ -12,7 +12,7 @@ use std::time::Duration;
 
 const TEN_CATE: &str = include_str!("../validation/scenes/ten-cate-e1.toml");
 const CLIENT_DIR: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/clients/yade");
-/// lbmdem.py and lbmdem_scene.py, which the YADE module imports from PYTHONPATH.
+/// lbmdem (the package lbmdem/) and lbmdem_scene.py, which the YADE module imports from PYTHONPATH.
 const PYTHON_CLIENTS: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/clients/python");
 
 /// The Debian python YADE runs on.

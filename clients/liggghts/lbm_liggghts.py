@@ -8,7 +8,7 @@
 LIGGGHTS (Debian's libliggghts3) is loaded at run time. The deck runs first and builds the DEM:
 one atom per particle of the scene (atom ID i is the scene's particle i - 1), a granular atom
 style, materials, contact law, walls, gravity and ``fix nve/sphere``. Then, each fluid step, the
-adapter reads the atoms' x, v, omega and radius, sends them to the fluid (clients/python/lbmdem.py,
+adapter reads the atoms' x, v, omega and radius, sends them to the fluid (clients/python/lbmdem/,
 PROTOCOL.md), and runs k LIGGGHTS steps (k = fluid dt / LIGGGHTS timestep) with the fluid's force
 and torque on them (``fix external``), following the atoms within the fluid step as the scene's
 ``coupling.substep_drag`` and ``coupling.lubrication`` say (the adapter then integrates the

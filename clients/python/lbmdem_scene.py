@@ -12,7 +12,7 @@ module reads them the way ``scene::Scene::initial_particles`` does, ids 0, 1, 2,
 4. ``[[dem.csv]]``: rows of a CSV file (header naming x, y, z, r or radius; optional vx, vy, vz,
    wx, wy, wz; a relative path is taken next to the scene file, else from the working folder).
 
-    import lbmdem_scene                # clients/python on PYTHONPATH, beside lbmdem.py
+    import lbmdem_scene                # clients/python on PYTHONPATH, beside lbmdem/
     scene = lbmdem_scene.Scene.load("validation/scenes/ten-cate-e1.toml")
     for p in scene.particles:          # SceneParticle(id, position, velocity, angular_velocity,
         ...                            #               radius, material, density)

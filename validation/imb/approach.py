@@ -26,9 +26,12 @@ import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import results as compact  # noqa: E402
-import ten_cate as tc  # noqa: E402
+import ten_cate_analysis  # noqa: E402  (validation/imb/ten_cate.py's parts: the log and the series read)
+import ten_cate_charts  # noqa: E402  (the cases' colours)
+import ten_cate_runs  # noqa: E402  (the binary and the csv reduction)
+import ten_cate_scenes  # noqa: E402  (the cases, the sphere and the scene writer)
 
-HERE = tc.HERE
+HERE = ten_cate_scenes.HERE
 SCRIPT = "approach"
 RUNS = compact.work(SCRIPT)
 NAME_RE = re.compile(r"(E\d)_N([0-9p]+)_lub-(on|off)$")
@@ -38,11 +41,11 @@ TIME_FACTOR = 1.6        # simulated time = TIME_FACTOR x 120 mm / u_inf (E4 nee
 
 
 def run_dir(case, n, lub):
-    return os.path.join(RUNS, "%s_N%s_lub-%s" % (case, tc.ntag(n), lub))
+    return os.path.join(RUNS, "%s_N%s_lub-%s" % (case, ten_cate_scenes.ntag(n), lub))
 
 
 def write_scene(case, n, lub, path):
-    ln = tc.write_scene(case, n, path, sim_time=TIME_FACTOR * tc.GAP0 / tc.CASES[case]["u_inf"])
+    ln = ten_cate_scenes.write_scene(case, n, path, sim_time=TIME_FACTOR * ten_cate_scenes.GAP0 / ten_cate_scenes.CASES[case]["u_inf"])
     text = open(path).read()
     text = re.sub(r"^interval = .*", "interval = 1                         # every fluid step", text, count=1, flags=re.M)
     text = re.sub(r'^name = "(.*)"', r'name = "\1-lub-%s"' % lub, text, count=1, flags=re.M)
@@ -65,16 +68,16 @@ def run_one(case, n, lub):
     shutil.rmtree(tmp, ignore_errors=True)
     t0 = time.time()
     with open(os.path.join(out, "log.txt"), "w") as log:
-        p = subprocess.run([tc.BINARY, "run", scene, "--out", tmp], stdout=log, stderr=subprocess.STDOUT,
-                           env=dict(os.environ, NODEVICE_SELECT="1"), cwd=tc.ROOT)
+        p = subprocess.run([ten_cate_runs.BINARY, "run", scene, "--out", tmp], stdout=log, stderr=subprocess.STDOUT,
+                           env=dict(os.environ, NODEVICE_SELECT="1"), cwd=ten_cate_scenes.ROOT)
     print("  exit %d after %.1f s" % (p.returncode, time.time() - t0), flush=True)
     for name in ("summary.json",):
         if os.path.exists(os.path.join(tmp, name)):
             shutil.copy(os.path.join(tmp, name), os.path.join(out, name))
     if os.path.exists(os.path.join(tmp, "particles.csv")):
-        tc.reduce_csv(os.path.join(tmp, "particles.csv"), os.path.join(out, "particles.csv"),
+        ten_cate_runs.reduce_csv(os.path.join(tmp, "particles.csv"), os.path.join(out, "particles.csv"),
                       keep=("step", "time", "z", "vz", "fz"), digits=9,
-                      row_kept=lambda row: float(row["z"]) - tc.R < KEEP_BELOW)
+                      row_kept=lambda row: float(row["z"]) - ten_cate_scenes.R < KEEP_BELOW)
     shutil.rmtree(tmp, ignore_errors=True)
     distil([out])
 
@@ -91,9 +94,9 @@ def at_crossing(y, gap, level):
 def film_alone_time(case, dx, h0, h1):
     """Quasi-steady closing time of the floor film alone from h0 to h1 under the buoyant weight F:
     K/F (ln(h0/h1) - (h0 - h1)/dx), K = 6 pi mu r^2."""
-    c = tc.CASES[case]
-    weight = (tc.RHO_P - c["rho_f"]) * math.pi / 6.0 * tc.D ** 3 * 9.81
-    k = 6.0 * math.pi * c["mu"] * tc.R ** 2
+    c = ten_cate_scenes.CASES[case]
+    weight = (ten_cate_scenes.RHO_P - c["rho_f"]) * math.pi / 6.0 * ten_cate_scenes.D ** 3 * 9.81
+    k = 6.0 * math.pi * c["mu"] * ten_cate_scenes.R ** 2
     return k / weight * (math.log(h0 / h1) - (h0 - h1) / dx)
 
 
@@ -103,20 +106,20 @@ def analyse(out, case, n, lub):
     p = os.path.join(out, "particles.csv")
     if not os.path.exists(p):
         return None
-    d = tc.load_series(p)
-    t, gap, speed = d["time"], [z - tc.R for z in d["z"]], [-v for v in d["vz"]]
+    d = ten_cate_analysis.load_series(p)
+    t, gap, speed = d["time"], [z - ten_cate_scenes.R for z in d["z"]], [-v for v in d["vz"]]
     s = json.load(open(os.path.join(out, "summary.json")))
-    info = tc.parse_log(os.path.join(out, "log.txt"))
+    info = ten_cate_analysis.parse_log(os.path.join(out, "log.txt"))
     log = open(os.path.join(out, "log.txt")).read()
     m = re.search(r"DEM step ([0-9.eE+-]+) s = fluid step / (\d+)", log)
-    dx = tc.D / n
+    dx = ten_cate_scenes.D / n
     res = dict(case=case, N=n, lub=lub, dx=dx, dir=os.path.basename(out), exit_reason=s.get("exit_reason"),
                wall_time_s=s.get("wall_time_s"), tau=info.get("tau"), dt=info.get("dt"),
                dem_substeps=int(m.group(2)) if m else None,
                dem_physics=(s.get("peer") or {}).get("physics"), fluid_physics=s.get("fluid_physics"))
     t1 = at_crossing(t, gap, dx)
     res["t_1dx"] = t1
-    for name, level in (("dx", dx), ("0p1dx", 0.1 * dx), ("0p01d", 0.01 * tc.D)):
+    for name, level in (("dx", dx), ("0p1dx", 0.1 * dx), ("0p01d", 0.01 * ten_cate_scenes.D)):
         tl = at_crossing(t, gap, level)
         res["dt_to_" + name] = None if tl is None or t1 is None else tl - t1
         res["speed_at_" + name] = at_crossing(speed, gap, level)
@@ -160,7 +163,7 @@ def records():
     out = []
     for _, r in sorted(compact.runs(SCRIPT).items()):
         r = dict(r)
-        r["series"] = dict(t=r["series"]["t"], gap=[z - tc.R for z in r["series"]["z"]])
+        r["series"] = dict(t=r["series"]["t"], gap=[z - ten_cate_scenes.R for z in r["series"]["z"]])
         out.append(r)
     return out
 
@@ -177,14 +180,14 @@ def chart(results, path):
             t0 = r["t_1dx"] or 0.0
             style = "-" if r["lub"] == "on" else "--"
             ax.plot([x - t0 for x in s["t"]], [max(g, 1e-6) * 1e3 for g in s["gap"]], style,
-                    color=tc.COLORS[case], alpha=1.0 if r["lub"] == "on" else 0.6,
+                    color=ten_cate_charts.COLORS[case], alpha=1.0 if r["lub"] == "on" else 0.6,
                     label="N = %g, films %s" % (r["N"], r["lub"]))
-        ax.axhline(tc.D / min(r["N"] for r in results if r["case"] == case) * 1e3, color="0.6", lw=0.8, ls=":")
+        ax.axhline(ten_cate_scenes.D / min(r["N"] for r in results if r["case"] == case) * 1e3, color="0.6", lw=0.8, ls=":")
         ax.set_yscale("log")
         ax.set_xlim(-0.1, None)
         ax.set_ylim(1e-3, 40)
         ax.set_xlabel("t - t(gap = 1 cell) [s]")
-        ax.set_title("%s (St %.2f)" % (case, tc.CASES[case]["St"]))
+        ax.set_title("%s (St %.2f)" % (case, ten_cate_scenes.CASES[case]["St"]))
         ax.legend(fontsize=7)
     axes[0][0].set_ylabel("gap to the floor [mm] (1 um shown for contact)")
     fig.suptitle("Approach to the floor with the squeeze film in the DEM (solid) and without (dashed); "
@@ -267,7 +270,7 @@ def main():
     sub = a.add_subparsers(dest="cmd", required=True)
     r = sub.add_parser("run")
     r.add_argument("N", nargs="*", type=float, default=[6.0])
-    r.add_argument("--cases", nargs="+", default=list(tc.CASES), choices=list(tc.CASES))
+    r.add_argument("--cases", nargs="+", default=list(ten_cate_scenes.CASES), choices=list(ten_cate_scenes.CASES))
     sub.add_parser("report")
     d = sub.add_parser("distil")
     d.add_argument("dir")

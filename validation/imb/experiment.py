@@ -3,7 +3,7 @@
 time (reference/ten_cate_2002_E1_*.csv, digitized from the paper's figures), not only u_inf.
 
 The runs are the experiment's: the closed 100 x 100 x 160 mm box, the sphere released from rest
-with its bottom 120 mm above the floor (scenes from validation/imb/ten_cate.py's `write_scene`),
+with its bottom 120 mm above the floor (scenes from validation/imb/ten_cate_scenes.py's `write_scene`),
 TRT, Mach 0.05 by default (tau 0.85 / 1.03 / 1.20 at 6 / 9 / 12 cells per diameter: at Mach 0.1
 E1's tau is 1.2-2.25, which biases the boundary: REPORT.md, "Tau check"; `--mach` for a series at
 one tau), with the code of the day they were run. The runs are made in the ignored work folder
@@ -32,7 +32,9 @@ import sys
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
 import results as compact  # noqa: E402
-import ten_cate as tc  # noqa: E402  (the scene writer, the binary and the csv reduction)
+import ten_cate_analysis  # noqa: E402  (validation/imb/ten_cate.py's parts: the log and the series read)
+import ten_cate_runs  # noqa: E402  (a run made, a batch's runs imported)
+import ten_cate_scenes  # noqa: E402  (the cases, the sphere and the scene writer)
 
 SCRIPT = "experiment"
 RUNS = compact.work(SCRIPT)
@@ -55,7 +57,7 @@ def read_reference(name):
 
 
 def run_dir(n, mach=MACH):
-    return os.path.join(RUNS, "%s_N%s_M%s" % (CASE, tc.ntag(n), tc.ntag(mach)))
+    return os.path.join(RUNS, "%s_N%s_M%s" % (CASE, ten_cate_scenes.ntag(n), ten_cate_scenes.ntag(mach)))
 
 
 PREFIX = "exp_"       # the batch's scene folders: exp_<run folder name>
@@ -67,16 +69,16 @@ def write_scenes(folder, ns, mach=MACH, sim_time=SIM_TIME):
     for n in ns:
         name = PREFIX + os.path.basename(run_dir(n, mach))
         os.makedirs(os.path.join(folder, name), exist_ok=True)
-        ln = tc.write_scene(CASE, n, os.path.join(folder, name, "scene.toml"), mach=mach, sim_time=sim_time)
+        ln = ten_cate_scenes.write_scene(CASE, n, os.path.join(folder, name, "scene.toml"), mach=mach, sim_time=sim_time)
         cells = ln["cells"][0] * ln["cells"][1] * ln["cells"][2]
         print("%s %dx%dx%d tau %.3f steps %d cell-steps %.3g" % (name, *ln["cells"], ln["tau"], ln["steps"],
                                                                  cells * ln["steps"]))
 
 
 def import_runs(src):
-    """Each SRC/exp_<run>/ with a summary.json into the work folder (`ten_cate.import_runs`), then into
+    """Each SRC/exp_<run>/ with a summary.json into the work folder (`ten_cate_runs.import_runs`), then into
     the results."""
-    distil(tc.import_runs(src, force=True, runs=RUNS, prefix=PREFIX))
+    distil(ten_cate_runs.import_runs(src, force=True, runs=RUNS, prefix=PREFIX))
 
 
 def run(n, mach=MACH, force=False):
@@ -84,7 +86,7 @@ def run(n, mach=MACH, force=False):
     if os.path.basename(out) in compact.runs(SCRIPT) and not force:
         print("%s: already run, skipped" % os.path.basename(out))
         return
-    tc.run_one(CASE, n, force, mach, sim_time=SIM_TIME, out=out)
+    ten_cate_runs.run_one(CASE, n, force, mach, sim_time=SIM_TIME, out=out)
     distil([out])
 
 
@@ -95,8 +97,8 @@ def distil(folders):
         if not os.path.exists(os.path.join(folder, "particles.csv")):
             print("%s: no particles.csv, not distilled" % folder)
             continue
-        s = tc.load_series(os.path.join(folder, "particles.csv"))
-        info = tc.parse_log(os.path.join(folder, "log.txt"))
+        s = ten_cate_analysis.load_series(os.path.join(folder, "particles.csv"))
+        info = ten_cate_analysis.parse_log(os.path.join(folder, "log.txt"))
         name = os.path.basename(os.path.normpath(folder))
         summary = os.path.join(folder, "summary.json")
         code = json.load(open(summary)).get("exit_code") if os.path.exists(summary) else None
@@ -135,9 +137,9 @@ def gap_from_speed(exp_v):
         if t > ts[-1]:
             ts.append(t)
             vs.append(-v)
-    gaps = [tc.GAP0 / tc.D]
+    gaps = [ten_cate_scenes.GAP0 / ten_cate_scenes.D]
     for k in range(1, len(ts)):
-        gaps.append(gaps[-1] - 0.5 * (vs[k] + vs[k - 1]) * (ts[k] - ts[k - 1]) / tc.D)
+        gaps.append(gaps[-1] - 0.5 * (vs[k] + vs[k - 1]) * (ts[k] - ts[k - 1]) / ten_cate_scenes.D)
     return ts, gaps
 
 
@@ -146,7 +148,7 @@ def load_run(out, r):
     s = r["series"]
     t = s["t"]
     speed = [-v for v in s["vz"]]
-    gap = [(z - tc.R) / tc.D for z in s["z"]]
+    gap = [(z - ten_cate_scenes.R) / ten_cate_scenes.D for z in s["z"]]
     n = float(os.path.basename(out).split("_N")[1].split("_M")[0].replace("p", "."))
     mach = float(os.path.basename(out).split("_M")[1].replace("p", "."))
     return dict(n=n, mach=mach, t=t, speed=speed, gap=gap, tau=r["tau"], cells=r["cells"], dir=out,
@@ -162,7 +164,7 @@ def compare(r, exp_v, exp_g):
     # The measured plateau: the speed's points in WINDOW (five of them at the same digitized value),
     # and the slope of the measured gap there (least squares).
     plateau = [s for t, s in zip(tv, exp_speed) if WINDOW[0] <= t <= WINDOW[1]]
-    pts = [(t, g * tc.D) for t, g in zip(tg, gd) if WINDOW[0] <= t <= WINDOW[1]]
+    pts = [(t, g * ten_cate_scenes.D) for t, g in zip(tg, gd) if WINDOW[0] <= t <= WINDOW[1]]
     mt, mg = sum(p[0] for p in pts) / len(pts), sum(p[1] for p in pts) / len(pts)
     slope = -sum((t - mt) * (g - mg) for t, g in pts) / sum((t - mt) ** 2 for t, _ in pts)
     inside = [v for t, v in zip(r["t"], r["speed"]) if WINDOW[0] <= t <= WINDOW[1]]
@@ -194,7 +196,7 @@ def chart(runs, exp_v, exp_g, path):
         lab = "N = %g, Mach %g (tau %.2f)" % (r["n"], r["mach"], r["tau"] or float("nan"))
         a1.plot(r["t"], r["speed"], "-", label=lab)
         a2.plot(r["t"], r["gap"], "-", label=lab)
-    a1.axhline(tc.CASES[CASE]["u_inf"], color="grey", ls=":", label="u_inf (unbounded)")
+    a1.axhline(ten_cate_scenes.CASES[CASE]["u_inf"], color="grey", ls=":", label="u_inf (unbounded)")
     a1.set_xlabel("t [s]")
     a1.set_ylabel("settling speed -v_z [m/s]")
     a1.set_title("E1 (Re 1.5) in the experiment's box: speed")
@@ -293,8 +295,8 @@ box).%(short)s
            at=at, g_meas=drift[0], g_speed=drift[1], w0=WINDOW[0], w1=WINDOW[1],
            exp_slope=c0["exp_slope"] if c0 else float("nan"), slope_points=c0["slope_points"] if c0 else 0,
            gap_heads=" | ".join("gap %g d" % g for g in GAPS), gap_bars="---|" * len(GAPS), times="\n".join(times),
-           u_inf=tc.CASES[CASE]["u_inf"],
-           plateau_vs_uinf=pct(c0["exp_plateau"], tc.CASES[CASE]["u_inf"]) if c0 else float("nan"),
+           u_inf=ten_cate_scenes.CASES[CASE]["u_inf"],
+           plateau_vs_uinf=pct(c0["exp_plateau"], ten_cate_scenes.CASES[CASE]["u_inf"]) if c0 else float("nan"),
            short="\n\nNot compared (shorter than 3 s of fall): " + ", ".join(short) + "." if short else "")
     with open(os.path.join(HERE, "EXPERIMENT.md"), "w") as f:
         f.write(text)

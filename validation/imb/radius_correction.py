@@ -28,7 +28,9 @@ import sys
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
 import results as compact  # noqa: E402
-import ten_cate  # noqa: E402  (the same box geometry, plateau and reduction)
+import ten_cate_analysis  # noqa: E402  (validation/imb/ten_cate.py's parts: the records, the series, the plateau)
+import ten_cate_runs  # noqa: E402  (a scene run, the csv reduction)
+import ten_cate_scenes  # noqa: E402  (the same box geometry, the run names, the scene writer)
 
 SCRIPT = "radius_correction"
 OUT = compact.work(SCRIPT)
@@ -47,15 +49,15 @@ def corrected_scene(text, timeout=None):
 def ten_cate_scene(name):
     """The scene of the Ten Cate run NAME: its scene.toml in ten_cate.py's work folder, or the scene
     ten_cate.py writes for it now, for the steps its record ran."""
-    kept = os.path.join(ten_cate.RUNS, name, "scene.toml")
+    kept = os.path.join(ten_cate_scenes.RUNS, name, "scene.toml")
     if os.path.exists(kept):
         return open(kept).read()
-    sp, r = ten_cate.spec_of(name), ten_cate.records().get(name)
+    sp, r = ten_cate_scenes.spec_of(name), ten_cate_analysis.records().get(name)
     if sp is None or r is None:
         raise SystemExit("%s: no such Ten Cate run in %s" % (name, compact.path("ten_cate")))
     path = os.path.join(OUT, name + ".scene.toml")
     os.makedirs(OUT, exist_ok=True)
-    ten_cate.write_scene(sp["case"], sp["n"], path, sp["mach"], sp["op"], sp["width"], sp["height"],
+    ten_cate_scenes.write_scene(sp["case"], sp["n"], path, sp["mach"], sp["op"], sp["width"], sp["height"],
                          (r["steps_requested"] - 0.5) * r["dt"], sp["explicit"])
     return open(path).read()
 
@@ -63,11 +65,11 @@ def ten_cate_scene(name):
 def run(name, timeout=None):
     scene = ten_cate_scene(name)
     out = os.path.join(OUT, name)
-    code, work = ten_cate.run_scene(out, corrected_scene(scene, timeout))
+    code, work = ten_cate_runs.run_scene(out, corrected_scene(scene, timeout))
     if code != 0:
         raise SystemExit("%s: lbm-server exited %d (see %s/log.txt)" % (name, code, out))
     shutil.copy(os.path.join(work, "summary.json"), os.path.join(out, "summary.json"))
-    ten_cate.reduce_csv(os.path.join(work, "particles.csv"), os.path.join(out, "particles.csv"))
+    ten_cate_runs.reduce_csv(os.path.join(work, "particles.csv"), os.path.join(out, "particles.csv"))
     shutil.rmtree(work)
     distil([out])
 
@@ -92,13 +94,13 @@ def distil(folders):
 
 def terminal(folder):
     """(case, N, tau, terminal speed, error vs u_inf [%]) of a larger-box run folder."""
-    m = ten_cate.DIR_RE.match(os.path.basename(folder))
+    m = ten_cate_scenes.DIR_RE.match(os.path.basename(folder))
     case = m.group(1)
-    cols = ten_cate.load_series(os.path.join(folder, "particles.csv"))
-    gap = [z - ten_cate.R for z in cols["z"]]
+    cols = ten_cate_analysis.load_series(os.path.join(folder, "particles.csv"))
+    gap = [z - ten_cate_scenes.R for z in cols["z"]]
     speed = [-v for v in cols["vz"]]
-    p = ten_cate.plateau(cols["time"], gap, speed)
-    u_inf = ten_cate.CASES[case]["u_inf"]
+    p = ten_cate_analysis.plateau(cols["time"], gap, speed)
+    u_inf = ten_cate_scenes.CASES[case]["u_inf"]
     with open(os.path.join(folder, "log.txt")) as f:
         tau = float(re.search(r"tau ([0-9.]+)", f.read()).group(1))
     return case, float(m.group(2).replace("p", ".")), tau, p["terminal_speed"], 100.0 * (p["terminal_speed"] - u_inf) / u_inf
@@ -128,7 +130,7 @@ def refinement(series):
 def report():
     rows, opening = [], []
     series = {}
-    at_radius = ten_cate.records()
+    at_radius = ten_cate_analysis.records()
     for name, rc in sorted(compact.runs(SCRIPT).items()):
         case, n, tau, v_rc, e_rc = rc["case"], rc["N"], rc["tau"], rc["terminal_speed"], rc["terminal_error_pct"]
         v, e = at_radius[name]["terminal_speed"], at_radius[name]["terminal_error_pct"]
@@ -138,7 +140,7 @@ def report():
             name, case, n, tau, product / r_cells, v, e, v_rc, e_rc))
         series.setdefault(box_of(name), []).append((n, e, e_rc))
         opening.append(("%s (%s, N = %g, tau %.3f), corrected: terminal speed" % (name, case, n, tau),
-                        "u_inf %.3f m/s (unbounded)" % ten_cate.CASES[case]["u_inf"], "%.4f m/s" % v_rc, "%+.1f %%" % e_rc,
+                        "u_inf %.3f m/s (unbounded)" % ten_cate_scenes.CASES[case]["u_inf"], "%.4f m/s" % v_rc, "%+.1f %%" % e_rc,
                         "python3 validation/imb/radius_correction.py %s" % name))
     text = ("# Ten Cate in larger boxes with the calibrated radius correction\n\n"
             + compact.summary(opening, "python3 validation/imb/radius_correction.py --report") + "\n\n"

@@ -5,7 +5,7 @@ against FP32. The lattice's own cases in each storage are `lbm-server validate -
 
 Each run is validation/imb/ten_cate.py's E3 run at 9 cells per diameter (100 x 100 x 160 mm box, 60 x
 60 x 96 cells, TRT, Mach 0.1 of u_inf) with lattice.storage set, made in the ignored folder
-validation/imb/work/storage/E3_N9_<storage>/; what the table needs of it (ten_cate.py's analyse(),
+validation/imb/work/storage/E3_N9_<storage>/; what the table needs of it (ten_cate_analysis.py's analyse(),
 without the series) goes to validation/lbm/storage_ten_cate.json (committed), and the section "Storage of the
 populations: a settling sphere" of validation/lbm/REPORT.md is written from that file alone (then its
 summary by summary.py).
@@ -21,7 +21,8 @@ import sys
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(HERE, "..", "imb"))
-import ten_cate  # noqa: E402  (the Ten Cate runs: scene, run, analysis)
+import ten_cate_analysis  # noqa: E402  (validation/imb/ten_cate.py's parts: a run's record)
+import ten_cate_runs  # noqa: E402  (the Ten Cate runs: scene and run)
 import results as compact  # noqa: E402  (compact JSON)
 import summary  # noqa: E402  (validation/lbm/summary.py: the report's sections and summary)
 
@@ -52,8 +53,8 @@ def run(storage, force):
         print("%s: already in %s, skipped (--force reruns it)" % (name, RESULTS))
         return
     out = os.path.join(WORK, name)
-    ten_cate.run_into(out, CASE, N, storage=storage)
-    r = ten_cate.analyse(out, CASE, N)
+    ten_cate_runs.run_into(out, CASE, N, storage=storage)
+    r = ten_cate_analysis.analyse(out, CASE, N)
     if r is None:
         raise SystemExit("%s: no summary.json (see %s/log.txt)" % (name, out))
     r["storage"] = storage
@@ -118,8 +119,8 @@ def main():
     sub.add_parser("report")
     args = ap.parse_args()
     if args.cmd == "run":
-        if not os.path.exists(ten_cate.BINARY):
-            raise SystemExit("%s missing: cargo build --release --bins" % ten_cate.BINARY)
+        if not os.path.exists(ten_cate_runs.BINARY):
+            raise SystemExit("%s missing: cargo build --release --bins" % ten_cate_runs.BINARY)
         for s in args.storage or STORAGES:
             if s not in STORAGES:
                 raise SystemExit("storage %r: one of %s" % (s, ", ".join(STORAGES)))
