@@ -58,11 +58,21 @@ impl BlockLattice {
         load: impl Fn(usize, crate::lbm::imb::Load) -> T + Sync,
         comm: &dyn Communicator,
     ) -> Result<(), String> {
+        let overlapped = self.overlaps();
         let Some(halo) = &mut self.halo else {
             return self.lattice.step_coupled_with(particles, out, load);
         };
-        let step = self.lattice.step_coupled_unread(particles)?;
-        halo.exchange(&self.lattice, comm);
+        let step = match overlapped {
+            true => self.lattice.step_coupled_unread(
+                particles,
+                Some(&mut |lattice| halo.step_overlapped(lattice, comm)),
+            )?,
+            false => {
+                let step = self.lattice.step_coupled_unread(particles, None)?;
+                halo.exchange(&self.lattice, comm);
+                step
+            }
+        };
         let share = match comm.rank() {
             0 => Vec::new(),
             _ => self.lattice.share(&step)?,
