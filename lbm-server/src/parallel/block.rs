@@ -92,6 +92,16 @@ impl BlockLattice {
         self.overlap && self.lattice.splits_by_region()
     }
 
+    /// The halo exchange the steps take, as the run's first line says it (none on one rank).
+    pub fn exchange_said(&self) -> Option<&'static str> {
+        self.halo.as_ref()?;
+        Some(match (self.overlaps(), self.overlap) {
+            (true, _) => "halo exchange overlapped with the interior's update",
+            (false, true) => "halo exchange after the whole step (covered cells redone)",
+            (false, false) => "halo exchange after the whole step ([parallel] overlap = false)",
+        })
+    }
+
     /// Completed steps.
     pub fn time(&self) -> u64 {
         self.lattice.time
