@@ -1,7 +1,8 @@
 //! A run decomposed over MPI ranks (`mpirun -np N lbm-server run`), against the same run in one
 //! process, walled and periodic, on 2 and 4 ranks: a fluid-only run's probe lines and every field
 //! snapshot byte for byte; a coupled run's particles.csv and snapshots byte for byte, spheres
-//! across the cuts; and the refusals of blocks and settings that cannot be. The runs need mpirun
+//! across the cuts, the covered cells redone (the exchange after the whole step), skipped and
+//! fused (the exchange overlapped); and the refusals of blocks that cannot be. The runs need mpirun
 //! and an lbm-server built with `--features mpi`; where either is missing they say so and pass.
 
 mod common;
@@ -10,15 +11,20 @@ use common::mpi::{
     SOLID, WALLED,
 };
 use common::*;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// The scene on one process, then on each of `runs`' ranks with its `[parallel]` section (or
-/// none): the same `outputs` byte for byte, and the summary names the ranks and blocks. False
-/// where the runs cannot be made (said why).
-fn same_on_ranks(tag: &str, text_: &str, runs: &[(usize, &str)], outputs: fn(&Path) -> Files) -> bool {
+/// none): the same `outputs` byte for byte, and the summary names the ranks and blocks. The runs'
+/// folder (the run on N ranks in npN); none where the runs cannot be made (said why).
+fn same_on_ranks(
+    tag: &str,
+    text_: &str,
+    runs: &[(usize, &str)],
+    outputs: fn(&Path) -> Files,
+) -> Option<PathBuf> {
     let Some(mpirun) = mpirun() else {
         eprintln!("skipped: mpirun is not installed (apt-get install openmpi-bin libopenmpi-dev)");
-        return false;
+        return None;
     };
     let dir = temp_dir(tag);
     let scene = write_scene(&dir, text_);
@@ -33,7 +39,7 @@ fn same_on_ranks(tag: &str, text_: &str, runs: &[(usize, &str)], outputs: fn(&Pa
         let o = mpirun_command(&mpirun, n, &scene, &out).output().unwrap();
         if text(&o).contains("built without MPI") {
             eprintln!("skipped: lbm-server is built without MPI (cargo build -p lbm-server --features mpi)");
-            return false;
+            return None;
         }
         assert_eq!(o.status.code(), Some(0), "{n} ranks: {}", text(&o));
         for ((file, want), (_, have)) in expected.iter().zip(outputs(&out)) {
@@ -50,7 +56,7 @@ fn same_on_ranks(tag: &str, text_: &str, runs: &[(usize, &str)], outputs: fn(&Pa
         assert_eq!(blocks, n as u64, "{s}");
         assert_eq!(s["parallel"]["devices"].as_array().unwrap().len(), n, "{s}");
     }
-    true
+    Some(dir)
 }
 
 #[test]
@@ -130,7 +136,12 @@ fn a_build_without_mpi_refuses_to_run_as_one_of_several_ranks() {
 #[test]
 fn a_coupled_walled_run_on_2_and_4_ranks_writes_the_single_process_particles_byte_for_byte() {
     let scene = coupled_scene("coupled-walled", false);
-    same_on_ranks("mpi-coupled-walled", &scene, &[(2, ""), (4, "")], coupled_outputs);
+    let Some(dir) = same_on_ranks("mpi-coupled-walled", &scene, &[(2, ""), (4, "")], coupled_outputs) else {
+        return;
+    };
+    // "auto" takes the redo on ranks: its exchange follows the whole step.
+    let s = summary(&dir.join("np2"));
+    assert_eq!(s["parallel"]["halo_overlapped"], false, "{s}");
 }
 
 #[test]
@@ -145,30 +156,20 @@ fn a_coupled_periodic_run_on_2_and_4_ranks_writes_the_single_process_particles_b
     );
 }
 
-/// What a coupled run on several ranks cannot take yet is refused before anything runs (exit
-/// 2), naming the setting.
+/// The covered cells skipped (on 2 ranks) and fused (on 4, cut along two axes): particles.csv
+/// and the snapshots byte for byte, the halo exchange overlapped with the interior's update
+/// (summary.json's `halo_overlapped`).
 #[test]
-fn a_coupled_run_on_ranks_refuses_the_covered_cells_it_cannot_take() {
-    let Some(mpirun) = mpirun() else {
-        eprintln!("skipped: mpirun is not installed");
-        return;
-    };
-    let dir = temp_dir("mpi-coupled-refused");
-    let text_ = coupled_scene("coupled-fused", false)
-        .replace("timeout = 10.0", "timeout = 10.0\ncovered_cells = \"fused\"");
-    let scene = write_scene(&dir, &text_);
-    let o = mpirun_command(&mpirun, 2, &scene, &dir.join("out"))
-        .output()
-        .unwrap();
-    if text(&o).contains("built without MPI") {
-        eprintln!("skipped: lbm-server is built without MPI");
-        return;
+fn a_coupled_run_on_ranks_with_the_covered_cells_skipped_or_fused_overlaps_the_exchange() {
+    let blocks = "[parallel]\nblocks = [2, 1, 2]";
+    for (way, n, parallel) in [("skip", 2, ""), ("fused", 4, blocks)] {
+        let text_ = coupled_scene(&format!("coupled-{way}"), true)
+            .replace("timeout = 10.0", &format!("timeout = 10.0\ncovered_cells = \"{way}\""));
+        let tag = format!("mpi-coupled-{way}");
+        let Some(dir) = same_on_ranks(&tag, &text_, &[(n, parallel)], coupled_outputs) else {
+            return;
+        };
+        let s = summary(&dir.join(format!("np{n}")));
+        assert_eq!(s["parallel"]["halo_overlapped"], true, "{way}: {s}");
     }
-    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
-    assert!(
-        text(&o).contains("coupling.covered_cells = \"fused\" on 2 ranks"),
-        "{}",
-        text(&o)
-    );
-    assert!(!dir.join("out").join("particles.csv").exists(), "nothing ran");
 }

@@ -1,6 +1,7 @@
 //! `lbm-server bench`: lattice updates per second against this device's memory bandwidth.
 
 mod coupled;
+mod coupled_ranks;
 mod naive;
 mod ranks;
 mod storage;
@@ -32,6 +33,8 @@ pub struct BenchArgs {
     operator: String,
     /// Also run coupled steps with these particle counts (e.g. 1,8,64,512,4096,32768): spheres of
     /// 4 cells diameter on a regular lattice, immersed moving boundary; MLUPS and ratio to LBM-only.
+    /// On several ranks the steps are coupled, with the first count and the first way of
+    /// --covered-cells (the loads gathered at rank 0 as in a run).
     #[arg(long, value_delimiter = ',')]
     particles: Vec<usize>,
     /// With --particles: also time each pass of the coupled step on its own (each submitted and

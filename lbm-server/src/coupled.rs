@@ -25,4 +25,3 @@ mod ways;
 pub use fluid_side::FluidSide;
 pub(crate) use radius_correction::calibrated_drawn_larger;
 pub use ranks::follow;
-pub use ways::refuse_on_ranks;

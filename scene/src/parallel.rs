@@ -18,7 +18,8 @@ pub struct Parallel {
     pub blocks: Option<[u64; 3]>,
     /// Whether each rank's halo exchange overlaps the update of its block's interior (true, the
     /// default), or follows the whole step (false: exposed, for timing the two side by side);
-    /// the same results either way, bit for bit.
+    /// the same results either way, bit for bit. A coupled run whose covered cells are redone
+    /// exchanges after the whole step either way.
     pub overlap: Option<bool>,
 }
 

@@ -9,7 +9,7 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 /// The ways of treating the covered cells that `--covered-cells` names.
-fn covered_cell_modes(name: &str) -> Result<Vec<CoveredCells>, String> {
+pub(super) fn covered_cell_modes(name: &str) -> Result<Vec<CoveredCells>, String> {
     match name {
         "both" => return Ok(vec![CoveredCells::Redo, CoveredCells::Fused]),
         "all" => return Ok(CoveredCells::DEFINITE.to_vec()),
@@ -146,7 +146,7 @@ impl Sweep {
 
 /// The bench's `count` spheres of 4 cells on a regular lattice filling grid `n`: a cube number of
 /// them, at least 4 cells apart.
-fn bench_spheres(count: usize, n: [usize; 3]) -> Result<Vec<SolidParticle>, String> {
+pub(super) fn bench_spheres(count: usize, n: [usize; 3]) -> Result<Vec<SolidParticle>, String> {
     let side = (count as f64).cbrt().round().max(1.0) as usize;
     if side * side * side != count {
         return Err(format!(

@@ -3,11 +3,13 @@
 //! per rank and in total, the halo's bytes per step and the exchange's share of the step, and per
 //! way of exchanging (`--exchange`: overlapped, exposed) the exposed exchange against the blocks
 //! stepped without it; one storage of the populations (`--storage`, fp32 by default: the halo's
-//! messages carry its bits).
+//! messages carry its bits). With `--particles N` the steps are coupled (`coupled_ranks.rs`).
 
+use super::coupled_ranks::{coupling, Coupled};
 use super::{parse_faces, parse_grid, parse_operator, BenchArgs};
 use crate::lbm::geometry::Setup;
 use crate::lbm::gpu::{Gpu, Health};
+use crate::lbm::imb::ImbOptions;
 use crate::lbm::storage::Storage;
 use crate::parallel::{all, choose_blocks, BlockLattice, Communicator, Decomposition, ThreadRanks};
 use std::sync::Arc;
@@ -24,17 +26,18 @@ struct RankTime {
 
 /// A way of stepping the blocks in the bench.
 #[derive(Clone, Copy, PartialEq)]
-enum Stepping {
+pub(super) enum Stepping {
     /// The halo exchange overlapped with the interior's update.
     Overlapped,
     /// The halo exchange after the whole step.
     Exposed,
-    /// No exchange, a submission per step: the compute alone (its results are not the run's).
+    /// No exchange, a submission per step: the compute alone (its results are not the run's;
+    /// coupled, each block's loads read from its own pairs, none gathered).
     Alone,
 }
 
 impl Stepping {
-    fn name(self) -> &'static str {
+    pub(super) fn name(self) -> &'static str {
         match self {
             Stepping::Overlapped => "overlapped",
             Stepping::Exposed => "exposed",
@@ -73,24 +76,28 @@ pub fn run(args: &BenchArgs, comm: &dyn Communicator) -> Result<(), String> {
     };
     let periodic: [bool; 3] = std::array::from_fn(|a| setup.periodic(a));
     let blocks = choose_blocks(n, periodic, comm.size())?;
-    let started = start(&setup, blocks, comm);
+    let coupled = coupling(args, n)?;
+    let started = start(&setup, blocks, comm, coupled.as_ref().map(|c| c.options));
     if !all(comm, started.is_ok()) {
         return Err(started
             .err()
             .unwrap_or_else(|| "another rank failed to start".into()));
     }
     let (gpu, mut lattice) = started.expect("started");
-    lattice.step(20, comm);
+    step(&mut lattice, comm, (Stepping::Exposed, coupled.as_ref()), 20)?;
     let _ = lattice.health(comm);
     let mine = RankTime {
         device: format!("{}: {}", comm.host(), gpu.adapter.name),
         cells: lattice.decomposition.size.iter().product(),
         halo_bytes: lattice.halo_cost().0,
-        times: time_rounds(args, &mut lattice, comm, &modes),
+        times: time_rounds(args, &mut lattice, comm, (&modes, coupled.as_ref()))?,
     };
     let rows = gather(comm, &mine);
     if comm.rank() == 0 {
         print(args, n, blocks, &rows, &modes);
+        if let Some(c) = &coupled {
+            c.print(&modes);
+        }
     }
     Ok(())
 }
@@ -105,19 +112,19 @@ fn one_storage(names: &[String]) -> Result<Storage, String> {
 }
 
 /// Per way of stepping in `modes`, its best round of `args.rounds` (the ways alternating): time
-/// [s] and the host's exchange time in it [s].
+/// [s] and the host's exchange time in it [s]; coupled steps where `coupled` says.
 fn time_rounds(
     args: &BenchArgs,
     lattice: &mut BlockLattice,
     comm: &dyn Communicator,
-    modes: &[Stepping],
-) -> Vec<(f64, f64)> {
+    (modes, coupled): (&[Stepping], Option<&Coupled>),
+) -> Result<Vec<(f64, f64)>, String> {
     let mut best = vec![(f64::INFINITY, 0.0); modes.len()];
     for _ in 0..args.rounds.max(1) {
         for (m, &mode) in modes.iter().enumerate() {
             comm.min(0);
             let (t0, x0) = (Instant::now(), lattice.halo_cost().1);
-            step(lattice, comm, mode, args.steps);
+            step(lattice, comm, (mode, coupled), args.steps)?;
             // The health check reads the device's status: the steps are done.
             let _ = lattice.health(comm);
             let round = (t0.elapsed().as_secs_f64(), lattice.halo_cost().1 - x0);
@@ -126,19 +133,28 @@ fn time_rounds(
             }
         }
     }
-    best
+    Ok(best)
 }
 
-/// `steps` steps of `lattice` the way `mode` says.
-fn step(lattice: &mut BlockLattice, comm: &dyn Communicator, mode: Stepping, steps: u64) {
+/// `steps` steps of `lattice` the way `mode` says, coupled where `coupled` says.
+pub(super) fn step(
+    lattice: &mut BlockLattice,
+    comm: &dyn Communicator,
+    (mode, coupled): (Stepping, Option<&Coupled>),
+    steps: u64,
+) -> Result<(), String> {
+    lattice.set_overlap(mode == Stepping::Overlapped);
+    if let Some(c) = coupled {
+        return c.step(lattice, comm, mode == Stepping::Alone, steps);
+    }
     if mode == Stepping::Alone {
         for _ in 0..steps {
             lattice.lattice.step(1);
         }
-        return;
+        return Ok(());
     }
-    lattice.set_overlap(mode == Stepping::Overlapped);
     lattice.step(steps, comm);
+    Ok(())
 }
 
 /// [`run`] on `--thread-ranks N` threads of this process, one rank each; the first rank's error.
@@ -163,15 +179,17 @@ pub fn on_threads(args: &BenchArgs) -> Result<(), String> {
     results.into_iter().collect()
 }
 
+/// This rank's device and block of `setup` cut into `blocks`, coupled with `options` where given.
 fn start(
     setup: &Setup,
     blocks: [usize; 3],
     comm: &dyn Communicator,
+    options: Option<ImbOptions>,
 ) -> Result<(Arc<Gpu>, BlockLattice), String> {
     let gpu = Arc::new(Gpu::for_local_rank(comm.local_rank())?);
     let periodic: [bool; 3] = std::array::from_fn(|a| setup.periodic(a));
     let d = Decomposition::new(setup.n, periodic, blocks, comm.rank());
-    let lattice = BlockLattice::new(gpu.clone(), setup.clone(), Health::default(), d)?;
+    let lattice = BlockLattice::with_coupling(gpu.clone(), setup.clone(), Health::default(), d, options)?;
     Ok((gpu, lattice))
 }
 

@@ -204,13 +204,21 @@ impl FluidSide {
         self.lattice.lattice.adapter()
     }
 
+    /// On several ranks, "; " and the halo exchange the steps take (`BlockLattice::exchange_said`:
+    /// after the whole step with the covered cells redone); nothing on one.
+    pub fn exchange(&self) -> String {
+        self.lattice
+            .exchange_said()
+            .map_or(String::new(), |e| format!("; {e}"))
+    }
+
     /// The fluid as `--verbose` describes it: the lattice's scales, the device, the way the
     /// covered cells are treated, the lubrication and the radius correction.
     pub fn describe(&self) -> String {
         let u = &self.units;
         format!(
             "lattice {}x{}x{} ({}, tau {:.4}, dx {:e} m, dt {:e} s) on {}, {}, immersed moving \
-             boundary ({}, {:.1}% of the cells covered at the start{}){}{}",
+             boundary ({}, {:.1}% of the cells covered at the start{}){}{}{}",
             u.n[0],
             u.n[1],
             u.n[2],
@@ -238,7 +246,8 @@ impl FluidSide {
                 )
             } else {
                 String::new()
-            }
+            },
+            self.exchange()
         )
     }
 
@@ -348,6 +357,7 @@ fn coupled_block(
         ..setup_of(units)
     };
     let d = Decomposition::new(units.n, scene.periodic_axes(), blocks, comm.rank());
-    let lattice = BlockLattice::with_coupling(gpu, setup, health_of(units), d, Some(options))?;
+    let mut lattice = BlockLattice::with_coupling(gpu, setup, health_of(units), d, Some(options))?;
+    lattice.set_overlap(scene.parallel.overlap());
     Ok((lattice, trial))
 }

@@ -27,7 +27,8 @@ pub(super) fn covered_cells_of(scene: &Scene) -> Result<Vec<CoveredCells>, Strin
 /// building the other kernels there costs about a second each, more than a short run wins back,
 /// and a run busy building them notices a dead DEM late; `coupling.covered_cells = "timed"`
 /// times them on every device. On several `ranks` (which step in lockstep) it times nothing and
-/// takes the first kernels and the redo.
+/// takes the first kernels and the first way: the one the scene names, else the redo (whose
+/// halo exchange follows the whole step: `parallel/coupled_block.rs`).
 pub(super) fn trial(
     scene: &Scene,
     kernel: Option<Kernel>,
@@ -39,19 +40,6 @@ pub(super) fn trial(
         trial.pin_first();
     }
     Ok(trial)
-}
-
-/// On several ranks, what a coupled run cannot take yet, named: the covered cells other than
-/// redone (`coupling.covered_cells` "fused" or "skip"; "auto" and "timed" take the redo there).
-pub fn refuse_on_ranks(scene: &Scene, ranks: usize) -> Result<(), String> {
-    let name = scene.coupling.covered_cells.as_str();
-    if ranks > 1 && covered_cells_of(scene)?.first() != Some(&CoveredCells::Redo) {
-        return Err(format!(
-            "coupling.covered_cells = {name:?} on {ranks} ranks: a run with particles on several \
-             ranks redoes the covered cells (\"redo\", or \"auto\" which takes it there)"
-        ));
-    }
-    Ok(())
 }
 
 impl FluidSide {

@@ -62,9 +62,9 @@ impl BlockLattice {
         let options = options.map(|o| block_options(o, &d, &setup));
         let mut lattice = GpuLattice::new(gpu, local, health, options)?;
         let halo = split.then(|| Halo::new(&lattice, &d, &setup));
-        // The coupled step keeps the exposed exchange (`coupled_block.rs`).
-        let overlap = split && options.is_none();
-        if overlap {
+        // Overlapped by default (a coupled step with the covered cells redone keeps the exposed
+        // exchange: `coupled_block.rs`).
+        if split {
             let (regions, region_of) = Halo::regions(&d, d.local_n());
             lattice.set_regions(regions, region_of);
         }
@@ -74,20 +74,32 @@ impl BlockLattice {
             whole: setup,
             halo,
             shares_sent: SharesSent::default(),
-            overlap,
+            overlap: split,
         })
     }
 
-    /// Makes [`BlockLattice::step`] overlap the halo exchange with the interior's update (`on`,
-    /// the default where the lattice is decomposed and has no particles), or exchange after the
-    /// whole step; the same bits either way.
+    /// Makes [`BlockLattice::step`] and [`BlockLattice::step_coupled_with`] overlap the halo
+    /// exchange with the interior's update (`on`, the default where the lattice is decomposed),
+    /// or exchange after the whole step; the same bits either way. A coupled step with the
+    /// covered cells redone exchanges after the whole step either way (`coupled_block.rs`).
     pub fn set_overlap(&mut self, on: bool) {
         self.overlap = on && self.lattice.regions() > 0;
     }
 
-    /// Whether the steps overlap the halo exchange with the interior's update.
+    /// Whether the steps overlap the halo exchange with the interior's update (asked for, and
+    /// not a coupled step with the covered cells redone: what the steps do now).
     pub fn overlaps(&self) -> bool {
-        self.overlap
+        self.overlap && self.lattice.splits_by_region()
+    }
+
+    /// The halo exchange the steps take, as the run's first line says it (none on one rank).
+    pub fn exchange_said(&self) -> Option<&'static str> {
+        self.halo.as_ref()?;
+        Some(match (self.overlaps(), self.overlap) {
+            (true, _) => "halo exchange overlapped with the interior's update",
+            (false, true) => "halo exchange after the whole step (covered cells redone)",
+            (false, false) => "halo exchange after the whole step ([parallel] overlap = false)",
+        })
     }
 
     /// Completed steps.

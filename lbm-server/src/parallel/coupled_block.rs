@@ -1,8 +1,10 @@
 //! The coupled step of one rank's block ([`BlockLattice::step_coupled_with`]): every rank steps
 //! the same particles (rank 0 sends them their states: `coupled/ranks.rs`), in the whole lattice's
-//! coordinates, over its own cells; the halo is exchanged after the whole step (not overlapped:
-//! the redo's passes over the covered cells write into the shell's slots after the fluid kernels,
-//! docs/imb.md); each rank other than 0 sends rank 0 its share of the loads
+//! coordinates, over its own cells; the halo exchange overlaps the update of the block's interior
+//! with the covered cells skipped or fused (the step's fluid kernels split by region,
+//! `lbm/imb/by_region.rs`), and follows the whole step with the covered cells redone (the redo's
+//! `store_covered` writes into the shell's slots after the fluid kernels, docs/imb.md) or where
+//! `[parallel] overlap = false`; each rank other than 0 sends rank 0 its share of the loads
 //! (`lbm/imb/share.rs`: the loads of the particles whose box it holds alone, the covered cells it
 //! holds of those across a cut), from which rank 0 makes every particle's load in the single
 //! process's order (`lbm/imb/gathered.rs`): the same bits as one process.
@@ -58,11 +60,21 @@ impl BlockLattice {
         load: impl Fn(usize, crate::lbm::imb::Load) -> T + Sync,
         comm: &dyn Communicator,
     ) -> Result<(), String> {
+        let overlapped = self.overlaps();
         let Some(halo) = &mut self.halo else {
             return self.lattice.step_coupled_with(particles, out, load);
         };
-        let step = self.lattice.step_coupled_unread(particles)?;
-        halo.exchange(&self.lattice, comm);
+        let step = match overlapped {
+            true => self.lattice.step_coupled_unread(
+                particles,
+                Some(&mut |lattice| halo.step_overlapped(lattice, comm)),
+            )?,
+            false => {
+                let step = self.lattice.step_coupled_unread(particles, None)?;
+                halo.exchange(&self.lattice, comm);
+                step
+            }
+        };
         let share = match comm.rank() {
             0 => Vec::new(),
             _ => self.lattice.share(&step)?,

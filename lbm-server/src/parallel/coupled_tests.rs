@@ -47,20 +47,62 @@ fn check_with(
     steps: u64,
 ) -> Vec<usize> {
     let gpu = Arc::new(Gpu::new().expect("a wgpu adapter (lavapipe in CI)"));
+    let want = single(&gpu, particles, &setup, steps, CoveredCells::Redo);
+    let have = on_blocks(&gpu, particles, &setup, blocks, steps, (CoveredCells::Redo, true));
+    same_bits(&want, &have, &format!("blocks {blocks:?}"));
+    have.sent
+}
+
+/// What `steps` coupled steps of `setup` from rest with the particles of `particles` at each
+/// step give: rank 0's loads and the whole lattice's fields after each step, and the bytes each
+/// rank sent rank 0 per step for the loads (rank order; none on one lattice).
+pub(super) struct CoupledRun {
+    pub loads: Vec<Vec<Load>>,
+    pub fields: Vec<Vec<[f32; 4]>>,
+    pub sent: Vec<usize>,
+}
+
+/// [`CoupledRun`] on one lattice, the covered cells taking their solid term the way `mode` says.
+pub(super) fn single(
+    gpu: &Arc<Gpu>,
+    particles: fn(u64) -> Vec<SolidParticle>,
+    setup: &Setup,
+    steps: u64,
+    mode: CoveredCells,
+) -> CoupledRun {
     let options = Some(ImbOptions {
-        covered_cells: CoveredCells::Redo,
+        covered_cells: mode,
         ..ImbOptions::default()
     });
     let mut one = GpuLattice::new(gpu.clone(), setup.clone(), Health::default(), options).unwrap();
-    let want: Vec<Vec<Load>> = (0..steps)
-        .map(|t| one.step_coupled(&particles(t)).unwrap())
-        .collect();
-    let want_fields = one.fields().0;
-    let ranks: usize = blocks.iter().product();
+    let (loads, fields) = (0..steps)
+        .map(|t| (one.step_coupled(&particles(t)).unwrap(), one.fields().0))
+        .unzip();
+    CoupledRun {
+        loads,
+        fields,
+        sent: Vec::new(),
+    }
+}
+
+/// [`CoupledRun`] cut into `blocks` on threads, the covered cells taking their solid term the way
+/// `mode` says, the halo exchange overlapped with the interior's update where `overlap` asks
+/// (`block.overlaps()` checked against what the step does: not with the redo).
+pub(super) fn on_blocks(
+    gpu: &Arc<Gpu>,
+    particles: fn(u64) -> Vec<SolidParticle>,
+    setup: &Setup,
+    blocks: [usize; 3],
+    steps: u64,
+    (mode, overlap): (CoveredCells, bool),
+) -> CoupledRun {
+    let options = Some(ImbOptions {
+        covered_cells: mode,
+        ..ImbOptions::default()
+    });
     let periodic: [bool; 3] = std::array::from_fn(|a| setup.periodic(a));
-    let mut sent = Vec::new();
-    let (loads, fields) = std::thread::scope(|s| {
-        let handles: Vec<_> = ThreadRanks::world(ranks)
+    let all: Vec<_> = std::thread::scope(|s| {
+        let handles: Vec<_> = ThreadRanks::world(blocks.iter().product())
             .into_iter()
             .enumerate()
             .map(|(rank, comm)| {
@@ -69,37 +111,51 @@ fn check_with(
                     let d = Decomposition::new(setup.n, periodic, blocks, rank);
                     let mut block =
                         BlockLattice::with_coupling(gpu, setup, Health::default(), d, options).unwrap();
-                    let loads: Vec<Vec<Load>> = (0..steps)
+                    block.set_overlap(overlap);
+                    let split = overlap && mode != CoveredCells::Redo;
+                    assert_eq!(block.overlaps(), split, "{mode:?}: the exchange that runs");
+                    let steps: Vec<(Vec<Load>, Vec<[f32; 4]>)> = (0..steps)
                         .map(|t| {
                             let mut out = Vec::new();
                             block
                                 .step_coupled_with(&particles(t)[..], &mut out, |_, l| l, &comm)
                                 .unwrap();
-                            out
+                            (out, block.own_fields(&comm).0)
                         })
                         .collect();
-                    (loads, block.own_fields(&comm).0, block.shares_per_step())
+                    (steps, block.shares_per_step())
                 })
             })
             .collect();
-        let all: Vec<_> = handles.into_iter().map(|h| h.join().unwrap()).collect();
-        let own: Vec<&[[f32; 4]]> = all.iter().map(|(_, f, _)| &f[..]).collect();
-        let fields = put_together(&setup, blocks, &own);
-        sent = all.iter().map(|(_, _, s)| *s).collect();
-        (all[0].0.clone(), fields)
+        handles.into_iter().map(|h| h.join().unwrap()).collect()
     });
+    let fields = (0..steps as usize)
+        .map(|t| {
+            let own: Vec<&[[f32; 4]]> = all.iter().map(|(s, _)| &s[t].1[..]).collect();
+            put_together(setup, blocks, &own)
+        })
+        .collect();
+    CoupledRun {
+        loads: all[0].0.iter().map(|(l, _)| l.clone()).collect(),
+        fields,
+        sent: all.iter().map(|(_, s)| *s).collect(),
+    }
+}
+
+/// The loads of every step, and the fields after each, are the same bits in `have` as in `want`
+/// (the particles feel the fluid); `what` names the run.
+pub(super) fn same_bits(want: &CoupledRun, have: &CoupledRun, what: &str) {
     assert!(
-        want.iter().flatten().any(|l| l.force != [0.0; 3]),
+        want.loads.iter().flatten().any(|l| l.force != [0.0; 3]),
         "the particles feel the fluid"
     );
-    for (t, (w, h)) in want.iter().zip(&loads).enumerate() {
-        assert_eq!(w, h, "blocks {blocks:?}, step {t}: the loads differ");
+    for (t, (w, h)) in want.loads.iter().zip(&have.loads).enumerate() {
+        assert_eq!(w, h, "{what}, step {t}: the loads differ");
     }
-    let differ = (0..want_fields.len())
-        .filter(|&k| want_fields[k] != fields[k])
-        .count();
-    assert_eq!(differ, 0, "blocks {blocks:?}: {differ} cells' fields differ");
-    sent
+    for (t, (w, h)) in want.fields.iter().zip(&have.fields).enumerate() {
+        let differ = (0..w.len()).filter(|&k| w[k] != h[k]).count();
+        assert_eq!(differ, 0, "{what}, step {t}: {differ} cells' fields differ");
+    }
 }
 
 /// Two and four blocks (an edge of the cuts, the periodic x faces between ranks); few, since

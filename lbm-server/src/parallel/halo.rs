@@ -28,6 +28,13 @@
 //! face's ghost layer and the layer next to it) first, packs, and the interior's update may run
 //! before or after the unpack lands; the next step's shell comes after both.
 //!
+//! A coupled step splits only its fluid kernels so (`lbm/imb/by_region.rs`): the passes over the
+//! particles and the covered cells keep their places around them, skipped covered cells collide
+//! before the shell (its slots final before the pack), fused ones in the fluid kernels of their
+//! region. The redo's `store_covered` writes into the shell's slots after every region, so a
+//! coupled step with the covered cells redone exchanges after the whole step
+//! (`parallel/coupled_block.rs`).
+//!
 //! Edges and corners: axis by axis (x, then y, then z), each layer spanning the other axes' ghost
 //! layers, so that what crosses an edge or corner reaches the diagonal neighbour in two or three
 //! hops, each hop after the one before it has been written.

@@ -29,6 +29,8 @@ mod checkpoint_tests;
 mod communicator;
 mod coupled_block;
 #[cfg(test)]
+mod coupled_overlap_tests;
+#[cfg(test)]
 mod coupled_tests;
 mod decomposition;
 mod halo;

@@ -19,7 +19,7 @@ pub struct ParallelSummary {
     /// mean over the run's steps; none from rank 0, none without particles).
     pub loads_bytes_per_step: Vec<usize>,
     /// Whether the exchange overlapped the interior's update (`[parallel] overlap`; a coupled
-    /// run's exchange follows the whole step).
+    /// run's exchange follows the whole step where the covered cells are redone).
     pub halo_overlapped: bool,
 }
 

@@ -70,7 +70,7 @@ pub(super) fn periodic() -> Setup {
 }
 
 /// Periodic, a body force, MRT, `n` cells.
-fn periodic_of(n: [usize; 3]) -> Setup {
+pub(super) fn periodic_of(n: [usize; 3]) -> Setup {
     let rates = Rates::dhumieres(1.0 / 0.8);
     let mut setup = Setup::new(n, [Face::Periodic; 6], 0.8, Operator::Mrt { rates });
     setup.force = [2e-4, 1e-4, -1e-4];

@@ -103,8 +103,7 @@ fn output_folder(
     Ok(lock)
 }
 
-/// The lattice's blocks on `ranks` ranks (`[parallel] blocks` or chosen); with particles, what
-/// several ranks cannot take yet refused (`coupled::refuse_on_ranks`).
+/// The lattice's blocks on `ranks` ranks (`[parallel] blocks` or chosen).
 pub(super) fn blocks(scene: &Scene, ranks: usize) -> Result<[usize; 3], String> {
     let given = scene.parallel.blocks();
     let Some(units) = &scene.lattice_units else {
@@ -115,11 +114,7 @@ pub(super) fn blocks(scene: &Scene, ranks: usize) -> Result<[usize; 3], String> 
             )),
         };
     };
-    let blocks = blocks_of(units.n, scene.periodic_axes(), given, ranks)?;
-    if scene.particle_count() > 0 {
-        crate::coupled::refuse_on_ranks(scene, ranks)?;
-    }
-    Ok(blocks)
+    blocks_of(units.n, scene.periodic_axes(), given, ranks)
 }
 
 /// The run's steps: `--duration`'s, `--steps` or the scene's.

@@ -192,12 +192,13 @@ impl Session {
             );
         }
         format!(
-            "lbm-server: scene '{}': {} particles, {}; {steps} steps = {} s; {}",
+            "lbm-server: scene '{}': {} particles, {}; {steps} steps = {} s; {}{}",
             scene.name,
             hello.initial_count,
             self.fluid.brief(),
             terminal::seconds(time),
-            self.fluid.device()
+            self.fluid.device(),
+            self.fluid.exchange()
         )
     }
 

@@ -4,7 +4,11 @@
 //! or writes), the others after it, in any order. In the AA pattern each slot is read and written
 //! by one cell's update alone within a step (lbm.wgsl), so a step split into regions leaves the
 //! same populations as the whole step, bit for bit: each region's cells go through the same
-//! kernels (its own cell list by class, or the per-cell kernel over its list: cells.wgsl, KIND 1).
+//! kernels (its own cell list by class, or the per-cell kernel over its list: cells.wgsl, KIND 1),
+//! compiled with its way's constants (skip's cover-mask test, the fused solid term) and bound to
+//! the coupling's buffers, bound again when they grow (`GpuLattice::rebind_regions`): a coupled
+//! step with the covered cells skipped or fused splits its fluid kernels so
+//! (`crate::lbm::imb`, `by_region.rs`).
 
 use super::cell_list::CellList;
 use super::state::GpuLattice;

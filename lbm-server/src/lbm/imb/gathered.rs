@@ -12,7 +12,9 @@
 //! process's order (partial loads per rank, added afterwards, would not be the same bits).
 
 use super::box_ranks::{BoxRanks, StepBoxes};
+use super::by_region::FluidByRegion;
 use super::loads::convert_loads;
+use super::passes::StepPasses;
 use super::records::{GpuLoad, Load, SolidParticles, PAIR_BYTES};
 use super::share::{share_of, Share};
 use super::step::Split;
@@ -28,24 +30,37 @@ pub struct BlockStep {
 impl GpuLattice {
     /// The coupled step's passes with the particles (whole-lattice coordinates), all submitted:
     /// the block's covers, its covered cells' collision, the reduce of its own pairs (the covers
-    /// cleared), the loads copied for the host, and the fluid kernels; the loads are not read.
+    /// cleared), the loads copied for the host, and the fluid kernels, in one piece or, with
+    /// `by_region`, split by region with the halo exchanged between them (`by_region.rs`); the
+    /// loads are not read.
     pub fn step_coupled_unread<P: SolidParticles + ?Sized>(
         &mut self,
         particles: &P,
+        by_region: Option<FluidByRegion>,
     ) -> Result<BlockStep, String> {
         let block = self.options.and_then(|o| o.block).expect("a block's coupling");
-        let split: Split = &mut |_, encoder| encoder;
         let (n, passes) = self.stage(particles)?;
-        let encoder = self.gpu.device.create_command_encoder(&Default::default());
-        let encoder = self.encode_cover(encoder, &passes.cover, n, split);
-        let encoder = self.encode_collision(encoder, &passes, split);
-        let encoder = self.encode_reduce(encoder, &passes, n, split);
-        let loads = self.submit_with_loads(encoder, n);
-        self.submit_fluid_after_loads(&passes, split);
+        let loads = match by_region {
+            Some(fluid) => self.coupled_passes_by_region(n, &passes, fluid),
+            None => self.coupled_passes(n, &passes),
+        };
         Ok(BlockStep {
             boxes: StepBoxes::of(particles, block),
             loads,
         })
+    }
+
+    /// The coupled step's device passes over the `n` particles with `passes` (this step's), in
+    /// one piece as on one process: the loads' bytes and the submission of their copy for the host.
+    fn coupled_passes(&mut self, n: u32, passes: &StepPasses) -> (u64, wgpu::SubmissionIndex) {
+        let split: Split = &mut |_, encoder| encoder;
+        let encoder = self.gpu.device.create_command_encoder(&Default::default());
+        let encoder = self.encode_cover(encoder, &passes.cover, n, split);
+        let encoder = self.encode_collision(encoder, passes, split);
+        let encoder = self.encode_reduce(encoder, passes, n, split);
+        let loads = self.submit_with_loads(encoder, n);
+        self.submit_fluid_after_loads(passes, split);
+        loads
     }
 
     /// What this rank (not 0) sends rank 0 of the step `step` (`share.rs`): the loads of the

@@ -8,6 +8,7 @@
 //! particle's force and torque from its cells (the table of passes at step.rs's `coupled_step`).
 
 mod block;
+mod by_region;
 mod box_ranks;
 mod chunks;
 mod coupling;

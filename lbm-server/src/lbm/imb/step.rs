@@ -121,7 +121,7 @@ impl GpuLattice {
 
     /// The redo and skip: the covered cells collide with the solid term first, from their
     /// pre-collision populations, and keep the result (shaders/imb.wgsl).
-    fn encode_covered_collision(
+    pub(super) fn encode_covered_collision(
         &self,
         mut encoder: wgpu::CommandEncoder,
         covered: &CoveredPasses,
@@ -188,7 +188,7 @@ impl GpuLattice {
     /// Skip, after the fluid kernels: every bit of the cover mask back to zero (a bit set is a
     /// covered cell's of this step: a buffer clear of one bit per cell, where a pass over the
     /// covered cells took an atomic per cell).
-    fn clear_cover_mask(&self, encoder: &mut wgpu::CommandEncoder) {
+    pub(super) fn clear_cover_mask(&self, encoder: &mut wgpu::CommandEncoder) {
         let cells = self.setup.cells() as u64;
         let covered = &self.imb.as_ref().expect("coupling").covered;
         encoder.clear_buffer(covered, cells * 4, Some(cells.div_ceil(32) * 4));
