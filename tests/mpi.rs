@@ -59,25 +59,35 @@ fn same_on_ranks(
     Some(dir)
 }
 
+/// `[parallel] overlap` unset: on a CPU driver the exchange follows the whole step (nothing
+/// overlaps there), on a GPU it overlaps the interior's update.
 #[test]
 fn a_walled_run_on_2_and_4_ranks_is_the_single_process_run_byte_for_byte() {
-    same_on_ranks(
+    let Some(dir) = same_on_ranks(
         "mpi-walled",
         &scene("walled", WALLED, SOLID),
         &[(2, ""), (4, "")],
         fluid_outputs,
-    );
+    ) else {
+        return;
+    };
+    let s = summary(&dir.join("np2"));
+    let on_cpu = s["parallel"]["devices"][0].as_str().unwrap().contains("llvmpipe");
+    assert_eq!(s["parallel"]["halo_overlapped"], !on_cpu, "{s}");
 }
 
 #[test]
 fn a_periodic_run_cut_along_two_axes_is_the_single_process_run_byte_for_byte() {
-    let blocks = "[parallel]\nblocks = [2, 1, 2]";
-    same_on_ranks(
+    let parallel = "[parallel]\nblocks = [2, 1, 2]\noverlap = true";
+    let Some(dir) = same_on_ranks(
         "mpi-periodic",
         &scene("periodic", PERIODIC, ""),
-        &[(4, blocks)],
+        &[(4, parallel)],
         fluid_outputs,
-    );
+    ) else {
+        return;
+    };
+    assert_eq!(summary(&dir.join("np4"))["parallel"]["halo_overlapped"], true);
 }
 
 /// Blocks that cannot be are refused before anything runs, naming the field and value: on one
@@ -161,8 +171,8 @@ fn a_coupled_periodic_run_on_2_and_4_ranks_writes_the_single_process_particles_b
 /// (summary.json's `halo_overlapped`).
 #[test]
 fn a_coupled_run_on_ranks_with_the_covered_cells_skipped_or_fused_overlaps_the_exchange() {
-    let blocks = "[parallel]\nblocks = [2, 1, 2]";
-    for (way, n, parallel) in [("skip", 2, ""), ("fused", 4, blocks)] {
+    let blocks = "[parallel]\nblocks = [2, 1, 2]\noverlap = true";
+    for (way, n, parallel) in [("skip", 2, "[parallel]\noverlap = true"), ("fused", 4, blocks)] {
         let text_ = coupled_scene(&format!("coupled-{way}"), true)
             .replace("timeout = 10.0", &format!("timeout = 10.0\ncovered_cells = \"{way}\""));
         let tag = format!("mpi-coupled-{way}");

@@ -240,7 +240,7 @@ fn start_lattice(
 ) -> Result<(Arc<Gpu>, BlockLattice), String> {
     let gpu = Arc::new(Gpu::for_local_rank(comm.local_rank())?);
     // On a CPU driver the kernels are not timed (coupled/ways.rs, `trial`).
-    if gpu.adapter.device_type == wgpu::DeviceType::Cpu {
+    if gpu.on_cpu() {
         trial.pin_first();
     }
     let d = Decomposition::new(units.n, scene.periodic_axes(), blocks, comm.rank());
@@ -249,7 +249,7 @@ fn start_lattice(
         ..setup_of(units)
     };
     let mut lattice = BlockLattice::new(gpu.clone(), setup, health_of(units), d)?;
-    lattice.set_overlap(scene.parallel.overlap());
+    lattice.set_overlap_asked(scene.parallel.overlap);
     crate::run::started();
     if comm.rank() != 0 {
         return Ok((gpu, lattice));

@@ -1,6 +1,7 @@
 //! `[parallel]`: how `lbm-server` cuts the lattice into blocks, one per MPI rank (`mpirun -np N
 //! lbm-server run SCENE`), and whether the halo exchange overlaps the interior's update.
-//! Optional: without it the blocks are chosen for the fewest halo cells, and the exchange overlaps.
+//! Optional: without it the blocks are chosen for the fewest halo cells, and the exchange overlaps
+//! on a GPU.
 
 use crate::numbers::fail;
 use crate::{Scene, SceneError, AXES};
@@ -16,10 +17,12 @@ pub struct Parallel {
     /// Blocks along x, y and z: each divides the lattice's cells along its axis, and the run has
     /// their product of ranks.
     pub blocks: Option<[u64; 3]>,
-    /// Whether each rank's halo exchange overlaps the update of its block's interior (true, the
-    /// default), or follows the whole step (false: exposed, for timing the two side by side);
-    /// the same results either way, bit for bit. A coupled run whose covered cells are redone
-    /// exchanges after the whole step either way.
+    /// Whether each rank's halo exchange overlaps the update of its block's interior (true), or
+    /// follows the whole step (false: exposed); the same results either way, bit for bit. By
+    /// default true on a GPU and false on a CPU driver (lavapipe), which runs each submission to
+    /// its end within the submit: nothing overlaps there, and the split step only adds
+    /// submissions. A coupled run whose covered cells are redone exchanges after the whole step
+    /// either way.
     pub overlap: Option<bool>,
 }
 
@@ -29,9 +32,10 @@ impl Parallel {
         self.blocks.map(|b| b.map(|v| v as usize))
     }
 
-    /// Whether the halo exchange overlaps the interior's update (`overlap`, true by default).
-    pub fn overlap(&self) -> bool {
-        self.overlap.unwrap_or(true)
+    /// Whether the halo exchange overlaps the interior's update: `overlap` where the scene gives
+    /// it, else on a GPU (`on_gpu`), not on a CPU driver.
+    pub fn overlap(&self, on_gpu: bool) -> bool {
+        self.overlap.unwrap_or(on_gpu)
     }
 }
 

@@ -346,7 +346,7 @@ fn coupled_block(
     (comm, blocks): (&dyn Communicator, [usize; 3]),
 ) -> Result<(BlockLattice, Trial), String> {
     let gpu = Arc::new(Gpu::for_local_rank(comm.local_rank())?);
-    let cpu = gpu.adapter.device_type == wgpu::DeviceType::Cpu;
+    let cpu = gpu.on_cpu();
     let trial = trial(scene, units.kernel, steps, (cpu, comm.size()))?;
     let options = ImbOptions {
         covered_cells: trial.kept().way,
@@ -358,6 +358,6 @@ fn coupled_block(
     };
     let d = Decomposition::new(units.n, scene.periodic_axes(), blocks, comm.rank());
     let mut lattice = BlockLattice::with_coupling(gpu, setup, health_of(units), d, Some(options))?;
-    lattice.set_overlap(scene.parallel.overlap());
+    lattice.set_overlap_asked(scene.parallel.overlap);
     Ok((lattice, trial))
 }

@@ -23,8 +23,10 @@ pub struct BlockLattice {
     /// What this rank sent rank 0 for the particles' loads (`coupled_block.rs`).
     pub(super) shares_sent: SharesSent,
     /// Whether [`BlockLattice::step`] overlaps the halo exchange with the interior's update
-    /// (`[parallel] overlap`, on by default), or exchanges after the whole step (exposed).
+    /// (`[parallel] overlap`, on by default on a GPU), or exchanges after the whole step (exposed).
     overlap: bool,
+    /// The scene's `[parallel] overlap` where it gave one ([`BlockLattice::set_overlap_asked`]).
+    overlap_asked: Option<bool>,
 }
 
 /// An unhealthy cell of the whole lattice, and the rank that holds it.
@@ -75,6 +77,7 @@ impl BlockLattice {
             halo,
             shares_sent: SharesSent::default(),
             overlap: split,
+            overlap_asked: None,
         })
     }
 
@@ -84,6 +87,13 @@ impl BlockLattice {
     /// covered cells redone exchanges after the whole step either way (`coupled_block.rs`).
     pub fn set_overlap(&mut self, on: bool) {
         self.overlap = on && self.lattice.regions() > 0;
+    }
+
+    /// Overlaps the halo exchange as the scene's `[parallel] overlap` asks (`asked`), by default
+    /// on a GPU and not on a CPU driver (scene::Parallel::overlap).
+    pub fn set_overlap_asked(&mut self, asked: Option<bool>) {
+        self.set_overlap(asked.unwrap_or(!self.lattice.on_cpu()));
+        self.overlap_asked = asked;
     }
 
     /// Whether the steps overlap the halo exchange with the interior's update (asked for, and
@@ -98,6 +108,9 @@ impl BlockLattice {
         Some(match (self.overlaps(), self.overlap) {
             (true, _) => "halo exchange overlapped with the interior's update",
             (false, true) => "halo exchange after the whole step (covered cells redone)",
+            (false, false) if self.overlap_asked.is_none() => {
+                "halo exchange after the whole step (a CPU driver's default: [parallel] overlap = true overlaps)"
+            }
             (false, false) => "halo exchange after the whole step ([parallel] overlap = false)",
         })
     }

@@ -175,6 +175,11 @@ impl Gpu {
         })
     }
 
+    /// Whether the device is a CPU driver (lavapipe, llvmpipe), not a GPU.
+    pub fn on_cpu(&self) -> bool {
+        self.adapter.device_type == wgpu::DeviceType::Cpu
+    }
+
     /// Waits until the queue is idle.
     pub fn wait(&self) {
         let _ = self.device.poll(wgpu::PollType::wait_indefinitely());

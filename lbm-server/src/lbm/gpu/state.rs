@@ -102,6 +102,11 @@ impl GpuLattice {
         Ok(lattice)
     }
 
+    /// Whether the lattice's device is a CPU driver, not a GPU.
+    pub fn on_cpu(&self) -> bool {
+        self.gpu.on_cpu()
+    }
+
     /// Waits until the device has done every step submitted.
     pub fn finish(&self) {
         self.gpu.wait();
