@@ -68,10 +68,11 @@ pub fn mpirun_command(mpirun: &Path, ranks: usize, scene: &Path, out: &Path) -> 
     cmd
 }
 
-/// `mpirun -np N lbm-server run` (as [`mpirun_command`]), its arguments to be added.
+/// `mpirun -np N lbm-server run` (as [`mpirun_command`]), its arguments to be added; it and its
+/// ranks die with the test ([`super::die_with_test`]).
 pub fn mpirun_run(mpirun: &Path, ranks: usize) -> Command {
     let mut cmd = Command::new(mpirun);
-    cmd.args([
+    super::die_with_test(&mut cmd).args([
         "--allow-run-as-root",
         "--oversubscribe",
         "-np",
