@@ -26,7 +26,9 @@ fn left_after_a_while(pids: &[u32]) -> Vec<u32> {
 /// What `ps` says of the processes `pids`, for a failure's message.
 fn described(pids: &[u32]) -> String {
     let list: Vec<String> = pids.iter().map(u32::to_string).collect();
-    let ps = Command::new("ps").args(["-o", "pid,ppid,stat,etime,args", "-p", &list.join(",")]).output();
+    let ps = Command::new("ps")
+        .args(["-o", "pid,ppid,stat,etime,args", "-p", &list.join(",")])
+        .output();
     ps.map(|o| output_text(&o)).unwrap_or_default()
 }
 
@@ -84,7 +86,10 @@ fn a_killed_harness_leaves_no_process() {
     cmd.args(["harness_to_kill", "--exact", "--ignored", "--nocapture"]);
     let harness = start(cmd);
     let line = Proc::wait_line(&harness.stdout, "pids: ", Duration::from_secs(180));
-    let pids: Vec<u32> = line["pids: ".len()..].split_whitespace().map(|p| p.parse().unwrap()).collect();
+    let pids: Vec<u32> = line["pids: ".len()..]
+        .split_whitespace()
+        .map(|p| p.parse().unwrap())
+        .collect();
     if pids.len() == 2 {
         eprintln!("the MPI part skipped: mpirun or lbm-server's MPI build missing");
     }

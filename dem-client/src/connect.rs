@@ -15,7 +15,6 @@ use rayon::prelude::*;
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::Arc;
 use std::time::Duration;
 
 #[derive(clap::Args)]
@@ -131,11 +130,7 @@ pub fn main(args: ConnectArgs) -> ExitCode {
             return ExitCode::from(2);
         }
     };
-    let interrupted = Arc::new(AtomicBool::new(false));
-    let flag = interrupted.clone();
-    if let Err(e) = ctrlc::set_handler(move || on_ctrl_c(&flag)) {
-        protocol::say!("dem-client: warning: cannot install the Ctrl-C handler: {e}");
-    }
+    let interrupted = crate::catch_ctrl_c(on_ctrl_c);
     let mut particles = CoupledParticles::new(setup.world, &scene);
     let joined = join(&args, &scene, &particles);
     JOINING.store(false, Ordering::SeqCst);

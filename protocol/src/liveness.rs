@@ -210,7 +210,11 @@ mod tests {
         while process_state(pid) != ProcessState::Dead && start.elapsed() < Duration::from_secs(5) {
             std::thread::sleep(Duration::from_millis(10));
         }
-        assert_eq!(process_state(pid), ProcessState::Dead, "sleep {pid} outlived its thread");
+        assert_eq!(
+            process_state(pid),
+            ProcessState::Dead,
+            "sleep {pid} outlived its thread"
+        );
     }
 
     #[test]

@@ -215,9 +215,7 @@ fn superposition_moves_a_covered_cell_to_the_solid_velocity() {
         });
         let (rho, _) = reference::moments(&f0[setup.index([6, 6, 6])], force);
         for a in 0..3 {
-            let j: f64 = (0..19)
-                .map(|i| post[i] * crate::lbm::d3q19::C[i][a] as f64)
-                .sum();
+            let j: f64 = (0..19).map(|i| post[i] * crate::lbm::d3q19::C[i][a] as f64).sum();
             let want = rho * sphere.velocity[a] - (1.0 - 1.0 / setup.tau) * force[a] / 2.0;
             assert!(
                 (j - want).abs() < 1e-12,
