@@ -72,25 +72,6 @@ fn wait_for(moment: Moment, out: &Path, server: &mut Proc) -> bool {
     panic!("the moment did not come within 120 s");
 }
 
-/// Pid of the dem-client the run started (once its fluid is ready: seconds on a CPU driver).
-fn dem_of(server: &mut Proc) -> u32 {
-    let pid = server.child.id();
-    let deadline = Instant::now() + Duration::from_secs(120);
-    while Instant::now() < deadline {
-        let children = std::fs::read_to_string(format!("/proc/{pid}/task/{pid}/children"));
-        if let Some(child) = children.unwrap_or_default().split_whitespace().next() {
-            return child.parse().unwrap();
-        }
-        assert!(
-            server.child.try_wait().unwrap().is_none(),
-            "{}",
-            Proc::drain(&server.stderr)
-        );
-        std::thread::sleep(Duration::from_millis(10));
-    }
-    panic!("lbm-server {pid} started no dem-client");
-}
-
 fn same_file(a: &Path, b: &Path) {
     let (x, y) = (std::fs::read(a).unwrap(), std::fs::read(b).unwrap());
     assert!(x == y, "{} and {} differ", a.display(), b.display());

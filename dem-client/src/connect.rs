@@ -15,7 +15,6 @@ use rayon::prelude::*;
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::Arc;
 use std::time::Duration;
 
 #[derive(clap::Args)]
@@ -131,13 +130,11 @@ pub fn main(args: ConnectArgs) -> ExitCode {
             return ExitCode::from(2);
         }
     };
-    let interrupted = Arc::new(AtomicBool::new(false));
-    let flag = interrupted.clone();
-    if let Err(e) = ctrlc::set_handler(move || flag.store(true, Ordering::SeqCst)) {
-        protocol::say!("dem-client: warning: cannot install the Ctrl-C handler: {e}");
-    }
+    let interrupted = crate::catch_ctrl_c(on_ctrl_c);
     let mut particles = CoupledParticles::new(setup.world, &scene);
-    let (link, welcome) = match join(&args, &scene, &particles) {
+    let joined = join(&args, &scene, &particles);
+    JOINING.store(false, Ordering::SeqCst);
+    let (link, welcome) = match joined {
         Ok(ok) => ok,
         Err(e) => {
             protocol::say!("dem-client: error: {e}");
@@ -176,6 +173,21 @@ pub fn main(args: ConnectArgs) -> ExitCode {
             ExitCode::from(1)
         }
     }
+}
+
+/// Whether the DEM is still joining the run (waiting for the fluid's services and its Welcome),
+/// with no step to stop in order: Ctrl-C then ends the process at once.
+static JOINING: AtomicBool = AtomicBool::new(true);
+
+/// Ctrl-C (SIGINT, SIGTERM; SIGTERM too when the lbm-server that started this DEM dies): while
+/// joining, the process ends at once (exit 130); later the run stops at its next step
+/// (`interrupted`), or ends on the fluid's death, which the wait for its forces sees first.
+fn on_ctrl_c(interrupted: &AtomicBool) {
+    if JOINING.load(Ordering::SeqCst) {
+        protocol::say!("dem-client: interrupted while joining the run");
+        std::process::exit(130);
+    }
+    interrupted.store(true, Ordering::SeqCst);
 }
 
 /// A resumed run (Welcome's `first_step` above 0): the particles' state of that step, from

@@ -15,6 +15,8 @@ mod run_checkpoint;
 use clap::{Parser, Subcommand};
 use std::path::PathBuf;
 use std::process::ExitCode;
+use std::sync::atomic::AtomicBool;
+use std::sync::Arc;
 
 #[derive(Parser)]
 #[command(
@@ -51,6 +53,17 @@ pub fn say_scene_warnings(scene: &scene::Scene) {
     for warning in &scene.warnings {
         protocol::say!("dem-client: warning: {warning}");
     }
+}
+
+/// Installs `on_ctrl_c` as the handler of Ctrl-C (SIGINT, SIGTERM), given the flag it sets;
+/// the flag, which the run looks at to stop in order.
+pub fn catch_ctrl_c(on_ctrl_c: fn(&AtomicBool)) -> Arc<AtomicBool> {
+    let interrupted = Arc::new(AtomicBool::new(false));
+    let flag = interrupted.clone();
+    if let Err(e) = ctrlc::set_handler(move || on_ctrl_c(&flag)) {
+        protocol::say!("dem-client: warning: cannot install the Ctrl-C handler: {e}");
+    }
+    interrupted
 }
 
 fn main() -> ExitCode {

@@ -12,7 +12,6 @@ use scene::checkpoint::OutputPositions;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::Arc;
 use std::time::Instant;
 
 #[derive(clap::Args)]
@@ -57,11 +56,7 @@ pub fn main(args: RunArgs) -> ExitCode {
             return ExitCode::from(2);
         }
     };
-    let interrupted = Arc::new(AtomicBool::new(false));
-    let flag = interrupted.clone();
-    if let Err(e) = ctrlc::set_handler(move || flag.store(true, Ordering::SeqCst)) {
-        protocol::say!("dem-client: warning: cannot install the Ctrl-C handler: {e}");
-    }
+    let interrupted = crate::catch_ctrl_c(|flag| flag.store(true, Ordering::SeqCst));
     match simulate(p, args.resume.is_some(), args.checkpoint_interval, &interrupted) {
         Ok(true) => ExitCode::SUCCESS,
         Ok(false) => ExitCode::from(130),

@@ -5,6 +5,7 @@
 mod codes;
 
 pub use codes::{liggghts, yade};
+use protocol::liveness::die_with_parent;
 use std::ffi::OsString;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
@@ -58,7 +59,7 @@ impl DemCommand {
     }
 
     /// Starts the command for run `run` with the scene copy at `scene`, in a process group of
-    /// its own (as `spawn_dem_client`).
+    /// its own, ended with lbm-server (as `spawn_dem_client`).
     pub fn spawn(&self, run: &str, scene: &Path, env: &[(&str, PathBuf)]) -> std::io::Result<Child> {
         use std::os::unix::process::CommandExt;
         let mut cmd = Command::new(&self.argv[0]);
@@ -72,7 +73,7 @@ impl DemCommand {
         if let Some(dir) = &self.dir {
             cmd.current_dir(dir);
         }
-        cmd.spawn()
+        die_with_parent(&mut cmd, libc::SIGTERM).spawn()
     }
 }
 
@@ -114,6 +115,9 @@ pub fn find_on_path(name: &str) -> Option<PathBuf> {
 ///
 /// The DEM gets a process group of its own, so a terminal's Ctrl-C reaches only lbm-server, which
 /// then ends the run in order (STOP in its next reply) instead of racing the DEM's own handler.
+/// It gets SIGTERM when lbm-server dies (killed: nothing ends the run in order), as from a Ctrl-C
+/// of its own: joining, it ends at once; stepping, it says that the fluid died and ends
+/// (PROTOCOL.md 7). Started from the main thread, which lives as long as lbm-server.
 pub fn spawn_dem_client(
     exe: &Path,
     run: &str,
@@ -123,8 +127,8 @@ pub fn spawn_dem_client(
     env: &[(&str, PathBuf)],
 ) -> std::io::Result<Child> {
     use std::os::unix::process::CommandExt;
-    Command::new(exe)
-        .process_group(0)
+    let mut cmd = Command::new(exe);
+    cmd.process_group(0)
         .envs(env.iter().map(|(k, v)| (k, v)))
         .arg("connect")
         .arg("--service")
@@ -134,8 +138,8 @@ pub fn spawn_dem_client(
         .arg("--timeout")
         .arg(timeout_s.to_string())
         .args(verbose.then_some("--verbose"))
-        .stdin(Stdio::null())
-        .spawn()
+        .stdin(Stdio::null());
+    die_with_parent(&mut cmd, libc::SIGTERM).spawn()
 }
 
 /// Waits up to `grace` for the child to exit by itself, then kills its process group (a shell's

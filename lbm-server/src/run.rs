@@ -105,12 +105,10 @@ enum Ending {
     StoppedByPeer,
 }
 
+/// A run, step by step: Ctrl-C caught, the ranks started, the scene prepared on each, then the
+/// fluid alone, or the DEM started on rank 0 and the coupled run (the other ranks following it).
 pub fn main(args: RunArgs) -> ExitCode {
-    let interrupted = Arc::new(AtomicBool::new(false));
-    let flag = interrupted.clone();
-    if let Err(e) = ctrlc::set_handler(move || on_ctrl_c(&flag)) {
-        protocol::say!("lbm-server: warning: cannot install the Ctrl-C handler: {e}");
-    }
+    let interrupted = catch_ctrl_c();
     crate::terminal::set_verbose(args.verbose);
     let comm = match crate::parallel::start() {
         Ok(comm) => comm,
@@ -119,52 +117,103 @@ pub fn main(args: RunArgs) -> ExitCode {
             return ExitCode::from(EXIT_BAD_INPUT);
         }
     };
-    let prepared = prepare(&args, &*comm);
-    // Every rank checks the same scene; rank 0 alone says why it is refused.
-    if !crate::parallel::all(&*comm, prepared.is_ok()) {
+    let prepared = match prepare_on_every_rank(&args, &*comm) {
+        Ok(prepared) => prepared,
+        Err(code) => return code,
+    };
+    if prepared.scene.lattice.is_some() && prepared.scene.particle_count() == 0 {
+        return run_fluid_alone(&prepared, interrupted, &*comm);
+    }
+    let dem = match dem_start_on_rank_0(&args, &prepared, &*comm) {
+        Ok(dem) => dem,
+        Err(code) => return code,
+    };
+    let comm: Rc<dyn Communicator> = Rc::from(comm);
+    match dem {
+        Some(dem) => run_coupled(prepared, dem, interrupted, comm),
+        None => follow_rank_0(&prepared, comm),
+    }
+}
+
+/// Installs the Ctrl-C handler ([`on_ctrl_c`]); the flag it sets once the run has started.
+fn catch_ctrl_c() -> Arc<AtomicBool> {
+    let interrupted = Arc::new(AtomicBool::new(false));
+    let flag = interrupted.clone();
+    if let Err(e) = ctrlc::set_handler(move || on_ctrl_c(&flag)) {
+        protocol::say!("lbm-server: warning: cannot install the Ctrl-C handler: {e}");
+    }
+    interrupted
+}
+
+/// The scene prepared on every rank, or the exit code where a rank refuses it: every rank checks
+/// the same scene; rank 0 alone says why it is refused.
+fn prepare_on_every_rank(args: &RunArgs, comm: &dyn Communicator) -> Result<prepare::Prepared, ExitCode> {
+    let prepared = prepare(args, comm);
+    if !crate::parallel::all(comm, prepared.is_ok()) {
         if let (0, Err(e)) = (comm.rank(), &prepared) {
             protocol::say!("lbm-server: error: {e}");
         }
-        return ExitCode::from(EXIT_BAD_INPUT);
+        return Err(ExitCode::from(EXIT_BAD_INPUT));
     }
-    let prepared = prepared.expect("prepared on every rank");
-    if prepared.scene.lattice.is_some() && prepared.scene.particle_count() == 0 {
-        let p = &prepared;
-        let checkpoints = p.checkpoints_on(&*comm);
-        return ExitCode::from(crate::fluid::run(
-            &p.scene,
-            &p.scene_file,
-            p.steps,
-            &p.out,
-            interrupted,
-            &*comm,
-            p.blocks,
-            checkpoints,
-        ));
-    }
-    // The DEM joins rank 0; the other ranks follow it (coupled/ranks.rs).
+    Ok(prepared.expect("prepared on every rank"))
+}
+
+/// A scene with a lattice and no particles: the fluid alone (`fluid.rs`).
+fn run_fluid_alone(p: &prepare::Prepared, interrupted: Arc<AtomicBool>, comm: &dyn Communicator) -> ExitCode {
+    let checkpoints = p.checkpoints_on(comm);
+    ExitCode::from(crate::fluid::run(
+        &p.scene,
+        &p.scene_file,
+        p.steps,
+        &p.out,
+        interrupted,
+        comm,
+        p.blocks,
+        checkpoints,
+    ))
+}
+
+/// How the DEM side starts, on rank 0 (the DEM joins rank 0; the other ranks follow it:
+/// coupled/ranks.rs): Some there, None on the other ranks, or the exit code where rank 0 cannot
+/// start it.
+fn dem_start_on_rank_0(
+    args: &RunArgs,
+    prepared: &prepare::Prepared,
+    comm: &dyn Communicator,
+) -> Result<Option<DemStart>, ExitCode> {
     let dem = match comm.rank() {
-        0 => dem_start(&args, &prepared).map(Some),
+        0 => dem_start(args, prepared).map(Some),
         _ => Ok(None),
     };
-    if !crate::parallel::all(&*comm, dem.is_ok()) {
+    if !crate::parallel::all(comm, dem.is_ok()) {
         if let Err(e) = &dem {
             protocol::say!("lbm-server: error: {e}");
         }
-        return ExitCode::from(EXIT_BAD_INPUT);
+        return Err(ExitCode::from(EXIT_BAD_INPUT));
     }
-    let comm: Rc<dyn Communicator> = Rc::from(comm);
-    let Some(dem) = dem.expect("agreed") else {
-        let p = &prepared;
-        let code = crate::coupled::follow(&p.scene, p.steps, &p.out, (comm.clone(), p.blocks));
-        wait_for_rank_0(&*comm);
-        return ExitCode::from(code);
-    };
+    Ok(dem.expect("agreed"))
+}
+
+/// Rank 0's coupled run: the stale runs' files removed, the run named, its session, its files
+/// removed.
+fn run_coupled(
+    prepared: prepare::Prepared,
+    dem: DemStart,
+    interrupted: Arc<AtomicBool>,
+    comm: Rc<dyn Communicator>,
+) -> ExitCode {
     protocol::cleanup::remove_stale_runs();
     let run = new_run_name();
     let _ = RUN.set(run.clone());
     let code = Session::start(prepared, &run, dem, interrupted, comm.clone());
     protocol::cleanup::remove_run(&run);
+    wait_for_rank_0(&*comm);
+    ExitCode::from(code)
+}
+
+/// Another rank's part of a coupled run: it follows rank 0 (coupled/ranks.rs).
+fn follow_rank_0(p: &prepare::Prepared, comm: Rc<dyn Communicator>) -> ExitCode {
+    let code = crate::coupled::follow(&p.scene, p.steps, &p.out, (comm.clone(), p.blocks));
     wait_for_rank_0(&*comm);
     ExitCode::from(code)
 }

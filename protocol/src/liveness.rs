@@ -102,6 +102,32 @@ impl Activity {
     }
 }
 
+/// Makes the process `cmd` starts receive `signal` when the thread that starts it ends (Linux's
+/// `PR_SET_PDEATHSIG`), so that it does not outlive a parent that is killed (`kill -9`, a test
+/// harness stopped at its timeout). The thread, not the process: start the child from a thread
+/// that lives as long as the child should (the main thread of a program, the thread of a test),
+/// not from a helper thread that ends first. The signal survives `exec`, not the child's own
+/// forks: a shell's children are not covered. A parent that dies before the child has asked for
+/// the signal fails the start, so no child is left either way.
+pub fn die_with_parent(cmd: &mut std::process::Command, signal: i32) -> &mut std::process::Command {
+    use std::os::unix::process::CommandExt;
+    let parent = std::process::id() as libc::pid_t;
+    // SAFETY: the closure runs between fork and exec and makes only async-signal-safe calls
+    // (prctl, getppid) and no allocation.
+    unsafe {
+        cmd.pre_exec(move || {
+            if libc::prctl(libc::PR_SET_PDEATHSIG, signal as libc::c_ulong) != 0 {
+                return Err(std::io::Error::last_os_error());
+            }
+            match libc::getppid() == parent {
+                true => Ok(()),
+                // Re-parented already: the parent died before the prctl above.
+                false => Err(std::io::Error::from_raw_os_error(libc::ESRCH)),
+            }
+        })
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -167,5 +193,36 @@ mod tests {
         std::thread::sleep(std::time::Duration::from_millis(100));
         assert_eq!(process_state(pid), ProcessState::Dead, "zombie counts as dead");
         child.wait().unwrap();
+    }
+
+    #[test]
+    fn a_child_dies_with_the_thread_that_started_it() {
+        let pid = std::thread::spawn(|| {
+            let mut cmd = std::process::Command::new("sleep");
+            cmd.arg("30");
+            die_with_parent(&mut cmd, libc::SIGKILL);
+            // Not waited for: reaped by the test process's exit, or seen as a zombie.
+            cmd.spawn().unwrap().id()
+        })
+        .join()
+        .unwrap();
+        let start = Instant::now();
+        while process_state(pid) != ProcessState::Dead && start.elapsed() < Duration::from_secs(5) {
+            std::thread::sleep(Duration::from_millis(10));
+        }
+        assert_eq!(
+            process_state(pid),
+            ProcessState::Dead,
+            "sleep {pid} outlived its thread"
+        );
+    }
+
+    #[test]
+    fn a_child_lives_while_the_thread_that_started_it_does() {
+        let mut cmd = std::process::Command::new("sleep");
+        cmd.arg("30");
+        let child = Child(die_with_parent(&mut cmd, libc::SIGKILL).spawn().unwrap());
+        std::thread::sleep(Duration::from_millis(200));
+        assert_eq!(process_state(child.0.id()), ProcessState::Running);
     }
 }

@@ -125,10 +125,25 @@ fn pump(stream: impl std::io::Read + Send + 'static) -> Receiver<String> {
     rx
 }
 
-/// Starts `cmd` in a process group of its own, capturing stdout and stderr.
+/// Makes the process `cmd` starts die with the thread that starts it (the test's: call this and
+/// start processes from the test's own thread, not from a helper thread that ends first), so
+/// that a test that ends, passes or fails, or a harness killed at its timeout or by Ctrl-C
+/// leaves no process behind (`protocol::liveness::die_with_parent`). With SIGKILL, which ends a
+/// stopped process too; mpirun with SIGTERM, which it passes on to its ranks, so that they stop
+/// in order (killed, it leaves them to notice its death themselves, about 2 s later). The same
+/// command tied twice (`start(server(..))`) is asked twice.
+pub fn die_with_test(cmd: &mut Command) -> &mut Command {
+    let mpirun = Path::new(cmd.get_program()).ends_with("mpirun");
+    let signal = if mpirun { libc::SIGTERM } else { libc::SIGKILL };
+    protocol::liveness::die_with_parent(cmd, signal)
+}
+
+/// Starts `cmd` in a process group of its own, capturing stdout and stderr; it dies with the
+/// test ([`die_with_test`]).
 pub fn start(mut cmd: Command) -> Proc {
     use std::os::unix::process::CommandExt;
-    cmd.stdout(Stdio::piped())
+    die_with_test(&mut cmd)
+        .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .stdin(Stdio::null())
         .process_group(0);
@@ -187,10 +202,15 @@ impl Proc {
     }
 }
 
-/// `lbm-server run SCENE --out OUT extra...`
+/// `lbm-server run SCENE --out OUT extra...`, dying with the test ([`die_with_test`]).
 pub fn server(scene: &Path, out: &Path, extra: &[&str]) -> Command {
     let mut cmd = Command::new(bin("lbm-server"));
-    cmd.arg("run").arg(scene).arg("--out").arg(out).args(extra);
+    die_with_test(&mut cmd)
+        .arg("run")
+        .arg(scene)
+        .arg("--out")
+        .arg(out)
+        .args(extra);
     cmd
 }
 
@@ -263,18 +283,41 @@ pub fn signal(pid: u32, signal: i32) {
     );
 }
 
+/// The first child process of `pid`, if any.
+fn first_child(pid: u32) -> Option<u32> {
+    let children = std::fs::read_to_string(format!("/proc/{pid}/task/{pid}/children")).unwrap_or_default();
+    children.split_whitespace().next().map(|c| c.parse().unwrap())
+}
+
 /// Pid of the dem-client started by the lbm-server `server_pid`.
 pub fn child_pid(server_pid: u32) -> u32 {
     let deadline = Instant::now() + Duration::from_secs(10);
     while Instant::now() < deadline {
-        let children = std::fs::read_to_string(format!("/proc/{server_pid}/task/{server_pid}/children"))
-            .unwrap_or_default();
-        if let Some(pid) = children.split_whitespace().next() {
-            return pid.parse().unwrap();
+        if let Some(pid) = first_child(server_pid) {
+            return pid;
         }
         std::thread::sleep(Duration::from_millis(10));
     }
     panic!("lbm-server {server_pid} started no dem-client");
+}
+
+/// Pid of the dem-client of the lbm-server `server` once it starts it (its start-up may take a
+/// while on a loaded machine); panics with its stderr where it ends first.
+pub fn dem_of(server: &mut Proc) -> u32 {
+    let pid = server.child.id();
+    let deadline = Instant::now() + Duration::from_secs(120);
+    while Instant::now() < deadline {
+        if let Some(child) = first_child(pid) {
+            return child;
+        }
+        assert!(
+            server.child.try_wait().unwrap().is_none(),
+            "{}",
+            Proc::drain(&server.stderr)
+        );
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    panic!("lbm-server {pid} started no dem-client");
 }
 
 /// Is the process gone (or a zombie)?

@@ -68,18 +68,20 @@ pub fn mpirun_command(mpirun: &Path, ranks: usize, scene: &Path, out: &Path) -> 
     cmd
 }
 
-/// `mpirun -np N lbm-server run` (as [`mpirun_command`]), its arguments to be added.
+/// `mpirun -np N lbm-server run` (as [`mpirun_command`]), its arguments to be added; it and its
+/// ranks die with the test ([`super::die_with_test`]).
 pub fn mpirun_run(mpirun: &Path, ranks: usize) -> Command {
     let mut cmd = Command::new(mpirun);
-    cmd.args([
-        "--allow-run-as-root",
-        "--oversubscribe",
-        "-np",
-        &ranks.to_string(),
-    ])
-    .args(["-x", "LP_NUM_THREADS=1", "-x", "NODEVICE_SELECT=1"])
-    .arg(bin("lbm-server"))
-    .arg("run");
+    super::die_with_test(&mut cmd)
+        .args([
+            "--allow-run-as-root",
+            "--oversubscribe",
+            "-np",
+            &ranks.to_string(),
+        ])
+        .args(["-x", "LP_NUM_THREADS=1", "-x", "NODEVICE_SELECT=1"])
+        .arg(bin("lbm-server"))
+        .arg("run");
     cmd
 }
 

@@ -6,7 +6,8 @@ use std::path::Path;
 use std::process::{Child, ChildStdout, Command, Stdio};
 use std::time::{Duration, Instant};
 
-/// A running `bench-link-peer`; killed and reaped on drop if it has not exited by then.
+/// A running `bench-link-peer`; killed and reaped on drop if it has not exited by then, and
+/// killed with the bench (started from its main thread) if that is killed.
 pub(super) struct PeerProcess {
     child: Child,
     stdout: BufReader<ChildStdout>,
@@ -14,7 +15,8 @@ pub(super) struct PeerProcess {
 
 impl PeerProcess {
     pub(super) fn spawn(exe: &Path, args: &[String]) -> Result<Self, String> {
-        let mut child = Command::new(exe)
+        let mut cmd = Command::new(exe);
+        let mut child = protocol::liveness::die_with_parent(&mut cmd, libc::SIGKILL)
             .arg("bench-link-peer")
             .args(args)
             .stdin(Stdio::null())
