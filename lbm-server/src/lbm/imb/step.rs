@@ -86,8 +86,8 @@ impl GpuLattice {
         Ok((n, passes))
     }
 
-    /// The solid fractions: `cover` over the `n` particles' boxes. The cover counts, slots and
-    /// mask are all 0 here (`reduce` clears them); with the redo and skip the covered cells are
+    /// The solid fractions: `cover` over the `n` particles' boxes. The slots and the cover mask
+    /// are all 0 here (`reduce` clears them); with the redo and skip the covered cells are
     /// listed by `cover` (status[4], status[8]) and dispatched indirectly (status[5..8],
     /// status[9..12]).
     pub(super) fn encode_cover(
@@ -191,7 +191,7 @@ impl GpuLattice {
     fn clear_cover_mask(&self, encoder: &mut wgpu::CommandEncoder) {
         let cells = self.setup.cells() as u64;
         let covered = &self.imb.as_ref().expect("coupling").covered;
-        encoder.clear_buffer(covered, cells * 4, Some(cells.div_ceil(32) * 4));
+        encoder.clear_buffer(covered, 0, Some(cells.div_ceil(32) * 4));
     }
 
     /// The `n` particles' loads copied where the host reads them, at the end of the passes so
