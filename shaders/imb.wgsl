@@ -259,11 +259,11 @@ fn cover(
         var list = NO_LIST;
         if t < cells {
             let q = box_cell(origin, m, t);
-            var covers = 0.0;
             k = lattice_cell(q);
             if k != NO_CELL {
                 let eps = solid_fraction(vec3<f32>(q) + 0.5, p.pos_r.xyz, p.pos_r.w);
-                if eps > 0.0 && (flags[k] & SOLID) == 0u {
+                let flag = flags[k];
+                if eps > 0.0 && (flag & SOLID) == 0u {
                     let arrival = hold_slot(k, slot_key(eps, j));
                     if arrival.first {
                         // First to cover the cell: it sets the cell's bit of the cover mask
@@ -271,16 +271,16 @@ fn cover(
                         if FUSED {
                             atomicOr(&covered[mask_word(k)], mask_bit(k));
                         } else {
-                            list = select(BACK, FRONT, (flags[k] & (0x7ffffu | WRAPS)) == 0u);
+                            list = select(BACK, FRONT, (flag & (0x7ffffu | WRAPS)) == 0u);
                         }
                     }
                     if arrival.dropped {
                         atomicAdd(&status[1], 1u);
                     }
-                    covers = 1.0;
+                    // Its pair (zeroed before the pass) marked covered.
+                    pairs[p.first + t].w = 1.0;
                 }
             }
-            pairs[p.first + t] = vec4<f32>(0.0, 0.0, 0.0, covers);
         }
         if !FUSED {
             join_list(k, list);

@@ -4,7 +4,7 @@
 
 use super::loads::convert_loads;
 use super::passes::{CoveredPasses, StepPasses};
-use super::records::{GpuLoad, Load, SolidParticle, SolidParticles, LOAD_BYTES, REDUCE_SLICES};
+use super::records::{GpuLoad, Load, SolidParticle, SolidParticles, LOAD_BYTES, PAIR_BYTES, REDUCE_SLICES};
 use crate::lbm::gpu::GpuLattice;
 
 /// Receives the encoder after each pass of a coupled step (named) and returns the one to go on
@@ -98,6 +98,11 @@ impl GpuLattice {
         split: Split,
     ) -> wgpu::CommandEncoder {
         encoder.clear_buffer(&self.status, 16, Some(32));
+        let coupling = self.imb.as_ref().expect("coupling");
+        let pairs = coupling.staged.1 * PAIR_BYTES;
+        if pairs > 0 {
+            encoder.clear_buffer(&coupling.pairs, 0, Some(pairs));
+        }
         self.dispatch_groups(&mut encoder, cover, self.time % 2, n);
         split("cover", encoder)
     }
