@@ -238,7 +238,8 @@ fn hold_slot(k: u32, rank: u32) -> Arrival {
     return Arrival(old == 0u, key != 0u);
 }
 
-// One workgroup per particle, its threads over the particle's bounding box.
+// One workgroup per particle, its threads over the particle's bounding box. The pairs are zero
+// here (the step clears them before the pass): a covered cell's pair gets w = 1.
 @compute @workgroup_size(64)
 fn cover(
     @builtin(workgroup_id) wg: vec3<u32>,
@@ -277,7 +278,6 @@ fn cover(
                     if arrival.dropped {
                         atomicAdd(&status[1], 1u);
                     }
-                    // Its pair (zeroed before the pass) marked covered.
                     pairs[p.first + t].w = 1.0;
                 }
             }
@@ -532,8 +532,9 @@ fn solid_term(k: u32, f: array<f32, 19>, m: Moments, post: array<f32, 19>) -> ar
 // operator's relaxation and source) is weighted by 1 - sum B, and each particle adds B_s Omega_s
 // (`solid_collision`). The particles in the order of their keys (`hold_slot`'s order: the sums do
 // not depend on the order of arrival), their weights B (eq. 7) from their solid fractions with the
-// total capped at 1. The first two particles are held through the three sums (the second read
-// once, where the cell has one); the others (slots 3 and 4: rare) are looked up again for each,
+// total capped at 1. The first two slots' keys are read once (an empty slot is 0: the cell's
+// count, `slot_count`) and their particles held through the three sums (the second looked up
+// where the cell has one); the others (slots 3 and 4: rare) are looked up again for each,
 // since an array indexed by slot would live in memory on llvmpipe, each access a loop over the
 // SIMD lanes. No loop over the slots bounded by the cell's count: llvmpipe runs a loop's body at
 // least once, masked, so each such loop cost every covered cell a particle's lookup and, the
