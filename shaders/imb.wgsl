@@ -5,8 +5,8 @@
 // (work = particles x cells covered, never cells x particles) and registers up to SLOTS particles
 // per cell; the fluid kernels of lbm.wgsl stream and collide; `reduce` sums each particle's force
 // and torque over slices of its box and `sum_loads` adds the slices, each in a fixed order (no
-// floating-point atomics: the result is the same every run), and `reduce` clears the cover counts
-// of its cells for the next step. The covered cells get their solid term in one of two ways (the
+// floating-point atomics: the result is the same every run), and `reduce` clears the slots of its
+// cells for the next step. The covered cells get their solid term in one of two ways (the
 // same result):
 // - FUSED: `cover` sets the cell's bit in a cover mask, and the fluid kernels, which test the bit
 //   of every cell, apply the solid term where it is set (`solid_term`);
@@ -62,8 +62,7 @@ struct Particle {
 // `box_cell`): xyz the momentum the fluid gave the particle in that cell during the step (0 where
 // it holds no slot), w 1 where the particle covers the cell, 0 elsewhere.
 @group(0) @binding(25) var<storage, read_write> pairs: array<vec4<f32>>;
-// Per cell: how many particles cover it this step; then (FUSED, SKIP) the cover mask, bit k % 32
-// of word cells + k / 32 set when cell k is covered.
+// (FUSED, SKIP) The cover mask: bit k % 32 of word k / 32 set when cell k is covered.
 @group(0) @binding(26) var<storage, read_write> covered: array<atomic<u32>>;
 // Per cell: the particles covering it (SLOTS entries), as keys (`slot_key`, 0: empty), largest
 // first: the SLOTS largest solid fractions, whatever the order in which `cover`'s invocations
@@ -214,19 +213,33 @@ fn slot_particle(key: u32) -> u32 {
     return PARTICLE_MASK - (key & PARTICLE_MASK);
 }
 
+// A particle's arrival at a cell's slots (`hold_slot`): whether it found them empty, the first of
+// the step to cover the cell, and whether a key fell off the last slot (the cell has more than
+// SLOTS particles: one of them is dropped).
+struct Arrival {
+    first: bool,
+    dropped: bool,
+}
+
 // Particle j joins cell k's slots if its key is among the SLOTS largest of the cell: the key goes
 // down the slots by atomicMax, each slot keeping the larger key and passing the smaller on. Every
 // key but the largest reaches slot 1, every key but the two largest slot 2, ..., so the slots end
 // with the SLOTS largest keys in order whatever the order of arrival: a crowded cell keeps its
 // largest solid fractions, and the same particles every run (the f64 reference keeps the same ones).
-fn hold_slot(k: u32, rank: u32) {
-    var key = rank;
-    for (var s = 0u; s < SLOTS && key != 0u; s++) {
+// Keys are never 0 and the slots start at 0, so exactly one arrival finds slot 0 empty, and each
+// key the cell does not keep is carried past the last slot by exactly one arrival: the slots filled
+// are the cell's count of particles up to SLOTS (`slot_count`), with no counter of their own.
+fn hold_slot(k: u32, rank: u32) -> Arrival {
+    let old = atomicMax(&slots[k * SLOTS], rank);
+    var key = min(rank, old);
+    for (var s = 1u; s < SLOTS && key != 0u; s++) {
         key = min(key, atomicMax(&slots[k * SLOTS + s], key));
     }
+    return Arrival(old == 0u, key != 0u);
 }
 
-// One workgroup per particle, its threads over the particle's bounding box.
+// One workgroup per particle, its threads over the particle's bounding box. The pairs are zero
+// here (the step clears them before the pass): a covered cell's pair gets w = 1.
 @compute @workgroup_size(64)
 fn cover(
     @builtin(workgroup_id) wg: vec3<u32>,
@@ -247,29 +260,27 @@ fn cover(
         var list = NO_LIST;
         if t < cells {
             let q = box_cell(origin, m, t);
-            var covers = 0.0;
             k = lattice_cell(q);
             if k != NO_CELL {
                 let eps = solid_fraction(vec3<f32>(q) + 0.5, p.pos_r.xyz, p.pos_r.w);
-                if eps > 0.0 && (flags[k] & SOLID) == 0u {
-                    let slot = atomicAdd(&covered[k], 1u);
-                    if slot == 0u {
+                let flag = flags[k];
+                if eps > 0.0 && (flag & SOLID) == 0u {
+                    let arrival = hold_slot(k, slot_key(eps, j));
+                    if arrival.first {
                         // First to cover the cell: it sets the cell's bit of the cover mask
                         // (FUSED), or the cell joins a list of covered cells.
                         if FUSED {
                             atomicOr(&covered[mask_word(k)], mask_bit(k));
                         } else {
-                            list = select(BACK, FRONT, (flags[k] & (0x7ffffu | WRAPS)) == 0u);
+                            list = select(BACK, FRONT, (flag & (0x7ffffu | WRAPS)) == 0u);
                         }
                     }
-                    if slot >= SLOTS {
+                    if arrival.dropped {
                         atomicAdd(&status[1], 1u);
                     }
-                    hold_slot(k, slot_key(eps, j));
-                    covers = 1.0;
+                    pairs[p.first + t].w = 1.0;
                 }
             }
-            pairs[p.first + t] = vec4<f32>(0.0, 0.0, 0.0, covers);
         }
         if !FUSED {
             join_list(k, list);
@@ -499,7 +510,7 @@ fn skipped_lanes(q: u32) -> vec4<bool> {
 
 // The word of the cover mask that holds cell k's bit, and the bit.
 fn mask_word(k: u32) -> u32 {
-    return cell_count() + (k >> 5u);
+    return k >> 5u;
 }
 
 fn mask_bit(k: u32) -> u32 {
@@ -521,19 +532,25 @@ fn solid_term(k: u32, f: array<f32, 19>, m: Moments, post: array<f32, 19>) -> ar
 // operator's relaxation and source) is weighted by 1 - sum B, and each particle adds B_s Omega_s
 // (`solid_collision`). The particles in the order of their keys (`hold_slot`'s order: the sums do
 // not depend on the order of arrival), their weights B (eq. 7) from their solid fractions with the
-// total capped at 1. The first two particles are held through the three sums (the second read
-// once, where the cell has one); the others (slots 3 and 4: rare) are looked up again for each,
+// total capped at 1. The first two slots' keys are read once (an empty slot is 0: the cell's
+// count, `slot_count`) and their particles held through the three sums (the second looked up
+// where the cell has one); the others (slots 3 and 4: rare) are looked up again for each,
 // since an array indexed by slot would live in memory on llvmpipe, each access a loop over the
 // SIMD lanes. No loop over the slots bounded by the cell's count: llvmpipe runs a loop's body at
 // least once, masked, so each such loop cost every covered cell a particle's lookup and, the
 // third, a solid collision, where most cells have one particle.
 fn immersed_boundary(k: u32, f: array<f32, 19>, m: Moments, post: array<f32, 19>) -> array<f32, 19> {
-    let count = min(atomicLoad(&covered[k]), SLOTS);
-    if count == 0u { return post; }
-    let first = slot_cover(k, 0u);
+    let first_key = atomicLoad(&slots[k * SLOTS]);
+    if first_key == 0u { return post; }
+    var second_key = first_key;
+    if SLOTS > 1u {
+        second_key = atomicLoad(&slots[k * SLOTS + 1u]);
+    }
+    let count = slot_count(k, second_key);
+    let first = cover_of(k, first_key);
     var second = first;
     if count > 1u {
-        second = slot_cover(k, 1u);
+        second = cover_of(k, second_key);
     }
     let scale = slot_scale(k, count, first.eps, second.eps);
     let b_first = weighting(first.eps * scale);
@@ -589,11 +606,31 @@ struct Cover {
     eps: f32,
 }
 
-// The particle of slot s of cell k, and its solid fraction as `cover` computed it (the same
-// function of the same values: the cell centre in the particle's box, one period away where the
-// box wraps).
+// How many particles covered cell k hold its slots (its first slot held), its second slot's key
+// given (0 where empty): the slots fill in order (`hold_slot`).
+fn slot_count(k: u32, second_key: u32) -> u32 {
+    var count = 1u;
+    if SLOTS > 1u && second_key != 0u {
+        count = 2u;
+    }
+    for (var s = 2u; s < SLOTS; s++) {
+        if atomicLoad(&slots[k * SLOTS + s]) != 0u {
+            count = s + 1u;
+        }
+    }
+    return count;
+}
+
+// The particle of slot s of cell k (`cover_of`).
 fn slot_cover(k: u32, s: u32) -> Cover {
-    let p = particles[slot_particle(atomicLoad(&slots[k * SLOTS + s]))];
+    return cover_of(k, atomicLoad(&slots[k * SLOTS + s]));
+}
+
+// The particle of the slot key `key` of cell k, and its solid fraction as `cover` computed it (the
+// same function of the same values: the cell centre in the particle's box, one period away where
+// the box wraps).
+fn cover_of(k: u32, key: u32) -> Cover {
+    let p = particles[slot_particle(key)];
     let t = box_offset(k, p);
     let x = vec3<f32>(box_origin(p) + t) + 0.5;
     return Cover(p, t, x, solid_fraction(x, p.pos_r.xyz, p.pos_r.w));
@@ -673,8 +710,8 @@ fn partial_load(j: u32, s: u32) -> u32 {
 // SLICES invocations per particle: each sums the force (seed eq. 10) and torque (eq. 11: the arm
 // from the particle's centre to the cell's, times the cell's force) of its slice of the particle's
 // bounding box (box cells s, s + SLICES, s + 2 SLICES, ...: neighbouring invocations read
-// neighbouring pairs) in a fixed order, and clears the cover counts, mask and slots of the covered
-// cells of its slice for the next step. `sum_loads` adds the slices. No floating-point atomics: the
+// neighbouring pairs) in a fixed order, and clears the slots (and FUSED the mask bits) of the
+// covered cells of its slice for the next step. `sum_loads` adds the slices. No floating-point atomics: the
 // same result every run. Many invocations of few cells each, rather than one per particle over its
 // whole box: a GPU waits on one memory access per cell, and overlaps those of its many invocations.
 @compute @workgroup_size(64)
@@ -731,11 +768,10 @@ fn sum_loads(
     }
 }
 
-// Cell k's cover count, mask bit and slots back to zero (NO_CELL: a cell of another rank's block,
+// Cell k's slots and (FUSED) mask bit back to zero (NO_CELL: a cell of another rank's block,
 // whose pair rank 0 reduces from the gathered pairs, `reduce_gathered`).
 fn clear_cover(k: u32) {
     if k == NO_CELL { return; }
-    atomicStore(&covered[k], 0u);
     if FUSED {
         atomicAnd(&covered[mask_word(k)], ~mask_bit(k));
     }

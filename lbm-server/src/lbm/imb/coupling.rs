@@ -12,7 +12,7 @@ pub struct Coupling {
     /// them `reduce`'s partial loads (REDUCE_SLICES per particle).
     pub(super) loads: wgpu::Buffer,
     pub(super) pairs: wgpu::Buffer,
-    /// Per cell the count of its particles, then the cover mask (one bit per cell, 32 to a word).
+    /// The cover mask (fused and skip): one bit per cell, 32 to a word.
     pub(super) covered: wgpu::Buffer,
     pub(super) slots: wgpu::Buffer,
     pub(super) info: wgpu::Buffer,
@@ -45,7 +45,7 @@ impl Coupling {
             particles: storage_buffer(d, "particles", PARTICLE_BYTES),
             loads: storage_buffer(d, "loads", LOADS_BUFFER_BYTES),
             pairs: storage_buffer(d, "pairs", PAIR_BYTES),
-            covered: storage_buffer(d, "covered", per_cell(4) + per_cell(4).div_ceil(128) * 4),
+            covered: storage_buffer(d, "covered", per_cell(4).div_ceil(128) * 4),
             slots: storage_buffer(d, "slots", per_cell(4 * slots)),
             info: storage_buffer(d, "imb info", 16),
             readback: readback_buffer(d, LOAD_BYTES),
@@ -117,7 +117,7 @@ impl GpuLattice {
         self.imb.as_ref().map_or(0, |c| c.saved_capacity)
     }
 
-    /// Test aid: the words of the cover counts, the cover mask and the slots that are not zero
+    /// Test aid: the words of the cover mask and the slots that are not zero
     /// (`reduce` clears them all for the next step).
     #[cfg(test)]
     pub fn cover_words_left(&self) -> usize {

@@ -4,7 +4,7 @@
 
 use super::loads::convert_loads;
 use super::passes::{CoveredPasses, StepPasses};
-use super::records::{GpuLoad, Load, SolidParticle, SolidParticles, LOAD_BYTES, REDUCE_SLICES};
+use super::records::{GpuLoad, Load, SolidParticle, SolidParticles, LOAD_BYTES, PAIR_BYTES, REDUCE_SLICES};
 use crate::lbm::gpu::GpuLattice;
 
 /// Receives the encoder after each pass of a coupled step (named) and returns the one to go on
@@ -86,8 +86,8 @@ impl GpuLattice {
         Ok((n, passes))
     }
 
-    /// The solid fractions: `cover` over the `n` particles' boxes. The cover counts, slots and
-    /// mask are all 0 here (`reduce` clears them); with the redo and skip the covered cells are
+    /// The solid fractions: `cover` over the `n` particles' boxes. The slots and the cover mask
+    /// are all 0 here (`reduce` clears them); with the redo and skip the covered cells are
     /// listed by `cover` (status[4], status[8]) and dispatched indirectly (status[5..8],
     /// status[9..12]).
     pub(super) fn encode_cover(
@@ -98,6 +98,11 @@ impl GpuLattice {
         split: Split,
     ) -> wgpu::CommandEncoder {
         encoder.clear_buffer(&self.status, 16, Some(32));
+        let coupling = self.imb.as_ref().expect("coupling");
+        let pairs = coupling.staged.1 * PAIR_BYTES;
+        if pairs > 0 {
+            encoder.clear_buffer(&coupling.pairs, 0, Some(pairs));
+        }
         self.dispatch_groups(&mut encoder, cover, self.time % 2, n);
         split("cover", encoder)
     }
@@ -191,7 +196,7 @@ impl GpuLattice {
     pub(super) fn clear_cover_mask(&self, encoder: &mut wgpu::CommandEncoder) {
         let cells = self.setup.cells() as u64;
         let covered = &self.imb.as_ref().expect("coupling").covered;
-        encoder.clear_buffer(covered, cells * 4, Some(cells.div_ceil(32) * 4));
+        encoder.clear_buffer(covered, 0, Some(cells.div_ceil(32) * 4));
     }
 
     /// The `n` particles' loads copied where the host reads them, at the end of the passes so
