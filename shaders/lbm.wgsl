@@ -316,8 +316,8 @@ fn bounce(face: u32, c: vec3<f32>, w: f32, f_star: f32, m: Moments) -> f32 {
 // The step of cells with a link that leaves the fluid (boundary part of the cell list), either
 // parity. llvmpipe (lavapipe) executes both sides of every branch: the fluid cells, far more, go
 // through the branch-free `stream_collide_fluid` instead. With particles, either these kernels
-// give the covered cells their solid term (FUSED, `solid_term` in imb.wgsl: one bit tested per
-// cell), or they update every cell without it and `store_covered` (imb.wgsl) then writes the
+// give the covered cells their solid term (FUSED, `solid_term` in imb_solid_term.wgsl: one bit tested per
+// cell), or they update every cell without it and `store_covered` (imb_covered.wgsl) then writes the
 // covered cells' own collision, made before them by `collide_covered`, over theirs, or (SKIP) they
 // leave alone the covered cells, which `collide_covered` updated in place before them.
 @compute @workgroup_size(64)

@@ -190,7 +190,7 @@ pub(super) fn box_cells<'a>(
     })
 }
 
-/// The collision of a covered cell (seed eq. 7; imb.wgsl `immersed_boundary`): the fluid part of
+/// The collision of a covered cell (seed eq. 7; imb_solid_term.wgsl `immersed_boundary`): the fluid part of
 /// `post` weighted by 1 - sum B, and each particle's B Omega added (`solid_collision`), with its
 /// load.
 #[allow(clippy::too_many_arguments)]

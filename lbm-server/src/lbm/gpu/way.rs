@@ -13,9 +13,18 @@ use crate::lbm::kernel::Kernel;
 use crate::lbm::storage::{Storage, StorageOnDevice};
 use wgpu::util::DeviceExt;
 
-/// The kernels' source, kept in their own files: the lattice and the immersed moving boundary.
+/// The kernels' source, kept in their own files: the lattice, and the immersed moving boundary
+/// (imb.wgsl and its parts, in order: imb.wgsl's header).
 pub const SHADER: &str = include_str!("../../../../shaders/lbm.wgsl");
-pub const IMB_SHADER: &str = include_str!("../../../../shaders/imb.wgsl");
+pub const IMB_SHADER: &str = concat!(
+    include_str!("../../../../shaders/imb.wgsl"),
+    "\n",
+    include_str!("../../../../shaders/imb_covered.wgsl"),
+    "\n",
+    include_str!("../../../../shaders/imb_solid_term.wgsl"),
+    "\n",
+    include_str!("../../../../shaders/imb_loads.wgsl"),
+);
 /// The per-cell kernel (`Kernel::Cells`).
 const CELLS_SHADER: &str = include_str!("../../../../shaders/cells.wgsl");
 /// The redo's list of covered cells with one atomic per subgroup, and with one per cell.

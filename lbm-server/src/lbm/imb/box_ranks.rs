@@ -16,7 +16,7 @@ pub enum BoxRanks {
     Several,
 }
 
-/// A particle's bounding box as imb.wgsl's `cover` and `reduce` walk it: its first cell (whole
+/// A particle's bounding box as `cover` (imb.wgsl) and `reduce` (imb_loads.wgsl) walk it: its first cell (whole
 /// lattice coordinates), its edge, its first pair, and the ranks that hold its cells.
 #[derive(Debug, Clone, Copy)]
 pub(super) struct ParticleBox {

@@ -67,7 +67,7 @@ pub(super) type GpuLoad = [f32; 6];
 
 pub(super) const PARTICLE_BYTES: u64 = std::mem::size_of::<GpuParticle>() as u64;
 pub(super) const LOAD_BYTES: u64 = std::mem::size_of::<GpuLoad>() as u64;
-/// imb.wgsl's SLICES: `reduce`'s invocations per particle, each with its partial load after the
+/// imb_loads.wgsl's SLICES: `reduce`'s invocations per particle, each with its partial load after the
 /// particles' loads in the loads buffer.
 pub(super) const REDUCE_SLICES: u32 = 8;
 /// Bytes of the loads buffer per particle: its load and its slices' partial loads.

@@ -125,7 +125,7 @@ impl GpuLattice {
     }
 
     /// The redo and skip: the covered cells collide with the solid term first, from their
-    /// pre-collision populations, and keep the result (shaders/imb.wgsl).
+    /// pre-collision populations, and keep the result (shaders/imb_covered.wgsl).
     pub(super) fn encode_covered_collision(
         &self,
         mut encoder: wgpu::CommandEncoder,
