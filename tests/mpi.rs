@@ -173,8 +173,10 @@ fn a_coupled_periodic_run_on_2_and_4_ranks_writes_the_single_process_particles_b
 fn a_coupled_run_on_ranks_with_the_covered_cells_skipped_or_fused_overlaps_the_exchange() {
     let blocks = "[parallel]\nblocks = [2, 1, 2]\noverlap = true";
     for (way, n, parallel) in [("skip", 2, "[parallel]\noverlap = true"), ("fused", 4, blocks)] {
-        let text_ = coupled_scene(&format!("coupled-{way}"), true)
-            .replace("timeout = 10.0", &format!("timeout = 10.0\ncovered_cells = \"{way}\""));
+        let text_ = coupled_scene(&format!("coupled-{way}"), true).replace(
+            "timeout = 10.0",
+            &format!("timeout = 10.0\ncovered_cells = \"{way}\""),
+        );
         let tag = format!("mpi-coupled-{way}");
         let Some(dir) = same_on_ranks(&tag, &text_, &[(n, parallel)], coupled_outputs) else {
             return;

@@ -45,7 +45,9 @@ impl Coupled {
         let mut loads = Vec::new();
         for _ in 0..steps {
             match alone {
-                true => lattice.lattice.step_coupled_with(&self.particles[..], &mut loads, |_, l| l)?,
+                true => lattice
+                    .lattice
+                    .step_coupled_with(&self.particles[..], &mut loads, |_, l| l)?,
                 false => lattice.step_coupled_with(&self.particles[..], &mut loads, |_, l| l, comm)?,
             }
         }

@@ -107,7 +107,10 @@ fn one_storage(names: &[String]) -> Result<Storage, String> {
     match super::storage::parse_storages(names)?[..] {
         [] => Ok(Storage::Fp32),
         [one] => Ok(one),
-        _ => Err(format!("--storage = {:?}: one storage on several ranks", names.join(","))),
+        _ => Err(format!(
+            "--storage = {:?}: one storage on several ranks",
+            names.join(",")
+        )),
     }
 }
 

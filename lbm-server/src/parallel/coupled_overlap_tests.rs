@@ -67,7 +67,10 @@ fn check(particles: fn(u64) -> Vec<SolidParticle>, setup: &Setup, blocks: [usize
         let want = single(&gpu, particles, setup, steps, mode);
         for overlap in [true, false] {
             let have = on_blocks(&gpu, particles, setup, blocks, steps, (mode, overlap));
-            let what = format!("{mode:?} {:?}, blocks {blocks:?}, overlapped {overlap}", setup.kernel);
+            let what = format!(
+                "{mode:?} {:?}, blocks {blocks:?}, overlapped {overlap}",
+                setup.kernel
+            );
             same_bits(&want, &have, &what);
         }
     }

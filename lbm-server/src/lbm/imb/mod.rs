@@ -8,8 +8,8 @@
 //! particle's force and torque from its cells (the table of passes at step.rs's `coupled_step`).
 
 mod block;
-mod by_region;
 mod box_ranks;
+mod by_region;
 mod chunks;
 mod coupling;
 mod cover;
