@@ -94,7 +94,7 @@ pub fn run(args: &BenchArgs, comm: &dyn Communicator) -> Result<(), String> {
     };
     let rows = gather(comm, &mine);
     if comm.rank() == 0 {
-        print(args, n, blocks, &rows, &modes);
+        print(args, &setup, blocks, &rows, &modes);
         if let Some(c) = &coupled {
             c.print(&modes);
         }
@@ -222,8 +222,8 @@ fn gather(comm: &dyn Communicator, mine: &RankTime) -> Vec<RankTime> {
         .collect()
 }
 
-fn print(args: &BenchArgs, n: [usize; 3], blocks: [usize; 3], rows: &[RankTime], modes: &[Stepping]) {
-    let steps = args.steps as f64;
+fn print(args: &BenchArgs, setup: &Setup, blocks: [usize; 3], rows: &[RankTime], modes: &[Stepping]) {
+    let (steps, n) = (args.steps as f64, setup.n);
     println!(
         "grid {}x{}x{} ({}, {}, {}) on {} ranks in {}x{}x{} blocks, {} steps, best of {} rounds, exchange {}",
         n[0],
@@ -231,7 +231,7 @@ fn print(args: &BenchArgs, n: [usize; 3], blocks: [usize; 3], rows: &[RankTime],
         n[2],
         args.operator,
         args.faces,
-        one_storage(&args.storage).unwrap_or(Storage::Fp32),
+        setup.storage,
         rows.len(),
         blocks[0],
         blocks[1],
