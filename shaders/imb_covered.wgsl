@@ -159,6 +159,12 @@ fn store_populations(k: u32, out: array<f32, 19>) {
     }
 }
 
+// Which covered cells `store_covered` writes: every one (0), or in a step of a block split by
+// region for the overlapped halo exchange (lbm-server/src/lbm/imb/by_region.rs) those of the
+// shell (1: after the shell's fluid update, before the exchange reads it) or the others (2: after
+// the interior's).
+override STORE_PART: u32 = 0u;
+
 // After the fluid step, which updated the covered cells without the solid term: each covered cell's
 // populations from `collide_covered` go where the next step reads them, over the fluid kernels'
 // (the AA pattern: the same slots, which no other cell touches in this step).
@@ -166,8 +172,22 @@ fn store_populations(k: u32, out: array<f32, 19>) {
 fn store_covered(at: Invocation) {
     let e = listed(at);
     if e == NO_CELL { return; }
+    if STORE_PART != 0u && in_shell(saved_word(list_cell(e))) != (STORE_PART == 1u) { return; }
     let c = kept(e);
     store_populations(c.k, c.out);
+}
+
+// Whether cell k of a block is in its shell, the region of a split step updated first: within
+// two layers of a face with a ghost layer (the ghost layer and the layer next to it, whose slots
+// the halo exchange reads and writes), as lbm-server/src/parallel/halo.rs `Halo::regions` draws
+// it. A face has a ghost layer where the block's lattice reaches beyond its own cells.
+fn in_shell(k: u32) -> bool {
+    let x = coords(k);
+    let n = vec3<i32>(params.n.xyz);
+    let base = vec3<i32>(BASE_X, BASE_Y, BASE_Z);
+    let below = base < vec3<i32>(OWN_LO_X, OWN_LO_Y, OWN_LO_Z);
+    let above = base + n > vec3<i32>(OWN_HI_X, OWN_HI_Y, OWN_HI_Z);
+    return any((below & (x < vec3<i32>(2))) | (above & (x >= n - 2)));
 }
 
 // SKIP: which of the four cells of quad q (cells 4q to 4q + 3, four bits of one mask word) the

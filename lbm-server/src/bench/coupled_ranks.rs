@@ -2,12 +2,11 @@
 //! the bench's N spheres of 4 cells (`coupled.rs`), the covered cells taking their solid term the
 //! first way `--covered-cells` names, rank 0 gathering the loads as in a run
 //! (`BlockLattice::step_coupled_with`), no DEM: what the exchange costs in a coupled step,
-//! overlapped (skip, fused) or after the whole step (the redo, or `--exchange exposed`).
+//! overlapped or after the whole step (`--exchange exposed`).
 
 use super::coupled::{bench_spheres, covered_cell_modes};
-use super::ranks::Stepping;
 use super::BenchArgs;
-use crate::lbm::imb::{CoveredCells, ImbOptions, SolidParticle};
+use crate::lbm::imb::{ImbOptions, SolidParticle};
 use crate::parallel::{BlockLattice, Communicator};
 
 /// The coupling of the bench's steps on ranks: the spheres and the coupling's settings.
@@ -54,18 +53,11 @@ impl Coupled {
         Ok(())
     }
 
-    /// The coupling's line of the bench's table: the spheres, the way of the covered cells, and
-    /// what the exchange timed as overlapped ran as (`BlockLattice::exchange_said`).
-    pub(super) fn print(&self, modes: &[Stepping]) {
+    /// The coupling's line of the bench's table: the spheres and the way of the covered cells.
+    pub(super) fn print(&self) {
         let mode = self.options.covered_cells.definite();
-        let ran = match (modes.contains(&Stepping::Overlapped), mode) {
-            (true, CoveredCells::Redo) => {
-                "; the exchange asked to overlap follows the whole step (covered cells redone)"
-            }
-            _ => "",
-        };
         println!(
-            "coupled: {} spheres of 4 cells diameter, covered cells {}, the loads gathered at rank 0{ran}",
+            "coupled: {} spheres of 4 cells diameter, covered cells {}, the loads gathered at rank 0",
             self.particles.len(),
             mode.name(),
         );

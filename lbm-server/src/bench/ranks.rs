@@ -96,7 +96,7 @@ pub fn run(args: &BenchArgs, comm: &dyn Communicator) -> Result<(), String> {
     if comm.rank() == 0 {
         print(args, &setup, blocks, &rows, &modes);
         if let Some(c) = &coupled {
-            c.print(&modes);
+            c.print();
         }
     }
     Ok(())

@@ -204,8 +204,8 @@ impl FluidSide {
         self.lattice.lattice.adapter()
     }
 
-    /// On several ranks, "; " and the halo exchange the steps take (`BlockLattice::exchange_said`:
-    /// after the whole step with the covered cells redone); nothing on one.
+    /// On several ranks, "; " and the halo exchange the steps take (`BlockLattice::exchange_said`);
+    /// nothing on one.
     pub fn exchange(&self) -> String {
         self.lattice
             .exchange_said()

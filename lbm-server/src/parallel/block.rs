@@ -64,8 +64,6 @@ impl BlockLattice {
         let options = options.map(|o| block_options(o, &d, &setup));
         let mut lattice = GpuLattice::new(gpu, local, health, options)?;
         let halo = split.then(|| Halo::new(&lattice, &d, &setup));
-        // Overlapped by default (a coupled step with the covered cells redone keeps the exposed
-        // exchange: `coupled_block.rs`).
         if split {
             let (regions, region_of) = Halo::regions(&d, d.local_n());
             lattice.set_regions(regions, region_of);
@@ -83,8 +81,8 @@ impl BlockLattice {
 
     /// Makes [`BlockLattice::step`] and [`BlockLattice::step_coupled_with`] overlap the halo
     /// exchange with the interior's update (`on`, the default where the lattice is decomposed),
-    /// or exchange after the whole step; the same bits either way. A coupled step with the
-    /// covered cells redone exchanges after the whole step either way (`coupled_block.rs`).
+    /// or exchange after the whole step; the same bits either way, coupled or not, whatever the
+    /// way of the covered cells (`lbm/imb/by_region.rs`).
     pub fn set_overlap(&mut self, on: bool) {
         self.overlap = on && self.lattice.regions() > 0;
     }
@@ -96,22 +94,20 @@ impl BlockLattice {
         self.overlap_asked = asked;
     }
 
-    /// Whether the steps overlap the halo exchange with the interior's update (asked for, and
-    /// not a coupled step with the covered cells redone: what the steps do now).
+    /// Whether the steps overlap the halo exchange with the interior's update.
     pub fn overlaps(&self) -> bool {
-        self.overlap && self.lattice.splits_by_region()
+        self.overlap
     }
 
     /// The halo exchange the steps take, as the run's first line says it (none on one rank).
     pub fn exchange_said(&self) -> Option<&'static str> {
         self.halo.as_ref()?;
-        Some(match (self.overlaps(), self.overlap) {
-            (true, _) => "halo exchange overlapped with the interior's update",
-            (false, true) => "halo exchange after the whole step (covered cells redone)",
-            (false, false) if self.overlap_asked.is_none() => {
+        Some(match self.overlap {
+            true => "halo exchange overlapped with the interior's update",
+            false if self.overlap_asked.is_none() => {
                 "halo exchange after the whole step (a CPU driver's default: [parallel] overlap = true overlaps)"
             }
-            (false, false) => "halo exchange after the whole step ([parallel] overlap = false)",
+            false => "halo exchange after the whole step ([parallel] overlap = false)",
         })
     }
 

@@ -1,10 +1,8 @@
 //! The coupled step of one rank's block ([`BlockLattice::step_coupled_with`]): every rank steps
 //! the same particles (rank 0 sends them their states: `coupled/ranks.rs`), in the whole lattice's
 //! coordinates, over its own cells; the halo exchange overlaps the update of the block's interior
-//! with the covered cells skipped or fused (the step's fluid kernels split by region,
-//! `lbm/imb/by_region.rs`), and follows the whole step with the covered cells redone (the redo's
-//! `store_covered` writes into the shell's slots after the fluid kernels, docs/imb.md) or where
-//! `[parallel] overlap = false`; each rank other than 0 sends rank 0 its share of the loads
+//! (the step's fluid kernels split by region, `lbm/imb/by_region.rs`), or follows the whole step
+//! where `[parallel] overlap = false` (a CPU driver's default); each rank other than 0 sends rank 0 its share of the loads
 //! (`lbm/imb/share.rs`: the loads of the particles whose box it holds alone, the covered cells it
 //! holds of those across a cut), from which rank 0 makes every particle's load in the single
 //! process's order (`lbm/imb/gathered.rs`): the same bits as one process.

@@ -1,6 +1,6 @@
 //! The coupled step with the halo exchange overlapped with the interior's update
 //! (`lbm/imb/by_region.rs`) against the exposed exchange and the single lattice: loads and fields
-//! bit for bit, with the covered cells skipped and fused, on 2 ranks and on a cut along two axes,
+//! bit for bit, with the covered cells skipped, fused and redone, on 2 ranks and on a cut along two axes,
 //! spheres across the cuts, in the shell and inside a block, and more spheres from a step on (the
 //! coupling's buffers grow, the regions rebound); ranks as threads (`tests.rs`), without MPI.
 
@@ -59,11 +59,11 @@ fn across_x_and_y(t: u64) -> Vec<SolidParticle> {
     spheres
 }
 
-/// For skip and fused: `steps` coupled steps of `setup` cut into `blocks`, the exchange
+/// For every way of the covered cells: `steps` coupled steps of `setup` cut into `blocks`, the exchange
 /// overlapped and exposed, give the single lattice's loads and fields bit for bit.
 fn check(particles: fn(u64) -> Vec<SolidParticle>, setup: &Setup, blocks: [usize; 3], steps: u64) {
     let gpu = Arc::new(Gpu::new().expect("a wgpu adapter (lavapipe in CI)"));
-    for mode in [CoveredCells::Skip, CoveredCells::Fused] {
+    for mode in [CoveredCells::Skip, CoveredCells::Fused, CoveredCells::Redo] {
         let want = single(&gpu, particles, setup, steps, mode);
         for overlap in [true, false] {
             let have = on_blocks(&gpu, particles, setup, blocks, steps, (mode, overlap));

@@ -87,7 +87,7 @@ pub(super) fn single(
 
 /// [`CoupledRun`] cut into `blocks` on threads, the covered cells taking their solid term the way
 /// `mode` says, the halo exchange overlapped with the interior's update where `overlap` asks
-/// (`block.overlaps()` checked against what the step does: not with the redo).
+/// (`block.overlaps()` checked against what the step does).
 pub(super) fn on_blocks(
     gpu: &Arc<Gpu>,
     particles: fn(u64) -> Vec<SolidParticle>,
@@ -112,8 +112,7 @@ pub(super) fn on_blocks(
                     let mut block =
                         BlockLattice::with_coupling(gpu, setup, Health::default(), d, options).unwrap();
                     block.set_overlap(overlap);
-                    let split = overlap && mode != CoveredCells::Redo;
-                    assert_eq!(block.overlaps(), split, "{mode:?}: the exchange that runs");
+                    assert_eq!(block.overlaps(), overlap, "{mode:?}: the exchange that runs");
                     let steps: Vec<(Vec<Load>, Vec<[f32; 4]>)> = (0..steps)
                         .map(|t| {
                             let mut out = Vec::new();

@@ -31,9 +31,8 @@
 //! A coupled step splits only its fluid kernels so (`lbm/imb/by_region.rs`): the passes over the
 //! particles and the covered cells keep their places around them, skipped covered cells collide
 //! before the shell (its slots final before the pack), fused ones in the fluid kernels of their
-//! region. The redo's `store_covered` writes into the shell's slots after every region, so a
-//! coupled step with the covered cells redone exchanges after the whole step
-//! (`parallel/coupled_block.rs`).
+//! region, the redo's `store_covered` of the shell's covered cells right after the shell's update
+//! and of the others after the interior's.
 //!
 //! Edges and corners: axis by axis (x, then y, then z), each layer spanning the other axes' ghost
 //! layers, so that what crosses an edge or corner reaches the diagonal neighbour in two or three

@@ -71,11 +71,16 @@ impl GpuLattice {
             bound,
             regions.cells_listed.as_ref(),
         );
+        if r == 0 {
+            self.encode_store_of_shell(&mut encoder);
+        }
         self.gpu.queue.submit([encoder.finish()])
     }
 
-    /// Ends a step whose every region has been submitted.
+    /// Ends a step whose every region has been submitted (a redo's coupled step: with the store
+    /// of the covered cells outside the shell).
     pub fn end_split_step(&mut self) {
+        self.submit_store_of_interior();
         self.time += 1;
     }
 

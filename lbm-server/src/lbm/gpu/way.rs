@@ -164,6 +164,14 @@ impl GpuLattice {
         let (cell_list, params) = self.list_and_params(list, &classes);
         let constants = self.way_constants(mode);
         let pipeline_kind = |entry: &str, kind: u32| self.pipeline(entry, &constants, kind);
+        let pipeline_part = |entry: &str, kind: u32, part: u32| match part {
+            0 => pipeline_kind(entry, kind),
+            _ => {
+                let mut constants = constants.clone();
+                constants.push(("STORE_PART", f64::from(part)));
+                self.pipeline(entry, &constants, kind)
+            }
+        };
         let pipeline = |entry: &str| pipeline_kind(entry, 0);
         let bind_groups = [0, 1].map(|parity| self.bind_group(&params[parity], &cell_list));
         let fluid = match kernel {
@@ -181,7 +189,9 @@ impl GpuLattice {
             kernel,
             fluid,
             macroscopic: pipeline("macroscopic"),
-            passes: self.options.is_some().then(|| Passes::new(mode, &pipeline_kind)),
+            passes: self
+                .options
+                .map(|o| Passes::new(mode, o.block.is_some(), &pipeline_part)),
             classes,
             cell_list,
             params,

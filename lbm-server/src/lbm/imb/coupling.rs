@@ -29,6 +29,9 @@ pub struct Coupling {
     pub(super) saved_cap: u64,
     /// The particles and pairs of the step staged last.
     pub(super) staged: (u32, u64),
+    /// The redo's `store_covered` in parts (the shell's covered cells, the others) while a step
+    /// split by region is under way (`by_region.rs`).
+    pub(super) store_by_region: Option<[[wgpu::ComputePipeline; 2]; 2]>,
 }
 
 impl Coupling {
@@ -61,6 +64,7 @@ impl Coupling {
             saved_capacity: 0,
             saved_cap: u64::MAX,
             staged: (0, 0),
+            store_by_region: None,
         }
     }
 

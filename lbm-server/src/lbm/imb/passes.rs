@@ -15,29 +15,40 @@ pub(in crate::lbm) struct Passes {
 /// The passes of [`CoveredCells::Redo`] and [`CoveredCells::Skip`]: `covered_groups`, then
 /// `collide_covered` (before the fluid kernels) and, with the redo, `store_covered` after them
 /// (skip's fluid kernels clear the cover mask as they read it), for each KIND (bit 0 the parity,
-/// bit 1 the covered cells with a link that leaves the fluid).
+/// bit 1 the covered cells with a link that leaves the fluid); on a block of a decomposed lattice
+/// the redo's store also in two parts, the shell's covered cells and the others (STORE_PART 1 and
+/// 2, `by_region.rs`).
 struct Redo {
     groups: wgpu::ComputePipeline,
     collide: [wgpu::ComputePipeline; 4],
     store: Option<[wgpu::ComputePipeline; 4]>,
+    store_parts: Option<[[wgpu::ComputePipeline; 4]; 2]>,
 }
+
+/// The four KINDs of a kernel over the list of covered cells.
+const KINDS: [u32; 4] = [0, 1, 2, 3];
 
 impl Passes {
     /// The cover and reduce pipelines of the way `mode`, and with the redo and skip the covered
-    /// cells' collide and store (or uncover) pipelines; `make(entry, KIND)`.
+    /// cells' collide and store (or uncover) pipelines, the redo's store in parts on a `block`;
+    /// `make(entry, KIND, STORE_PART)`.
     pub(in crate::lbm) fn new(
         mode: CoveredCells,
-        make: &dyn Fn(&str, u32) -> wgpu::ComputePipeline,
+        block: bool,
+        make: &dyn Fn(&str, u32, u32) -> wgpu::ComputePipeline,
     ) -> Passes {
+        let redone = mode == CoveredCells::Redo;
         let redo = (mode != CoveredCells::Fused).then(|| Redo {
-            groups: make("covered_groups", 0),
-            collide: [0, 1, 2, 3].map(|kind| make("collide_covered", kind)),
-            store: (mode != CoveredCells::Skip).then(|| [0, 1, 2, 3].map(|kind| make("store_covered", kind))),
+            groups: make("covered_groups", 0, 0),
+            collide: KINDS.map(|kind| make("collide_covered", kind, 0)),
+            store: redone.then(|| KINDS.map(|kind| make("store_covered", kind, 0))),
+            store_parts: (redone && block)
+                .then(|| [1, 2].map(|part| KINDS.map(|kind| make("store_covered", kind, part)))),
         });
         Passes {
-            cover: make("cover", 0),
-            reduce: make("reduce", 0),
-            sum_loads: make("sum_loads", 0),
+            cover: make("cover", 0, 0),
+            reduce: make("reduce", 0, 0),
+            sum_loads: make("sum_loads", 0, 0),
             redo,
         }
     }
@@ -48,6 +59,7 @@ impl Passes {
         if let Some(r) = &self.redo {
             all.push(&r.groups);
             all.extend(r.collide.iter().chain(r.store.iter().flatten()));
+            all.extend(r.store_parts.iter().flatten().flatten());
         }
         all
     }
@@ -68,6 +80,8 @@ pub(super) struct CoveredPasses {
     pub(super) collide: [wgpu::ComputePipeline; 2],
     /// The redo's `store_covered` (skip: none).
     pub(super) store: Option<[wgpu::ComputePipeline; 2]>,
+    /// The redo's `store_covered` on a block, of the shell's covered cells and of the others.
+    pub(super) store_parts: Option<[[wgpu::ComputePipeline; 2]; 2]>,
 }
 
 impl GpuLattice {
@@ -88,6 +102,10 @@ impl GpuLattice {
                 groups: r.groups.clone(),
                 collide: [0, 1].map(|list| r.collide[kind(list)].clone()),
                 store: r.store.as_ref().map(|s| [0, 1].map(|list| s[kind(list)].clone())),
+                store_parts: r
+                    .store_parts
+                    .as_ref()
+                    .map(|parts| parts.each_ref().map(|s| [0, 1].map(|list| s[kind(list)].clone()))),
             }),
         })
     }

@@ -177,9 +177,7 @@ impl GpuLattice {
         encoder = split("fluid", encoder);
         match &covered.store {
             Some(store) => {
-                for (offset, pipeline) in [0, 16].into_iter().zip(store) {
-                    self.dispatch_indirect(&mut encoder, pipeline, parity, offset);
-                }
+                self.encode_store(&mut encoder, store, parity);
                 encoder = split("store_covered", encoder);
             }
             None => {
@@ -212,6 +210,19 @@ impl GpuLattice {
             encoder.copy_buffer_to_buffer(&coupling.loads, 0, &coupling.readback, 0, bytes);
         }
         (bytes, self.gpu.queue.submit([encoder.finish()]))
+    }
+
+    /// The redo's `store_covered` over the front and the back of the list with `store`, in a step
+    /// of `parity`.
+    pub(super) fn encode_store(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        store: &[wgpu::ComputePipeline; 2],
+        parity: u64,
+    ) {
+        for (offset, pipeline) in [0, 16].into_iter().zip(store) {
+            self.dispatch_indirect(encoder, pipeline, parity, offset);
+        }
     }
 
     /// Dispatches as many workgroups as `covered_groups` wrote to status[5..8] (offset 0) or
