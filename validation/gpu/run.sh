@@ -13,8 +13,8 @@
 # with the populations in fp32, fp16s and fp16c, beside the copy bandwidth and the naive kernel),
 # bench_{trt,mrt}.txt (the same in FP32, both kernels), bench_ranks_{1,2,4}.txt (256^3 cut over
 # 1, 2 and 4 ranks sharing the device, the exchange overlapped and exposed; bench_ranks_4_fp16s.txt
-# the same in FP16S, its messages 2 bytes a population), bench_ranks_coupled_{skip,fused}.txt (the
-# same on 2 ranks with 16^3 spheres), bench_walls.txt and bench_periodic.txt (the Ten Cate
+# the same in FP16S, its messages 2 bytes a population), bench_ranks_coupled_{redo,skip,fused}.txt
+# (the same on 2 ranks with 16^3 spheres), bench_walls.txt and bench_periodic.txt (the Ten Cate
 # grid at 16 cells, 224 x 224 x 256, closed and periodic, one sphere, both ways of treating the
 # covered cells, each pass timed: what a closed box costs), coupled_trt.txt (256 x 256 x 512, 1 to
 # 32^3 particles, ratio to LBM-only, time per pass, the covered cells fused, redone and skipped),
@@ -153,10 +153,10 @@ for r in 2 4; do
 done
 step bench_ranks_4_fp16s 20 60 $bin/lbm-server bench --grid $cube --operator bgk --steps $kernel_steps --rounds 2 \
     --thread-ranks 4 --exchange both --storage fp16s
-# The coupled step on 2 ranks sharing the device, 16^3 spheres, the covered cells skipped and
-# fused: the exchange overlapped with the interior's update against the exchange after the whole
+# The coupled step on 2 ranks sharing the device, 16^3 spheres, the covered cells redone (what
+# "auto" takes on ranks), skipped and fused: the exchange overlapped with the interior's update against the exchange after the whole
 # step (lbm-server/src/lbm/imb/by_region.rs).
-for way in skip fused; do
+for way in redo skip fused; do
     step bench_ranks_coupled_$way 20 60 $bin/lbm-server bench --grid $cube --operator bgk --steps $kernel_steps \
         --rounds 2 --thread-ranks 2 --particles 4096 --covered-cells $way --exchange both
 done
