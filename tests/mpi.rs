@@ -190,3 +190,32 @@ fn a_coupled_run_on_ranks_with_the_covered_cells_skipped_or_fused_overlaps_the_e
         assert_eq!(s["parallel"]["halo_overlapped"], true, "{way}: {s}");
     }
 }
+
+/// `coupling.covered_cells = "timed"` on 2 ranks: every rank times the three ways on the same
+/// steps by rank 0's clock and keeps the same one; summary.json says what the trial timed and
+/// kept; particles.csv and the snapshots byte for byte as the single process's (which times them
+/// too: every way gives the same bits).
+#[test]
+fn a_coupled_run_on_ranks_times_the_ways_of_the_covered_cells_at_start_up() {
+    let text_ = coupled_scene("coupled-timed", false)
+        .replace("steps = 24", "steps = 150")
+        .replace("\ninterval = 4", "\ninterval = 25")
+        .replace("timeout = 10.0", "timeout = 10.0\ncovered_cells = \"timed\"")
+        .replace("operator = \"trt\"", "operator = \"trt\"\nkernel = \"quads\"");
+    let runs = [(2, "[parallel]\noverlap = true")];
+    let Some(dir) = same_on_ranks("mpi-coupled-timed", &text_, &runs, coupled_outputs) else {
+        return;
+    };
+    let s = summary(&dir.join("np2"));
+    let trial = s["trial"].as_array().expect("the trial's lines").clone();
+    assert!(
+        trial
+            .iter()
+            .any(|l| l.as_str().is_some_and(|l| l.contains("kept"))),
+        "{s}"
+    );
+    assert!(
+        ["redo", "skip", "fused"].contains(&s["covered_cells"].as_str().unwrap()),
+        "{s}"
+    );
+}

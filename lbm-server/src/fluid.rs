@@ -124,6 +124,8 @@ fn open(
 ) -> Option<(Arc<Gpu>, BlockLattice, Trial)> {
     let units = scene.lattice_units.as_ref().expect("fluid scenes have a lattice");
     let mut trial = Trial::new(kernels_of(units.kernel), Vec::new(), steps);
+    // On several ranks the kernels are not timed: the trial sets how many steps go at once, which
+    // the ranks' exchanges must agree on.
     if comm.size() > 1 {
         trial.pin_first();
     }
@@ -355,10 +357,11 @@ impl<'a> FluidRun<'a> {
     }
 
     /// While the trial is under way: the kernels of the step `lattice` takes next (the trial's;
-    /// a run without particles has one way of the covered cells).
+    /// a run without particles has one way of the covered cells; on several ranks none: `open`).
     fn take_kernel(&mut self, lattice: &mut GpuLattice) {
         let now = self.made.elapsed().as_secs_f64();
         self.trial.give_choice(lattice, lattice.time, now);
+        self.trial.say_report(true);
     }
 
     fn steps(

@@ -190,11 +190,10 @@ impl Trial {
     }
 
     /// Gives `lattice` the choice of step `step` (told that it starts at `now`; its stages' lines
-    /// in the log); a choice the device does not build is left out of the trial with a warning
-    /// (the step keeps the lattice's).
+    /// for [`Trial::say_report`]); a choice the device does not build is left out of the trial
+    /// with a warning (the step keeps the lattice's).
     pub fn give_choice(&mut self, lattice: &mut GpuLattice, step: u64, now: f64) {
         let choice = self.choice_for(step, now);
-        self.say_report();
         if (choice.kernel, choice.way) == (lattice.kernel(), lattice.covered_cells()) {
             return;
         }
@@ -349,9 +348,10 @@ impl Trial {
         std::mem::take(&mut self.report)
     }
 
-    /// Says the stages' lines not yet said: what each timed and kept, its times with `--verbose`.
-    pub fn say_report(&mut self) {
-        for line in self.take_report() {
+    /// Says the stages' lines not yet said (where `say`; else lets them go): what each timed and
+    /// kept, its times with `--verbose`.
+    pub fn say_report(&mut self, say: bool) {
+        for line in self.take_report().into_iter().filter(|_| say) {
             crate::terminal::say_either(
                 &format!("lbm-server: {} {}", brief_line(&line), crate::terminal::MORE),
                 &format!("lbm-server: {line}"),

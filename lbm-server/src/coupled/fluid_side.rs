@@ -259,13 +259,15 @@ impl FluidSide {
     /// Advances this rank's fluid one step with the particles `states` (SI) and returns their
     /// loads (SI; at rank 0, which alone has them): the lattice's, buoyancy added (`loads`), then
     /// the lubrication correction; then the health check where one is due, and the field outputs.
-    /// (`FluidSide::step` leads the other ranks into it: `ranks.rs`.)
+    /// The step starts at `now` on rank 0's clock (for the start-up trial). (`FluidSide::step`
+    /// leads the other ranks into it: `ranks.rs`.)
     pub(super) fn step_here(
         &mut self,
         states: &[ParticleState],
         out: &mut Vec<ParticleReply>,
+        now: f64,
     ) -> Result<(), String> {
-        self.take_way();
+        self.take_way(now);
         let not_finite = self.loads(states, out)?;
         if let (Some(lubrication), 0) = (&self.lubrication, self.comm.rank()) {
             lubrication.apply(states, out);
@@ -347,7 +349,7 @@ fn coupled_block(
 ) -> Result<(BlockLattice, Trial), String> {
     let gpu = Arc::new(Gpu::for_local_rank(comm.local_rank())?);
     let cpu = gpu.on_cpu();
-    let trial = trial(scene, units.kernel, steps, (cpu, comm.size()))?;
+    let trial = trial(scene, units.kernel, steps, cpu)?;
     let options = ImbOptions {
         covered_cells: trial.kept().way,
         ..imb_options(scene)?

@@ -30,13 +30,16 @@ impl FluidSide {
     /// the lattice's, buoyancy added, then the lubrication correction; then the health check
     /// where one is due, and the field outputs (`step_here`). The other ranks step with it.
     pub fn step(&mut self, states: &[ParticleState], out: &mut Vec<ParticleReply>) -> Result<(), String> {
+        let now = self.made.elapsed().as_secs_f64();
         if self.comm.size() > 1 {
-            // The states as the DEM sent them (PROTOCOL.md 3.1): the same bits on every rank.
+            // The step's start on rank 0's clock (every rank's start-up trial goes by it), and the
+            // states as the DEM sent them (PROTOCOL.md 3.1): the same bits on every rank.
             let mut command = vec![STEP];
+            command.extend_from_slice(&now.to_le_bytes());
             command.extend_from_slice(bytemuck::cast_slice(states));
             self.comm.broadcast(command);
         }
-        self.step_here(states, out)
+        self.step_here(states, out, now)
     }
 
     /// After the run's last step: the health check and the covers' warning, unless the last
@@ -143,13 +146,14 @@ pub fn follow(
         // Failures are rank 0's to say: every rank meets the same ones (the ranks agree).
         match command[0] {
             STEP => {
+                let now = f64::from_le_bytes(command[1..9].try_into().expect("rank 0's clock"));
                 states.clear();
                 states.extend(
-                    command[1..]
+                    command[9..]
                         .chunks_exact(size_of::<ParticleState>())
                         .map(bytemuck::pod_read_unaligned::<ParticleState>),
                 );
-                let _ = fluid.step_here(&states, &mut replies);
+                let _ = fluid.step_here(&states, &mut replies, now);
             }
             CHECK_LAST => {
                 let _ = fluid.check_last_step_here();

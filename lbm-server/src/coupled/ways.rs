@@ -26,17 +26,11 @@ pub(super) fn covered_cells_of(scene: &Scene) -> Result<Vec<CoveredCells>, Strin
 /// CPU driver (lavapipe, `cpu`) "auto" times nothing and takes the quads' kernels and the redo:
 /// building the other kernels there costs about a second each, more than a short run wins back,
 /// and a run busy building them notices a dead DEM late; `coupling.covered_cells = "timed"`
-/// times them on every device. On several `ranks` (which step in lockstep) it times nothing and
-/// takes the first kernels and the first way: the one the scene names, else the redo (whose
-/// halo exchange follows the whole step: `parallel/coupled_block.rs`).
-pub(super) fn trial(
-    scene: &Scene,
-    kernel: Option<Kernel>,
-    steps: u64,
-    (cpu, ranks): (bool, usize),
-) -> Result<Trial, String> {
+/// times them on every device. On several ranks every rank times the same steps by rank 0's
+/// clock (`FluidSide::step` sends it with the states), so that all keep the same.
+pub(super) fn trial(scene: &Scene, kernel: Option<Kernel>, steps: u64, cpu: bool) -> Result<Trial, String> {
     let mut trial = Trial::new(kernels_of(kernel), covered_cells_of(scene)?, steps);
-    if (cpu && scene.coupling.covered_cells != "timed") || ranks > 1 {
+    if cpu && scene.coupling.covered_cells != "timed" {
         trial.pin_first();
     }
     Ok(trial)
@@ -59,10 +53,11 @@ impl FluidSide {
         &self.trial.lines
     }
 
-    /// The kernels and way this step takes (the trial's; its stages' lines in the log); a choice
-    /// the device does not build is left out of the trial (this step keeps the lattice's).
-    pub(super) fn take_way(&mut self) {
-        let now = self.made.elapsed().as_secs_f64();
+    /// The kernels and way this step takes, which starts at `now` on rank 0's clock (the trial's;
+    /// its stages' lines in rank 0's log); a choice the device does not build is left out of the
+    /// trial (this step keeps the lattice's).
+    pub(super) fn take_way(&mut self, now: f64) {
         self.trial.give_choice(&mut self.lattice.lattice, self.steps, now);
+        self.trial.say_report(self.comm.rank() == 0);
     }
 }
