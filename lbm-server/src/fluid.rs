@@ -7,8 +7,8 @@ use crate::lbm::geometry::Setup;
 use crate::lbm::gpu::{Gpu, GpuLattice};
 use crate::output::LatticeSummary;
 use crate::parallel::{
-    all, checkpoint_due, resume_blocks, write_last_good_of_ranks, write_snapshot_of_ranks, BlockLattice,
-    Communicator, Decomposition, FieldPieces, ParallelSummary, RankUnhealthy,
+    all, checkpoint_due, rank0s, resume_blocks, write_last_good_of_ranks, write_snapshot_of_ranks,
+    BlockLattice, Communicator, Decomposition, FieldPieces, ParallelSummary, RankUnhealthy,
 };
 use crate::terminal::Progress;
 use crate::trials::{kernels_of, Trial};
@@ -124,11 +124,6 @@ fn open(
 ) -> Option<(Arc<Gpu>, BlockLattice, Trial)> {
     let units = scene.lattice_units.as_ref().expect("fluid scenes have a lattice");
     let mut trial = Trial::new(kernels_of(units.kernel), Vec::new(), steps);
-    // On several ranks the kernels are not timed: the trial sets how many steps go at once, which
-    // the ranks' exchanges must agree on.
-    if comm.size() > 1 {
-        trial.pin_first();
-    }
     let started = start_lattice(scene, units, (comm, blocks), &mut trial);
     let say = |e: &str| {
         let rank = match comm.size() {
@@ -357,11 +352,12 @@ impl<'a> FluidRun<'a> {
     }
 
     /// While the trial is under way: the kernels of the step `lattice` takes next (the trial's;
-    /// a run without particles has one way of the covered cells; on several ranks none: `open`).
+    /// a run without particles has one way of the covered cells). Every rank's trial goes by
+    /// rank 0's clock and the choices all ranks build, so that all step alike.
     fn take_kernel(&mut self, lattice: &mut GpuLattice) {
-        let now = self.made.elapsed().as_secs_f64();
-        self.trial.give_choice(lattice, lattice.time, now);
-        self.trial.say_report(true);
+        let now = rank0s(self.comm, self.made.elapsed().as_secs_f64());
+        self.trial
+            .give_agreed_choice(lattice, lattice.time, now, self.comm);
     }
 
     fn steps(

@@ -20,6 +20,7 @@
 use crate::lbm::gpu::GpuLattice;
 use crate::lbm::imb::CoveredCells;
 use crate::lbm::kernel::Kernel;
+use crate::parallel::{all, Communicator};
 
 /// Steps per choice and round; the first of them is not timed.
 pub const BLOCK: u64 = 5;
@@ -191,16 +192,37 @@ impl Trial {
 
     /// Gives `lattice` the choice of step `step` (told that it starts at `now`; its stages' lines
     /// for [`Trial::say_report`]); a choice the device does not build is left out of the trial
-    /// with a warning (the step keeps the lattice's).
-    pub fn give_choice(&mut self, lattice: &mut GpuLattice, step: u64, now: f64) {
+    /// with a warning (the step keeps the lattice's): false then.
+    pub fn give_choice(&mut self, lattice: &mut GpuLattice, step: u64, now: f64) -> bool {
         let choice = self.choice_for(step, now);
         if (choice.kernel, choice.way) == (lattice.kernel(), lattice.covered_cells()) {
-            return;
+            return true;
         }
         if let Err(e) = lattice.set_way(choice.kernel, choice.way) {
             protocol::say!("lbm-server: warning: {e}; the run times the others without it");
             self.refuse();
+            return false;
         }
+        true
+    }
+
+    /// [`Trial::give_choice`] on one of the ranks of `comm`, which step together: `now` is rank
+    /// 0's clock, and while the trial is under way a choice that any rank's device does not build
+    /// is left out on every rank, so that every rank's trial makes the same choices; rank 0 says
+    /// the stages' lines. The ranks' blocks may then run different choices for a step: every
+    /// choice gives the same bits.
+    pub fn give_agreed_choice(
+        &mut self,
+        lattice: &mut GpuLattice,
+        step: u64,
+        now: f64,
+        comm: &dyn Communicator,
+    ) {
+        let built = self.give_choice(lattice, step, now);
+        if self.under_way() && !all(comm, built) && built {
+            self.refuse();
+        }
+        self.say_report(comm.rank() == 0);
     }
 
     /// Leaves the choice just asked for out of the trial (the device did not build it): the step

@@ -57,7 +57,8 @@ impl FluidSide {
     /// its stages' lines in rank 0's log); a choice the device does not build is left out of the
     /// trial (this step keeps the lattice's).
     pub(super) fn take_way(&mut self, now: f64) {
-        self.trial.give_choice(&mut self.lattice.lattice, self.steps, now);
-        self.trial.say_report(self.comm.rank() == 0);
+        let comm = &*self.comm;
+        self.trial
+            .give_agreed_choice(&mut self.lattice.lattice, self.steps, now, comm);
     }
 }

@@ -84,6 +84,15 @@ pub fn all(comm: &dyn Communicator, ok: bool) -> bool {
     comm.min(u64::from(ok)) == 1
 }
 
+/// Rank 0's `value` at every rank (on one rank `value`).
+pub fn rank0s(comm: &dyn Communicator, value: f64) -> f64 {
+    if comm.size() == 1 {
+        return value;
+    }
+    let bytes = comm.broadcast(value.to_le_bytes().to_vec());
+    f64::from_le_bytes(bytes[..8].try_into().expect("8 bytes"))
+}
+
 /// A run in one process.
 pub struct OneRank;
 

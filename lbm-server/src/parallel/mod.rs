@@ -47,7 +47,7 @@ pub use block::{BlockLattice, RankUnhealthy};
 pub use checkpoint::{checkpoint_due, resume_blocks};
 pub use communicator::launched_ranks;
 use communicator::OneRank;
-pub use communicator::{all, interrupted, wait_for_rank_0, Communicator};
+pub use communicator::{all, interrupted, rank0s, wait_for_rank_0, Communicator};
 pub use decomposition::{check_blocks, choose_blocks, Decomposition};
 pub use hosts::{dem_hosts, hosts};
 pub use pieces::{write_last_good_of_ranks, write_snapshot_of_ranks, FieldPieces};

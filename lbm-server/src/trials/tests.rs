@@ -255,3 +255,44 @@ fn a_choice_not_built_is_left_out() {
         "{reports:?}"
     );
 }
+
+/// On two ranks (threads), the trial of the kernels by rank 0's clock (rank 1's own running 7
+/// times faster), where rank 1's device does not build the per-cell kernel: both ranks ask for
+/// the same choices at every step, are under way at the same steps, and keep the same kernel;
+/// rank 0's report says the per-cell kernel was not built.
+#[test]
+fn ranks_make_the_same_choices_by_rank_0s_clock_and_refusals() {
+    use crate::lbm::geometry::{Face, Operator, Setup};
+    use crate::lbm::gpu::{Gpu, Health};
+    use crate::parallel::{rank0s, ThreadRanks};
+    let gpu = std::sync::Arc::new(Gpu::new().expect("a wgpu adapter (lavapipe in CI)"));
+    let setup = Setup::new([8, 8, 8], [Face::Periodic; 6], 0.8, Operator::Bgk);
+    let steps = 120;
+    let taken: Vec<(Vec<(bool, Choice)>, Kernel)> = std::thread::scope(|s| {
+        let handles: Vec<_> = ThreadRanks::world(2)
+            .into_iter()
+            .map(|comm| {
+                let (gpu, setup) = (gpu.clone(), setup.clone());
+                s.spawn(move || {
+                    let mut lattice = GpuLattice::new(gpu, setup, Health::default(), None).unwrap();
+                    lattice.spoil_next_way = comm.rank() == 1;
+                    let mut trial = Trial::new(vec![Quads, Cells], Vec::new(), steps);
+                    let clock = [1e-3, 7e-3][comm.rank()];
+                    let asked: Vec<(bool, Choice)> = (0..steps)
+                        .map(|step| {
+                            let now = rank0s(&comm, clock * step as f64);
+                            trial.give_agreed_choice(&mut lattice, step, now, &comm);
+                            (trial.under_way(), trial.kept())
+                        })
+                        .collect();
+                    (asked, trial.kept().kernel)
+                })
+            })
+            .collect();
+        handles.into_iter().map(|h| h.join().unwrap()).collect()
+    });
+    assert_eq!(taken[0], taken[1], "the ranks' trials");
+    assert!(taken[0].0.iter().any(|(under_way, _)| *under_way));
+    assert!(!taken[0].0.last().unwrap().0, "the trial ended");
+    assert_eq!(taken[0].1, Quads);
+}

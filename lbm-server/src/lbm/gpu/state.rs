@@ -43,7 +43,7 @@ pub struct GpuLattice {
     /// Test aid: the next way built gets a constant its kernels do not declare (a validation
     /// error, as a driver refusing a kernel would give).
     #[cfg(test)]
-    pub(in crate::lbm) spoil_next_way: bool,
+    pub(crate) spoil_next_way: bool,
 }
 
 impl GpuLattice {
