@@ -137,6 +137,7 @@ fn open(
         return None;
     }
     let (gpu, mut lattice) = started.expect("started on every rank");
+    trial.agree_open(comm);
     // Every rank, once all have made their block (rank 0 sends each its part).
     if let Err(e) = resume_blocks(&mut lattice, comm, checkpoints.resumed.as_ref()) {
         say(&e);

@@ -206,6 +206,14 @@ impl Trial {
         true
     }
 
+    /// On one of the ranks of `comm`, once every rank has made its trial: where any rank's times
+    /// nothing (its device a CPU driver's), none does, so that all step alike.
+    pub fn agree_open(&mut self, comm: &dyn Communicator) {
+        if !all(comm, self.open()) {
+            self.pin_first();
+        }
+    }
+
     /// [`Trial::give_choice`] on one of the ranks of `comm`, which step together: `now` is rank
     /// 0's clock, and while the trial is under way a choice that any rank's device does not build
     /// is left out on every rank, so that every rank's trial makes the same choices; rank 0 says

@@ -97,6 +97,7 @@ impl FluidSide {
         }
         // Every rank, once all have made their block (rank 0 sends each its part).
         let mut fluid = made?;
+        fluid.trial.agree_open(&*comm);
         resume_blocks(&mut fluid.lattice, &*comm, resumed)?;
         fluid.steps = fluid.lattice.time();
         Ok(fluid)
