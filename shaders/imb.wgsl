@@ -10,8 +10,7 @@
 // same result):
 // - FUSED: `cover` sets the cell's bit in a cover mask, and the fluid kernels, which test the bit
 //   of every cell, apply the solid term where it is set (`solid_term`);
-// - otherwise (the redo): `cover` lists the covered cells (each particle those it is the first to
-//   cover, in its own range of entries), `collide_covered` gives each its
+// - otherwise (the redo): `cover` lists the covered cells, `collide_covered` gives each its
 //   collision with the solid term from its pre-collision populations and keeps the result, the
 //   loads are reduced and go back to the host, and meanwhile the fluid kernels update every cell as
 //   without particles and `store_covered` writes the kept populations over the covered cells'
@@ -27,8 +26,8 @@
 // the covered cells in `reduce` and `sum_loads`.
 //
 // Four files, appended in this order (lbm-server/src/lbm/gpu/way.rs, IMB_SHADER): this one (the
-// bindings, the constants, the geometry of a particle's box, the slots and `cover`, the lists of
-// covered cells by particle), imb_covered.wgsl (`collide_covered`, `store_covered`, the
+// bindings, the constants, the geometry of a particle's box, the slots and `cover`, the list of
+// covered cells and `covered_groups`), imb_covered.wgsl (`collide_covered`, `store_covered`, the
 // cover mask), imb_solid_term.wgsl (`solid_term`, `immersed_boundary`, `solid_collision`) and
 // imb_loads.wgsl (`reduce`, `sum_loads`).
 
@@ -75,35 +74,18 @@ struct Particle {
 // first: the SLOTS largest solid fractions, whatever the order in which `cover`'s invocations
 // arrive (see `hold_slot`).
 @group(0) @binding(27) var<storage, read_write> slots: array<atomic<u32>>;
-// particles, pairs, room of each list of spans (`particle_lists`), capacity of `saved`
+// particles, pairs, -, capacity of `saved`
 @group(0) @binding(28) var<storage, read> imb_info: vec4<u32>;
-// The covered cells of this step, each once, over the `fields` buffer (binding 3), which only
-// `macroscopic` uses and which it rewrites. Each particle lists the cells it is the first to cover
-// within its own pair range (entries p.first to p.first + edge^3 - 1, `particle_lists`): from the
-// front those none of whose links leaves the fluid or wraps (their neighbours are at fixed index
-// offsets), from the back the others. Entry e holds the cell and the 19 populations it sends out
-// this step (`collide_covered`), laid out by BY_POPULATION; entries from imb_info.w on do not fit
-// (counted in status[2]: the run stops).
+// The covered cells of this step, each once, in the order `cover` found them, over the `fields`
+// buffer (binding 3), which only `macroscopic` uses and which it rewrites: from the front those
+// none of whose links leaves the fluid or wraps (status[4] of them: their neighbours are at fixed
+// index offsets), from the back the others (status[8]). Entry e holds the cell and the 19
+// populations it sends out this step (`collide_covered`), laid out by BY_POPULATION.
 // Seen four words at a time (an entry point binds a buffer once): with one record per cell
 // (BY_POPULATION false) entry e's 20 words, the cell and its 19 populations, are the five vectors
 // from 5 e, each moved by one vector load or store, where llvmpipe loops over the SIMD lanes per
 // access; single words through `saved_word` and `set_saved_word`.
 @group(0) @binding(3) var<storage, read_write> saved: array<vec4<u32>>;
-// The lists of covered cells by particle (the redo and skip). Words 16 j and 16 j + 1: how many
-// cells particle j listed at the front and at the back of its range, counted by particle j's own
-// workgroup of `cover` (16 words a particle, so that no two particles' counters share a 64-byte
-// cache line: on a CPU driver each is touched by one core only); cleared by a buffer clear before
-// `cover`. After the counters (from word 16 imb_info.x) two lists of spans, each of room imb_info.z
-// (the front's, then the back's): a span is SPAN entries of one particle's list (two words: the
-// particle, the span's index in its list), listed by the invocation that takes the span's first
-// entry, and is a workgroup of `collide_covered` and `store_covered`. status[4] and status[8]
-// count the spans of each list; status[5..7] and status[9..11] the workgroups of the dispatch over
-// each (x up to 65535, y rows of them).
-@group(0) @binding(31) var<storage, read_write> particle_lists: array<atomic<u32>>;
-
-// Entries of a particle's list in one span: one workgroup's invocations, each an entry (a loop
-// over several, or over the spans of a workgroup, cost llvmpipe more than the workgroups saved).
-const SPAN: u32 = 64u;
 
 // Word w of the list of covered cells, and its store.
 fn saved_word(w: u32) -> u32 {
@@ -307,7 +289,7 @@ fn cover(
             }
         }
         if !FUSED {
-            join_list(j, p, k, list);
+            join_list(k, list);
         }
     }
 }
@@ -316,48 +298,43 @@ const FRONT: u32 = 0u;
 const BACK: u32 = 1u;
 const NO_LIST: u32 = 2u;
 
-// Cell k joins the front of particle j's list (entries from p.first up) or its back (from the end
-// of its pair range down), a cell beyond the room of `saved` counted in status[2] (the run stops:
-// its solid term would be missing). Called by every invocation of `cover` at each turn, `list`
-// NO_LIST for those whose cell joins none (`list_position` may gather a subgroup).
-fn join_list(j: u32, p: Particle, k: u32, list: u32) {
-    let position = list_position(j, list);
-    if list == NO_LIST {
-        return;
-    }
-    if position % SPAN == 0u {
-        add_span(list, j, position / SPAN);
-    }
-    let e = select(p.first + p.edge * p.edge * p.edge - 1u - position, p.first + position, list == FRONT);
-    if e < imb_info.w {
+// Cell k joins the front of the covered cells' list (status[4] of them) or its back (status[8]); a
+// cell that would not fit is counted by `covered_groups`. Called by every invocation of `cover`
+// at each turn, `list` NO_LIST for those whose cell joins none (`list_position` may gather a
+// subgroup).
+fn join_list(k: u32, list: u32) {
+    let position = list_position(list);
+    let e = select(imb_info.w - 1u - position, position, list == FRONT);
+    if list != NO_LIST && position < imb_info.w {
         set_saved_word(list_cell(e), k);
         // SKIP: the fluid kernels leave the listed cells alone (a cell beyond the list's room is
         // updated without its solid term, as with the redo, and the run stops).
         if SKIP {
             atomicOr(&covered[mask_word(k)], mask_bit(k));
         }
-    } else {
-        atomicAdd(&status[2], 1u);
     }
 }
 
-// Span `span` of particle j's list `list` (FRONT or BACK) joins that list's spans (status[4] or
-// status[8] of them), and the dispatch over them gains a workgroup along x up to 65535 (status[5]
-// or status[9]) and a row along y every 65535 (status[6] or status[10]).
-fn add_span(list: u32, j: u32, span: u32) {
-    let q = atomicAdd(&status[4u + 4u * list], 1u);
-    if q < 65535u {
-        atomicAdd(&status[5u + 4u * list], 1u);
+// The covered cells' workgroups for the indirect dispatches over the list (`collide_covered`, then
+// with the redo `store_covered`):
+// status[5..8] (x, y, z; 2D beyond 65535 workgroups) for the front of the list, status[9..12] for
+// the back. One invocation; covered cells beyond the capacity are counted in status[2] (the run
+// stops: their solid term would be missing).
+@compute @workgroup_size(1)
+fn covered_groups() {
+    let front = atomicLoad(&status[4]);
+    let back = atomicLoad(&status[8]);
+    let capacity = imb_info.w;
+    if front + back > capacity {
+        atomicAdd(&status[2], front + back - capacity);
     }
-    if q % 65535u == 0u {
-        atomicAdd(&status[6u + 4u * list], 1u);
+    let counts = vec2<u32>(min(front, capacity), min(back, capacity - min(front, capacity)));
+    for (var list = 0u; list < 2u; list++) {
+        let groups = (counts[list] + 63u) / 64u;
+        let x = min(groups, 65535u);
+        atomicStore(&status[5u + 4u * list], x);
+        atomicStore(&status[6u + 4u * list], select(1u, (groups + x - 1u) / x, x > 0u));
+        atomicStore(&status[7u + 4u * list], 1u);
     }
-    let at = span_word(list, q);
-    atomicStore(&particle_lists[at], j);
-    atomicStore(&particle_lists[at + 1u], span);
 }
 
-// The first word of span q of list `list` in `particle_lists`.
-fn span_word(list: u32, q: u32) -> u32 {
-    return 16u * imb_info.x + 2u * (q + list * imb_info.z);
-}

@@ -4,50 +4,28 @@
 // populations) and the redo's `store_covered`; the cover mask's words and SKIP's test of a quad's
 // lanes.
 
-// An invocation of a kernel over the spans of a list of covered cells (a workgroup per span).
+// An invocation of a kernel over the list of covered cells.
 struct Invocation {
     @builtin(workgroup_id) wg: vec3<u32>,
     @builtin(num_workgroups) nwg: vec3<u32>,
     @builtin(local_invocation_index) local: u32,
 }
 
-// A span of a particle's list: its entries' indices in the list, `start` to `end` (excluded), and
-// the entry of index 0 (the front's first, or the back's: the last of the particle's pair range).
-struct Span {
-    start: u32,
-    end: u32,
-    base: u32,
-}
-
-// Span q of the list of KIND (bit 1: the back, the cells with a link that leaves the fluid or
-// wraps), as `add_span` listed it, up to its particle's count.
-fn span_of(q: u32) -> Span {
-    let list = KIND >> 1u;
-    let at = span_word(list, q);
-    let j = atomicLoad(&particle_lists[at]);
-    let start = atomicLoad(&particle_lists[at + 1u]) * SPAN;
-    let count = atomicLoad(&particle_lists[16u * j + list]);
-    let first = particles[j].first;
-    let edge = particles[j].edge;
-    let base = select(first, first + edge * edge * edge - 1u, list == BACK);
-    return Span(start, min(start + SPAN, count), base);
-}
-
-// The entry of `saved` of an invocation over the spans of KIND's list, or NO_CELL past the end of
-// its span or of the spans.
+// The entry of `saved` of an invocation over the list, or NO_CELL past the end of its list.
 fn listed(at: Invocation) -> u32 {
-    let q = at.wg.y * at.nwg.x + at.wg.x;
-    if q >= atomicLoad(&status[4u + 4u * (KIND >> 1u)]) {
-        return NO_CELL;
-    }
-    let s = span_of(q);
-    return span_entry(s, s.start + at.local);
+    return saved_entry(cell_index(at.wg, at.nwg, at.local));
 }
 
-// The entry of `saved` of index i of span s, or NO_CELL past its end or the room of `saved`.
-fn span_entry(s: Span, i: u32) -> u32 {
-    let e = select(s.base + i, s.base - i, KIND >= 2u);
-    return select(NO_CELL, e, i < s.end && e < imb_info.w);
+// The entry of `saved` of invocation j, or NO_CELL past the end of its list. KIND: bit 0 the
+// parity, bit 1 the back of the list (cells with a link that leaves the fluid or wraps).
+fn saved_entry(j: u32) -> u32 {
+    let capacity = imb_info.w;
+    let front = min(atomicLoad(&status[4]), capacity);
+    if KIND < 2u {
+        return select(NO_CELL, j, j < front);
+    }
+    let back = min(atomicLoad(&status[8]), capacity - front);
+    return select(NO_CELL, capacity - 1u - j, j < back);
 }
 
 // Where entry e of the list (of capacity imb_info.w) keeps its cell, and the population it sends
@@ -69,11 +47,6 @@ fn population(e: u32, i: u32) -> u32 {
 fn collide_covered(at: Invocation) {
     let e = listed(at);
     if e == NO_CELL { return; }
-    collide_entry(e);
-}
-
-// The covered cell of entry e collides with the solid term (`collide_covered`).
-fn collide_entry(e: u32) {
     let k = saved_word(list_cell(e));
     let p = coords(k);
     var f: array<f32, 19>;

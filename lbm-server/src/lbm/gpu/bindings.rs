@@ -17,9 +17,7 @@ const FIRST_IMB_BINDING: u32 = FIRST_POPULATION_BINDING + 19;
 const CELL_LIST_BINDING: u32 = FIRST_IMB_BINDING + 5;
 /// The particles' force and torque (the coupling's output, the only part read back).
 const LOADS_BINDING: u32 = CELL_LIST_BINDING + 1;
-/// The lists of covered cells by particle (their counters and spans).
-const PARTICLE_LISTS_BINDING: u32 = LOADS_BINDING + 1;
-pub(super) const BINDINGS: u32 = PARTICLE_LISTS_BINDING + 1;
+pub(super) const BINDINGS: u32 = LOADS_BINDING + 1;
 
 /// A lattice's own buffers: the 19 populations, the cell flags, the MRT matrices, the fields
 /// (density and velocity) and the status words.
@@ -42,8 +40,8 @@ impl LatticeBuffers {
             })
         };
         // [0] first unhealthy cell, [1] dropped covers, [2] covered cells beyond the list's room,
-        // [4] and [8] the spans of the lists of covered cells (front and back), [5] and [9] the
-        // workgroups of the passes over them.
+        // [4] and [8] covered cells (two lists),
+        // [5..8] and [9..12] their workgroups.
         let mut status = [0u32; 16];
         status[0] = u32::MAX;
         LatticeBuffers {
@@ -88,7 +86,6 @@ pub(super) fn bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout 
     entries.push(storage(CELL_LIST_BINDING - 1, true));
     entries.push(storage(CELL_LIST_BINDING, true));
     entries.push(storage(LOADS_BINDING, false));
-    entries.push(storage(PARTICLE_LISTS_BINDING, false));
     device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
         label: Some("lattice"),
         entries: &entries,
@@ -147,8 +144,7 @@ pub fn fits_device(limits: &wgpu::Limits, n: [usize; 3]) -> Result<(), String> {
 }
 
 /// The lattice's bind group: `front` (params, flags, MRT matrices, fields, status) at bindings
-/// 0-4, then the populations, the coupling's buffers, the cell list, the loads and the lists of
-/// covered cells by particle.
+/// 0-4, then the populations, the coupling's buffers, the cell list and the loads.
 pub(super) fn make_bind_group(
     d: &wgpu::Device,
     layout: &wgpu::BindGroupLayout,
@@ -173,7 +169,6 @@ pub(super) fn make_bind_group(
     );
     entries.push(entry(CELL_LIST_BINDING, cell_list));
     entries.push(entry(LOADS_BINDING, coupling.loads()));
-    entries.push(entry(PARTICLE_LISTS_BINDING, coupling.particle_lists()));
     d.create_bind_group(&wgpu::BindGroupDescriptor {
         label: Some("lattice"),
         layout,

@@ -115,7 +115,7 @@ fn chosen_adapter(local: usize) -> Result<wgpu::Adapter, String> {
     // WGPU_BACKEND (vulkan, metal, dx12, gl) and friends are honoured.
     let mut descriptor = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
     // wgpu checks each indirect dispatch's workgroup counts with a dispatch of its own and two
-    // barriers, four times per coupled step with the redo; `cover` (imb.wgsl `add_span`) counts
+    // barriers, four times per coupled step with the redo; `covered_groups` (imb.wgsl) writes
     // them within the limits itself. WGPU_VALIDATION_INDIRECT_CALL=1 turns the check back on.
     descriptor.flags = (descriptor.flags - wgpu::InstanceFlags::VALIDATION_INDIRECT_CALL).with_env();
     let backends = descriptor.backends;

@@ -2,12 +2,8 @@
 //! hold a step's particles, and what the lattice tells of them (covered cells, slots, lost covers).
 
 use super::options::{CoveredCells, ImbOptions};
-use super::records::{
-    LostCovers, LIST_COUNTER_BYTES, LOADS_BUFFER_BYTES, LOAD_BYTES, PAIR_BYTES, PARTICLE_BYTES, SAVED_BYTES, SPAN,
-    SPAN_BYTES,
-};
+use super::records::{LostCovers, LOADS_BUFFER_BYTES, LOAD_BYTES, PAIR_BYTES, PARTICLE_BYTES, SAVED_BYTES};
 use crate::lbm::gpu::{storage_buffer, GpuLattice};
-use wgpu::util::DeviceExt;
 
 /// Buffers of the coupling (tiny placeholders when the scene has no particles).
 pub struct Coupling {
@@ -21,12 +17,8 @@ pub struct Coupling {
     pub(super) slots: wgpu::Buffer,
     pub(super) info: wgpu::Buffer,
     pub(super) readback: wgpu::Buffer,
-    /// The lists of covered cells by particle: each particle's counters, then two lists of spans
-    /// (imb.wgsl's `particle_lists`).
-    pub(super) particle_lists: wgpu::Buffer,
-    /// The workgroups of the passes over the front's and the back's spans (x and y copied from
-    /// status[5..7] and status[9..11] each step, z 1: a buffer bound as storage cannot be the
-    /// indirect argument of the same dispatch).
+    /// The workgroups of the covered cells (copied from status[5..8]: a buffer bound as storage
+    /// cannot be the indirect argument of the same dispatch).
     pub(super) indirect: wgpu::Buffer,
     pub(super) particle_capacity: u64,
     pub(super) pair_capacity: u64,
@@ -57,11 +49,11 @@ impl Coupling {
             slots: storage_buffer(d, "slots", per_cell(4 * slots)),
             info: storage_buffer(d, "imb info", 16),
             readback: readback_buffer(d, LOAD_BYTES),
-            particle_lists: storage_buffer(d, "lists of covered cells", 256),
-            indirect: d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            indirect: d.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("covered cells' workgroups"),
-                contents: bytemuck::cast_slice(&[0u32, 0, 1, 0, 0, 0, 1, 0]),
+                size: 32,
                 usage: wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
             }),
             particle_capacity: 1,
             pair_capacity: 1,
@@ -86,11 +78,6 @@ impl Coupling {
     /// The particles' force and torque (its own binding).
     pub fn loads(&self) -> &wgpu::Buffer {
         &self.loads
-    }
-
-    /// The lists of covered cells by particle (their own binding).
-    pub fn particle_lists(&self) -> &wgpu::Buffer {
-        &self.particle_lists
     }
 }
 
@@ -152,8 +139,7 @@ impl GpuLattice {
         }
     }
 
-    /// Grows the coupling's buffers to hold `particles` and `pairs` (with the redo and skip, the
-    /// lists of covered cells by particle).
+    /// Grows the particle and pair buffers to hold `particles` and `pairs`.
     pub(super) fn reserve(&mut self, particles: u64, pairs: u64) -> Result<(), String> {
         let limit = self.gpu.limits.max_storage_buffer_binding_size;
         if pairs * PAIR_BYTES > limit {
@@ -162,6 +148,7 @@ impl GpuLattice {
             ));
         }
         let d = self.gpu.device.clone();
+        let fused = self.covered_cells() == CoveredCells::Fused;
         let coupling = self.imb.as_mut().expect("coupling");
         let mut grew = false;
         if particles > coupling.particle_capacity {
@@ -176,45 +163,21 @@ impl GpuLattice {
             coupling.pairs = storage_buffer(&d, "pairs", coupling.pair_capacity * PAIR_BYTES);
             grew = true;
         }
-        if self.covered_cells() != CoveredCells::Fused {
-            grew |= self.reserve_lists(particles, pairs);
+        // The redo's covered cells, at most min(cells, pairs), over the `fields` buffer (fused: none).
+        let cells = self.setup.cells() as u64;
+        let most = (limit.min(self.gpu.limits.max_buffer_size) / SAVED_BYTES)
+            .min(cells)
+            .min(coupling.saved_cap);
+        let want = pairs.min(cells).next_power_of_two().min(most);
+        if !fused && want > coupling.saved_capacity as u64 {
+            let bytes = (want * SAVED_BYTES).max(cells * 16);
+            self.fields = storage_buffer(&d, "fields", bytes);
+            coupling.saved_capacity = (bytes / SAVED_BYTES).min(most) as u32;
+            grew = true;
         }
         if grew {
             self.rebind();
         }
         Ok(())
     }
-
-    /// The redo's and skip's lists of covered cells: each particle lists its cells in its own pair
-    /// range, so the entries are the pairs (at most the binding limit / 80 bytes: beyond it the
-    /// cells are counted and the run stops), over the `fields` buffer; and the particles'
-    /// counters and spans. Whether a buffer grew.
-    fn reserve_lists(&mut self, particles: u64, pairs: u64) -> bool {
-        let d = self.gpu.device.clone();
-        let limit = self.gpu.limits.max_storage_buffer_binding_size;
-        let cells = self.setup.cells() as u64;
-        let coupling = self.imb.as_mut().expect("coupling");
-        let most = (limit.min(self.gpu.limits.max_buffer_size) / SAVED_BYTES).min(coupling.saved_cap);
-        let want = pairs.next_power_of_two().min(most);
-        let mut grew = false;
-        if want > coupling.saved_capacity as u64 {
-            let bytes = (want * SAVED_BYTES).max(cells * 16);
-            self.fields = storage_buffer(&d, "fields", bytes);
-            coupling.saved_capacity = (bytes / SAVED_BYTES).min(most) as u32;
-            grew = true;
-        }
-        let bytes = particles * LIST_COUNTER_BYTES + 2 * span_room(particles, pairs) * SPAN_BYTES;
-        if bytes > coupling.particle_lists.size() {
-            let bytes = bytes.next_power_of_two();
-            coupling.particle_lists = storage_buffer(&d, "lists of covered cells", bytes);
-            grew = true;
-        }
-        grew
-    }
-}
-
-/// Room in each of the two lists of spans (imb.wgsl's `particle_lists`): a particle's front (or
-/// back), of at most its pairs, takes at most one span more than its pairs / SPAN.
-pub(super) fn span_room(particles: u64, pairs: u64) -> u64 {
-    particles + pairs.div_ceil(SPAN)
 }

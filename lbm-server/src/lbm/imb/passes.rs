@@ -12,11 +12,12 @@ pub(in crate::lbm) struct Passes {
     redo: Option<Redo>,
 }
 
-/// The passes of [`CoveredCells::Redo`] and [`CoveredCells::Skip`] over the lists of covered cells:
+/// The passes of [`CoveredCells::Redo`] and [`CoveredCells::Skip`]: `covered_groups`, then
 /// `collide_covered` (before the fluid kernels) and, with the redo, `store_covered` after them
 /// (skip's fluid kernels clear the cover mask as they read it), for each KIND (bit 0 the parity,
 /// bit 1 the covered cells with a link that leaves the fluid).
 struct Redo {
+    groups: wgpu::ComputePipeline,
     collide: [wgpu::ComputePipeline; 4],
     store: Option<[wgpu::ComputePipeline; 4]>,
 }
@@ -29,6 +30,7 @@ impl Passes {
         make: &dyn Fn(&str, u32) -> wgpu::ComputePipeline,
     ) -> Passes {
         let redo = (mode != CoveredCells::Fused).then(|| Redo {
+            groups: make("covered_groups", 0),
             collide: [0, 1, 2, 3].map(|kind| make("collide_covered", kind)),
             store: (mode != CoveredCells::Skip).then(|| [0, 1, 2, 3].map(|kind| make("store_covered", kind))),
         });
@@ -44,6 +46,7 @@ impl Passes {
     pub(in crate::lbm) fn kernels(&self) -> Vec<&wgpu::ComputePipeline> {
         let mut all = vec![&self.cover, &self.reduce, &self.sum_loads];
         if let Some(r) = &self.redo {
+            all.push(&r.groups);
             all.extend(r.collide.iter().chain(r.store.iter().flatten()));
         }
         all
@@ -61,6 +64,7 @@ pub(super) struct StepPasses {
 
 /// The passes over the covered cells of one step's parity, for the front and the back of the list.
 pub(super) struct CoveredPasses {
+    pub(super) groups: wgpu::ComputePipeline,
     pub(super) collide: [wgpu::ComputePipeline; 2],
     /// The redo's `store_covered` (skip: none).
     pub(super) store: Option<[wgpu::ComputePipeline; 2]>,
@@ -81,6 +85,7 @@ impl GpuLattice {
             reduce: passes.reduce.clone(),
             sum_loads: passes.sum_loads.clone(),
             covered: passes.redo.as_ref().map(|r| CoveredPasses {
+                groups: r.groups.clone(),
                 collide: [0, 1].map(|list| r.collide[kind(list)].clone()),
                 store: r.store.as_ref().map(|s| [0, 1].map(|list| s[kind(list)].clone())),
             }),

@@ -76,13 +76,6 @@ pub(super) const LOADS_BUFFER_BYTES: u64 = LOAD_BYTES * (1 + REDUCE_SLICES as u6
 pub(super) const PAIR_BYTES: u64 = 16;
 /// An entry of the shader's `saved`: a covered cell and its 19 populations (over the `fields` buffer).
 pub(super) const SAVED_BYTES: u64 = 80;
-/// Bytes of a particle's counters in the shader's `particle_lists` (its list's front and back,
-/// padded to a 64-byte cache line).
-pub(super) const LIST_COUNTER_BYTES: u64 = 64;
-/// imb.wgsl's SPAN: entries of a particle's list per workgroup of the passes over the covered cells.
-pub(super) const SPAN: u64 = 64;
-/// Bytes of a span in one of the shader's two lists of spans (the particle, the span's index).
-pub(super) const SPAN_BYTES: u64 = 8;
 
 /// Most particles a coupled step takes: imb.wgsl's `slot_key` holds 24-bit particle indices.
 pub(super) const MAX_PARTICLES: usize = 1 << 24;

@@ -2,13 +2,9 @@
 //! collides with the solid term and streams, and each particle's force and torque come back. Its
 //! passes in order are listed at `coupled_step`.
 
-use super::coupling::span_room;
 use super::loads::convert_loads;
 use super::passes::{CoveredPasses, StepPasses};
-use super::records::{
-    GpuLoad, Load, SolidParticle, SolidParticles, LIST_COUNTER_BYTES, LOAD_BYTES, PAIR_BYTES, REDUCE_SLICES,
-};
-use super::options::CoveredCells;
+use super::records::{GpuLoad, Load, SolidParticle, SolidParticles, LOAD_BYTES, PAIR_BYTES, REDUCE_SLICES};
 use crate::lbm::gpu::GpuLattice;
 
 /// Receives the encoder after each pass of a coupled step (named) and returns the one to go on
@@ -72,9 +68,8 @@ impl GpuLattice {
     }
 
     /// Before the device's passes: the faces' share of velocity (during the ramp), the particles
-    /// staged, and this step's pipelines and counts (particles, pairs, room in each list of spans
-    /// and in the list of covered cells) for the kernels; the count of particles and the
-    /// pipelines.
+    /// staged, and this step's pipelines and counts (particles, pairs, room in the list of
+    /// covered cells) for the kernels; the count of particles and the pipelines.
     pub(super) fn stage<P: SolidParticles + ?Sized>(
         &mut self,
         particles: &P,
@@ -84,8 +79,7 @@ impl GpuLattice {
         let passes = self.step_passes()?;
         let n = particles.count() as u32;
         let coupling = self.imb.as_ref().expect("coupling");
-        let spans = span_room(n as u64, pairs) as u32;
-        let info = [n, pairs as u32, spans, coupling.saved_capacity];
+        let info = [n, pairs as u32, 0, coupling.saved_capacity];
         self.gpu
             .queue
             .write_buffer(&coupling.info, 0, bytemuck::cast_slice(&info));
@@ -93,9 +87,9 @@ impl GpuLattice {
     }
 
     /// The solid fractions: `cover` over the `n` particles' boxes. The slots and the cover mask
-    /// are all 0 here (`reduce` clears them); with the redo and skip each particle lists the
-    /// cells it is the first to cover (its counters cleared here) in spans (status[4], status[8]),
-    /// dispatched indirectly (status[5..7], status[9..11]).
+    /// are all 0 here (`reduce` clears them); with the redo and skip the covered cells are
+    /// listed by `cover` (status[4], status[8]) and dispatched indirectly (status[5..8],
+    /// status[9..12]).
     pub(super) fn encode_cover(
         &self,
         mut encoder: wgpu::CommandEncoder,
@@ -108,10 +102,6 @@ impl GpuLattice {
         let pairs = coupling.staged.1 * PAIR_BYTES;
         if pairs > 0 {
             encoder.clear_buffer(&coupling.pairs, 0, Some(pairs));
-        }
-        let counters = n as u64 * LIST_COUNTER_BYTES;
-        if counters > 0 && self.way().mode != CoveredCells::Fused {
-            encoder.clear_buffer(&coupling.particle_lists, 0, Some(counters));
         }
         self.dispatch_groups(&mut encoder, cover, self.time % 2, n);
         split("cover", encoder)
@@ -143,10 +133,10 @@ impl GpuLattice {
         split: Split,
     ) -> wgpu::CommandEncoder {
         let parity = self.time % 2;
+        self.dispatch_groups(&mut encoder, &covered.groups, parity, 1);
         let indirect = &self.imb.as_ref().expect("coupling").indirect;
-        for (from, to) in [(20, 0), (36, 16)] {
-            encoder.copy_buffer_to_buffer(&self.status, from, indirect, to, 8);
-        }
+        encoder.copy_buffer_to_buffer(&self.status, 20, indirect, 0, 28);
+        encoder = split("covered_groups", encoder);
         for (offset, pipeline) in [0, 16].into_iter().zip(&covered.collide) {
             self.dispatch_indirect(&mut encoder, pipeline, parity, offset);
         }
@@ -224,8 +214,8 @@ impl GpuLattice {
         (bytes, self.gpu.queue.submit([encoder.finish()]))
     }
 
-    /// Dispatches as many workgroups as `cover` counted in status[5..7] (offset 0: the front's
-    /// spans) or status[9..11] (offset 16: the back's).
+    /// Dispatches as many workgroups as `covered_groups` wrote to status[5..8] (offset 0) or
+    /// status[9..12] (offset 16).
     fn dispatch_indirect(
         &self,
         encoder: &mut wgpu::CommandEncoder,
