@@ -97,11 +97,8 @@ fn coupled_with_yade(
     script: &Path,
     args: &[&str],
 ) -> (Output, Option<i32>, String, String) {
-    // As common::start_external, with more patience: the server compiles its kernels on the
-    // CPU's Vulkan driver, which takes long on a loaded machine.
-    let mut fluid = Fluid(start(server(scene, out, &["--dem", "external"])));
-    let line = Proc::wait_line(&fluid.0.stdout, "DEM service:", Duration::from_secs(90));
-    let run = line.split_whitespace().last().expect("a run name").to_string();
+    let (server, run) = start_external(scene, out);
+    let mut fluid = Fluid(server);
     let scene = scene.to_str().unwrap();
     let mut all = vec!["--service", &run, "--scene", scene];
     all.extend_from_slice(args);
