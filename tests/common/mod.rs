@@ -384,6 +384,16 @@ pub fn particle_rows(out: &Path) -> Vec<Vec<f64>> {
         .collect()
 }
 
+/// Every row of the CSV file `path` (a header line, then numbers) as numbers.
+pub fn csv_numbers(path: &Path) -> Vec<Vec<f64>> {
+    std::fs::read_to_string(path)
+        .unwrap()
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
+        .collect()
+}
+
 /// Rows of particles.csv grouped by step: step -> ids.
 pub fn csv_steps(out: &Path) -> std::collections::BTreeMap<u64, Vec<u64>> {
     let text = std::fs::read_to_string(out.join("particles.csv")).expect("particles.csv");
