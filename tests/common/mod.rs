@@ -6,7 +6,7 @@ pub mod mpi;
 use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Output, Stdio};
-use std::sync::mpsc::{channel, Receiver};
+use std::sync::mpsc::{channel, Receiver, RecvTimeoutError};
 use std::time::{Duration, Instant};
 
 /// A binary of the workspace, built next to the test executable (`cargo build` builds it).
@@ -194,23 +194,26 @@ impl Proc {
     fn wait_line(&self, rx: &Receiver<String>, stream: &str, needle: &str) -> String {
         let deadline = Instant::now() + PROCESS_WAIT;
         let mut seen = Vec::new();
-        while let Some(left) = deadline.checked_duration_since(Instant::now()) {
+        let closed = loop {
+            let Some(left) = deadline.checked_duration_since(Instant::now()) else {
+                break false;
+            };
             match rx.recv_timeout(left) {
                 Ok(line) if line.contains(needle) => return line,
                 Ok(line) => seen.push(line),
-                Err(_) => break,
+                Err(RecvTimeoutError::Disconnected) => break true,
+                Err(RecvTimeoutError::Timeout) => break false,
             }
-        }
+        };
+        let when = if closed {
+            format!("before it closed its {stream}")
+        } else {
+            format!("on its {stream} within {PROCESS_WAIT:?}")
+        };
         panic!(
-            "`{}` (pid {}) printed no line containing {needle:?} on its {stream} within \
-             {PROCESS_WAIT:?} ({}); saw:\n{}",
+            "`{}` (pid {}) printed no line containing {needle:?} {when}; saw:\n{}",
             self.name,
             self.child.id(),
-            if is_gone(self.child.id()) {
-                "it has ended"
-            } else {
-                "it still runs"
-            },
             seen.join("\n")
         );
     }
