@@ -172,11 +172,7 @@ fn a_coupled_run_killed_and_resumed_writes_the_same_particles() {
     let (full, part) = (dir.join("full"), dir.join("part"));
     run_ok(server(&scene, &full, &[]));
     let mut server = start(server(&scene, &part, &[]));
-    Proc::wait_line(
-        &server.stderr,
-        "checkpoint at step 30 written",
-        Duration::from_secs(60),
-    );
+    server.stderr_line("checkpoint at step 30 written");
     signal(server.child.id(), libc::SIGKILL);
     let _ = server.wait_exit(Duration::from_secs(10));
     let resumed = resume(&part, &[]);

@@ -228,6 +228,34 @@ fn crossings(out: &Path) -> [bool; 2] {
 /// lag, which the exact step has not).
 #[test]
 fn resting_beads_take_the_sub_steps_while_the_falling_ones_fly() {
+    let last =
+        |out: &Path| -> Vec<Vec<f64>> { particle_rows(out).into_iter().filter(|r| r[0] == 39.0).collect() };
+    let (code, err, out) = run_scene_verbose("islands", &islands_scene(true));
+    assert_eq!(code, Some(0), "{err}");
+    assert!(
+        err.contains("0 steps in free flight, 39 with an island (0 dropped for a sphere beyond its reach); 60.0% of the sphere-steps flown"),
+        "{err}"
+    );
+    let flown = last(&out);
+    let (code, err, out) = run_scene_verbose("islands_off", &islands_scene(false));
+    assert_eq!(code, Some(0), "{err}");
+    assert!(err.contains("0 with an island"), "{err}");
+    let stepped = last(&out);
+    assert_eq!(flown.len(), 10);
+    let apart = apart(&flown, &stepped);
+    // Measured: the resting beads 1.4e-9 m and 9e-8 m/s apart, the falling ones (at 0.03 m/s)
+    // 1.9e-7 m and 1.3e-6 to 1.7e-6 m/s.
+    assert!(
+        apart.iter().all(|&(_, dx, dv)| dx < 1e-6 && dv < 1e-5),
+        "{apart:?}"
+    );
+    let falling: f64 = flown[4..].iter().map(|r| r[8]).sum::<f64>() / 6.0;
+    assert!(falling < -0.02, "the upper beads fall: mean vz {falling}");
+}
+
+/// The scene of [`resting_beads_take_the_sub_steps_while_the_falling_ones_fly`]: 4 beads resting
+/// on the floor and 6 above them falling, 40 steps, with free flight on (`free`) or off.
+fn islands_scene(free: bool) -> String {
     let beads: String = (0..10)
         .map(|k| {
             let (x, y, z) = if k < 4 {
@@ -243,33 +271,20 @@ fn resting_beads_take_the_sub_steps_while_the_falling_ones_fly() {
             format!("[[particles.sphere]]\nposition = [{x}, {y}, {z}]\nradius = 0.0012\n")
         })
         .collect();
-    let scene = |free: bool| {
-        format!(
-            "name = \"islands\"\ngravity = [0.0, 0.0, -9.81]\n[domain]\nmin = [0.0, 0.0, 0.0]\n\
-             max = [0.016, 0.016, 0.024]\n[fluid]\ndensity = 1235.0\ndynamic_viscosity = 0.2\n\
-             [time]\nsteps = 40\n[lattice]\ndx = 0.001\noperator = \"trt\"\nvelocity_scale = 0.05\n\
-             mach = 0.1\n[output]\ninterval = 39\n[coupling]\nfree_flight = {free}\n\
-             [particles]\ndensity = 2500.0\n{beads}"
-        )
-    };
-    let last =
-        |out: &Path| -> Vec<Vec<f64>> { particle_rows(out).into_iter().filter(|r| r[0] == 39.0).collect() };
-    let (code, err, out) = run_scene_verbose("islands", &scene(true));
-    assert_eq!(code, Some(0), "{err}");
-    assert!(
-        err.contains("0 steps in free flight, 39 with an island (0 dropped for a sphere beyond its reach); 60.0% of the sphere-steps flown"),
-        "{err}"
-    );
-    let flown = last(&out);
-    let (code, err, out) = run_scene_verbose("islands_off", &scene(false));
-    assert_eq!(code, Some(0), "{err}");
-    assert!(err.contains("0 with an island"), "{err}");
-    let stepped = last(&out);
-    assert_eq!(flown.len(), 10);
-    // (bead, distance, velocity difference) from the sub-stepped run's.
-    let apart: Vec<(f64, f64, f64)> = flown
+    format!(
+        "name = \"islands\"\ngravity = [0.0, 0.0, -9.81]\n[domain]\nmin = [0.0, 0.0, 0.0]\n\
+         max = [0.016, 0.016, 0.024]\n[fluid]\ndensity = 1235.0\ndynamic_viscosity = 0.2\n\
+         [time]\nsteps = 40\n[lattice]\ndx = 0.001\noperator = \"trt\"\nvelocity_scale = 0.05\n\
+         mach = 0.1\n[output]\ninterval = 39\n[coupling]\nfree_flight = {free}\n\
+         [particles]\ndensity = 2500.0\n{beads}"
+    )
+}
+
+/// (bead, distance, velocity difference) of each bead of the rows `flown` from its row in `stepped`.
+fn apart(flown: &[Vec<f64>], stepped: &[Vec<f64>]) -> Vec<(f64, f64, f64)> {
+    flown
         .iter()
-        .zip(&stepped)
+        .zip(stepped)
         .map(|(a, b)| {
             let d = |at: usize| {
                 (0..3)
@@ -279,13 +294,5 @@ fn resting_beads_take_the_sub_steps_while_the_falling_ones_fly() {
             };
             (a[2], d(3), d(6))
         })
-        .collect();
-    // Measured: the resting beads 1.4e-9 m and 9e-8 m/s apart, the falling ones (at 0.03 m/s)
-    // 1.9e-7 m and 1.3e-6 to 1.7e-6 m/s.
-    assert!(
-        apart.iter().all(|&(_, dx, dv)| dx < 1e-6 && dv < 1e-5),
-        "{apart:?}"
-    );
-    let falling: f64 = flown[4..].iter().map(|r| r[8]).sum::<f64>() / 6.0;
-    assert!(falling < -0.02, "the upper beads fall: mean vz {falling}");
+        .collect()
 }

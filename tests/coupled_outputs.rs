@@ -13,14 +13,7 @@ use std::path::Path;
 /// surface, partly covered, carry the liquid's velocity inwards; 12% slower for a sphere of 6 cells).
 #[test]
 fn a_coupled_run_writes_the_fields_the_scene_asks_for() {
-    let scene = "name = \"sphere-fields\"\ngravity = [0.0, 0.0, -9.81]\n[domain]\nmin = [0.0, 0.0, 0.0]\n\
-                 max = [0.08, 0.08, 0.08]\n[fluid]\ndensity = 970.0\ndynamic_viscosity = 0.373\n[time]\n\
-                 steps = 100\n[lattice]\ndx = 0.0025\noperator = \"trt\"\nvelocity_scale = 0.038\nmach = 0.1\n\
-                 [output]\ninterval = 25\nfields_interval = 50\n\
-                 [[output.line]]\naxis = \"z\"\nthrough = [0.04, 0.04, 0.0]\n\
-                 [particles]\ndensity = 1120.0\n[[particles.sphere]]\nposition = [0.04, 0.04, 0.045]\n\
-                 radius = 0.015\n";
-    let (code, err, out) = run_scene("coupled-fields", scene);
+    let (code, err, out) = run_scene("coupled-fields", SPHERE_FIELDS);
     assert_eq!(code, Some(0), "{err}");
     let pvd = std::fs::read_to_string(out.join("fields.pvd")).unwrap();
     assert_eq!(pvd.matches("<DataSet").count(), 2, "steps 50 and 100: {pvd}");
@@ -29,12 +22,7 @@ fn a_coupled_run_writes_the_fields_the_scene_asks_for() {
         vti.len() > 16 * 32 * 32 * 32,
         "density and velocity of 32^3 cells present"
     );
-    let text = std::fs::read_to_string(out.join("line0.csv")).unwrap();
-    let rows: Vec<Vec<f64>> = text
-        .lines()
-        .skip(1)
-        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
-        .collect();
+    let rows = csv_numbers(&out.join("line0.csv"));
     assert_eq!(rows.len(), 4 * 32, "steps 25, 50, 75 and 100, 32 cells each");
     // The sphere's last state (step 99), far from the walls, against the line's cell nearest its
     // centre after step 100.
@@ -65,8 +53,23 @@ fn a_coupled_run_writes_the_fields_the_scene_asks_for() {
     let pvd = std::fs::read_to_string(out.join("particles.pvd")).unwrap();
     let steps = csv_steps(&out);
     assert_eq!(pvd.matches("<DataSet").count(), steps.len(), "{pvd}");
-    let last = steps.keys().last().unwrap();
-    let vtp = std::fs::read_to_string(out.join(format!("particles_{last:06}.vtp"))).unwrap();
+    let fz = vtp_force_z(&out, *steps.keys().last().unwrap());
+    assert_eq!(fz, sphere[14], "the vtp's fluid force against particles.csv's");
+}
+
+/// The scene of [`a_coupled_run_writes_the_fields_the_scene_asks_for`]: a sphere of 12 cells
+/// settling in a box of 32^3 cells, fields every 50 steps and a probe line along z through it.
+const SPHERE_FIELDS: &str = "name = \"sphere-fields\"\ngravity = [0.0, 0.0, -9.81]\n[domain]\nmin = [0.0, 0.0, 0.0]\n\
+                 max = [0.08, 0.08, 0.08]\n[fluid]\ndensity = 970.0\ndynamic_viscosity = 0.373\n[time]\n\
+                 steps = 100\n[lattice]\ndx = 0.0025\noperator = \"trt\"\nvelocity_scale = 0.038\nmach = 0.1\n\
+                 [output]\ninterval = 25\nfields_interval = 50\n\
+                 [[output.line]]\naxis = \"z\"\nthrough = [0.04, 0.04, 0.0]\n\
+                 [particles]\ndensity = 1120.0\n[[particles.sphere]]\nposition = [0.04, 0.04, 0.045]\n\
+                 radius = 0.015\n";
+
+/// The z component of the fluid's force on the first particle in the ParaView file of `step`.
+fn vtp_force_z(out: &Path, step: u64) -> f64 {
+    let vtp = std::fs::read_to_string(out.join(format!("particles_{step:06}.vtp"))).unwrap();
     let force = vtp
         .split("Name=\"fluid_force\"")
         .nth(1)
@@ -74,8 +77,7 @@ fn a_coupled_run_writes_the_fields_the_scene_asks_for() {
         .lines()
         .nth(1)
         .unwrap();
-    let fz: f64 = force.split(' ').nth(2).unwrap().parse().unwrap();
-    assert_eq!(fz, sphere[14], "the vtp's fluid force against particles.csv's");
+    force.split(' ').nth(2).unwrap().parse().unwrap()
 }
 
 /// The default scene (no file given) is a coupled run: the lattice, the immersed moving boundary
@@ -297,26 +299,54 @@ fn a_run_says_a_short_header_and_a_line_per_warning() {
 /// names the kernels and the way kept and holds the trial's lines.
 #[test]
 fn a_timed_run_changes_ways_and_not_its_particles() {
-    let beads = beads_in_a_row(&[3.7, 7.9, 12.1]);
-    let scene = |way: &str, kernel: &str| {
-        format!(
-            "name = \"ways\"\ngravity = [0.0, 0.0, -9.81]\n[domain]\nmin = [0.0, 0.0, 0.0]\n\
-             max = [0.016, 0.012, 0.016]\n[fluid]\ndensity = 1235.0\ndynamic_viscosity = 0.2\n\
-             [time]\nsteps = 240\n[lattice]\ndx = 0.001\noperator = \"trt\"\nvelocity_scale = 0.05\n\
-             mach = 0.1\nkernel = \"{kernel}\"\n[output]\ninterval = 10\n[coupling]\ncovered_cells = \"{way}\"\n\
-             [particles]\ndensity = 2500.0\n{beads}"
-        )
-    };
-    let (code, redo_err, redo) = run_scene_verbose("timed_redo", &scene("redo", "quads"));
+    let (code, redo_err, redo) = run_scene_verbose("timed_redo", &ways_scene("redo", "quads"));
     assert_eq!(code, Some(0), "{redo_err}");
     assert!(!redo_err.contains("covered cells timed"), "{redo_err}");
     assert!(!redo_err.contains("kernels timed"), "{redo_err}");
-    let (code, err, timed) = run_scene_verbose("timed", &scene("timed", "auto"));
+    let (code, err, timed) = run_scene_verbose("timed", &ways_scene("timed", "auto"));
     assert_eq!(code, Some(0), "{err}");
     assert!(
         err.contains("the kernels and the ways of the covered cells timed on the run's first steps"),
         "{err}"
     );
+    let (kernel, kept) = kept_by_the_trial(&err);
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(timed.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["covered_cells"], kept, "summary.json names the way kept");
+    assert_eq!(summary["kernel"], kernel, "summary.json names the kernels kept");
+    assert_eq!(
+        summary["trial"].as_array().map(Vec::len),
+        Some(2),
+        "the trial's lines"
+    );
+    let particles = |out: &Path| std::fs::read_to_string(out.join("particles.csv")).unwrap();
+    assert_eq!(
+        particles(&timed).lines().count(),
+        1 + 25 * 3,
+        "rows every 10 steps and the last"
+    );
+    assert!(
+        particles(&timed) == particles(&redo),
+        "the timed run's particles.csv differs from the redone run's"
+    );
+}
+
+/// The scene of [`a_timed_run_changes_ways_and_not_its_particles`]: three beads in a row settling,
+/// 240 steps, with the covered cells' `way` and the `kernel` given.
+fn ways_scene(way: &str, kernel: &str) -> String {
+    let beads = beads_in_a_row(&[3.7, 7.9, 12.1]);
+    format!(
+        "name = \"ways\"\ngravity = [0.0, 0.0, -9.81]\n[domain]\nmin = [0.0, 0.0, 0.0]\n\
+         max = [0.016, 0.012, 0.016]\n[fluid]\ndensity = 1235.0\ndynamic_viscosity = 0.2\n\
+         [time]\nsteps = 240\n[lattice]\ndx = 0.001\noperator = \"trt\"\nvelocity_scale = 0.05\n\
+         mach = 0.1\nkernel = \"{kernel}\"\n[output]\ninterval = 10\n[coupling]\ncovered_cells = \"{way}\"\n\
+         [particles]\ndensity = 2500.0\n{beads}"
+    )
+}
+
+/// The kernels and the way of the covered cells that the trial said it kept, from the run's
+/// stderr `err`; every way timed.
+fn kept_by_the_trial(err: &str) -> (&'static str, &'static str) {
     let line = |what: &str| {
         err.lines()
             .find(|l| l.contains(what))
@@ -338,23 +368,5 @@ fn a_timed_run_changes_ways_and_not_its_particles() {
             "{way} timed: {ways}"
         );
     }
-    let summary: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(timed.join("summary.json")).unwrap()).unwrap();
-    assert_eq!(summary["covered_cells"], kept, "summary.json names the way kept");
-    assert_eq!(summary["kernel"], kernel, "summary.json names the kernels kept");
-    assert_eq!(
-        summary["trial"].as_array().map(Vec::len),
-        Some(2),
-        "the trial's lines"
-    );
-    let particles = |out: &Path| std::fs::read_to_string(out.join("particles.csv")).unwrap();
-    assert_eq!(
-        particles(&timed).lines().count(),
-        1 + 25 * 3,
-        "rows every 10 steps and the last"
-    );
-    assert!(
-        particles(&timed) == particles(&redo),
-        "the timed run's particles.csv differs from the redone run's"
-    );
+    (kernel, kept)
 }

@@ -193,14 +193,7 @@ fn a_periodic_granular_scene_is_checked_across_its_faces() {
 #[test]
 fn the_dem_bench_times_a_coupled_scene_with_free_flight_on_and_off() {
     let dir = temp_dir("dem-bench");
-    let bed =
-        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/validation/scenes/bed.toml")).unwrap();
-    let small = bed.replace("count = [32, 32, 32]", "count = [4, 4, 2]");
-    assert_ne!(
-        small, bed,
-        "validation/scenes/bed.toml holds the count this test shrinks"
-    );
-    let scene = write_scene(&dir, &small);
+    let scene = write_scene(&dir, &small_bed());
     let run = Command::new(bin("dem-client"))
         .args(["bench", "--steps", "3"])
         .arg(&scene)
@@ -217,12 +210,7 @@ fn the_dem_bench_times_a_coupled_scene_with_free_flight_on_and_off() {
         .iter()
         .position(|l| l.contains("free flight off"))
         .expect(&stderr);
-    let k: u64 = lines[on]
-        .split(" DEM steps of ")
-        .next()
-        .and_then(|head| head.rsplit(' ').next())
-        .and_then(|k| k.parse().ok())
-        .expect(&stderr);
+    let k = dem_steps_per_fluid_step(lines[on]).expect(&stderr);
     assert!(lines[on].contains("32 spheres, 3 fluid steps"), "{stderr}");
     // Every bead is in the island: its first fluid steps alternate the island's world and the
     // whole world's lists (their trial, dem/world/everyone.rs), two of three through the island.
@@ -251,4 +239,24 @@ fn the_dem_bench_times_a_coupled_scene_with_free_flight_on_and_off() {
     let stderr = String::from_utf8_lossy(&refused.stderr);
     assert_eq!(refused.status.code(), Some(2), "{stderr}");
     assert!(stderr.contains("the scene has no [lattice]"), "{stderr}");
+}
+
+/// validation/scenes/bed.toml with 4 x 4 x 2 of its beads.
+fn small_bed() -> String {
+    let bed =
+        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/validation/scenes/bed.toml")).unwrap();
+    let small = bed.replace("count = [32, 32, 32]", "count = [4, 4, 2]");
+    assert_ne!(
+        small, bed,
+        "validation/scenes/bed.toml holds the count this test shrinks"
+    );
+    small
+}
+
+/// The DEM steps per fluid step that the bench's `line` names ("... K DEM steps of ...").
+fn dem_steps_per_fluid_step(line: &str) -> Option<u64> {
+    line.split(" DEM steps of ")
+        .next()
+        .and_then(|head| head.rsplit(' ').next())
+        .and_then(|k| k.parse().ok())
 }

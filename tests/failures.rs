@@ -30,7 +30,7 @@ fn long_run_of(tag: &str, text: &str) -> (Proc, u32, std::path::PathBuf) {
     let scene = write_scene(&dir, text);
     let out = dir.join("out");
     let server = start(server(&scene, &out, &[]));
-    Proc::wait_line(&server.stderr, "lbm-server: scene", Duration::from_secs(20));
+    server.stderr_line("lbm-server: scene");
     std::thread::sleep(Duration::from_millis(300));
     let dem = child_pid(server.child.id());
     (server, dem, out)
@@ -256,7 +256,7 @@ fn ctrl_c_on_a_fluid_run_writes_the_step_it_stopped_at() {
     let scene = write_scene(&dir, &text.replace("steps = 3000", "steps = 100000000"));
     let out = dir.join("out");
     let mut server = start(server(&scene, &out, &[]));
-    Proc::wait_line(&server.stderr, "lbm-server: scene", Duration::from_secs(20));
+    server.stderr_line("lbm-server: scene");
     std::thread::sleep(Duration::from_millis(500));
     signal(server.child.id(), libc::SIGINT);
     let (code, _) = server.wait_exit(Duration::from_secs(20));

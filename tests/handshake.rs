@@ -17,7 +17,7 @@ fn protocol_version_mismatch_is_refused_naming_both_versions() {
         .unwrap();
     let client_err = String::from_utf8_lossy(&client.stderr);
     assert_eq!(client.status.code(), Some(1), "{client_err}");
-    let (code, _) = server.wait_exit(Duration::from_secs(10));
+    let (code, _) = server.wait_exit(PROCESS_WAIT);
     let server_err = Proc::drain(&server.stderr);
     assert_eq!(code, Some(1));
     let expected = "protocol version mismatch: lbm-server speaks version 2, the DEM client speaks version 7";

@@ -39,7 +39,7 @@ enum Victim {
     Fluid,
 }
 
-#[derive(Clone, Copy)]
+#[derive(Clone, Copy, Debug)]
 enum Moment {
     /// Once particles.csv holds the rows of step 25 (checkpoints at 20 and 30).
     BetweenCheckpoints,
@@ -50,7 +50,7 @@ enum Moment {
 
 /// Waits until `moment` in the run writing into `out` (true), or the run ended first (false).
 fn wait_for(moment: Moment, out: &Path, server: &mut Proc) -> bool {
-    let deadline = Instant::now() + Duration::from_secs(120);
+    let deadline = Instant::now() + PROCESS_WAIT;
     while Instant::now() < deadline {
         let now = match moment {
             Moment::BetweenCheckpoints => {
@@ -69,7 +69,12 @@ fn wait_for(moment: Moment, out: &Path, server: &mut Proc) -> bool {
         }
         std::thread::sleep(Duration::from_micros(300));
     }
-    panic!("the moment did not come within 120 s");
+    panic!(
+        "`{}` (pid {}) did not reach the moment {moment:?} in {} within {PROCESS_WAIT:?}",
+        server.name,
+        server.child.id(),
+        out.display()
+    );
 }
 
 fn same_file(a: &Path, b: &Path) {

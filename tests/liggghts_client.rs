@@ -144,7 +144,7 @@ fn both_dems(tag: &str, scene_text: &str, deck: &Path, vars: &[(&str, &str)]) ->
     assert!(builtin.status.success(), "built-in DEM run:\n{}", text(&builtin));
 
     let out = dir.join("liggghts");
-    let (mut server, run) = start_waiting_server(&scene, &out);
+    let (mut server, run) = start_external(&scene, &out);
     let client = adapter(&dir, &run, &scene, deck, vars)
         .output()
         .expect("python3 runs");
@@ -159,16 +159,6 @@ fn both_dems(tag: &str, scene_text: &str, deck: &Path, vars: &[(&str, &str)]) ->
     );
     assert!(leftover_files(&run).is_empty(), "{:?}", leftover_files(&run));
     (builtin_out, out, text(&client))
-}
-
-/// `lbm-server run SCENE --dem external` and the run name it printed. Its start (the lattice's
-/// shaders built for lavapipe by a debug build) may take longer than `start_external` waits
-/// while other tests load the machine.
-fn start_waiting_server(scene: &Path, out: &Path) -> (Proc, String) {
-    let server = start(server(scene, out, &["--dem", "external"]));
-    let line = Proc::wait_line(&server.stdout, "DEM service:", Duration::from_secs(120));
-    let run = line.split_whitespace().last().expect("a run name").to_string();
-    (server, run)
 }
 
 /// Prints `what` from both DEMs and asserts that LIGGGHTS's is within 0.5% of the built-in DEM's.

@@ -44,7 +44,7 @@ fn started_long_run(tag: &str) -> Option<(Proc, Vec<u32>, PathBuf)> {
 fn started_run_of(tag: &str, text: &str) -> Option<(Proc, Vec<u32>, PathBuf)> {
     let (mpirun, scene_file, out) = setup(tag, text)?;
     let run = start(mpirun_command(&mpirun, 2, &scene_file, &out));
-    Proc::wait_line(&run.stderr, "lbm-server: step ", Duration::from_secs(120));
+    run.stderr_line("lbm-server: step ");
     let ranks = ranks_of(run.child.id());
     assert_eq!(ranks.len(), 2, "the ranks of mpirun {}", run.child.id());
     Some((run, ranks, out))

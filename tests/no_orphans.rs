@@ -56,7 +56,7 @@ fn long_mpi_run() -> Option<(Proc, Vec<u32>)> {
         return None;
     }
     let run = start(mpirun_command(&mpirun, 2, &scene_file, &dir.join("out")));
-    Proc::wait_line(&run.stderr, "lbm-server: step ", Duration::from_secs(120));
+    run.stderr_line("lbm-server: step ");
     let pid = run.child.id();
     let children = std::fs::read_to_string(format!("/proc/{pid}/task/{pid}/children")).unwrap();
     let ranks = children.split_whitespace().map(|c| c.parse().unwrap()).collect();
@@ -85,7 +85,7 @@ fn a_killed_harness_leaves_no_process() {
     let mut cmd = Command::new(std::env::current_exe().unwrap());
     cmd.args(["harness_to_kill", "--exact", "--ignored", "--nocapture"]);
     let harness = start(cmd);
-    let line = Proc::wait_line(&harness.stdout, "pids: ", Duration::from_secs(180));
+    let line = harness.stdout_line("pids: ");
     let pids: Vec<u32> = line["pids: ".len()..]
         .split_whitespace()
         .map(|p| p.parse().unwrap())

@@ -66,7 +66,7 @@ fn long_coupled_run(tag: &str, interval: u64) -> (Proc, PathBuf) {
     let scene = write_scene(&dir, &scene_text(tag, [4, 4, 4], 10_000_000, interval, 30.0));
     let out = dir.join("out");
     let server = start(server(&scene, &out, &[]));
-    Proc::wait_line(&server.stderr, "lbm-server: scene", Duration::from_secs(30));
+    server.stderr_line("lbm-server: scene");
     (server, out)
 }
 
@@ -99,7 +99,7 @@ fn a_second_granular_run_into_the_same_folder_is_refused_naming_the_first() {
     let scene = write_scene(&dir, &granular(100_000_000, 1000));
     let out = dir.join("out");
     let mut first = start(dem_run(&scene, &out));
-    Proc::wait_line(&first.stderr, "dem-client: scene", Duration::from_secs(30));
+    first.stderr_line("dem-client: scene");
     let pid = first.child.id();
     let _first = KillOnDrop(pid);
     let short = write_scene(&out, &granular(5, 1));
@@ -135,7 +135,7 @@ fn whole_rows(path: &Path, columns: usize) -> Vec<Vec<f64>> {
 fn steps_done_after(server: &Proc, count: usize) -> u64 {
     let mut done = 0;
     for _ in 0..count {
-        let line = Proc::wait_line(&server.stderr, "lbm-server: step ", Duration::from_secs(60));
+        let line = server.stderr_line("lbm-server: step ");
         let n = line.split("step ").nth(1).and_then(|r| r.split('/').next());
         done = n.and_then(|n| n.parse().ok()).unwrap_or_else(|| panic!("{line}"));
     }
@@ -171,7 +171,7 @@ fn a_killed_granular_run_leaves_whole_rows() {
     let out = dir.join("out");
     let mut run = start(dem_run(&scene, &out));
     let _run = KillOnDrop(run.child.id());
-    Proc::wait_line(&run.stderr, "dem-client: scene", Duration::from_secs(30));
+    run.stderr_line("dem-client: scene");
     std::thread::sleep(Duration::from_millis(1500));
     signal(run.child.id(), libc::SIGKILL);
     run.wait_exit(Duration::from_secs(10));
@@ -345,11 +345,7 @@ fn ctrl_c_during_start_up_acts_at_once() {
         std::fs::write(out.join("summary.json"), "{}\n").unwrap();
         let mut run = start(server(&scene, &out, &[]));
         let _run = KillOnDrop(run.child.id());
-        Proc::wait_line(
-            &run.stderr,
-            "output files of an earlier run",
-            Duration::from_secs(30),
-        );
+        run.stderr_line("output files of an earlier run");
         signal(run.child.id(), libc::SIGINT);
         let (code, waited) = run.wait_exit(Duration::from_secs(60));
         let stderr = Proc::drain(&run.stderr);

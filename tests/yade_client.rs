@@ -97,11 +97,8 @@ fn coupled_with_yade(
     script: &Path,
     args: &[&str],
 ) -> (Output, Option<i32>, String, String) {
-    // As common::start_external, with more patience: the server compiles its kernels on the
-    // CPU's Vulkan driver, which takes long on a loaded machine.
-    let mut fluid = Fluid(start(server(scene, out, &["--dem", "external"])));
-    let line = Proc::wait_line(&fluid.0.stdout, "DEM service:", Duration::from_secs(90));
-    let run = line.split_whitespace().last().expect("a run name").to_string();
+    let (server, run) = start_external(scene, out);
+    let mut fluid = Fluid(server);
     let scene = scene.to_str().unwrap();
     let mut all = vec!["--service", &run, "--scene", scene];
     all.extend_from_slice(args);
@@ -143,13 +140,7 @@ fn yade_settles_the_ten_cate_sphere_as_the_builtin_dem_does() {
     let Some(yade) = Yade::find("yade_settles_the_ten_cate_sphere_as_the_builtin_dem_does") else {
         return;
     };
-    let (dir, scene) = ten_cate_scene("yade-tencate", 150);
-    let spinning = std::fs::read_to_string(&scene).unwrap().replace(
-        "radius = 0.0075                      # m",
-        "radius = 0.0075                      # m\nangular_velocity = [0.0, 5.0, 0.0]",
-    );
-    assert!(spinning.contains("angular_velocity"));
-    std::fs::write(&scene, spinning).unwrap();
+    let (dir, scene) = spinning_ten_cate_scene("yade-tencate", 150);
     let builtin = dir.join("builtin");
     let run = server(&scene, &builtin, &[]).output().expect("lbm-server runs");
     assert!(run.status.success(), "built-in DEM run: {}", text(&run.stderr));
@@ -182,9 +173,29 @@ fn yade_settles_the_ten_cate_sphere_as_the_builtin_dem_does() {
         (with_yade - with_builtin).abs() <= 0.005 * with_builtin,
         "peak settling speed with YADE {with_yade} m/s, with the built-in DEM {with_builtin} m/s"
     );
+    same_spin(&builtin, &out);
+    assert!(leftover_files(&run).is_empty(), "{:?}", leftover_files(&run));
+}
+
+/// [`ten_cate_scene`] with the sphere released spinning at 5 rad/s about y.
+fn spinning_ten_cate_scene(tag: &str, steps: u64) -> (PathBuf, PathBuf) {
+    let (dir, scene) = ten_cate_scene(tag, steps);
+    let spinning = std::fs::read_to_string(&scene).unwrap().replace(
+        "radius = 0.0075                      # m",
+        "radius = 0.0075                      # m\nangular_velocity = [0.0, 5.0, 0.0]",
+    );
+    assert!(spinning.contains("angular_velocity"));
+    std::fs::write(&scene, spinning).unwrap();
+    (dir, scene)
+}
+
+/// The sphere's spin about y in the runs into `builtin` and `yade` at every output step: the same
+/// within 0.5%, and 1e-5 of the initial spin where it has decayed to the flow's own (1e-3 rad/s
+/// at 0.5 s); the fluid slows it.
+fn same_spin(builtin: &Path, yade: &Path) {
     // particles.csv: step, time, id, x, y, z, vx, vy, vz, wx, wy, wz, ... Within 0.5%, and 1e-5
     // of the initial spin where it has decayed to the flow's own (1e-3 rad/s at 0.5 s).
-    let (spin_builtin, spin_yade) = (particle_rows(&builtin), particle_rows(&out));
+    let (spin_builtin, spin_yade) = (particle_rows(builtin), particle_rows(yade));
     assert_eq!(spin_builtin.len(), spin_yade.len());
     assert!(
         spin_builtin[8][10] < 1.0,
@@ -200,7 +211,6 @@ fn yade_settles_the_ten_cate_sphere_as_the_builtin_dem_does() {
             b[10]
         );
     }
-    assert!(leftover_files(&run).is_empty(), "{:?}", leftover_files(&run));
 }
 
 /// A YADE script for the one-sphere Ten Cate scene: `count` builds two spheres, `ids` maps the

@@ -45,7 +45,9 @@ def grid_positions(n: int, lo: np.ndarray, hi: np.ndarray, radius: float) -> np.
     return np.clip(centre, lo + radius, hi - radius)
 
 
-def main() -> int:
+def arguments() -> tuple[argparse.Namespace, tuple[float, float, float]] | None:
+    """The command line and the units it names (length [m], time [s], mass [kg]); None, said,
+    where a value is bad."""
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--service", default=os.environ.get("LBMDEM_RUN"),
                     help="run name printed by lbm-server (default: $LBMDEM_RUN, which "
@@ -63,18 +65,22 @@ def main() -> int:
         ap.error("--service is required (or $LBMDEM_RUN)")
     if args.particles < 1:
         print("python-dem: error: --particles must be at least 1", file=sys.stderr)
-        return 1
+        return None
     if not (args.density > 0.0 and math.isfinite(args.density)):
         print("python-dem: error: --density must be a positive number", file=sys.stderr)
-        return 1
+        return None
     try:
         length_m, time_s, mass_kg = (float(u) for u in args.units.split(","))
     except ValueError:
         print(f"python-dem: error: --units {args.units!r}: must be three numbers LENGTH_M,TIME_S,MASS_KG",
               file=sys.stderr)
-        return 1
-    units = lbmdem.Units(length_m, time_s, mass_kg)
+        return None
+    return args, (length_m, time_s, mass_kg)
 
+
+def stop_on_signals() -> dict:
+    """Ctrl-C and SIGTERM set the returned ``{"flag": True}`` (STOP goes with the next states); a
+    second one leaves at once (KeyboardInterrupt)."""
     stop_requested = {"flag": False}
 
     def on_signal(signum, _frame):
@@ -86,6 +92,58 @@ def main() -> int:
 
     signal.signal(signal.SIGINT, on_signal)
     signal.signal(signal.SIGTERM, on_signal)
+    return stop_requested
+
+
+class Spheres:
+    """The spheres this DEM moves, from the Welcome: their states (sent as they are), mass, the
+    box and its periodic axes, and gravity, all in this DEM's units."""
+
+    def __init__(self, welcome, n: int, density_si: float, length_m: float, mass_kg: float):
+        self.dt = welcome.dt
+        self.lo = np.array(welcome.domain_min[:])
+        self.hi = np.array(welcome.domain_max[:])
+        self.g = np.array(welcome.gravity[:])
+        self.periodic = np.array(welcome.periodic_axes())
+        axes = [name for name, p in zip("xyz", self.periodic) if p]
+        lo, hi = self.lo, self.hi
+        print(f"python-dem: connected to {welcome.software_text()} (pid {welcome.pid}): "
+              f"{welcome.steps} steps of {self.dt:g} s, domain {lo.tolist()} .. {hi.tolist()}, "
+              f"periodic along {axes}, capacity {welcome.capacity}", file=sys.stderr, flush=True)
+
+        radius = 0.02 * float(np.min(hi - lo))
+        # Everything from the Welcome is in our units already; the density is given in SI.
+        density = density_si * length_m ** 3 / mass_kg
+        self.mass = density * 4.0 / 3.0 * math.pi * radius ** 3
+        self.states = np.zeros(n, lbmdem.STATE_DTYPE)
+        self.states["id"] = np.arange(n, dtype=np.uint64)
+        self.states["position"] = grid_positions(n, lo, hi, radius)
+        self.states["radius"] = radius
+        self.low, self.high = lo + radius, hi - radius
+
+    def advance(self, forces) -> None:
+        """Symplectic Euler, then elastic reflection at the faces; along the periodic axes
+        (Welcome.periodic) the spheres pass through and come back on the other side."""
+        x = self.states["position"]  # views into the array that is sent
+        v = self.states["velocity"]
+        dt, lo, hi, low, high, periodic = self.dt, self.lo, self.hi, self.low, self.high, self.periodic
+        v += dt * (forces["force"] / self.mass + self.g)
+        x += dt * v
+        x[:] = np.where(periodic, lo + np.mod(x - lo, hi - lo), x)
+        below, above = (x < low) & ~periodic, (x > high) & ~periodic
+        x[below] = 2.0 * np.broadcast_to(low, x.shape)[below] - x[below]
+        x[above] = 2.0 * np.broadcast_to(high, x.shape)[above] - x[above]
+        v[below | above] *= -1.0
+        x[:] = np.where(periodic, x, np.clip(x, low, high))
+
+
+def main() -> int:
+    parsed = arguments()
+    if parsed is None:
+        return 1
+    args, (length_m, time_s, mass_kg) = parsed
+    units = lbmdem.Units(length_m, time_s, mass_kg)
+    stop_requested = stop_on_signals()
 
     n = args.particles
     hello = lbmdem.Hello.new(
@@ -99,34 +157,13 @@ def main() -> int:
     last = None
     try:
         welcome = link.connect(hello)
-        dt = welcome.dt
-        lo = np.array(welcome.domain_min[:])
-        hi = np.array(welcome.domain_max[:])
-        g = np.array(welcome.gravity[:])
-        periodic = np.array(welcome.periodic_axes())
-        axes = [name for name, p in zip("xyz", periodic) if p]
-        print(f"python-dem: connected to {welcome.software_text()} (pid {welcome.pid}): "
-              f"{welcome.steps} steps of {dt:g} s, domain {lo.tolist()} .. {hi.tolist()}, "
-              f"periodic along {axes}, capacity {welcome.capacity}", file=sys.stderr, flush=True)
-
-        radius = 0.02 * float(np.min(hi - lo))
-        # Everything from the Welcome is in our units already; the density is given in SI.
-        density = args.density * length_m ** 3 / mass_kg
-        mass = density * 4.0 / 3.0 * math.pi * radius ** 3
-        states = np.zeros(n, lbmdem.STATE_DTYPE)
-        states["id"] = np.arange(n, dtype=np.uint64)
-        states["position"] = grid_positions(n, lo, hi, radius)
-        states["radius"] = radius
-        x = states["position"]  # views into the array that is sent
-        v = states["velocity"]
-        low, high = lo + radius, hi - radius
-
+        spheres = Spheres(welcome, n, args.density, length_m, mass_kg)
         round_trips = []
         step = 0
         while True:
             flags = lbmdem.StepFlags.STOP if stop_requested["flag"] else 0
             t0 = time.perf_counter()
-            link.send_states(step, step * dt, states, flags)
+            link.send_states(step, step * spheres.dt, spheres.states, flags)
             header, forces = link.receive_forces(step)  # checks step, count, ids
             round_trips.append(time.perf_counter() - t0)
             last = step
@@ -136,16 +173,7 @@ def main() -> int:
             if step + 1 >= welcome.steps:
                 raise lbmdem.BadReply(f"the {lbmdem.FLUID} did not mark the reply to step {step}, "
                                       f"the last of {welcome.steps}, FINAL", last)
-            # Symplectic Euler, then elastic reflection at the faces; along the periodic axes
-            # (Welcome.periodic) the spheres pass through and come back on the other side.
-            v += dt * (forces["force"] / mass + g)
-            x += dt * v
-            x[:] = np.where(periodic, lo + np.mod(x - lo, hi - lo), x)
-            below, above = (x < low) & ~periodic, (x > high) & ~periodic
-            x[below] = 2.0 * np.broadcast_to(low, x.shape)[below] - x[below]
-            x[above] = 2.0 * np.broadcast_to(high, x.shape)[above] - x[above]
-            v[below | above] *= -1.0
-            x[:] = np.where(periodic, x, np.clip(x, low, high))
+            spheres.advance(forces)
             step += 1
     except KeyboardInterrupt:
         link.close()
@@ -161,16 +189,20 @@ def main() -> int:
               f"{last if last is not None else 'none'})", file=sys.stderr)
         return 1
     link.close()
+    say_ended(round_trips, stop_requested["flag"], last, welcome.steps, n)
+    return 0
 
+
+def say_ended(round_trips: list, stopped: bool, last: int, steps: int, n: int) -> None:
+    """The round trips' median and 99th percentile, how the run ended, and the steps completed."""
     rt = np.array(round_trips) * 1e6
     print(f"python-dem: round trip median {np.median(rt):.0f} us, p99 "
           f"{np.percentile(rt, 99):.0f} us over {rt.size} steps", file=sys.stderr)
-    if stop_requested["flag"]:
+    if stopped:
         print(f"python-dem: stopped on request after step {last}", file=sys.stderr)
-    elif last + 1 < welcome.steps:
+    elif last + 1 < steps:
         print(f"python-dem: the fluid server stopped the run after step {last}", file=sys.stderr)
     print(f"python-dem: completed {last + 1} steps, {n} particles, last step {last}", flush=True)
-    return 0
 
 
 if __name__ == "__main__":

@@ -399,11 +399,11 @@ impl Watch {
         T: Debug + ZeroCopySend + 'static,
         H: Debug + ZeroCopySend + 'static,
     {
-        let start = Instant::now();
-        let mut stopped_since: Option<Instant> = None;
-        // Started at the first look at the peer, one poll into the wait (its windows and idle time
-        // still count from the wait's start): an answer that is there at once costs no read.
-        let mut activity: Option<Activity> = None;
+        let mut waiting = Waiting {
+            start: Instant::now(),
+            stopped_since: None,
+            activity: None,
+        };
         loop {
             if let Some(r) = take(inbox)? {
                 return Ok(r);
@@ -416,42 +416,71 @@ impl Watch {
             if let Some(r) = take(inbox)? {
                 return Ok(r);
             }
-            if let Some(pid) = self.pid {
-                match process_state(pid) {
-                    ProcessState::Dead => return Err(LinkError::PeerDied { peer: self.peer, pid }),
-                    ProcessState::Stopped => {
-                        let since = *stopped_since.get_or_insert_with(Instant::now);
-                        if since.elapsed() >= STOPPED_GRACE {
-                            return Err(LinkError::PeerStopped { peer: self.peer, pid });
-                        }
-                    }
-                    ProcessState::Running => stopped_since = None,
-                }
-                activity.get_or_insert_with(|| Activity::for_timeout(pid, timeout, start));
-            }
+            self.look_at_peer(&mut waiting, timeout)?;
             if self.connected && !inbox.has_publisher() {
                 return Err(LinkError::PeerLeft { peer: self.peer });
             }
             if interrupt() {
                 return Err(LinkError::Interrupted);
             }
-            let last_busy = activity.as_mut().map_or(start, |a| a.last_busy());
-            if last_busy.elapsed() >= timeout {
-                return Err(LinkError::Timeout {
-                    peer: self.peer,
-                    waited: start.elapsed(),
-                    idle: activity.is_some().then(|| last_busy.elapsed()),
-                });
-            }
-            if let Some(pid) = self.pid.filter(|_| start.elapsed() >= timeout * BUSY_FACTOR) {
-                return Err(LinkError::Busy {
-                    peer: self.peer,
-                    pid,
-                    waited: start.elapsed(),
-                });
-            }
+            self.within_time(&mut waiting, timeout)?;
         }
     }
+
+    /// Whether the peer, where its pid is known, still lives and is not stopped past
+    /// [`STOPPED_GRACE`]; starts watching its activity at the first look.
+    fn look_at_peer(&self, waiting: &mut Waiting, timeout: Duration) -> Result<(), LinkError> {
+        let Some(pid) = self.pid else {
+            return Ok(());
+        };
+        match process_state(pid) {
+            ProcessState::Dead => return Err(LinkError::PeerDied { peer: self.peer, pid }),
+            ProcessState::Stopped => {
+                let since = *waiting.stopped_since.get_or_insert_with(Instant::now);
+                if since.elapsed() >= STOPPED_GRACE {
+                    return Err(LinkError::PeerStopped { peer: self.peer, pid });
+                }
+            }
+            ProcessState::Running => waiting.stopped_since = None,
+        }
+        let start = waiting.start;
+        waiting
+            .activity
+            .get_or_insert_with(|| Activity::for_timeout(pid, timeout, start));
+        Ok(())
+    }
+
+    /// Whether the wait is still within its time: the peer idle for less than `timeout`, and
+    /// waited on for less than [`BUSY_FACTOR`] x `timeout`.
+    fn within_time(&self, waiting: &mut Waiting, timeout: Duration) -> Result<(), LinkError> {
+        let start = waiting.start;
+        let last_busy = waiting.activity.as_mut().map_or(start, |a| a.last_busy());
+        if last_busy.elapsed() >= timeout {
+            return Err(LinkError::Timeout {
+                peer: self.peer,
+                waited: start.elapsed(),
+                idle: waiting.activity.is_some().then(|| last_busy.elapsed()),
+            });
+        }
+        if let Some(pid) = self.pid.filter(|_| start.elapsed() >= timeout * BUSY_FACTOR) {
+            return Err(LinkError::Busy {
+                peer: self.peer,
+                pid,
+                waited: start.elapsed(),
+            });
+        }
+        Ok(())
+    }
+}
+
+/// Where one [`Watch::wait`] stands.
+struct Waiting {
+    start: Instant,
+    /// Since when the peer has been seen stopped, if it is.
+    stopped_since: Option<Instant>,
+    /// Started at the first look at the peer, one poll into the wait (its windows and idle time
+    /// still count from the wait's start): an answer that is there at once costs no read.
+    activity: Option<Activity>,
 }
 
 /// Takes one byte message if there is one.

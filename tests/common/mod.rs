@@ -6,7 +6,7 @@ pub mod mpi;
 use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Output, Stdio};
-use std::sync::mpsc::{channel, Receiver};
+use std::sync::mpsc::{channel, Receiver, RecvTimeoutError};
 use std::time::{Duration, Instant};
 
 /// A binary of the workspace, built next to the test executable (`cargo build` builds it).
@@ -105,12 +105,20 @@ pub fn write_scene(dir: &Path, text: &str) -> PathBuf {
     path
 }
 
+/// How long a test waits for a process it started to print a line, start its DEM or reach a
+/// moment of its run. Generous, as a debug build compiles its kernels for lavapipe and a loaded
+/// machine (load 10+ on 2 cores) slows its start-up many times over: the wait ends as soon as the
+/// line comes, so a test that passes never waits it out. No result is compared against it.
+pub const PROCESS_WAIT: Duration = Duration::from_secs(180);
+
 /// A started process whose stderr (and optionally stdout) lines arrive on channels.
 pub struct Proc {
     pub child: Child,
     pub stderr: Receiver<String>,
     pub stdout: Receiver<String>,
     pub started: Instant,
+    /// The command that started it, program file name and arguments, for messages.
+    pub name: String,
 }
 
 fn pump(stream: impl std::io::Read + Send + 'static) -> Receiver<String> {
@@ -147,6 +155,7 @@ pub fn start(mut cmd: Command) -> Proc {
         .stderr(Stdio::piped())
         .stdin(Stdio::null())
         .process_group(0);
+    let name = command_name(&cmd);
     let mut child = cmd.spawn().expect("spawn");
     let stderr = pump(child.stderr.take().unwrap());
     let stdout = pump(child.stdout.take().unwrap());
@@ -155,23 +164,56 @@ pub fn start(mut cmd: Command) -> Proc {
         stderr,
         stdout,
         started: Instant::now(),
+        name,
     }
 }
 
+/// `cmd`'s program file name and arguments, as a message names the process.
+fn command_name(cmd: &Command) -> String {
+    let program = Path::new(cmd.get_program());
+    let program = program.file_name().unwrap_or(program.as_os_str());
+    std::iter::once(program)
+        .chain(cmd.get_args())
+        .map(|part| part.to_string_lossy().into_owned())
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
 impl Proc {
-    /// Waits for a line containing `needle` on `stream`; returns it, or panics with what was seen.
-    pub fn wait_line(rx: &Receiver<String>, needle: &str, timeout: Duration) -> String {
-        let deadline = Instant::now() + timeout;
+    /// Waits up to [`PROCESS_WAIT`] for a line containing `needle` on the process's stderr;
+    /// returns it, or panics naming the process and the line, with what it printed.
+    pub fn stderr_line(&self, needle: &str) -> String {
+        self.wait_line(&self.stderr, "stderr", needle)
+    }
+
+    /// [`Proc::stderr_line`] on the process's stdout.
+    pub fn stdout_line(&self, needle: &str) -> String {
+        self.wait_line(&self.stdout, "stdout", needle)
+    }
+
+    fn wait_line(&self, rx: &Receiver<String>, stream: &str, needle: &str) -> String {
+        let deadline = Instant::now() + PROCESS_WAIT;
         let mut seen = Vec::new();
-        while let Some(left) = deadline.checked_duration_since(Instant::now()) {
+        let closed = loop {
+            let Some(left) = deadline.checked_duration_since(Instant::now()) else {
+                break false;
+            };
             match rx.recv_timeout(left) {
                 Ok(line) if line.contains(needle) => return line,
                 Ok(line) => seen.push(line),
-                Err(_) => break,
+                Err(RecvTimeoutError::Disconnected) => break true,
+                Err(RecvTimeoutError::Timeout) => break false,
             }
-        }
+        };
+        let when = if closed {
+            format!("before it closed its {stream}")
+        } else {
+            format!("on its {stream} within {PROCESS_WAIT:?}")
+        };
         panic!(
-            "no line containing {needle:?} within {timeout:?}; saw:\n{}",
+            "`{}` (pid {}) printed no line containing {needle:?} {when}; saw:\n{}",
+            self.name,
+            self.child.id(),
             seen.join("\n")
         );
     }
@@ -185,7 +227,11 @@ impl Proc {
             }
             if start.elapsed() > timeout {
                 let _ = self.child.kill();
-                panic!("process did not exit within {timeout:?}");
+                panic!(
+                    "`{}` (pid {}) did not exit within {timeout:?}",
+                    self.name,
+                    self.child.id()
+                );
             }
             std::thread::sleep(Duration::from_millis(5));
         }
@@ -240,7 +286,7 @@ pub fn run_scene_with(tag: &str, text: &str, extra: &[&str]) -> (Option<i32>, St
 
 pub fn start_external(scene: &Path, out: &Path) -> (Proc, String) {
     let server = start(server(scene, out, &["--dem", "external"]));
-    let line = Proc::wait_line(&server.stdout, "DEM service:", Duration::from_secs(20));
+    let line = server.stdout_line("DEM service:");
     let run = line.split_whitespace().last().expect("a run name").to_string();
     (server, run)
 }
@@ -291,21 +337,21 @@ fn first_child(pid: u32) -> Option<u32> {
 
 /// Pid of the dem-client started by the lbm-server `server_pid`.
 pub fn child_pid(server_pid: u32) -> u32 {
-    let deadline = Instant::now() + Duration::from_secs(10);
+    let deadline = Instant::now() + PROCESS_WAIT;
     while Instant::now() < deadline {
         if let Some(pid) = first_child(server_pid) {
             return pid;
         }
         std::thread::sleep(Duration::from_millis(10));
     }
-    panic!("lbm-server {server_pid} started no dem-client");
+    panic!("lbm-server {server_pid} started no dem-client within {PROCESS_WAIT:?}");
 }
 
 /// Pid of the dem-client of the lbm-server `server` once it starts it (its start-up may take a
 /// while on a loaded machine); panics with its stderr where it ends first.
 pub fn dem_of(server: &mut Proc) -> u32 {
     let pid = server.child.id();
-    let deadline = Instant::now() + Duration::from_secs(120);
+    let deadline = Instant::now() + PROCESS_WAIT;
     while Instant::now() < deadline {
         if let Some(child) = first_child(pid) {
             return child;
@@ -317,7 +363,7 @@ pub fn dem_of(server: &mut Proc) -> u32 {
         );
         std::thread::sleep(Duration::from_millis(10));
     }
-    panic!("lbm-server {pid} started no dem-client");
+    panic!("lbm-server {pid} started no dem-client within {PROCESS_WAIT:?}");
 }
 
 /// Is the process gone (or a zombie)?
@@ -338,6 +384,16 @@ pub fn particle_rows(out: &Path) -> Vec<Vec<f64>> {
         .lines()
         .skip(1)
         .map(|l| l.split(',').map(|v| v.parse().expect("a number")).collect())
+        .collect()
+}
+
+/// Every row of the CSV file `path` (a header line, then numbers) as numbers.
+pub fn csv_numbers(path: &Path) -> Vec<Vec<f64>> {
+    std::fs::read_to_string(path)
+        .unwrap()
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
         .collect()
 }
 

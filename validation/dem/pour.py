@@ -63,81 +63,16 @@ def run_one(code, k, threads=1, collect_only=False):
 
 
 def report():
+    """reference/pour_<code>.json and reference/pour.png from the runs' results in work/."""
     import statistics
-    P = cases.POUR
     radii0, _ = cases.pour_layout(0)
     initial = {f"run{k}": cases.pour_layout(k)[1] for k in cases.POUR_RUNS}
     docs = {}
     for code in ("liggghts", "yade"):
-        runs = {}
-        for fn in sorted(os.listdir(rr.WORK)):
-            if fn.startswith(f"pour_result_{code}_") and fn.endswith(".json"):
-                runs[fn[len("pour_result_"):-5]] = json.load(open(os.path.join(rr.WORK, fn)))
+        runs = pour_results(code)
         if not runs:
             continue
-        prim = "liggghts_run0" if code == "liggghts" else "yade_j1_run0"
-        if prim not in runs:
-            prim = sorted(runs)[0]
-        # packing-fraction runs: every run (YADE -j1 and -j2 runs of the same k are different trajectories too)
-        if code == "liggghts":
-            pf_keys = [f"liggghts_run{k}" for k in cases.POUR_RUNS if f"liggghts_run{k}" in runs]
-        else:
-            pf_keys = [f"yade_j{th}_run{k}" for (c, k, th) in PLAN if c == "yade" and f"yade_j{th}_run{k}" in runs]
-        pfs = [runs[k]["packing_fraction"] for k in pf_keys]
-        hs = [runs[k]["bed_height_m"] for k in pf_keys]
-        ke_every = max(1, int(round(0.004 / (P["ke_every_steps"] * P["dt_s"]))))
-        doc = {
-            "code": code,
-            "code_version": rr.liggghts_version() if code == "liggghts" else rr.yade_version(),
-            "case": "pour", "model": "hertz",
-            "params": {
-                **P, "material": cases.MAT, "n_particles": P["n"],
-                "model_switches": rr.SWITCHES[(code, "hertz")],
-                "walls_detail": ("LIGGGHTS: fix wall/gran ... primitive type 1 zplane/xplane/yplane (R* = r)" if code == "liggghts"
-                                 else "YADE: utils.wall(pos, axis, sense=0) x 5 (Mindlin uses R = r/2 on walls)"),
-                "layout_rule": cases.pour_layout.__doc__.strip(),
-                "initial_radii_m": radii0,
-                "initial_positions_m": initial,
-                "initial_velocities": "all zero (translational and angular)",
-                "deck": "decks/pour_run<k>/in.liggghts + particles.data" if code == "liggghts"
-                        else "params.json written by cases.yade_params('pour', 'hertz', run=k) + yade_case.py",
-            },
-            "packing_fraction": statistics.mean(pfs),
-            "packing_fraction_runs": pfs,
-            "packing_fraction_runs_labels": pf_keys,
-            "packing_fraction_std": statistics.stdev(pfs) if len(pfs) > 1 else None,
-            "bed_height_m": statistics.mean(hs),
-            "bed_height_m_runs": hs,
-            "measuring_region_m_runs": [runs[k]["measuring_region_m"] for k in pf_keys],
-            "highest_sphere_top_m_runs": [runs[k]["highest_sphere_top_m"] for k in pf_keys],
-            "particles_left_at_end": [runs[k]["n_final"] for k in pf_keys],
-            "kinetic_energy_J": [[r[0], r[1]] for r in runs[prim]["kinetic_energy"]],
-            "kinetic_energy_translational_J": [[r[0], r[2]] for r in runs[prim]["kinetic_energy"]],
-            "kinetic_energy_J_run": prim,
-            "kinetic_energy_J_all_runs_every_4ms": {k: [[r[0], r[1]] for r in runs[k]["kinetic_energy"][::ke_every]]
-                                                   for k in sorted(runs)},
-            "wall_time_s": runs[prim]["wall_time_s"],
-            "particle_steps_per_second": runs[prim]["particle_steps_per_second"],
-            "timing_run": prim,
-            "timings": {k: {"threads": v["threads"], "wall_time_s": v["wall_time_s"], "loop_time_s": v["loop_time_s"],
-                            "particle_steps_per_second": v["particle_steps_per_second"]} for k, v in sorted(runs.items())},
-            "machine": f"{os.cpu_count()} CPU cores, one run at a time",
-            "definitions": {
-                "packing_fraction": "solid volume fraction inside the measuring region, i.e. the fraction of the points of a "
-                                    "cell-centred grid of spacing 1e-4 m filling the region that lie inside any sphere "
-                                    "(final positions at t_end); mean over the runs listed in packing_fraction_runs",
-                "measuring_region_m": "[[x0,x1],[y0,y1],[z0,z1]] = 2 nominal diameters (8 mm) from every side wall and from "
-                                      "the floor, top at bed_height - 2 diameters",
-                "bed_height_m": "2 x volume-weighted mean centre height of all spheres, 2 sum(r_i^3 z_i) / sum(r_i^3) "
-                                "(a uniform bed from z = 0 to H has its centroid at H/2)",
-                "kinetic_energy_J": "[t_s, sum 1/2 m v^2 + 1/2 I w^2] over all spheres every 400 steps (2 ms); YADE values use "
-                                    "half-step (leapfrog) velocities",
-                "wall_time_s": "whole process, start to exit (includes start-up, deck reading, output)",
-                "particle_steps_per_second": "n_particles x n_steps / loop time (LIGGGHTS: 'Loop time' of the run; YADE: "
-                                             "wall time of O.run(n, wait=True))",
-                "runs": "perturbation k shifts the jitter phase (k / 7) of every sphere; radii identical in all runs",
-            },
-        }
+        doc = pour_doc(code, runs, radii0, initial)
         if code == "yade":
             for th in (1, 2):
                 ks = [k for k in runs if k.startswith(f"yade_j{th}_")]
@@ -147,6 +82,99 @@ def report():
         rr.dump(doc, f"pour_{code}.json")
         docs[code] = (doc, runs)
     plot(docs)
+
+
+def pour_results(code):
+    """The results of CODE's pour runs in work/, by run label."""
+    runs = {}
+    for fn in sorted(os.listdir(rr.WORK)):
+        if fn.startswith(f"pour_result_{code}_") and fn.endswith(".json"):
+            runs[fn[len("pour_result_"):-5]] = json.load(open(os.path.join(rr.WORK, fn)))
+    return runs
+
+
+def packing_runs(code, runs):
+    """The labels of the runs the packing fraction is averaged over."""
+    # packing-fraction runs: every run (YADE -j1 and -j2 runs of the same k are different trajectories too)
+    if code == "liggghts":
+        pf_keys = [f"liggghts_run{k}" for k in cases.POUR_RUNS if f"liggghts_run{k}" in runs]
+    else:
+        pf_keys = [f"yade_j{th}_run{k}" for (c, k, th) in PLAN if c == "yade" and f"yade_j{th}_run{k}" in runs]
+    return pf_keys
+
+
+def pour_doc(code, runs, radii0, initial):
+    """The reference document of CODE from its RUNS (the initial radii and positions beside them)."""
+    import statistics
+    P = cases.POUR
+    prim = "liggghts_run0" if code == "liggghts" else "yade_j1_run0"
+    if prim not in runs:
+        prim = sorted(runs)[0]
+    pf_keys = packing_runs(code, runs)
+    pfs = [runs[k]["packing_fraction"] for k in pf_keys]
+    hs = [runs[k]["bed_height_m"] for k in pf_keys]
+    ke_every = max(1, int(round(0.004 / (P["ke_every_steps"] * P["dt_s"]))))
+    return {
+        "code": code,
+        "code_version": rr.liggghts_version() if code == "liggghts" else rr.yade_version(),
+        "case": "pour", "model": "hertz",
+        "params": pour_params(code, radii0, initial),
+        "packing_fraction": statistics.mean(pfs),
+        "packing_fraction_runs": pfs,
+        "packing_fraction_runs_labels": pf_keys,
+        "packing_fraction_std": statistics.stdev(pfs) if len(pfs) > 1 else None,
+        "bed_height_m": statistics.mean(hs),
+        "bed_height_m_runs": hs,
+        "measuring_region_m_runs": [runs[k]["measuring_region_m"] for k in pf_keys],
+        "highest_sphere_top_m_runs": [runs[k]["highest_sphere_top_m"] for k in pf_keys],
+        "particles_left_at_end": [runs[k]["n_final"] for k in pf_keys],
+        "kinetic_energy_J": [[r[0], r[1]] for r in runs[prim]["kinetic_energy"]],
+        "kinetic_energy_translational_J": [[r[0], r[2]] for r in runs[prim]["kinetic_energy"]],
+        "kinetic_energy_J_run": prim,
+        "kinetic_energy_J_all_runs_every_4ms": {k: [[r[0], r[1]] for r in runs[k]["kinetic_energy"][::ke_every]]
+                                               for k in sorted(runs)},
+        "wall_time_s": runs[prim]["wall_time_s"],
+        "particle_steps_per_second": runs[prim]["particle_steps_per_second"],
+        "timing_run": prim,
+        "timings": {k: {"threads": v["threads"], "wall_time_s": v["wall_time_s"], "loop_time_s": v["loop_time_s"],
+                        "particle_steps_per_second": v["particle_steps_per_second"]} for k, v in sorted(runs.items())},
+        "machine": f"{os.cpu_count()} CPU cores, one run at a time",
+        "definitions": POUR_DEFINITIONS,
+    }
+
+
+def pour_params(code, radii0, initial):
+    """The parameters of the pour as CODE ran it."""
+    P = cases.POUR
+    return {
+        **P, "material": cases.MAT, "n_particles": P["n"],
+        "model_switches": rr.SWITCHES[(code, "hertz")],
+        "walls_detail": ("LIGGGHTS: fix wall/gran ... primitive type 1 zplane/xplane/yplane (R* = r)" if code == "liggghts"
+                         else "YADE: utils.wall(pos, axis, sense=0) x 5 (Mindlin uses R = r/2 on walls)"),
+        "layout_rule": cases.pour_layout.__doc__.strip(),
+        "initial_radii_m": radii0,
+        "initial_positions_m": initial,
+        "initial_velocities": "all zero (translational and angular)",
+        "deck": "decks/pour_run<k>/in.liggghts + particles.data" if code == "liggghts"
+                else "params.json written by cases.yade_params('pour', 'hertz', run=k) + yade_case.py",
+    }
+
+
+POUR_DEFINITIONS = {
+    "packing_fraction": "solid volume fraction inside the measuring region, i.e. the fraction of the points of a "
+                        "cell-centred grid of spacing 1e-4 m filling the region that lie inside any sphere "
+                        "(final positions at t_end); mean over the runs listed in packing_fraction_runs",
+    "measuring_region_m": "[[x0,x1],[y0,y1],[z0,z1]] = 2 nominal diameters (8 mm) from every side wall and from "
+                          "the floor, top at bed_height - 2 diameters",
+    "bed_height_m": "2 x volume-weighted mean centre height of all spheres, 2 sum(r_i^3 z_i) / sum(r_i^3) "
+                    "(a uniform bed from z = 0 to H has its centroid at H/2)",
+    "kinetic_energy_J": "[t_s, sum 1/2 m v^2 + 1/2 I w^2] over all spheres every 400 steps (2 ms); YADE values use "
+                        "half-step (leapfrog) velocities",
+    "wall_time_s": "whole process, start to exit (includes start-up, deck reading, output)",
+    "particle_steps_per_second": "n_particles x n_steps / loop time (LIGGGHTS: 'Loop time' of the run; YADE: "
+                                 "wall time of O.run(n, wait=True))",
+    "runs": "perturbation k shifts the jitter phase (k / 7) of every sphere; radii identical in all runs",
+}
 
 
 def plot(docs):

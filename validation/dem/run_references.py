@@ -161,76 +161,86 @@ def drop_case(models=("linear", "hertz")):
         else:
             variants["yade"].append("_bigsphere")
         P = cases.yade_params("drop", model)
-        r = cases.DROP["radius_m"]
-        dt = cases.DROP["dt_s"]
         for code in ("liggghts", "yade"):
-            meas = {}
-            for var in variants[code]:
-                name = f"drop_{model}{var}"
-                if code == "liggghts":
-                    deck = cases.write_liggghts_drop(model, var)
-                    wd, wall, loop = run_liggghts(deck, name)
-                    rows = cases.read_liggghts_dump(os.path.join(wd, "traj.dump"), dt)
-                else:
-                    pv = dict(P, variant=var)
-                    if var == "":
-                        d = os.path.join(cases.DECKS, name)
-                        os.makedirs(d, exist_ok=True)
-                        json.dump(pv, open(os.path.join(d, "params.json"), "w"), indent=1)
-                    wd, wall, info = run_yade(pv, name, 1)
-                    rows = read_traj(os.path.join(wd, "traj.txt"))
-                t = [row[0] for row in rows]
-                d = [r - row[3] for row in rows]
-                ts, te, i0, i1 = cases.crossings(t, d)
-                vz0 = cases.DROP["initial_velocity_m_s"][2]
-                m = {
-                    "restitution": -rows[-1][6] / vz0,
-                    "contact_duration_s": te - ts,
-                    "contact_duration_steps_s": sum(1 for x in d if x > 0) * dt,
-                    "contact_start_s": ts, "contact_end_s": te,
-                    "peak_overlap_m": max(d),
-                    "final_velocity_m_s": rows[-1][4:7],
-                    "wall_time_s": wall,
-                    "trace": {"t_s": t[::20], "overlap_m": d[::20], "vz_m_s": [row[6] for row in rows][::20]},
-                }
-                meas[var] = m
-            base = meas[""]
-            doc = {
-                "code": code,
-                "code_version": liggghts_version() if code == "liggghts" else yade_version(),
-                "case": "drop", "model": model,
-                "params": {
-                    **{k: v for k, v in cases.DROP.items()},
-                    "material": dict(cases.MAT, friction=0.0),
-                    "linear": cases.LINEAR if model == "linear" else None,
-                    "model_switches": SWITCHES[(code, model)],
-                    "deck": f"decks/drop_{model}/" + ("in.liggghts" if code == "liggghts" else "params.json + yade_case.py"),
-                },
-                "analytic": (cases.linear_analytic(cases.M0) if model == "linear"
-                             else cases.hertz_derived(r, None, cases.M0, None, 1.0)),
-                "restitution": base["restitution"],
-                "contact_duration_s": base["contact_duration_s"],
-                "contact_duration_steps_s": base["contact_duration_steps_s"],
-                "contact_start_s": base["contact_start_s"], "contact_end_s": base["contact_end_s"],
-                "peak_overlap_m": base["peak_overlap_m"],
-                "final_velocity_m_s": base["final_velocity_m_s"],
-                "wall_time_s": base["wall_time_s"],
-                "definitions": COMMON_DEFS,
-                "trace_every_20_steps": base["trace"],
-            }
-            for var, m in meas.items():
-                if var:
-                    doc.setdefault("variants", {})[var.strip("_")] = {
-                        "description": ("LIGGGHTS with 'limitForce on' (hooke/stiffness clamps Fn >= 0, like YADE)"
-                                        if var == "_limitforce" else
-                                        "YADE with the wall replaced by a fixed sphere of radius 100 m (R* = r (1 - 2e-5), "
-                                        "m* = m), i.e. the LIGGGHTS wall geometry"),
-                        **{k: v for k, v in m.items() if k != "trace"}}
+            meas = {var: drop_run(code, model, var, P) for var in variants[code]}
+            doc = drop_doc(code, model, meas)
             dump(doc, f"drop_{model}_{code}.json")
             res[code] = (doc, meas)
         out[model] = res
     plot_drop(out)
     return out
+
+
+def drop_run(code, model, var, P):
+    """One drop run by CODE (LIGGGHTS or YADE) with the contact MODEL in the variant VAR: what it measured."""
+    r = cases.DROP["radius_m"]
+    dt = cases.DROP["dt_s"]
+    name = f"drop_{model}{var}"
+    if code == "liggghts":
+        deck = cases.write_liggghts_drop(model, var)
+        wd, wall, loop = run_liggghts(deck, name)
+        rows = cases.read_liggghts_dump(os.path.join(wd, "traj.dump"), dt)
+    else:
+        pv = dict(P, variant=var)
+        if var == "":
+            d = os.path.join(cases.DECKS, name)
+            os.makedirs(d, exist_ok=True)
+            json.dump(pv, open(os.path.join(d, "params.json"), "w"), indent=1)
+        wd, wall, info = run_yade(pv, name, 1)
+        rows = read_traj(os.path.join(wd, "traj.txt"))
+    t = [row[0] for row in rows]
+    d = [r - row[3] for row in rows]
+    ts, te, i0, i1 = cases.crossings(t, d)
+    vz0 = cases.DROP["initial_velocity_m_s"][2]
+    m = {
+        "restitution": -rows[-1][6] / vz0,
+        "contact_duration_s": te - ts,
+        "contact_duration_steps_s": sum(1 for x in d if x > 0) * dt,
+        "contact_start_s": ts, "contact_end_s": te,
+        "peak_overlap_m": max(d),
+        "final_velocity_m_s": rows[-1][4:7],
+        "wall_time_s": wall,
+        "trace": {"t_s": t[::20], "overlap_m": d[::20], "vz_m_s": [row[6] for row in rows][::20]},
+    }
+    return m
+
+
+def drop_doc(code, model, meas):
+    """The reference document of the drop by CODE with MODEL from its runs MEAS (by variant)."""
+    r = cases.DROP["radius_m"]
+    base = meas[""]
+    doc = {
+        "code": code,
+        "code_version": liggghts_version() if code == "liggghts" else yade_version(),
+        "case": "drop", "model": model,
+        "params": {
+            **{k: v for k, v in cases.DROP.items()},
+            "material": dict(cases.MAT, friction=0.0),
+            "linear": cases.LINEAR if model == "linear" else None,
+            "model_switches": SWITCHES[(code, model)],
+            "deck": f"decks/drop_{model}/" + ("in.liggghts" if code == "liggghts" else "params.json + yade_case.py"),
+        },
+        "analytic": (cases.linear_analytic(cases.M0) if model == "linear"
+                     else cases.hertz_derived(r, None, cases.M0, None, 1.0)),
+        "restitution": base["restitution"],
+        "contact_duration_s": base["contact_duration_s"],
+        "contact_duration_steps_s": base["contact_duration_steps_s"],
+        "contact_start_s": base["contact_start_s"], "contact_end_s": base["contact_end_s"],
+        "peak_overlap_m": base["peak_overlap_m"],
+        "final_velocity_m_s": base["final_velocity_m_s"],
+        "wall_time_s": base["wall_time_s"],
+        "definitions": COMMON_DEFS,
+        "trace_every_20_steps": base["trace"],
+    }
+    for var, m in meas.items():
+        if var:
+            doc.setdefault("variants", {})[var.strip("_")] = {
+                "description": ("LIGGGHTS with 'limitForce on' (hooke/stiffness clamps Fn >= 0, like YADE)"
+                                if var == "_limitforce" else
+                                "YADE with the wall replaced by a fixed sphere of radius 100 m (R* = r (1 - 2e-5), "
+                                "m* = m), i.e. the LIGGGHTS wall geometry"),
+                **{k: v for k, v in m.items() if k != "trace"}}
+    return doc
 
 
 def plot_drop(out):
@@ -258,62 +268,75 @@ def oblique_case(models=("hertz", "linear")):
     for model in models:
         for angle in cases.OBLIQUE_ANGLES:
             P = cases.yade_params("oblique", model, angle=angle)
-            dt = P["dt_s"]
-            r1, r2 = P["radius_m"]
             for code in ("liggghts", "yade"):
-                name = f"oblique_{model}_{angle}"
-                if code == "liggghts":
-                    deck = cases.write_liggghts_oblique(model, angle)
-                    json.dump(P, open(os.path.join(deck, "params.json"), "w"), indent=1)
-                    wd, wall, loop = run_liggghts(deck, name)
-                    rows = cases.read_liggghts_dump(os.path.join(wd, "traj.dump"), dt)
-                else:
-                    wd, wall, info = run_yade(P, name, 1)
-                    rows = read_traj(os.path.join(wd, "traj.txt"))
-                t = [row[0] for row in rows]
-                d = [r1 + r2 - math.dist(row[1:4], row[10:13]) for row in rows]
-                ts, te, i0, i1 = cases.crossings(t, d)
-                f = rows[-1]
-                v1, w1, v2, w2 = f[4:7], f[7:10], f[13:16], f[16:19]
-                vi = P["initial_velocity_m_s"]
-                g0 = [vi[1][k] - vi[0][k] for k in range(3)]
-                g1 = [v2[k] - v1[k] for k in range(3)]
-                # contact-point velocity of 2 relative to 1 (normal n = +x): v2 - v1 - (r1 w1 + r2 w2) x n
-                n = [1.0, 0.0, 0.0]
-                def cross(a, b):
-                    return [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
-                wsum = [r1 * w1[k] + r2 * w2[k] for k in range(3)]
-                vc1 = [g1[k] - cross(wsum, n)[k] for k in range(3)]
-                doc = {
-                    "code": code,
-                    "code_version": liggghts_version() if code == "liggghts" else yade_version(),
-                    "case": "oblique", "model": model, "angle": angle, "angle_deg": angle,
-                    "params": {**P, "material": cases.MAT,
-                               "linear": cases.LINEAR if model == "linear" else None,
-                               "model_switches": SWITCHES[(code, model)],
-                               "deck": f"decks/oblique_{model}_{angle}/" + ("in.liggghts" if code == "liggghts" else "params.json + yade_case.py")},
-                    "post": {"v1": v1, "w1": w1, "v2": v2, "w2": w2},
-                    "post_units": "v in m/s, w in rad/s; sphere 1 starts at negative x",
-                    "normal_restitution": -g1[0] / g0[0],
-                    "tangential_contact_velocity_ratio": vc1[1] / g0[1],
-                    "contact_duration_s": te - ts,
-                    "contact_duration_steps_s": sum(1 for x in d if x > 0) * dt,
-                    "peak_overlap_m": max(d),
-                    "wall_time_s": wall,
-                    "definitions": dict(COMMON_DEFS, **{
-                        "post": "velocities / angular velocities of both spheres at t_end (after separation they are constant)",
-                        "normal_restitution": "-(v2 - v1)_x after / (v2 - v1)_x before (x = line of centres at first touch)",
-                        "tangential_contact_velocity_ratio": "y-component of the contact-point slip velocity "
-                            "(v2 - v1) - (r1 w1 + r2 w2) x x_hat after, divided by (v2 - v1)_y before (+1: no tangential "
-                            "interaction, 0: rolling without slip at separation, < 0: tangential rebound)",
-                    }),
-                    "trace_every_20_steps": {"t_s": t[::20], "overlap_m": d[::20],
-                                             "wz1_rad_s": [row[9] for row in rows][::20]},
-                }
+                rows, wall = oblique_run(code, model, angle, P)
+                doc = oblique_doc(code, model, angle, P, rows, wall)
                 dump(doc, f"oblique_{model}_{angle}_{code}.json")
                 out[(model, angle, code)] = doc
     plot_oblique(out)
     return out
+
+
+def oblique_run(code, model, angle, P):
+    """One oblique impact run by CODE (LIGGGHTS or YADE) with the contact MODEL at ANGLE: its rows and wall time."""
+    dt = P["dt_s"]
+    name = f"oblique_{model}_{angle}"
+    if code == "liggghts":
+        deck = cases.write_liggghts_oblique(model, angle)
+        json.dump(P, open(os.path.join(deck, "params.json"), "w"), indent=1)
+        wd, wall, loop = run_liggghts(deck, name)
+        rows = cases.read_liggghts_dump(os.path.join(wd, "traj.dump"), dt)
+    else:
+        wd, wall, info = run_yade(P, name, 1)
+        rows = read_traj(os.path.join(wd, "traj.txt"))
+    return rows, wall
+
+
+def oblique_doc(code, model, angle, P, rows, wall):
+    """The reference document of the oblique impact by CODE with MODEL at ANGLE from its run's ROWS."""
+    dt = P["dt_s"]
+    r1, r2 = P["radius_m"]
+    t = [row[0] for row in rows]
+    d = [r1 + r2 - math.dist(row[1:4], row[10:13]) for row in rows]
+    ts, te, i0, i1 = cases.crossings(t, d)
+    f = rows[-1]
+    v1, w1, v2, w2 = f[4:7], f[7:10], f[13:16], f[16:19]
+    vi = P["initial_velocity_m_s"]
+    g0 = [vi[1][k] - vi[0][k] for k in range(3)]
+    g1 = [v2[k] - v1[k] for k in range(3)]
+    # contact-point velocity of 2 relative to 1 (normal n = +x): v2 - v1 - (r1 w1 + r2 w2) x n
+    n = [1.0, 0.0, 0.0]
+    def cross(a, b):
+        return [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+    wsum = [r1 * w1[k] + r2 * w2[k] for k in range(3)]
+    vc1 = [g1[k] - cross(wsum, n)[k] for k in range(3)]
+    doc = {
+        "code": code,
+        "code_version": liggghts_version() if code == "liggghts" else yade_version(),
+        "case": "oblique", "model": model, "angle": angle, "angle_deg": angle,
+        "params": {**P, "material": cases.MAT,
+                   "linear": cases.LINEAR if model == "linear" else None,
+                   "model_switches": SWITCHES[(code, model)],
+                   "deck": f"decks/oblique_{model}_{angle}/" + ("in.liggghts" if code == "liggghts" else "params.json + yade_case.py")},
+        "post": {"v1": v1, "w1": w1, "v2": v2, "w2": w2},
+        "post_units": "v in m/s, w in rad/s; sphere 1 starts at negative x",
+        "normal_restitution": -g1[0] / g0[0],
+        "tangential_contact_velocity_ratio": vc1[1] / g0[1],
+        "contact_duration_s": te - ts,
+        "contact_duration_steps_s": sum(1 for x in d if x > 0) * dt,
+        "peak_overlap_m": max(d),
+        "wall_time_s": wall,
+        "definitions": dict(COMMON_DEFS, **{
+            "post": "velocities / angular velocities of both spheres at t_end (after separation they are constant)",
+            "normal_restitution": "-(v2 - v1)_x after / (v2 - v1)_x before (x = line of centres at first touch)",
+            "tangential_contact_velocity_ratio": "y-component of the contact-point slip velocity "
+                "(v2 - v1) - (r1 w1 + r2 w2) x x_hat after, divided by (v2 - v1)_y before (+1: no tangential "
+                "interaction, 0: rolling without slip at separation, < 0: tangential rebound)",
+        }),
+        "trace_every_20_steps": {"t_s": t[::20], "overlap_m": d[::20],
+                                 "wz1_rad_s": [row[9] for row in rows][::20]},
+    }
+    return doc
 
 
 def plot_oblique(out):

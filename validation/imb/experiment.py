@@ -223,6 +223,26 @@ def report():
     short = ["%s (%.2f s simulated)" % (os.path.basename(r["dir"]), r["t"][-1] if r["t"] else 0.0)
              for r in every if r not in runs]
     chart(runs, exp_v, exp_g, os.path.join(HERE, "experiment_E1.png"))
+    rows, times, opening = comparison_rows(runs, exp_v, exp_g)
+    c0 = compare(runs[0], exp_v, exp_g) if runs else None
+    ti, gi = gap_from_speed(exp_v)
+    at = 2.44
+    drift = (interp(at, *exp_g), interp(at, ti, gi))
+    text = EXPERIMENT_REPORT % dict(opening=compact.summary(opening, "python3 validation/imb/experiment.py report"), mach=MACH, sim=SIM_TIME, exp_peak=c0["exp_peak"] if c0 else float("nan"),
+        exp_plateau=c0["exp_plateau"] if c0 else float("nan"), rows="\n".join(rows),
+        at=at, g_meas=drift[0], g_speed=drift[1], w0=WINDOW[0], w1=WINDOW[1],
+        exp_slope=c0["exp_slope"] if c0 else float("nan"), slope_points=c0["slope_points"] if c0 else 0,
+        gap_heads=" | ".join("gap %g d" % g for g in GAPS), gap_bars="---|" * len(GAPS), times="\n".join(times),
+        u_inf=ten_cate_scenes.CASES[CASE]["u_inf"],
+        plateau_vs_uinf=pct(c0["exp_plateau"], ten_cate_scenes.CASES[CASE]["u_inf"]) if c0 else float("nan"),
+        short="\n\nNot compared (shorter than 3 s of fall): " + ", ".join(short) + "." if short else "")
+    with open(os.path.join(HERE, "EXPERIMENT.md"), "w") as f:
+        f.write(text)
+    print(text)
+
+
+def comparison_rows(runs, exp_v, exp_g):
+    """The rows of the speed and gap tables of each run compared, and its row of the summary."""
     rows, times, opening = [], [], []
     for r in runs:
         c = compare(r, exp_v, exp_g)
@@ -235,17 +255,22 @@ def report():
                     % (r["n"], r["mach"], "x".join(map(str, r["cells"] or [])), r["tau"] or float("nan"), c["peak"], c["t_peak"],
                        c["plateau"], pct(c["plateau"], c["exp_plateau"]), pct(c["plateau"], c["exp_slope"]),
                        1e3 * c["rms"], 1e3 * c["mean"], c["points"], r["device"]))
-        cells = []
-        for g in GAPS:
-            ours, exp, by_speed = c["times"][g]
-            rel = lambda ref: "-" if ours is None or ref is None else "%.2f (%+.1f%%)" % (ref, pct(ours, ref))
-            cells.append("-" if ours is None else "%.2f / %s / %s" % (ours, rel(exp), rel(by_speed)))
-        times.append("| %g | %g | %s |" % (r["n"], r["mach"], " | ".join(cells)))
-    c0 = compare(runs[0], exp_v, exp_g) if runs else None
-    ti, gi = gap_from_speed(exp_v)
-    at = 2.44
-    drift = (interp(at, *exp_g), interp(at, ti, gi))
-    text = """# Ten Cate et al. (2002) E1 against the experiment's own curves (issue 5)
+        times.append("| %g | %g | %s |" % (r["n"], r["mach"], " | ".join(gap_cells(c))))
+    return rows, times, opening
+
+
+def gap_cells(c):
+    """The gap table's cells of the comparison C: the simulated time to each gap, against the measured gap and
+    the measured speed integrated."""
+    cells = []
+    for g in GAPS:
+        ours, exp, by_speed = c["times"][g]
+        rel = lambda ref: "-" if ours is None or ref is None else "%.2f (%+.1f%%)" % (ref, pct(ours, ref))
+        cells.append("-" if ours is None else "%.2f / %s / %s" % (ours, rel(exp), rel(by_speed)))
+    return cells
+
+
+EXPERIMENT_REPORT = """# Ten Cate et al. (2002) E1 against the experiment's own curves (issue 5)
 
 %(opening)s
 
@@ -290,17 +315,7 @@ and against the measured gap's slope there (%(exp_slope).4f m/s, least squares o
 
 u_inf = %(u_inf)g m/s; the measured plateau is %(plateau_vs_uinf)+.1f%% from it (the walls of the
 box).%(short)s
-""" % dict(opening=compact.summary(opening, "python3 validation/imb/experiment.py report"), mach=MACH, sim=SIM_TIME, exp_peak=c0["exp_peak"] if c0 else float("nan"),
-           exp_plateau=c0["exp_plateau"] if c0 else float("nan"), rows="\n".join(rows),
-           at=at, g_meas=drift[0], g_speed=drift[1], w0=WINDOW[0], w1=WINDOW[1],
-           exp_slope=c0["exp_slope"] if c0 else float("nan"), slope_points=c0["slope_points"] if c0 else 0,
-           gap_heads=" | ".join("gap %g d" % g for g in GAPS), gap_bars="---|" * len(GAPS), times="\n".join(times),
-           u_inf=ten_cate_scenes.CASES[CASE]["u_inf"],
-           plateau_vs_uinf=pct(c0["exp_plateau"], ten_cate_scenes.CASES[CASE]["u_inf"]) if c0 else float("nan"),
-           short="\n\nNot compared (shorter than 3 s of fall): " + ", ".join(short) + "." if short else "")
-    with open(os.path.join(HERE, "EXPERIMENT.md"), "w") as f:
-        f.write(text)
-    print(text)
+"""
 
 
 def main():

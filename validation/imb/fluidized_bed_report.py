@@ -25,8 +25,20 @@ GPU_BATCH = "bash validation/gpu/prepare.sh"
 def held_rows(opening):
     """The held bed's report lines; its rows of the summary appended to OPENING."""
     operator, re_, depth, _ = HELD_FROM
-    ar, re_t = settling_reynolds()
-    lines = [
+    lines = held_header(operator, re_)
+    runs = [(cells, operator) for cells in HELD_CELLS + GPU_HELD_CELLS] + [(cells, "mrts") for cells in HELD_SUPERPOSED_CELLS]
+    records = compact.runs(SCRIPT)
+    for cells, held_operator in runs:
+        rec = records.get(held_name(cells, held_operator))
+        if rec is None:
+            continue
+        lines.append(held_row(rec, cells, held_operator, opening))
+    return lines
+
+
+def held_header(operator, re_):
+    """The held bed's heading, description and table header."""
+    return [
         "",
         "## The bed held still",
         "",
@@ -44,46 +56,45 @@ def held_rows(opening):
         "| cells per d | tau | solid term | outcome | steps | wall time [s] | MLUPS | device | force / buoyant weight (range) | Tenneti | error | voidage | Richardson-Zaki Re | largest displacement [cells] |",
         "|---:|---:|---|---|---:|---:|---:|---|---|---:|---:|---:|---:|---:|",
     ]
-    runs = [(cells, operator) for cells in HELD_CELLS + GPU_HELD_CELLS] + [(cells, "mrts") for cells in HELD_SUPERPOSED_CELLS]
-    records = compact.runs(SCRIPT)
-    for cells, held_operator in runs:
-        rec = records.get(held_name(cells, held_operator))
-        if rec is None:
-            continue
-        done, columns = run_columns(rec)
-        eps = rec["start_voidage"]
-        expected = 3.0 * math.pi * re_ * tenneti(1.0 - eps, re_) / (ar * math.pi / 6.0)
-        n_rz, _, _ = richardson_zaki(re_, depth)
-        re_rz = re_t * eps**n_rz
-        force = error = moved = ""
-        if "force_over_buoyant_weight" in rec:
-            mean = rec["force_over_buoyant_weight"][0]
-            force = "%.3f (%.3f-%.3f)" % tuple(rec["force_over_buoyant_weight"])
-            error = "%+.0f%%" % (100.0 * (mean / expected - 1.0))
-        if "largest_displacement_m" in rec:
-            moved = "%.2g" % (rec["largest_displacement_m"] / (D / cells))
-        command = GPU_BATCH if cells in GPU_HELD_CELLS else \
-            "python3 validation/imb/fluidized_bed.py %s" % ("held-superposed" if held_operator == "mrts" else "held")
-        opening.append(("held bed, %d cells per d, %s term: liquid's force / buoyant weight" % (
-            cells, "superposition" if held_operator == "mrts" else "Noble-Torczynski"),
-            "%.3f, Tenneti et al. (2011)" % expected, force.split(" ")[0] or columns[0],
-            error.replace("%", " %") or "-", command))
-        lines.append(
-            "| %d | %.4f | %s | %s | %s | %s | %s | %s | %s | %.3f | %s | %.3f | %.0f | %s |"
-            % (
-                cells,
-                lattice_tau(re_, cells),
-                "superposition" if held_operator == "mrts" else "Noble-Torczynski",
-                *columns,
-                force,
-                expected,
-                error,
-                eps,
-                re_rz,
-                moved,
-            )
+
+
+def held_row(rec, cells, held_operator, opening):
+    """The held bed's row of the run REC at CELLS per diameter; its row of the summary appended to OPENING."""
+    operator, re_, depth, _ = HELD_FROM
+    ar, re_t = settling_reynolds()
+    done, columns = run_columns(rec)
+    eps = rec["start_voidage"]
+    expected = 3.0 * math.pi * re_ * tenneti(1.0 - eps, re_) / (ar * math.pi / 6.0)
+    n_rz, _, _ = richardson_zaki(re_, depth)
+    re_rz = re_t * eps**n_rz
+    force = error = moved = ""
+    if "force_over_buoyant_weight" in rec:
+        mean = rec["force_over_buoyant_weight"][0]
+        force = "%.3f (%.3f-%.3f)" % tuple(rec["force_over_buoyant_weight"])
+        error = "%+.0f%%" % (100.0 * (mean / expected - 1.0))
+    if "largest_displacement_m" in rec:
+        moved = "%.2g" % (rec["largest_displacement_m"] / (D / cells))
+    command = GPU_BATCH if cells in GPU_HELD_CELLS else \
+        "python3 validation/imb/fluidized_bed.py %s" % ("held-superposed" if held_operator == "mrts" else "held")
+    opening.append(("held bed, %d cells per d, %s term: liquid's force / buoyant weight" % (
+        cells, "superposition" if held_operator == "mrts" else "Noble-Torczynski"),
+        "%.3f, Tenneti et al. (2011)" % expected, force.split(" ")[0] or columns[0],
+        error.replace("%", " %") or "-", command))
+    return (
+        "| %d | %.4f | %s | %s | %s | %s | %s | %s | %s | %.3f | %s | %.3f | %.0f | %s |"
+        % (
+            cells,
+            lattice_tau(re_, cells),
+            "superposition" if held_operator == "mrts" else "Noble-Torczynski",
+            *columns,
+            force,
+            expected,
+            error,
+            eps,
+            re_rz,
+            moved,
         )
-    return lines
+    )
 
 
 def run_columns(rec):
@@ -100,8 +111,29 @@ def run_columns(rec):
 
 
 def report():
+    """Writes FLUIDIZED_BED.md from the records, and prints it."""
+    lines = introduction()
+    records = compact.runs(SCRIPT)
+    opening = []
+    for operator, re_, depth, cells in CASES + GPU_CASES:
+        rec = records.get(name(operator, re_, depth, cells))
+        if rec is None:
+            continue
+        lines.append(case_row(rec, (operator, re_, depth, cells), opening))
+    lines.append("")
+    lines += FINDINGS
+    lines += held_rows(opening)
+    lines[2:2] = [compact.summary(opening, "python3 validation/imb/fluidized_bed.py --report",
+                                  "`%s` writes the scenes of the GPU batch (validation/gpu/)." % GPU_BATCH), ""]
+    with open(REPORT, "w") as f:
+        f.write("\n".join(lines) + "\n")
+    print("\n".join(lines))
+
+
+def introduction():
+    """The heading, the scene, how voidage and weight are measured, and the table header."""
     ar, re_t = settling_reynolds()
-    lines = [
+    return [
         "# A fluidized bed at Re 200 and 400 by operator (the seed paper's section 5)",
         "",
         "Written by `python3 validation/imb/fluidized_bed.py --report` from `results/fluidized_bed.json`",
@@ -136,96 +168,93 @@ def report():
         "| case | Re | slab depth [d] | cells per d | tau | U [m/s] | outcome | steps | wall time [s] | MLUPS | device | grains at the top, last row | weight the liquid carries | voidage (range) | voidage 1-3 d (range) | Richardson-Zaki | walled | error | Tenneti | drag / Tenneti's |",
         "|---|---:|---:|---:|---:|---:|---|---:|---:|---:|---|---|---:|---|---|---:|---:|---:|---:|---:|",
     ]
-    records = compact.runs(SCRIPT)
-    opening = []
-    for operator, re_, depth, cells in CASES + GPU_CASES:
-        rec = records.get(name(operator, re_, depth, cells))
-        if rec is None:
-            continue
-        done, columns = run_columns(rec)
-        n, eps_rz, eps_walled = richardson_zaki(re_, depth)
-        measured = band = error = top = carried = excess = ""
-        if "last_row" in rec:
-            top = "%s of %s (%.2f s)" % (rec["last_row"]["at_top"], rec["last_row"]["grains"], rec["last_row"]["time"])
-        if "voidage" in rec:
-            mean = rec["voidage"][0]
-            measured = "%.3f (%.3f-%.3f)" % tuple(rec["voidage"])
-            error = "%+.1f%%" % (100.0 * (mean / eps_rz - 1.0))
-            band = "%.3f (%.3f-%.3f)" % tuple(rec["band_voidage"])
-            if "weight_carried" in rec:
-                share = rec["weight_carried"]
-                carried = "%.3f" % share
-                excess = "%.2f" % (share * buoyant_weight(re_) / tenneti(1.0 - mean, re_))
-        gpu = (operator, re_, depth, cells) in GPU_CASES
-        opening.append(("%s, Re %d, slab %d d, %d cells per d: bed voidage" % (label(operator), re_, depth, cells),
-                        "%.3f, Richardson-Zaki" % eps_rz, measured.split(" ")[0] or columns[0],
-                        error.replace("%", " %") or "-",
-                        GPU_BATCH if gpu else "python3 validation/imb/fluidized_bed.py %s" % name(operator, re_, depth, cells)))
-        lines.append(
-            "| %s | %d | %d | %d | %.4f | %.4f | %s | %s | %s | %s | %s | %s | %s | %s | %s | %.3f | %s | %s | %.3f | %s |"
-            % (
-                label(operator),
-                re_,
-                depth,
-                cells,
-                lattice_tau(re_, cells),
-                inflow(re_),
-                *columns,
-                top,
-                carried,
-                measured,
-                band,
-                eps_rz,
-                "-" if periodic(operator) else "%.3f" % eps_walled,
-                error,
-                tenneti_voidage(re_),
-                excess,
-            )
+
+
+def case_row(rec, case, opening):
+    """The table row of the run REC of CASE (operator, Re, depth, cells); its row of the summary appended to OPENING."""
+    operator, re_, depth, cells = case
+    done, columns = run_columns(rec)
+    n, eps_rz, eps_walled = richardson_zaki(re_, depth)
+    measured = band = error = top = carried = excess = ""
+    if "last_row" in rec:
+        top = "%s of %s (%.2f s)" % (rec["last_row"]["at_top"], rec["last_row"]["grains"], rec["last_row"]["time"])
+    if "voidage" in rec:
+        mean = rec["voidage"][0]
+        measured = "%.3f (%.3f-%.3f)" % tuple(rec["voidage"])
+        error = "%+.1f%%" % (100.0 * (mean / eps_rz - 1.0))
+        band = "%.3f (%.3f-%.3f)" % tuple(rec["band_voidage"])
+        if "weight_carried" in rec:
+            share = rec["weight_carried"]
+            carried = "%.3f" % share
+            excess = "%.2f" % (share * buoyant_weight(re_) / tenneti(1.0 - mean, re_))
+    gpu = (operator, re_, depth, cells) in GPU_CASES
+    opening.append(("%s, Re %d, slab %d d, %d cells per d: bed voidage" % (label(operator), re_, depth, cells),
+                    "%.3f, Richardson-Zaki" % eps_rz, measured.split(" ")[0] or columns[0],
+                    error.replace("%", " %") or "-",
+                    GPU_BATCH if gpu else "python3 validation/imb/fluidized_bed.py %s" % name(operator, re_, depth, cells)))
+    return (
+        "| %s | %d | %d | %d | %.4f | %.4f | %s | %s | %s | %s | %s | %s | %s | %s | %s | %.3f | %s | %s | %.3f | %s |"
+        % (
+            label(operator),
+            re_,
+            depth,
+            cells,
+            lattice_tau(re_, cells),
+            inflow(re_),
+            *columns,
+            top,
+            carried,
+            measured,
+            band,
+            eps_rz,
+            "-" if periodic(operator) else "%.3f" % eps_walled,
+            error,
+            tenneti_voidage(re_),
+            excess,
         )
-    lines.append("")
-    lines.append("Error: the measured voidage against Richardson-Zaki without the wall term. What these runs")
-    lines.append("found (the ramp, the outflow without backflow, the bed lifted at Re 400, BGK and TRT with")
-    lines.append("tau- <= 1 blowing up in the bed where they held one sphere): docs/imb.md, \"Stability near")
-    lines.append("tau = 1/2\". BGK was refused below tau 0.51 until 2026-12-03. The liquid carries the bed's")
-    lines.append("weight: it is fluidized, its grains feel too much drag. The grid hardly changes that: MRT at")
-    lines.append("Re 200 expands the bed to voidage 0.761, 0.757 and 0.747 at 6, 10 and 15 cells per diameter")
-    lines.append("(+30.1%, +29.4%, +27.8%; 10 and 15 on an NVIDIA H200, 2026-12-04), and at 10 cells Re 400")
-    lines.append("lifts the bed against the top plane and blows up (step 11293, 0.65 s) and BGK at Re 200 blows")
-    lines.append("up (step 1534) as at 6. Held still (below) the grains carry their buoyant weight at 6, 9 and 12")
-    lines.append("cells alike (1.07, 1.05, 1.01): not their motion, and not the grid. With the superposition")
-    lines.append("solid term (\"MRT, superposition\", coupling.solid_collision; docs/imb.md \"The solid")
-    lines.append("collision\"), which drags every sphere 10-20% less, the bed at 6 cells expands 16.2% more than")
-    lines.append("Richardson & Zaki instead of 30.1%, and held it carries 0.77 of its weight instead of 1.07;")
-    lines.append("but that term also drags 9-15% too little in Stokes flow, where the default is within 1%.")
-    lines.append("A simple cubic array at")
-    lines.append("voidage 0.76 carries the weight at Re 476-491 at 6 to 24 cells (spheres in line shelter each")
-    lines.append("other); a random array in a periodic box at Re 252-266 at 6 to 12 cells, where Tenneti et al.'s")
-    lines.append("random arrays need 361, though in Stokes flow it converges to theirs, and at 279 at 18 cells (one")
-    lines.append("placement): its excess falls with the grid, as a lone sphere's at Re 200-300 does, +25-29% above")
-    lines.append("Schiller & Naumann at 6 cells, +6-7% at 16 (validation/lbm/REPORT.md, \"drag in a bed\", \"a random")
-    lines.append("array at the fluidized bed's voidage\" and \"a held sphere at the fluidized bed's Reynolds")
-    lines.append("numbers\"; docs/imb.md).")
-    lines.append("Without the side walls (\"MRT, periodic sides\": the slab's four side faces periodic for the")
-    lines.append("liquid and the grains, 2026-12-05) the bed at Re 200 expands to voidage 0.709 / 0.718 / 0.719 at")
-    lines.append("6 / 9 / 12 cells (+21.2 / +22.7 / +23.0%), its grains dragged 1.84 / 1.94 / 1.96 times Tenneti et")
-    lines.append("al.'s at that voidage, where the walled slab's are 2.48 at 6 cells (2.55 twice as deep, 2.29 at")
-    lines.append("15): about a third of the excess expansion is the walls' (Richardson & Zaki's wall term, made for")
-    lines.append("tubes, expects more of them), the rest the drag that the random arrays show at these grids, 1.6-1.8")
-    lines.append("times Tenneti's, not falling from 6 to 12 cells (1.5 at 18 cells). Which walls: periodic along y")
-    lines.append("only (\"MRT, periodic along y\", the walls 10 diameters apart kept, those 4 apart gone) the bed")
-    lines.append("expands to 0.733 at 6 cells (+25.3%, drag 2.11 times Tenneti's): each pair of walls makes about")
-    lines.append("half of the walls' share. Twice as deep and periodic along y, 0.732 (+25.2%): the pair 8")
-    lines.append("diameters apart adds 6.2 points (31.4 - 25.2), the pair 4 apart 4.8, the pair 10 apart 4.1; a pair")
-    lines.append("of walls adds 4-6 points whatever its distance, not a confinement that falls as 1/width. Nor is it")
-    lines.append("a circulation the walls drive: both beds circulate (grains' vz from 0.4 s on, by distance from the")
-    lines.append("x faces, a throwaway rerun: walled, -4 to -8 mm/s within 3 d of the walls, +12 mm/s beyond 4 d;")
-    lines.append("periodic, -9 to -16 mm/s within 3 d of the faces, +17 mm/s beyond), the periodic one no less. Nor")
-    lines.append("is it the grains rubbing on")
-    lines.append("the walls: with the walls frictionless for them (\"MRT, walls frictionless\") the bed expands to")
-    lines.append("0.761 at 6 cells (+30.2%), as with friction. The periodic slab at 15 cells is in the GPU batch.")
-    lines += held_rows(opening)
-    lines[2:2] = [compact.summary(opening, "python3 validation/imb/fluidized_bed.py --report",
-                                  "`%s` writes the scenes of the GPU batch (validation/gpu/)." % GPU_BATCH), ""]
-    with open(REPORT, "w") as f:
-        f.write("\n".join(lines) + "\n")
-    print("\n".join(lines))
+    )
+
+
+# What the runs found, below the table.
+FINDINGS = [
+    "Error: the measured voidage against Richardson-Zaki without the wall term. What these runs",
+    "found (the ramp, the outflow without backflow, the bed lifted at Re 400, BGK and TRT with",
+    "tau- <= 1 blowing up in the bed where they held one sphere): docs/imb.md, \"Stability near",
+    "tau = 1/2\". BGK was refused below tau 0.51 until 2026-12-03. The liquid carries the bed's",
+    "weight: it is fluidized, its grains feel too much drag. The grid hardly changes that: MRT at",
+    "Re 200 expands the bed to voidage 0.761, 0.757 and 0.747 at 6, 10 and 15 cells per diameter",
+    "(+30.1%, +29.4%, +27.8%; 10 and 15 on an NVIDIA H200, 2026-12-04), and at 10 cells Re 400",
+    "lifts the bed against the top plane and blows up (step 11293, 0.65 s) and BGK at Re 200 blows",
+    "up (step 1534) as at 6. Held still (below) the grains carry their buoyant weight at 6, 9 and 12",
+    "cells alike (1.07, 1.05, 1.01): not their motion, and not the grid. With the superposition",
+    "solid term (\"MRT, superposition\", coupling.solid_collision; docs/imb.md \"The solid",
+    "collision\"), which drags every sphere 10-20% less, the bed at 6 cells expands 16.2% more than",
+    "Richardson & Zaki instead of 30.1%, and held it carries 0.77 of its weight instead of 1.07;",
+    "but that term also drags 9-15% too little in Stokes flow, where the default is within 1%.",
+    "A simple cubic array at",
+    "voidage 0.76 carries the weight at Re 476-491 at 6 to 24 cells (spheres in line shelter each",
+    "other); a random array in a periodic box at Re 252-266 at 6 to 12 cells, where Tenneti et al.'s",
+    "random arrays need 361, though in Stokes flow it converges to theirs, and at 279 at 18 cells (one",
+    "placement): its excess falls with the grid, as a lone sphere's at Re 200-300 does, +25-29% above",
+    "Schiller & Naumann at 6 cells, +6-7% at 16 (validation/lbm/REPORT.md, \"drag in a bed\", \"a random",
+    "array at the fluidized bed's voidage\" and \"a held sphere at the fluidized bed's Reynolds",
+    "numbers\"; docs/imb.md).",
+    "Without the side walls (\"MRT, periodic sides\": the slab's four side faces periodic for the",
+    "liquid and the grains, 2026-12-05) the bed at Re 200 expands to voidage 0.709 / 0.718 / 0.719 at",
+    "6 / 9 / 12 cells (+21.2 / +22.7 / +23.0%), its grains dragged 1.84 / 1.94 / 1.96 times Tenneti et",
+    "al.'s at that voidage, where the walled slab's are 2.48 at 6 cells (2.55 twice as deep, 2.29 at",
+    "15): about a third of the excess expansion is the walls' (Richardson & Zaki's wall term, made for",
+    "tubes, expects more of them), the rest the drag that the random arrays show at these grids, 1.6-1.8",
+    "times Tenneti's, not falling from 6 to 12 cells (1.5 at 18 cells). Which walls: periodic along y",
+    "only (\"MRT, periodic along y\", the walls 10 diameters apart kept, those 4 apart gone) the bed",
+    "expands to 0.733 at 6 cells (+25.3%, drag 2.11 times Tenneti's): each pair of walls makes about",
+    "half of the walls' share. Twice as deep and periodic along y, 0.732 (+25.2%): the pair 8",
+    "diameters apart adds 6.2 points (31.4 - 25.2), the pair 4 apart 4.8, the pair 10 apart 4.1; a pair",
+    "of walls adds 4-6 points whatever its distance, not a confinement that falls as 1/width. Nor is it",
+    "a circulation the walls drive: both beds circulate (grains' vz from 0.4 s on, by distance from the",
+    "x faces, a throwaway rerun: walled, -4 to -8 mm/s within 3 d of the walls, +12 mm/s beyond 4 d;",
+    "periodic, -9 to -16 mm/s within 3 d of the faces, +17 mm/s beyond), the periodic one no less. Nor",
+    "is it the grains rubbing on",
+    "the walls: with the walls frictionless for them (\"MRT, walls frictionless\") the bed expands to",
+    "0.761 at 6 cells (+30.2%), as with friction. The periodic slab at 15 cells is in the GPU batch.",
+]

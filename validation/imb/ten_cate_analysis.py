@@ -91,44 +91,49 @@ def analyse(out, case, n, mach=MACH, op=OPERATOR, width=None, height=None, expli
         res["log_errors"] = info["errors"]
     pp = os.path.join(out, "particles.csv")
     if os.path.exists(pp):
-        d = load_series(pp)
-        t, z, vz = d["time"], d["z"], d["vz"]
-        speed = [-v for v in vz]                       # settling speed, downward positive
-        i = max(range(len(speed)), key=lambda k: speed[k])
-        sim_t = res["steps"] * dt if res["steps"] else t[-1]
-        res.update(peak_speed=speed[i], peak_time=t[i], peak_gap=z[i] - R,
-                   peak_error_pct=100.0 * (speed[i] - c["u_inf"]) / c["u_inf"],
-                   simulated_time_s=sim_t, final_gap=z[-1] - R,
-                   wall_s_per_sim_s=(res["wall_time_s"] / sim_t) if sim_t > 0 else None,
-                   updates_per_sim_s=(ln["cells"][0] * ln["cells"][1] * ln["cells"][2] * res["steps"] / sim_t)
-                   if res["steps"] and sim_t > 0 else None,
-                   mlups=(ln["cells"][0] * ln["cells"][1] * ln["cells"][2] * res["steps"] / res["wall_time_s"] / 1e6)
-                   if res["steps"] else None,
-                   Re_peak=c["rho_f"] * speed[i] * D / c["mu"])
-        # time for the gap to close from 120 mm to 1 d (15 mm) and to 0.1 d
-        for lim, key in ((D, "t_gap_1d"), (0.1 * D, "t_gap_0p1d")):
-            hit = next((t[k] for k in range(len(z)) if z[k] - R <= lim), None)
-            res[key] = hit
-        # mean speed while the gap closes from 80 to 40 mm (smooths the ripple of coarse grids)
-        band = [speed[k] for k in range(len(z)) if 0.040 <= z[k] - R <= 0.080]
-        res["plateau_speed"] = sum(band) / len(band) if band else None
-        pl = plateau(t, [zz - R for zz in z], speed)
-        pl["terminal_error_pct"] = 100.0 * (pl["terminal_speed"] - c["u_inf"]) / c["u_inf"]
-        res.update(pl)
-        # after landing (gap < 0.5 mm for the last quarter of the run): rms of the reported velocity
-        # (last 5 % of the run, all rows within 50 um of the floor), and the rms of dz/dt from the
-        # positions of consecutive rows over the same window: they differ when the sphere oscillates
-        # faster than the rows sample it
-        ks = [k for k in range(1, len(z)) if t[k] >= 0.95 * t[-1]]
-        if len(ks) > 5 and all(abs(z[k] - R) < 0.00005 for k in ks):
-            res["rest_speed_rms"] = math.sqrt(sum(speed[k] ** 2 for k in ks) / len(ks))
-            dz = [(z[k] - z[k - 1]) / (t[k] - t[k - 1]) for k in ks]
-            res["rest_dzdt_rms"] = math.sqrt(sum(v * v for v in dz) / len(dz))
-            res["rest_gap_range_um"] = [1e6 * (min(z[k] for k in ks) - R), 1e6 * (max(z[k] for k in ks) - R)]
-        else:
-            res["rest_speed_rms"] = None
-        res["series"] = dict(t=t, z=z, vz=vz)    # as particles.csv has them (7 digits): the charts' series
+        add_trajectory(res, load_series(pp), c, ln, dt)
     return res
+
+
+def add_trajectory(res, d, c, ln, dt):
+    """The figures of the sphere's trajectory D (particles.csv's series) into the record RES of case C on the
+    lattice LN at time step DT: the peak, the gap's times, the plateau, the speed at rest and the series."""
+    t, z, vz = d["time"], d["z"], d["vz"]
+    speed = [-v for v in vz]                       # settling speed, downward positive
+    i = max(range(len(speed)), key=lambda k: speed[k])
+    sim_t = res["steps"] * dt if res["steps"] else t[-1]
+    res.update(peak_speed=speed[i], peak_time=t[i], peak_gap=z[i] - R,
+               peak_error_pct=100.0 * (speed[i] - c["u_inf"]) / c["u_inf"],
+               simulated_time_s=sim_t, final_gap=z[-1] - R,
+               wall_s_per_sim_s=(res["wall_time_s"] / sim_t) if sim_t > 0 else None,
+               updates_per_sim_s=(ln["cells"][0] * ln["cells"][1] * ln["cells"][2] * res["steps"] / sim_t)
+               if res["steps"] and sim_t > 0 else None,
+               mlups=(ln["cells"][0] * ln["cells"][1] * ln["cells"][2] * res["steps"] / res["wall_time_s"] / 1e6)
+               if res["steps"] else None,
+               Re_peak=c["rho_f"] * speed[i] * D / c["mu"])
+    # time for the gap to close from 120 mm to 1 d (15 mm) and to 0.1 d
+    for lim, key in ((D, "t_gap_1d"), (0.1 * D, "t_gap_0p1d")):
+        hit = next((t[k] for k in range(len(z)) if z[k] - R <= lim), None)
+        res[key] = hit
+    # mean speed while the gap closes from 80 to 40 mm (smooths the ripple of coarse grids)
+    band = [speed[k] for k in range(len(z)) if 0.040 <= z[k] - R <= 0.080]
+    res["plateau_speed"] = sum(band) / len(band) if band else None
+    pl = plateau(t, [zz - R for zz in z], speed)
+    pl["terminal_error_pct"] = 100.0 * (pl["terminal_speed"] - c["u_inf"]) / c["u_inf"]
+    res.update(pl)
+    # after landing (gap < 0.5 mm for the last quarter of the run): rms of the reported velocity
+    # (last 5 % of the run, all rows within 50 um of the floor), and the rms of dz/dt from the
+    # positions of consecutive rows over the same window: they differ when the sphere oscillates
+    # faster than the rows sample it
+    ks = [k for k in range(1, len(z)) if t[k] >= 0.95 * t[-1]]
+    if len(ks) > 5 and all(abs(z[k] - R) < 0.00005 for k in ks):
+        res["rest_speed_rms"] = math.sqrt(sum(speed[k] ** 2 for k in ks) / len(ks))
+        dz = [(z[k] - z[k - 1]) / (t[k] - t[k - 1]) for k in ks]
+        res["rest_dzdt_rms"] = math.sqrt(sum(v * v for v in dz) / len(dz))
+        res["rest_gap_range_um"] = [1e6 * (min(z[k] for k in ks) - R), 1e6 * (max(z[k] for k in ks) - R)]
+    else:
+        res["rest_speed_rms"] = None
+    res["series"] = dict(t=t, z=z, vz=vz)    # as particles.csv has them (7 digits): the charts' series
 
 
 def charted(sp):

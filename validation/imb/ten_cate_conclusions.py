@@ -33,7 +33,6 @@ def conclusions(results, extra, wide, opw=()):
     """The conclusions of the larger-box runs: (headline, "what the error means", wide-box findings)."""
     if not wide:
         return "", "", ""
-    F = lambda r: "%+.1f %%" % r["terminal_error_pct"]
     e4 = {k: find_run(wide, "E4", *k) for k in [(6, 100, 320), (6, 200, 320), (6, 300, 320), (6, 200, 240), (9, 200, 240),
                                                  (12, 200, 240), (12, 150, 240), (16, 150, 240)]}
     e1 = {k: find_run(wide, "E1", *k) for k in [(6, 100, 240), (6, 200, 240), (6, 300, 240), (9, 200, 240), (12, 200, 240)]}
@@ -41,35 +40,67 @@ def conclusions(results, extra, wide, opw=()):
     e3 = {k: find_run(wide, "E3", *k) for k in [(6, 200, 240), (9, 200, 240), (12, 200, 240), (6, 300, 320)]}
     b4 = box_baseline(e4[(6, 300, 320)], results, extra) if e4[(6, 300, 320)] else None
     b1 = box_baseline(e1[(6, 300, 240)], results, extra) if e1[(6, 300, 240)] else None
-    head, mean, find = [], [], []
+    head = box_headlines(e4, e1, e3, b4, b1)
+    find = (e4_findings(e4, b4) + e1_findings(e1, b1) + e3_findings(e3, results, extra) + e2_findings(e2)
+            + e4_n16_findings(e4, wide))
+    allw = list(wide) + list(opw)
+    badw = [r for r in allw if r.get("exit_code") != 0]
+    find.append("- **Stability:** " + ("all %d runs in larger boxes completed (exit 0, no health-check failure)." % len(allw) if not badw
+                else "runs that did not complete: " + ", ".join("%s (%s)" % (r["dir"], r.get("exit_reason")) for r in badw)))
+    find.append(WIDE_END)
+    verdict = widest_runs(wide)
+    head.append(verdict_headline(verdict))
+    laws = law_check(verdict)
+    if laws:
+        head.append(laws[0])
+        find.append(laws[1])
+    ops_w = operator_errors(wide, opw)
+    if ops_w:
+        head.append("**These larger-box numbers are TRT's (the operator of the main table); the operator matters:** in the same "
+                    "200 x 200 x 240 mm box %s (section \"Operators\")." % "; ".join(ops_w))
+    return " ".join(head), MEANING_END, "\n".join(f for f in find if f)
+
+
+def terminal_error(r):
+    return "%+.1f %%" % r["terminal_error_pct"]
+
+
+def box_headlines(e4, e1, e3, b4, b1):
+    """The headline's sentences on E4's and E1's wall effect and E3 in the larger box."""
+    head = []
     if e4[(6, 300, 320)] and b4:
         w = e4[(6, 300, 320)]
         t = ("**E4's %+.1f %% in the experiment's box is half box, half simulation:** at N = 6 the box lowers the "
              "peak by a factor %.3f, and in the 300 mm wide box E4 settles %s from u_inf" % (
-                 b4["peak_error_pct"], b4["peak_speed"] / w["terminal_speed"], F(w)))
+                 b4["peak_error_pct"], b4["peak_speed"] / w["terminal_speed"], terminal_error(w)))
         if e4[(9, 200, 240)] and e4[(6, 200, 240)]:
             t += (" (in 200 x 200 x 240 mm: %s at N = 6, %s at N = 9, so refining does not remove it)" % (
-                F(e4[(6, 200, 240)]), F(e4[(9, 200, 240)])))
+                terminal_error(e4[(6, 200, 240)]), terminal_error(e4[(9, 200, 240)])))
         head.append(t + ".")
     if e1[(6, 300, 240)] and b1:
         w = e1[(6, 300, 240)]
         t = ("**The experiment's walls hide a too-fast sphere at low Re:** E1 at N = 6 (Mach 0.05, tau 0.85) peaks "
              "%+.1f %% from u_inf in the experiment's box but settles %s from it in a 300 mm wide box (wall effect %.3f)" % (
-                 b1["peak_error_pct"], F(w), b1["peak_speed"] / w["terminal_speed"]))
+                 b1["peak_error_pct"], terminal_error(w), b1["peak_speed"] / w["terminal_speed"]))
         if e1[(9, 200, 240)] and e1[(6, 200, 240)]:
             t += ("; in 200 x 200 x 240 mm it is %s at N = 6 and %s at N = 9 (tau %.2f)" % (
-                F(e1[(6, 200, 240)]), F(e1[(9, 200, 240)]), e1[(9, 200, 240)]["tau"]))
+                terminal_error(e1[(6, 200, 240)]), terminal_error(e1[(9, 200, 240)]), e1[(9, 200, 240)]["tau"]))
         head.append(t + ".")
     if e3[(6, 200, 240)]:
-        t = "E3 in 200 x 200 x 240 mm: %s at N = 6" % F(e3[(6, 200, 240)])
+        t = "E3 in 200 x 200 x 240 mm: %s at N = 6" % terminal_error(e3[(6, 200, 240)])
         if e3[(9, 200, 240)]:
-            t += ", %s at N = 9" % F(e3[(9, 200, 240)])
+            t += ", %s at N = 9" % terminal_error(e3[(9, 200, 240)])
         if e3[(12, 200, 240)]:
-            t += ", %s at N = 12" % F(e3[(12, 200, 240)])
+            t += ", %s at N = 12" % terminal_error(e3[(12, 200, 240)])
         if e3[(6, 300, 320)]:
-            t += "; %s at N = 6 in 300 x 300 x 320 mm" % F(e3[(6, 300, 320)])
+            t += "; %s at N = 6 in 300 x 300 x 320 mm" % terminal_error(e3[(6, 300, 320)])
         head.append(t + ".")
-    # where the box's effect comes from (E4 and E1 at N = 6)
+    return head
+
+
+def e4_findings(e4, b4):
+    """Where E4's box effect comes from, and E4 by N (6, 9, 12) in the same box."""
+    find = []
     if e4[(6, 100, 320)] and e4[(6, 300, 320)] and b4:
         tall, w = e4[(6, 100, 320)], e4[(6, 300, 320)]
         find.append(
@@ -90,7 +121,7 @@ def conclusions(results, extra, wide, opw=()):
             "m/s (%s) at N = 6 and %.4f m/s (%s) at N = 9, as in the experiment's box (-5.7 %% to -6.0 %% for N = 6-12). "
             "Applying the N = 6 width and height effect (300 x 300 x 320 against 200 x 200 x 240 mm: %+.1f %%) to "
             "N = 9 would put N = 9 near %+.1f %% (an estimate, not a run)." % (
-                a6["terminal_speed"], F(a6), a9["terminal_speed"], F(a9),
+                a6["terminal_speed"], terminal_error(a6), a9["terminal_speed"], terminal_error(a9),
                 (e4[(6, 300, 320)]["terminal_error_pct"] - a6["terminal_error_pct"]) if e4[(6, 300, 320)] else float("nan"),
                 (a9["terminal_error_pct"] + e4[(6, 300, 320)]["terminal_error_pct"] - a6["terminal_error_pct"]) if e4[(6, 300, 320)] else float("nan")))
     if e4[(12, 200, 240)] and e4[(9, 200, 240)] and e4[(6, 200, 240)]:
@@ -99,10 +130,16 @@ def conclusions(results, extra, wide, opw=()):
             "200 x 200 x 240 mm box: %.4f m/s (%s), after %s at N = 6 and %s at N = 9: the deficit shrinks slowly "
             "with N; the N = 6 widening to 300 x 300 x 320 mm (%+.1f %%) would put it near %+.1f %% (an estimate, "
             "not a run)." % (
-                e4[(12, 200, 240)]["terminal_speed"], F(e4[(12, 200, 240)]), F(e4[(6, 200, 240)]), F(e4[(9, 200, 240)]),
+                e4[(12, 200, 240)]["terminal_speed"], terminal_error(e4[(12, 200, 240)]), terminal_error(e4[(6, 200, 240)]), terminal_error(e4[(9, 200, 240)]),
                 (e4[(6, 300, 320)]["terminal_error_pct"] - e4[(6, 200, 240)]["terminal_error_pct"]) if e4[(6, 300, 320)] else float("nan"),
                 (e4[(12, 200, 240)]["terminal_error_pct"] + e4[(6, 300, 320)]["terminal_error_pct"]
                  - e4[(6, 200, 240)]["terminal_error_pct"]) if e4[(6, 300, 320)] else float("nan")))
+    return find
+
+
+def e1_findings(e1, b1):
+    """E1: the lateral walls and the broad plateau; E1 by N."""
+    find = []
     if e1[(6, 100, 240)] and e1[(6, 300, 240)] and b1:
         n100, w2, w3 = e1[(6, 100, 240)], e1[(6, 200, 240)], e1[(6, 300, 240)]
         find.append(
@@ -119,47 +156,65 @@ def conclusions(results, extra, wide, opw=()):
     if e1[(9, 200, 240)] and e1[(6, 200, 240)]:
         a6, a9 = e1[(6, 200, 240)], e1[(9, 200, 240)]
         t = "- **E1 with N** (Mach 0.05; tau %.2f -> %.2f), 200 x 200 x 240 mm: %.4f m/s (%s) -> %.4f m/s (%s)" % (
-            a6["tau"], a9["tau"], a6["terminal_speed"], F(a6), a9["terminal_speed"], F(a9))
+            a6["tau"], a9["tau"], a6["terminal_speed"], terminal_error(a6), a9["terminal_speed"], terminal_error(a9))
         a12 = e1[(12, 200, 240)]
         if a12:
             t += " -> %.4f m/s (%s) at N = 12 (tau %.2f, above the 1.0 the coupled run warns about)" % (
-                a12["terminal_speed"], F(a12), a12["tau"])
+                a12["terminal_speed"], terminal_error(a12), a12["tau"])
         find.append(t + ".")
+    return find
+
+
+def e3_findings(e3, results, extra):
+    """E3 in 200 x 200 x 240 mm by N, and in 300 x 300 x 320 mm."""
+    find = []
     if e3[(6, 200, 240)]:
         b3 = box_baseline(e3[(6, 200, 240)], results, extra)
-        t = "- **E3 (Re 11.6), 200 x 200 x 240 mm:** %.4f m/s (%s) at N = 6" % (e3[(6, 200, 240)]["terminal_speed"], F(e3[(6, 200, 240)]))
+        t = "- **E3 (Re 11.6), 200 x 200 x 240 mm:** %.4f m/s (%s) at N = 6" % (e3[(6, 200, 240)]["terminal_speed"], terminal_error(e3[(6, 200, 240)]))
         if b3:
             t += " (experiment's box: peak %+.1f %%, wall effect %.3f)" % (b3["peak_error_pct"], b3["peak_speed"] / e3[(6, 200, 240)]["terminal_speed"])
         if e3[(9, 200, 240)]:
             b9 = box_baseline(e3[(9, 200, 240)], results, extra)
-            t += "; %.4f m/s (%s) at N = 9" % (e3[(9, 200, 240)]["terminal_speed"], F(e3[(9, 200, 240)]))
+            t += "; %.4f m/s (%s) at N = 9" % (e3[(9, 200, 240)]["terminal_speed"], terminal_error(e3[(9, 200, 240)]))
             if b9:
                 t += " (experiment's box: %+.1f %%, wall effect %.3f)" % (b9["peak_error_pct"], b9["peak_speed"] / e3[(9, 200, 240)]["terminal_speed"])
         if e3[(12, 200, 240)]:
-            t += "; %.4f m/s (%s) at N = 12" % (e3[(12, 200, 240)]["terminal_speed"], F(e3[(12, 200, 240)]))
+            t += "; %.4f m/s (%s) at N = 12" % (e3[(12, 200, 240)]["terminal_speed"], terminal_error(e3[(12, 200, 240)]))
         if e3[(6, 300, 320)]:
-            t += "; %.4f m/s (%s) at N = 6 in 300 x 300 x 320 mm" % (e3[(6, 300, 320)]["terminal_speed"], F(e3[(6, 300, 320)]))
+            t += "; %.4f m/s (%s) at N = 6 in 300 x 300 x 320 mm" % (e3[(6, 300, 320)]["terminal_speed"], terminal_error(e3[(6, 300, 320)]))
             if e3[(9, 200, 240)]:
                 dd = e3[(6, 300, 320)]["terminal_error_pct"] - e3[(6, 200, 240)]["terminal_error_pct"]
                 t += (". Applying the N = 6 change from 200 x 200 x 240 to 300 x 300 x 320 mm (%+.1f %%) to N = 9 would "
                       "put N = 9 near %+.1f %% (an estimate, not a run)" % (dd, e3[(9, 200, 240)]["terminal_error_pct"] + dd))
         find.append(t + ". The experiment's box takes about 3 % off E3's speed, so E3's small in-box errors at N = 6-7.5 "
                     "(main table) were a too-fast sphere meeting the walls, as suspected under Findings.")
+    return find
+
+
+def e2_findings(e2):
+    """E2 in 200 x 200 x 240 mm against u_inf and the drag laws."""
+    find = []
     e2_runs = [(n, e2[(n, 200, 240)]) for n in (6, 9, 12) if e2[(n, 200, 240)]]
     if e2_runs:
         sn, cgw = drag_law_velocity("E2", "sn"), drag_law_velocity("E2", "cgw")
         find.append(
             "- **E2 (Re 4.1), 200 x 200 x 240 mm, Mach 0.1:** " + "; ".join(
                 "%.4f m/s at N = %g (tau %.2f; %s of u_inf, %+.1f / %+.1f %% of Schiller-Naumann / Clift-Grace-Weber)" % (
-                    r["terminal_speed"], n, r["tau"], F(r), 100 * (r["terminal_speed"] / sn - 1), 100 * (r["terminal_speed"] / cgw - 1))
+                    r["terminal_speed"], n, r["tau"], terminal_error(r), 100 * (r["terminal_speed"] / sn - 1), 100 * (r["terminal_speed"] / cgw - 1))
                 for n, r in e2_runs) + ". Like E1, E2 settles faster than its u_inf and converges towards the drag laws "
             "with N; its small in-box errors (main table) were the experiment's walls.")
+    return find
+
+
+def e4_n16_findings(e4, wide):
+    """E4 at N = 16 against N = 12 in the 150 mm box, and on a GPU in 210 mm."""
+    find = []
     a12, a16 = e4[(12, 150, 240)], e4[(16, 150, 240)]
     if a12 and a16:
         t = ("- **E4 at N = 16** (150 x 150 x 240 mm: a 200 mm wide box at N = 16 is 213.3 cells wide, and 210 mm "
              "needs 12.8 M cells, above the 8.4 M that lavapipe's 128 MiB storage binding allows): %.4f m/s (%s) "
              "against %.4f m/s (%s) at N = 12 in the same box, %+.2f %% from N = 12 to 16" % (
-                 a16["terminal_speed"], F(a16), a12["terminal_speed"], F(a12),
+                 a16["terminal_speed"], terminal_error(a16), a12["terminal_speed"], terminal_error(a12),
                  100 * (a16["terminal_speed"] / a12["terminal_speed"] - 1)))
         if e4[(12, 200, 240)]:
             wall = e4[(12, 200, 240)]["terminal_error_pct"] - a12["terminal_error_pct"]
@@ -167,40 +222,41 @@ def conclusions(results, extra, wide, opw=()):
                   "would be near %+.1f %% (an estimate)" % (wall, a16["terminal_error_pct"] + wall))
         g16 = find_run(wide, "E4", 16, 210, 240)
         if g16:
-            t += ("; measured on a GPU in 210 x 210 x 240 mm: %.4f m/s (%s)" % (g16["terminal_speed"], F(g16)))
+            t += ("; measured on a GPU in 210 x 210 x 240 mm: %.4f m/s (%s)" % (g16["terminal_speed"], terminal_error(g16)))
         find.append(t + ".")
-    allw = list(wide) + list(opw)
-    badw = [r for r in allw if r.get("exit_code") != 0]
-    find.append("- **Stability:** " + ("all %d runs in larger boxes completed (exit 0, no health-check failure)." % len(allw) if not badw
-                else "runs that did not complete: " + ", ".join("%s (%s)" % (r["dir"], r.get("exit_reason")) for r in badw)))
-    find.append(WIDE_END)
-    # verdict against the target, from the widest box run per case and N
+    return find
+
+
+def widest_runs(wide):
+    """(case, N, run) of the widest box run per case and N."""
     verdict = []
     for case in CASES:
         for n in sorted({r["N"] for r in wide if r["case"] == case}):
             w = widest(wide, case, n)
             if w:
                 verdict.append((case, n, w))
-    inside = ["%s N = %g (%s)" % (c, n, F(w)) for c, n, w in verdict if abs(w["terminal_error_pct"]) < 2.95]
-    edge = ["%s N = %g (%s)" % (c, n, F(w)) for c, n, w in verdict if 2.95 <= abs(w["terminal_error_pct"]) <= 3.5]
-    outside = ["%s N = %g (%s)" % (c, n, F(w)) for c, n, w in verdict if abs(w["terminal_error_pct"]) > 3.5]
-    head.append(
+    return verdict
+
+
+def verdict_headline(verdict):
+    """The verdict against the target (3 % of u_inf) from the widest box run per case and N."""
+    inside = ["%s N = %g (%s)" % (c, n, terminal_error(w)) for c, n, w in verdict if abs(w["terminal_error_pct"]) < 2.95]
+    edge = ["%s N = %g (%s)" % (c, n, terminal_error(w)) for c, n, w in verdict if 2.95 <= abs(w["terminal_error_pct"]) <= 3.5]
+    outside = ["%s N = %g (%s)" % (c, n, terminal_error(w)) for c, n, w in verdict if abs(w["terminal_error_pct"]) > 3.5]
+    return (
         "**Against u_inf in the widest box run per case and N: within 3 %%:** %s; **at the limit (3.0-3.5 %%):** %s; "
         "**outside:** %s. %s" % (", ".join(inside) or "none", ", ".join(edge) or "none", ", ".join(outside) or "none",
                                  HEADLINE_END))
-    laws = law_check(verdict)
-    if laws:
-        head.append(laws[0])
-        find.append(laws[1])
+
+
+def operator_errors(wide, opw):
+    """The larger-box runs of other operators against TRT's in the same box."""
     ops_w = []
     for r in sorted(opw, key=lambda r: (r["case"], r["N"], r["op"])):
         t = find_run(wide, r["case"], r["N"], r["box"][0] * 1e3, r["box"][2] * 1e3)
         if "terminal_speed" in r and t:
-            ops_w.append("%s N = %g %s %s (TRT %s)" % (r["case"], r["N"], op_name(r["op"]), F(r), F(t)))
-    if ops_w:
-        head.append("**These larger-box numbers are TRT's (the operator of the main table); the operator matters:** in the same "
-                    "200 x 200 x 240 mm box %s (section \"Operators\")." % "; ".join(ops_w))
-    return " ".join(head), MEANING_END, "\n".join(f for f in find if f)
+            ops_w.append("%s N = %g %s %s (TRT %s)" % (r["case"], r["N"], op_name(r["op"]), terminal_error(r), terminal_error(t)))
+    return ops_w
 
 
 def law_check(verdict):

@@ -31,12 +31,27 @@ def e4_split(ok, extra, wide):
 
 
 def make_findings(ok, extra=(), wide=()):
+    """The Findings of the runs in the experiment's box: the bullets, one a line."""
     out = []
     by = {}
     for r in ok:
         by.setdefault(r["case"], []).append(r)
     for c in by:
         by[c].sort(key=lambda r: r["N"])
+    add_peak_errors(out, by)
+    if extra:
+        add_tau_check(out, ok, extra)
+    add_box_and_grid(out, by, ok, extra, wide)
+    add_resting(out, ok, extra)
+    bad = [r for r in ok if r.get("exit_code") != 0]
+    out.append("- **Stability:** " + ("every run completed (exit 0, no health-check failure); tau stayed above "
+               "%.3f (E4 at N = 3), far from the 0.5005 limit." % min(r["tau"] for r in ok if r.get("tau"))
+               if not bad else "runs that did not complete: " + ", ".join("%s N=%g (%s)" % (r["case"], r["N"], r["exit_reason"]) for r in bad)))
+    return "\n".join(out)
+
+
+def add_peak_errors(out, by):
+    """The peak speed errors per case and resolution, and how they fall from the most viscous case to the least."""
     line = []
     for c in sorted(by):
         line.append("%s (tau %s): %s" % (c, " / ".join("%.3f" % r["tau"] for r in by[c] if r.get("tau")),
@@ -51,24 +66,31 @@ def make_findings(ok, extra=(), wide=()):
         "only tau. With refinement the low-Re errors shrink (E1 %s %% at N = %s) even though tau - 1/2 "
         "grows with N at fixed Mach." % (" -> ".join("%+.1f" % r["peak_error_pct"] for r in by.get("E1", [])),
                                        ", ".join("%g" % r["N"] for r in by.get("E1", []))))
-    if extra:
-        checks = []
-        for e in extra:
-            base = next((r for r in ok if r["case"] == e["case"] and r["N"] == e["N"]), None)
-            if base and "peak_speed" in e:
-                checks.append(
-                    "%s at N = %g: Mach %g -> %g lowers tau %.3f -> %.3f and moves the peak error %+.1f %% -> %+.1f %% "
-                    "(mean speed over the 80-40 mm gap %.4f -> %.4f m/s)" % (
-                        e["case"], e["N"], base["mach"], e["mach"], base["tau"], e["tau"], base["peak_error_pct"],
-                        e["peak_error_pct"], base["plateau_speed"], e["plateau_speed"]))
-        if checks:
-            out.append(
-                "- **Tau check** (same grid, half the time step, twice the steps): " + "; ".join(checks) + ". Halving dt "
-                "also halves the Mach number, but compressibility errors at Mach 0.1 are of order Ma^2 = 1 %, so most "
-                "of this shift is tau: the IMB sphere's effective radius depends on tau, and part of the low-Re "
-                "excess at fixed Mach 0.1 is that dependence, not resolution. Keeping tau near 0.6-1 (a lower Mach "
-                "for E1/E2) helps and costs steps in proportion, but it is not the whole fix: in a larger box E1 at "
-                "Mach 0.05 is still far too fast (section \"Larger boxes\").")
+
+
+def add_tau_check(out, ok, extra):
+    """The tau check: the same grid at half the time step against the run at Mach 0.1."""
+    checks = []
+    for e in extra:
+        base = next((r for r in ok if r["case"] == e["case"] and r["N"] == e["N"]), None)
+        if base and "peak_speed" in e:
+            checks.append(
+                "%s at N = %g: Mach %g -> %g lowers tau %.3f -> %.3f and moves the peak error %+.1f %% -> %+.1f %% "
+                "(mean speed over the 80-40 mm gap %.4f -> %.4f m/s)" % (
+                    e["case"], e["N"], base["mach"], e["mach"], base["tau"], e["tau"], base["peak_error_pct"],
+                    e["peak_error_pct"], base["plateau_speed"], e["plateau_speed"]))
+    if checks:
+        out.append(
+            "- **Tau check** (same grid, half the time step, twice the steps): " + "; ".join(checks) + ". Halving dt "
+            "also halves the Mach number, but compressibility errors at Mach 0.1 are of order Ma^2 = 1 %, so most "
+            "of this shift is tau: the IMB sphere's effective radius depends on tau, and part of the low-Re "
+            "excess at fixed Mach 0.1 is that dependence, not resolution. Keeping tau near 0.6-1 (a lower Mach "
+            "for E1/E2) helps and costs steps in proportion, but it is not the whole fix: in a larger box E1 at "
+            "Mach 0.05 is still far too fast (section \"Larger boxes\").")
+
+
+def add_box_and_grid(out, by, ok, extra, wide):
+    """Errors that cross zero, coarse grids' ripple, E4's short fall."""
     e3 = ", ".join("%+.1f %% at N = %g" % (r["peak_error_pct"], r["N"]) for r in by.get("E3", []))
     e4 = ", ".join("%+.1f %% at N = %g" % (r["peak_error_pct"], r["N"]) for r in by.get("E4", []))
     out.append(
@@ -85,6 +107,10 @@ def make_findings(ok, extra=(), wide=()):
         "floor, after which the floor decelerates it; 1.3 x 120 mm / u_inf is just enough simulated time "
         "for it to reach the floor (final gaps in the second table). The larger boxes measure what the short "
         "fall costs: see \"Where E4's box effect comes from\" below.")
+
+
+def add_resting(out, ok, extra):
+    """A sphere resting on the floor: the velocity it kept reporting, where it did."""
     rest = [r for r in ok if r.get("rest_speed_rms") is not None]
     loud = [r for r in rest if r["rest_speed_rms"] > 1e-3]
     quiet = [r for r in rest if r["rest_speed_rms"] <= 1e-3]
@@ -111,47 +137,58 @@ def make_findings(ok, extra=(), wide=()):
                       "not to the contact alone." % (e["case"], e["N"], e["mach"], e.get("dem_substeps"), e["tau"],
                                                       1e3 * e["rest_speed_rms"])
                       for e in extra if e.get("rest_speed_rms") is not None and e["rest_speed_rms"] < 1e-3))
-    bad = [r for r in ok if r.get("exit_code") != 0]
-    out.append("- **Stability:** " + ("every run completed (exit 0, no health-check failure); tau stayed above "
-               "%.3f (E4 at N = 3), far from the 0.5005 limit." % min(r["tau"] for r in ok if r.get("tau"))
-               if not bad else "runs that did not complete: " + ", ".join("%s N=%g (%s)" % (r["case"], r["N"], r["exit_reason"]) for r in bad)))
-    return "\n".join(out)
 
 
 def narrative(results, extra, wide, ops, opw=()):
     """The prose of the wide-box and operator sections, the headline and "What the error means", from the runs."""
     ok = [r for r in results if "peak_speed" in r]
-    pct = lambda v: "%+.1f %%" % v
-    box_txt = lambda r: "%g x %g x %g mm" % tuple(round(L * 1e3, 3) for L in r["box"])
-    # ---- wide boxes
-    wide_intro = (
-        "The table above compares the peak speed *in the experiment's box* with u_inf, the terminal velocity in an "
-        "*unbounded* fluid. To separate the box from the method, the same cases were run in larger closed boxes "
-        "(all six faces walls, as before): width = depth W, height H, the sphere centred in x and y and released "
-        "from rest 32.5 mm below the lid as in the experiment, so it falls H - 40 mm before touching the floor; "
-        "same fluid, sphere, operator (TRT) and Mach number as the matching run in the experiment's box "
-        "(BGK and MRT in a larger box: section \"Operators\"). "
-        "**Terminal (plateau) speed:** the mean of -v_z over the contiguous rows of particles.csv around the "
-        "maximum speed in which the speed stays within 0.5 % of that maximum (so it changes by less than 0.5 % "
-        "over the window; the window's gap range and length of fall are in the table; a window of several "
-        "diameters is a plateau, not a passing maximum). **Error:** (terminal - u_inf) / u_inf. **Wall effect:** "
-        "(peak speed in the 100 x 100 x 160 mm box) / (terminal speed in the larger box) at the same N and Mach; "
-        "1 means no effect of the box.\n\n"
-        "Choice of boxes (cost on this CPU ~ cells x steps / (5-10 MLUPS), one run at a time, the cores shared "
-        "with another session): N = 6 (dx 2.5 mm) for the width scans, widths 100, 200, 300 mm (d / W = 0.15, "
-        "0.075, 0.05). E4 (and E3 at N = 6, 300 mm wide) in 320 mm tall boxes (280 mm of fall: E4, the highest Stokes number, needs "
-        "about 100 mm of fall to come within 0.5 % of its plateau, and in the 160 mm box only just gets there). "
-        "E1 (Re 1.5) at Mach 0.05 (tau 0.85; the tau check shows that tau 1.2 at Mach 0.1 biases it) in 240 mm "
-        "tall boxes (200 mm of fall: E1 reaches its plateau within ~40 mm, but at low Re the lid and the floor "
-        "reach further). N = 9 (dx 1.667 mm) in 200 x 200 x 240 mm, not 300 mm wide: 300 x 300 x 240 mm at "
-        "N = 9 is 4.7 M cells x 2500-3000 steps, 20-40 min here; a run at N = 6 in the same 200 x 200 x 240 mm box "
-        "gives the N = 6 -> 9 comparison in one box (E4, E1, E3). E3 last, as time allowed: N = 6 and 9 in "
-        "200 x 200 x 240 mm, N = 6 in 300 x 300 x 320 mm. Then, in a later session: E2 at N = 6, 9 and 12 and "
-        "E3 at N = 12 in 200 x 200 x 240 mm; E4 at N = 12 and 16 in 150 x 150 x 240 mm (the largest box N = 16 "
-        "fits on lavapipe: 8.4 M cells); E1 at N = 12 (Mach 0.05, 200 x 200 x 240 mm, 4.9 M cells x 7206 steps): "
-        "a first run was killed by the system at step 5798 for memory (a growth of about 1 byte per cell per "
-        "coupled step on lavapipe), rerun to the end after the fix. Simulated time: long enough for the sphere to "
-        "reach the floor region (steps in the table); the runs stop before the sphere rests on the floor.")
+    wide_findings = wide_box_findings(results, extra, wide)
+    op_findings = operator_findings(ok, ops, wide, opw)
+    headline, meaning, wc = headline_and_meaning(results, extra, wide, opw)
+    wide_findings = wide_findings + ("\n" + wc if wc else "")
+    return WIDE_INTRO, wide_findings, OP_INTRO, op_findings, headline, meaning
+
+
+def pct(v):
+    return "%+.1f %%" % v
+
+
+def box_txt(r):
+    return "%g x %g x %g mm" % tuple(round(L * 1e3, 3) for L in r["box"])
+
+
+WIDE_INTRO = (
+    "The table above compares the peak speed *in the experiment's box* with u_inf, the terminal velocity in an "
+    "*unbounded* fluid. To separate the box from the method, the same cases were run in larger closed boxes "
+    "(all six faces walls, as before): width = depth W, height H, the sphere centred in x and y and released "
+    "from rest 32.5 mm below the lid as in the experiment, so it falls H - 40 mm before touching the floor; "
+    "same fluid, sphere, operator (TRT) and Mach number as the matching run in the experiment's box "
+    "(BGK and MRT in a larger box: section \"Operators\"). "
+    "**Terminal (plateau) speed:** the mean of -v_z over the contiguous rows of particles.csv around the "
+    "maximum speed in which the speed stays within 0.5 % of that maximum (so it changes by less than 0.5 % "
+    "over the window; the window's gap range and length of fall are in the table; a window of several "
+    "diameters is a plateau, not a passing maximum). **Error:** (terminal - u_inf) / u_inf. **Wall effect:** "
+    "(peak speed in the 100 x 100 x 160 mm box) / (terminal speed in the larger box) at the same N and Mach; "
+    "1 means no effect of the box.\n\n"
+    "Choice of boxes (cost on this CPU ~ cells x steps / (5-10 MLUPS), one run at a time, the cores shared "
+    "with another session): N = 6 (dx 2.5 mm) for the width scans, widths 100, 200, 300 mm (d / W = 0.15, "
+    "0.075, 0.05). E4 (and E3 at N = 6, 300 mm wide) in 320 mm tall boxes (280 mm of fall: E4, the highest Stokes number, needs "
+    "about 100 mm of fall to come within 0.5 % of its plateau, and in the 160 mm box only just gets there). "
+    "E1 (Re 1.5) at Mach 0.05 (tau 0.85; the tau check shows that tau 1.2 at Mach 0.1 biases it) in 240 mm "
+    "tall boxes (200 mm of fall: E1 reaches its plateau within ~40 mm, but at low Re the lid and the floor "
+    "reach further). N = 9 (dx 1.667 mm) in 200 x 200 x 240 mm, not 300 mm wide: 300 x 300 x 240 mm at "
+    "N = 9 is 4.7 M cells x 2500-3000 steps, 20-40 min here; a run at N = 6 in the same 200 x 200 x 240 mm box "
+    "gives the N = 6 -> 9 comparison in one box (E4, E1, E3). E3 last, as time allowed: N = 6 and 9 in "
+    "200 x 200 x 240 mm, N = 6 in 300 x 300 x 320 mm. Then, in a later session: E2 at N = 6, 9 and 12 and "
+    "E3 at N = 12 in 200 x 200 x 240 mm; E4 at N = 12 and 16 in 150 x 150 x 240 mm (the largest box N = 16 "
+    "fits on lavapipe: 8.4 M cells); E1 at N = 12 (Mach 0.05, 200 x 200 x 240 mm, 4.9 M cells x 7206 steps): "
+    "a first run was killed by the system at step 5798 for memory (a growth of about 1 byte per cell per "
+    "coupled step on lavapipe), rerun to the end after the fix. Simulated time: long enough for the sphere to "
+    "reach the floor region (steps in the table); the runs stop before the sphere rests on the floor.")
+
+
+def wide_box_findings(results, extra, wide):
+    """The bullets of "Larger boxes": each case's terminal speeds by box, the width trend, u_inf by the drag laws."""
     bullets = []
     for case in CASES:
         rc = [r for r in wide if r["case"] == case and "terminal_speed" in r]
@@ -169,7 +206,24 @@ def narrative(results, extra, wide, ops, opw=()):
             bullets.append("- **%s, N = %g, Mach %g (tau %.3f):** in the experiment's box the peak is %s m/s (%s); %s." % (
                 case, n, rn[0]["mach"], rn[0]["tau"], fmt(base["peak_speed"] if base else None, "%.4f"),
                 pct(base["peak_error_pct"]) if base else "-", "; ".join(parts)))
-    # the width trend at the N with the most widths, per case
+    trend = width_trend(wide)
+    if trend:
+        bullets.append("- **Width convergence:** " + "; ".join(trend) + ". Lateral wall effects fall off with the "
+                       "width; a last step that changes the speed by a fraction of a percent puts the widest box "
+                       "within about that much of the unbounded value (assuming the remaining effect decays at least "
+                       "as fast as the step; not shown by a still wider box).")
+    laws = "; ".join("%s: %.4f / %.4f m/s (u_inf %.3f)" % (c, drag_law_velocity(c, "sn"), drag_law_velocity(c, "cgw"), CASES[c]["u_inf"])
+                     for c in CASES)
+    bullets.append("- **u_inf itself** (for orientation only): standard drag laws give terminal velocities (Schiller-Naumann / "
+                   "Clift-Grace-Weber) of %s. For E3 and E4 they lie within -2 to +3 %% of the reference's u_inf; for E1 "
+                   "and E2 they are 5-9 %% above it. The laws differ from each other by up to 3 %%, so they cannot "
+                   "arbitrate at the 3 %% level; every error in this report is against the reference's u_inf." % laws)
+    return "\n".join(bullets)
+
+
+def width_trend(wide):
+    """Per case and N, the terminal speeds of three widths or more at one height, and the last widening's change."""
+    trend = []
     trend = []
     for case in CASES:
         for n in sorted({r["N"] for r in wide if r["case"] == case}):
@@ -185,30 +239,24 @@ def narrative(results, extra, wide, ops, opw=()):
                                  "changes it by %+.2f %%" % (case, n, h * 1e3, " / ".join("%.4f" % r["terminal_speed"] for r in rs),
                                                              " / ".join("%g" % (r["box"][0] * 1e3) for r in rs),
                                                              rs[-2]["box"][0] * 1e3, rs[-1]["box"][0] * 1e3, d_last))
-    if trend:
-        bullets.append("- **Width convergence:** " + "; ".join(trend) + ". Lateral wall effects fall off with the "
-                       "width; a last step that changes the speed by a fraction of a percent puts the widest box "
-                       "within about that much of the unbounded value (assuming the remaining effect decays at least "
-                       "as fast as the step; not shown by a still wider box).")
-    laws = "; ".join("%s: %.4f / %.4f m/s (u_inf %.3f)" % (c, drag_law_velocity(c, "sn"), drag_law_velocity(c, "cgw"), CASES[c]["u_inf"])
-                     for c in CASES)
-    bullets.append("- **u_inf itself** (for orientation only): standard drag laws give terminal velocities (Schiller-Naumann / "
-                   "Clift-Grace-Weber) of %s. For E3 and E4 they lie within -2 to +3 %% of the reference's u_inf; for E1 "
-                   "and E2 they are 5-9 %% above it. The laws differ from each other by up to 3 %%, so they cannot "
-                   "arbitrate at the 3 %% level; every error in this report is against the reference's u_inf." % laws)
-    wide_findings = "\n".join(bullets)
-    # ---- operators
-    op_intro = (
-        "E3 (Re 11.6, the seed paper's case) in the experiment's box at Mach 0.1 with the three collision operators "
-        "of the lattice: BGK (one rate 1/tau), TRT (magic 3/16; the runs of the main table) and MRT (d'Humieres et "
-        "al. 2002 D3Q19, shear rate 1/tau, the scene's default rates for the other moments: s_e = 1.19, "
-        "s_epsilon = 1.4, s_q = 1.2, s_pi = 1.4, s_m = 1.98; `[lattice.mrt]` in scene/src/lattice.rs). Same "
-        "grids, steps and measurement (peak speed) as the main table. **Timings:** wall time of the whole coupled "
-        "run on 2 CPU cores shared with another session's builds and runs; the 1-minute load average before and "
-        "after each run is listed (2 = both cores busy); runs of the same size can differ by 2x, so read the "
-        "timing ratios between operators as +-50 %. For the timing TRT was rerun beside BGK and MRT "
-        "(runs `E3_N<n>_trt`, N = 3, 6, 9; the chart's dashed TRT line); the earlier TRT runs of the main table were "
-        "timed under another load (no load recorded).")
+    return trend
+
+
+OP_INTRO = (
+    "E3 (Re 11.6, the seed paper's case) in the experiment's box at Mach 0.1 with the three collision operators "
+    "of the lattice: BGK (one rate 1/tau), TRT (magic 3/16; the runs of the main table) and MRT (d'Humieres et "
+    "al. 2002 D3Q19, shear rate 1/tau, the scene's default rates for the other moments: s_e = 1.19, "
+    "s_epsilon = 1.4, s_q = 1.2, s_pi = 1.4, s_m = 1.98; `[lattice.mrt]` in scene/src/lattice.rs). Same "
+    "grids, steps and measurement (peak speed) as the main table. **Timings:** wall time of the whole coupled "
+    "run on 2 CPU cores shared with another session's builds and runs; the 1-minute load average before and "
+    "after each run is listed (2 = both cores busy); runs of the same size can differ by 2x, so read the "
+    "timing ratios between operators as +-50 %. For the timing TRT was rerun beside BGK and MRT "
+    "(runs `E3_N<n>_trt`, N = 3, 6, 9; the chart's dashed TRT line); the earlier TRT runs of the main table were "
+    "timed under another load (no load recorded).")
+
+
+def operator_findings(ok, ops, wide, opw):
+    """The bullets of "Operators": each operator's errors, side by side, wall times, against u_inf without the walls."""
     op_bullets = []
     for op in ("bgk", "mrt"):
         rs = sorted([r for r in ops if r["op"] == op and "peak_speed" in r], key=lambda r: r["N"])
@@ -219,7 +267,15 @@ def narrative(results, extra, wide, ops, opw=()):
             t = next((b for b in ok if b["case"] == r["case"] and b["N"] == r["N"]), None)
             items.append("N = %g: %s (TRT %s)" % (r["N"], pct(r["peak_error_pct"]), pct(t["peak_error_pct"]) if t else "-"))
         op_bullets.append("- **%s on %s, peak speed error against u_inf in the experiment's box:** %s." % (op_name(op), rs[0]["case"], "; ".join(items)))
-    # operators against each other, N by N
+    add_side_by_side(op_bullets, ok, ops)
+    add_wall_times(op_bullets, ok, ops)
+    add_without_walls(op_bullets, ok, ops, wide)
+    add_in_larger_box(op_bullets, ops, wide, opw)
+    return "\n".join(op_bullets)
+
+
+def add_side_by_side(op_bullets, ok, ops):
+    """The operators' peak speeds side by side, N by N, where two or more ran."""
     cmp_ = []
     for n in sorted({r["N"] for r in ops}):
         by_op = {}
@@ -247,6 +303,10 @@ def narrative(results, extra, wide, ops, opw=()):
                           "coarse grids, TRT - BGK = %s of u_inf, shrinking as N grows. So at N <= 9 the IMB sphere's "
                           "effective size depends on the collision operator, TRT's being the smallest (fastest). %s" % (
                               max(diffs_bm) if diffs_bm else float("nan"), ", ".join(diffs_tb), OP_END))
+
+
+def add_wall_times(op_bullets, ok, ops):
+    """The operators' wall times, N by N, and how closely the TRT reruns reproduce the earlier runs."""
     timing = []
     for n in sorted({r["N"] for r in ops}):
         row = {r["op"]: r for r in ops if r["N"] == n and "wall_time_s" in r}
@@ -268,6 +328,10 @@ def narrative(results, extra, wide, ops, opw=()):
                                              min(b for _, b in same), max(b for _, b in same)))
         op_bullets.append("- **Wall time of the whole run** (TRT: the reruns `E3_N<n>_trt`, same steps and grid; "
                           "1-minute load before / after): " + "; ".join(timing) + ". " + OP_TIME_END + rerun)
+
+
+def add_without_walls(op_bullets, ok, ops, wide):
+    """BGK's and MRT's errors against u_inf estimated with the wall effect measured with TRT."""
     est = []
     for n in sorted({r["N"] for r in ops}):
         w = find_run(wide, "E3", n, 200, 240)
@@ -287,6 +351,10 @@ def narrative(results, extra, wide, ops, opw=()):
                           "and MRT spheres by the same factor as the TRT one (measured with TRT in 200 x 200 x 240 mm, "
                           "section \"Larger boxes\"), their errors against u_inf would be %s. On that estimate BGK and MRT "
                           "are closer to u_inf than TRT at N = 6; the runs in the next item test it." % "; ".join(est))
+
+
+def add_in_larger_box(op_bullets, ops, wide, opw):
+    """BGK and MRT run in a larger box: their terminal speeds."""
     meas = []
     for r in opw:
         if "terminal_speed" not in r:
@@ -302,8 +370,10 @@ def narrative(results, extra, wide, ops, opw=()):
     if meas:
         op_bullets.append("- **BGK and MRT in a larger box, measured** (%s; terminal speed as in \"Larger boxes\"; E1 and "
                           "E4 with BGK added to see whether their errors are TRT's): %s." % (box_txt(opw[0]), "; ".join(meas)))
-    op_findings = "\n".join(op_bullets)
-    # ---- headline and "what the error means"
+
+
+def headline_and_meaning(results, extra, wide, opw):
+    """The headline and "What the error means" from the widest boxes, and the conclusion closing "Larger boxes"."""
     items, effects = [], []
     for case in CASES:
         for n in sorted({r["N"] for r in wide if r["case"] == case}):
@@ -321,8 +391,7 @@ def narrative(results, extra, wide, ops, opw=()):
     hc, mc, wc = conclusions(results, extra, wide, opw)
     headline = headline.replace("HEADLINE_CONCLUSION", hc)
     meaning = meaning.replace("MEANING_CONCLUSION", mc)
-    wide_findings = wide_findings + ("\n" + wc if wc else "")
-    return wide_intro, wide_findings, op_intro, op_findings, headline, meaning
+    return headline, meaning, wc
 
 
 OP_END = (

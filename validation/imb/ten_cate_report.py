@@ -59,7 +59,33 @@ def summary_rows(ok, wide):
 
 
 def report(results, chart_paths, extra=(), wide=(), ops=(), opw=()):
+    """Writes REPORT.md from the records: the main runs (results), the tau check (extra), the larger boxes
+    (wide), the operators (ops) and the operators in a larger box (opw), with the charts at chart_paths."""
     ok = [r for r in results if "peak_speed" in r]
+    best = best_per_case(ok)
+    est, mlups, ml = finer_cost(ok)
+    tau_wide, wide_main = split_wide(wide)
+    findings = make_findings(ok, extra, wide_main)
+    nmax = max([r["N"] for r in ok], default=None)
+    tau_check = tau_check_section(ok, extra)
+    wide_table = wide_section(wide, results, extra)
+    op_table = op_section(ops, results)
+    wide_intro, wide_findings, op_intro, op_findings, headline, meaning = narrative(results, extra, wide_main, ops, opw)
+    wide_findings += tau_check_in_larger_boxes(tau_wide, wide_main)
+    opening = compact.summary(summary_rows(ok, wide_main), "python3 validation/imb/ten_cate.py report")
+    text = REPORT.format(
+        opening=opening, best_txt=best_text(best) or "no completed run", within=within_text(best) or "no case",
+        nmax=fmt(nmax, "%g"), headline=headline, table=results_table(results), traj=trajectory_table(ok),
+        charts_md=charts_list(chart_paths), findings=findings, tau_check=tau_check, wide_intro=wide_intro,
+        wide_table=wide_table, wide_findings=wide_findings, op_intro=op_intro, op_table=op_table,
+        op_findings=op_findings, meaning=meaning, mlups=fmt(mlups, "%.2f"), ml_low=fmt(ml[0] if ml else None, "%.2f"),
+        ml_high=fmt(ml[-1] if ml else None, "%.2f"), est=est)
+    with open(os.path.join(HERE, "REPORT.md"), "w") as f:
+        f.write(text)
+
+
+def results_table(results):
+    """The rows of the main table: every run in the experiment's box."""
     rows = []
     for r in sorted(results, key=lambda r: (r["case"], r["N"])):
         rows.append("| %s | %g | %s | %.3f | %s | %s | %s | %s | %s | %s | %s |" % (
@@ -68,21 +94,49 @@ def report(results, chart_paths, extra=(), wide=(), ops=(), opw=()):
             fmt(r.get("tau"), "%.4f"), fmt(r.get("wall_s_per_sim_s"), "%.0f"),
             fmt(r.get("wall_time_s"), "%.0f"), fmt(r.get("mlups"), "%.2f"),
             "lavapipe CPU" + ("" if r.get("exit_code") == 0 else " (exit %s: %s)" % (r.get("exit_code"), r.get("exit_reason")))))
-    table = "\n".join(rows)
+    return "\n".join(rows)
+
+
+def trajectory_table(ok):
+    """The rows of the trajectory table: every completed run in the experiment's box."""
     traj = []
     for r in sorted(ok, key=lambda r: (r["case"], r["N"])):
         traj.append("| %s | %g | %.3f | %.1f | %s | %s | %s | %.2f | %.3f | %s |" % (
             r["case"], r["N"], r["peak_time"], r["peak_gap"] * 1e3, fmt(r.get("t_gap_1d"), "%.2f"),
             fmt(r.get("t_gap_0p1d"), "%.2f"), fmt(r.get("plateau_speed"), "%.4f"), r["Re_peak"],
             r["final_gap"] * 1e3, fmt(r.get("rest_speed_rms"), "%.4f")))
-    traj = "\n".join(traj)
-    charts_md = "\n".join("- [%s](%s)" % (os.path.basename(p), os.path.basename(p)) for p in chart_paths)
+    return "\n".join(traj)
+
+
+def charts_list(chart_paths):
+    """The charts, a link a line."""
+    return "\n".join("- [%s](%s)" % (os.path.basename(p), os.path.basename(p)) for p in chart_paths)
+
+
+def best_per_case(ok):
+    """The run at the finest grid of each case."""
     best = {}
     for r in ok:
         if r["case"] not in best or r["N"] > best[r["case"]]["N"]:
             best[r["case"]] = r
-    best_txt = "; ".join("%s %+.1f %% at N = %g" % (c, best[c]["peak_error_pct"], best[c]["N"]) for c in sorted(best))
-    # cost estimate for finer grids from the measured MLUPS (cost ~ N^4: N^3 cells x N steps)
+    return best
+
+
+def best_text(best):
+    """The peak speed error at the finest grid of each case."""
+    return "; ".join("%s %+.1f %% at N = %g" % (c, best[c]["peak_error_pct"], best[c]["N"]) for c in sorted(best))
+
+
+def within_text(best):
+    """The cases whose finest grid is within 3 % of u_inf, with their verb."""
+    within = ", ".join("%s" % c for c in sorted(best) if abs(best[c]["peak_error_pct"]) <= 3.0)
+    within = (within + (" are" if "," in within else " is")) if within else ""
+    return within
+
+
+def finer_cost(ok):
+    """The cost estimate for finer grids from the measured MLUPS (cost ~ N^4: N^3 cells x N steps): the table's
+    rows, the median MLUPS of the finest runs and their MLUPS sorted."""
     est = []
     nmax = max([r["N"] for r in ok], default=None)
     mlups = None
@@ -96,25 +150,23 @@ def report(results, chart_paths, extra=(), wide=(), ops=(), opw=()):
             secs = cells * steps / (mlups * 1e6)
             est.append("| %g | %.3g mm | %.2f M | %d | %.1f h | %.1f h |" % (
                 n, D / n * 1e3, cells / 1e6, steps, secs / 3600, 4 * secs / 3600))
-    est = "\n".join(est)
-    # Larger-box runs at another Mach number than their case's, beside one at their case's in the same
-    # box and grid (a tau check in a larger box), have their own finding; the narrative compares boxes
-    # at the Mach numbers of the main runs. A run alone in its box and grid (the GPU's N = 16 and 24,
-    # at the Mach number that holds tau at its N = 12 value) is a main run.
+    return "\n".join(est), mlups, ml
+
+
+def split_wide(wide):
+    """(tau_wide, wide_main): larger-box runs at another Mach number than their case's, beside one at their
+    case's in the same box and grid (a tau check in a larger box), have their own finding; the narrative
+    compares boxes at the Mach numbers of the main runs. A run alone in its box and grid (the GPU's N = 16 and
+    24, at the Mach number that holds tau at its N = 12 value) is a main run."""
     main_mach = lambda r: r["mach"] == WIDE_MACH.get(r["case"], MACH)
     tau_wide = [r for r in wide if not main_mach(r) and any(
         main_mach(o) and (o["case"], o["N"], o["box"]) == (r["case"], r["N"], r["box"]) for o in wide)]
     wide_main = [r for r in wide if r not in tau_wide]
-    findings = make_findings(ok, extra, wide_main)
-    nmax = max([r["N"] for r in ok], default=None)
-    within = ", ".join("%s" % c for c in sorted(best) if abs(best[c]["peak_error_pct"]) <= 3.0)
-    within = (within + (" are" if "," in within else " is")) if within else ""
-    tc_line = "?"
-    for e in extra:
-        base = next((r for r in ok if r["case"] == e["case"] and r["N"] == e["N"]), None)
-        if base and "peak_speed" in e and e["case"] == "E1":
-            tc_line = "%+.1f %% at tau %.2f to %+.1f %% at tau %.2f" % (base["peak_error_pct"], base["tau"],
-                                                                        e["peak_error_pct"], e["tau"])
+    return tau_wide, wide_main
+
+
+def tau_check_section(ok, extra):
+    """The tau check's table: each run beside the main run of its case and grid; "(not run)" without one."""
     tc = []
     for e in extra:
         base = next((r for r in ok if r["case"] == e["case"] and r["N"] == e["N"]), None)
@@ -123,16 +175,13 @@ def report(results, chart_paths, extra=(), wide=(), ops=(), opw=()):
                 tc.append("| %s | %g | %g | %.4f | %d | %.4f | %+.1f | %s | %.0f |" % (
                     r["case"], r["N"], r["mach"], r["tau"], r["steps"], r["peak_speed"], r["peak_error_pct"],
                     fmt(r.get("plateau_speed"), "%.4f"), r["wall_s_per_sim_s"]))
-    tau_check = ("Same case, same grid, only dt (hence tau) changed: if the error moves with tau the IMB "
-                 "boundary's effective radius depends on the viscosity in lattice units.\n\n"
-                 "| case | N | Mach | tau | steps | peak speed [m/s] | error vs u_inf [%] | mean speed, gap 80-40 mm [m/s] | wall s / sim s |\n"
-                 "|---|---|---|---|---|---|---|---|---|\n" + "\n".join(tc)) if tc else "(not run)"
-    wide_table = wide_section(wide, results, extra)
-    op_table = op_section(ops, results)
-    wide_intro, wide_findings, op_intro, op_findings, headline, meaning = narrative(results, extra, wide_main, ops, opw)
-    wide_findings += tau_check_in_larger_boxes(tau_wide, wide_main)
-    opening = compact.summary(summary_rows(ok, wide_main), "python3 validation/imb/ten_cate.py report")
-    text = f"""# Ten Cate et al. (2002) settling sphere with the immersed moving boundary (issue 5)
+    return ("Same case, same grid, only dt (hence tau) changed: if the error moves with tau the IMB "
+            "boundary's effective radius depends on the viscosity in lattice units.\n\n"
+            "| case | N | Mach | tau | steps | peak speed [m/s] | error vs u_inf [%] | mean speed, gap 80-40 mm [m/s] | wall s / sim s |\n"
+            "|---|---|---|---|---|---|---|---|---|\n" + "\n".join(tc)) if tc else "(not run)"
+
+
+REPORT = """# Ten Cate et al. (2002) settling sphere with the immersed moving boundary (issue 5)
 
 {opening}
 
@@ -145,8 +194,8 @@ timings are CPU timings that say nothing about GPU speed.
 
 **Target of issue 5:** terminal velocity within 3 % at 16 cells per diameter or less.
 **Reached here** (finest grid per case; error of the *peak* settling speed in the box against the
-*unbounded* u_inf): {best_txt or "no completed run"}. Taken at face value {within or "no case"} within 3 %
-at N = {fmt(nmax, "%g")} cells per diameter or less. {headline}
+*unbounded* u_inf): {best_txt}. Taken at face value {within} within 3 %
+at N = {nmax} cells per diameter or less. {headline}
 
 ## Set-up
 
@@ -251,7 +300,7 @@ wall s / sim s are this machine's, shared with other work.
 ## Cost of finer resolutions on this CPU
 
 Cells grow as N^3 and steps as N (dt proportional to dx at fixed Mach), so the cost grows as N^4. From the
-median MLUPS of the finest runs here (N = {fmt(nmax, "%g")}: {fmt(mlups, "%.2f")} MLUPS on lavapipe, range {fmt(ml[0] if ml else None, "%.2f")}-{fmt(ml[-1] if ml else None, "%.2f")}, whole
+median MLUPS of the finest runs here (N = {nmax}: {mlups} MLUPS on lavapipe, range {ml_low}-{ml_high}, whole
 coupled run, 2 cores shared with other work):
 
 | N | dx | cells | steps (every case) | one case | E1-E4 |
@@ -262,8 +311,6 @@ coupled run, 2 cores shared with other work):
 does not divide 100 mm, so 16 is listed for cost only.) A GPU at a few hundred to a few thousand MLUPS
 would bring N = 15 to minutes per case.
 """
-    with open(os.path.join(HERE, "REPORT.md"), "w") as f:
-        f.write(text)
 
 
 def wide_section(wide, results, extra):

@@ -110,12 +110,7 @@ impl FluidSide {
         resumed: Option<&Loaded>,
         (comm, blocks): (Rc<dyn Communicator>, [usize; 3]),
     ) -> Result<FluidSide, String> {
-        let Some(units) = scene.lattice_units.clone() else {
-            return Err(format!(
-                "scene '{}' has particles but no [lattice]: the fluid needs one",
-                scene.name
-            ));
-        };
+        let units = lattice_units(scene)?;
         // The scene's coupling settings are checked before the device is opened.
         let deficit_product = radius_deficit_product(
             &scene.coupling.radius_correction,
@@ -125,23 +120,12 @@ impl FluidSide {
         let radii: Vec<f64> = scene.initial_particles().iter().map(|p| p.radius).collect();
         let covered = covered_fraction(radii.iter().map(|&r| units.cells(r)), units.n.iter().product());
         let (lattice, trial) = coupled_block(scene, &units, steps, (&*comm, blocks))?;
-        let d = &lattice.decomposition;
-        let pieces =
-            (comm.size() > 1).then(|| FieldPieces::new(scene, &units, out.to_path_buf(), d, comm.rank()));
+        let (fields, pieces) = field_outputs(scene, &units, out, resumed, (&*comm, &lattice.decomposition))?;
         let lubrication = scene
             .coupling
             .lubrication
             .then(|| HeldLubrication::for_lattice(scene, &units));
         let warnings = lattice_warnings(scene, &units, &radii);
-        let fields = match comm.rank() {
-            0 => Some(FieldOutput::new(
-                scene,
-                &units,
-                out,
-                resumed.map(|l| &l.header.outputs),
-            )?),
-            _ => None,
-        };
         Ok(FluidSide {
             lattice,
             comm,
@@ -338,6 +322,38 @@ fn imb_options(scene: &Scene) -> Result<ImbOptions, String> {
         })?,
         ..ImbOptions::default()
     })
+}
+
+/// The scene's lattice, which a coupled run needs.
+fn lattice_units(scene: &Scene) -> Result<LatticeUnits, String> {
+    scene.lattice_units.clone().ok_or_else(|| {
+        format!(
+            "scene '{}' has particles but no [lattice]: the fluid needs one",
+            scene.name
+        )
+    })
+}
+
+/// The field files of the run into `out` (rank 0: the whole lattice's, continuing those of the
+/// checkpoint `resumed` from), and on several ranks each rank's pieces of them (block `d`).
+fn field_outputs(
+    scene: &Scene,
+    units: &LatticeUnits,
+    out: &Path,
+    resumed: Option<&Loaded>,
+    (comm, d): (&dyn Communicator, &Decomposition),
+) -> Result<(Option<FieldOutput>, Option<FieldPieces>), String> {
+    let pieces = (comm.size() > 1).then(|| FieldPieces::new(scene, units, out.to_path_buf(), d, comm.rank()));
+    let fields = match comm.rank() {
+        0 => Some(FieldOutput::new(
+            scene,
+            units,
+            out,
+            resumed.map(|l| &l.header.outputs),
+        )?),
+        _ => None,
+    };
+    Ok((fields, pieces))
 }
 
 /// This rank's block of the scene's lattice cut into `blocks`, coupled to particles, on this rank's

@@ -59,13 +59,36 @@ const BOUNDED_TAU_MINUS: f64 = 1.0;
 /// a velocity inlet below [`TRT_INLET_TAU`], with `particles` below [`TRT_PARTICLES_TAU`]; BGK,
 /// or TRT with a bounded tau-, with an inlet or particles below [`BGK_LIKE_TAU`].
 pub fn stability_warning(units: &LatticeUnits, particles: bool) -> Option<Warning> {
+    let (name, measured, advice) = where_it_blew_up(units, particles)?;
+    let tau = units.tau;
+    let tau_minus = tau_minus(units.magic, tau);
+    let short_name = match units.operator {
+        CollisionOperator::Trt => format!("TRT (tau- = {tau_minus:.2})"),
+        _ => "BGK".to_string(),
+    };
+    Some(Warning {
+        brief: format!(
+            "lattice tau = {tau:.4} with {short_name}: near the taus where it blew up; consider \
+             lattice.operator = \"mrt\"{advice}"
+        ),
+        full: format!(
+            "lattice tau = {tau:.4} with {name}. A sphere of 8 cells held in a stream \
+             (validation/lbm/REPORT.md, \"Stability near tau = 1/2\") {measured}; consider \
+             lattice.operator = \"mrt\"{advice}"
+        ),
+    })
+}
+
+/// Where the lattice's operator at its tau is near a measured blow-up (`particles` in it or
+/// not): the operator's name, what was measured, and the advice beyond MRT; None where it is not.
+fn where_it_blew_up(units: &LatticeUnits, particles: bool) -> Option<(String, &'static str, &'static str)> {
     let inlet = units
         .faces
         .iter()
         .any(|f| matches!(f, LatticeFace::VelocityInlet(_)));
     let tau = units.tau;
     let tau_minus = tau_minus(units.magic, tau);
-    let (name, measured, advice) = match units.operator {
+    let found = match units.operator {
         CollisionOperator::Trt if tau_minus <= BOUNDED_TAU_MINUS + 1e-9 => (
             format!("TRT with tau- = {tau_minus:.2}"),
             if (inlet || particles) && tau < BGK_LIKE_TAU {
@@ -103,21 +126,7 @@ pub fn stability_warning(units: &LatticeUnits, particles: bool) -> Option<Warnin
         ),
         _ => return None,
     };
-    let short_name = match units.operator {
-        CollisionOperator::Trt => format!("TRT (tau- = {tau_minus:.2})"),
-        _ => "BGK".to_string(),
-    };
-    Some(Warning {
-        brief: format!(
-            "lattice tau = {tau:.4} with {short_name}: near the taus where it blew up; consider \
-             lattice.operator = \"mrt\"{advice}"
-        ),
-        full: format!(
-            "lattice tau = {tau:.4} with {name}. A sphere of 8 cells held in a stream \
-             (validation/lbm/REPORT.md, \"Stability near tau = 1/2\") {measured}; consider \
-             lattice.operator = \"mrt\"{advice}"
-        ),
-    })
+    Some(found)
 }
 
 /// Health limits: twice the operator's Mach limit, and a density deviation of 50%.

@@ -49,9 +49,8 @@ use std::time::{Duration, Instant};
 /// the block) and its ghost layer (those pointing out across it).
 pub struct Halo {
     kernels: HaloKernels,
-    faces: Vec<HaloFace>,
-    /// The cut axes, in the order of the exchange (x, y, z).
-    axes: Vec<usize>,
+    /// The cut faces, grouped by axis (built once), in the order of the exchange (x, y, z).
+    cuts: Vec<Vec<HaloFace>>,
     /// Bytes sent per step, and the time spent exchanging (from the step's end on the device).
     pub bytes_per_step: usize,
     pub time: Duration,
@@ -94,8 +93,7 @@ impl Halo {
         let bytes_per_step = faces.iter().map(|f| f.inward.words() * 4).sum();
         Halo {
             kernels,
-            faces,
-            axes: cut_axes(d),
+            cuts: by_axis(faces),
             bytes_per_step,
             time: Duration::ZERO,
         }
@@ -109,10 +107,10 @@ impl Halo {
         lattice.finish();
         let started = Instant::now();
         let after_even = lattice.time % 2 == 1;
-        for &axis in &self.axes {
-            let (faces, send, receive) = self.sides(axis, after_even);
+        for faces in &self.cuts {
+            let (send, receive) = sides(faces, after_even);
             let packed = lattice.pack_halo(&self.kernels, &send);
-            let received = comm.exchange(&messages(&faces, &packed), &expected(&faces, &receive));
+            let received = comm.exchange(&messages(faces, &packed), &expected(faces, &receive));
             lattice.unpack_halo(&self.kernels, &unpacked(&receive, &received));
         }
         self.time += started.elapsed();
@@ -127,35 +125,18 @@ impl Halo {
     pub fn step_overlapped(&mut self, lattice: &mut GpuLattice, comm: &dyn Communicator) {
         let after_even = lattice.time.is_multiple_of(2);
         lattice.step_region(0);
-        for (part, &axis) in self.axes.iter().enumerate() {
-            let (faces, send, receive) = self.sides(axis, after_even);
+        for (part, faces) in self.cuts.iter().enumerate() {
+            let (send, receive) = sides(faces, after_even);
             let packed = lattice.submit_pack(&self.kernels, &send);
             lattice.step_region(1 + part);
             // The host's time in the exchange: from here (the device on the interior).
             let started = Instant::now();
             let packed = lattice.read_packed(&send, packed);
-            let received = comm.exchange(&messages(&faces, &packed), &expected(&faces, &receive));
+            let received = comm.exchange(&messages(faces, &packed), &expected(faces, &receive));
             lattice.unpack_halo(&self.kernels, &unpacked(&receive, &received));
             self.time += started.elapsed();
         }
         lattice.end_split_step();
-    }
-
-    /// The faces across `axis`, and the layers each sends and receives after an even step
-    /// (`after_even`) or an odd one.
-    fn sides(&self, axis: usize, after_even: bool) -> (Vec<&HaloFace>, Vec<&HaloLayer>, Vec<&HaloLayer>) {
-        let faces: Vec<&HaloFace> = self.faces.iter().filter(|f| f.face / 2 == axis).collect();
-        let (send, receive) = faces
-            .iter()
-            .map(|f| {
-                if after_even {
-                    (&f.inward, &f.outward)
-                } else {
-                    (&f.outward, &f.inward)
-                }
-            })
-            .unzip();
-        (faces, send, receive)
     }
 
     /// The regions of a step split for the overlapped exchange, and each cell's, in the block `d` of
@@ -203,8 +184,36 @@ fn cut_axes(d: &Decomposition) -> Vec<usize> {
     axes
 }
 
+/// `faces`, in face order, grouped by axis: the faces across each cut axis, in the order of the
+/// exchange (x, y, z), as [`cut_axes`] lists the axes.
+fn by_axis(faces: Vec<HaloFace>) -> Vec<Vec<HaloFace>> {
+    let mut cuts: Vec<Vec<HaloFace>> = Vec::new();
+    for f in faces {
+        match cuts.last_mut() {
+            Some(cut) if cut[0].face / 2 == f.face / 2 => cut.push(f),
+            _ => cuts.push(vec![f]),
+        }
+    }
+    cuts
+}
+
+/// The layers each of `faces` (across one axis) sends and receives after an even step
+/// (`after_even`) or an odd one.
+fn sides(faces: &[HaloFace], after_even: bool) -> (Vec<&HaloLayer>, Vec<&HaloLayer>) {
+    faces
+        .iter()
+        .map(|f| {
+            if after_even {
+                (&f.inward, &f.outward)
+            } else {
+                (&f.outward, &f.inward)
+            }
+        })
+        .unzip()
+}
+
 /// The message of each of `faces` with its `packed` words.
-fn messages<'a>(faces: &[&HaloFace], packed: &'a [Vec<u32>]) -> Vec<Message<'a>> {
+fn messages<'a>(faces: &[HaloFace], packed: &'a [Vec<u32>]) -> Vec<Message<'a>> {
     faces
         .iter()
         .zip(packed)
@@ -218,7 +227,7 @@ fn messages<'a>(faces: &[&HaloFace], packed: &'a [Vec<u32>]) -> Vec<Message<'a>>
 
 /// The message awaited across each of `faces` into its layer of `receive`: the message across
 /// face f arrives across the neighbour's opposite face, f ^ 1.
-fn expected(faces: &[&HaloFace], receive: &[&HaloLayer]) -> Vec<Expected> {
+fn expected(faces: &[HaloFace], receive: &[&HaloLayer]) -> Vec<Expected> {
     faces
         .iter()
         .zip(receive)

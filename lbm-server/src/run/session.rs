@@ -5,7 +5,7 @@
 use super::checkpointing::resume_refusal;
 use super::counters::Counters;
 use super::prepare::Prepared;
-use super::summary::PeerInfo;
+use super::summary::{PeerInfo, Summary};
 use super::welcome::{welcome_for, yielded};
 use super::{Ending, EXIT_BAD_INPUT, EXIT_FAILURE, EXIT_INTERRUPTED};
 use crate::checkpoint::Checkpoints;
@@ -274,23 +274,7 @@ impl Session {
         }
         let checkpointed = self.checkpoints.wait();
         let dem_status = self.end_dem(result.is_ok() || self.told_to_end);
-        let (mut reason, mut code) = match &result {
-            // A DEM the run started that refused its input (exit 2: YADE or LIGGGHTS missing, a
-            // deck or script that does not fit the scene) before or at step 0: the run's input
-            // was bad, and it said why.
-            _ if dem_status == Some(i32::from(EXIT_BAD_INPUT)) && self.counters.steps_completed() <= 1 => {
-                let why = "the DEM refused its input (exit status 2; its message is above)";
-                protocol::say!("lbm-server: error: {why}");
-                (format!("error: {why}"), EXIT_BAD_INPUT)
-            }
-            Ok(Ending::Completed) => ("completed".to_string(), 0),
-            Ok(Ending::Interrupted) => ("interrupted".to_string(), EXIT_INTERRUPTED),
-            Ok(Ending::StoppedByPeer) => ("stopped by the DEM client".to_string(), EXIT_INTERRUPTED),
-            Err(_) if self.interrupted.load(Ordering::SeqCst) => {
-                ("interrupted".to_string(), EXIT_INTERRUPTED)
-            }
-            Err(e) => (format!("error: {e}"), EXIT_FAILURE),
-        };
+        let (mut reason, mut code) = self.ending(&result, dem_status);
         if let Err(e) = checkpointed {
             protocol::say!("lbm-server: error: {e}");
             (reason, code) = (format!("error: {e}"), EXIT_FAILURE);
@@ -308,6 +292,35 @@ impl Session {
             protocol::say!("lbm-server: error: summary.json: {e}");
             return EXIT_FAILURE;
         }
+        self.say_ended(&summary, code);
+        code
+    }
+
+    /// How the run ended, from its `result` and the exit status of a DEM it started: the
+    /// summary's reason and the exit code.
+    fn ending(&self, result: &Result<Ending, String>, dem_status: Option<i32>) -> (String, u8) {
+        match result {
+            // A DEM the run started that refused its input (exit 2: YADE or LIGGGHTS missing, a
+            // deck or script that does not fit the scene) before or at step 0: the run's input
+            // was bad, and it said why.
+            _ if dem_status == Some(i32::from(EXIT_BAD_INPUT)) && self.counters.steps_completed() <= 1 => {
+                let why = "the DEM refused its input (exit status 2; its message is above)";
+                protocol::say!("lbm-server: error: {why}");
+                (format!("error: {why}"), EXIT_BAD_INPUT)
+            }
+            Ok(Ending::Completed) => ("completed".to_string(), 0),
+            Ok(Ending::Interrupted) => ("interrupted".to_string(), EXIT_INTERRUPTED),
+            Ok(Ending::StoppedByPeer) => ("stopped by the DEM client".to_string(), EXIT_INTERRUPTED),
+            Err(_) if self.interrupted.load(Ordering::SeqCst) => {
+                ("interrupted".to_string(), EXIT_INTERRUPTED)
+            }
+            Err(e) => (format!("error: {e}"), EXIT_FAILURE),
+        }
+    }
+
+    /// The run's last line, after `summary` was written with the exit `code`: how far an
+    /// interrupted run came, or how fast a completed one ran; where its output is.
+    fn say_ended(&self, summary: &Summary, code: u8) {
         if code == EXIT_INTERRUPTED {
             protocol::say!(
                 "lbm-server: {} after {} of {} steps; output in {}",
@@ -333,7 +346,6 @@ impl Session {
                 self.p.out.display()
             );
         }
-        code
     }
 
     /// Ends the DEM side: a DEM `told` to end (its last reply said FINAL or STOP) ends on its own

@@ -94,66 +94,85 @@ pub(super) fn moving_boundary(gpu: &Arc<Gpu>) -> String {
 
 /// One comparison of [`HELD_AND_TOWED`]: its rows written to `t`, its gaps returned.
 fn held_and_towed(gpu: &Arc<Gpu>, c: &HeldAndTowed, t: &mut String) -> Vec<TowedRow> {
-    let d = 6.0;
     let mut rows = Vec::new();
-    let imb = crate::lbm::imb::ImbOptions {
-        seed_weighting: c.seed_weighting,
-        ..Default::default()
-    };
-    let case = |shift: f64| cases::HeldSphere {
+    let towed = cases::towed_sphere(gpu, &sphere_case(c, 0.0));
+    protocol::say!("lbm-server: moving-boundary: {} {towed:?}", c.operator);
+    for &shift in c.shifts {
+        let held = cases::held_sphere(gpu, &sphere_case(c, shift));
+        protocol::say!("lbm-server: moving-boundary: {} {held:?}", c.operator);
+        if let Some(gap) = write_towed_row(t, c, shift, &held, &towed) {
+            rows.push(TowedRow {
+                operator: c.operator,
+                reynolds: c.reynolds,
+                seed_weighting: c.seed_weighting,
+                gap,
+            });
+        }
+    }
+    rows
+}
+
+/// The diameter of the sphere of [`HELD_AND_TOWED`], in cells.
+const TOWED_DIAMETER: f64 = 6.0;
+
+/// The sphere of the comparison `c`, moved downstream by `shift` cells.
+fn sphere_case(c: &HeldAndTowed, shift: f64) -> cases::HeldSphere {
+    cases::HeldSphere {
         reynolds: c.reynolds,
-        diameter: d,
+        diameter: TOWED_DIAMETER,
         width: 36,
         length: 60,
         tau: Some(c.tau),
         drawn_larger: 0.0,
         operator: operator_named(c.operator, c.tau),
-        imb,
+        imb: crate::lbm::imb::ImbOptions {
+            seed_weighting: c.seed_weighting,
+            ..Default::default()
+        },
         shift,
-    };
+    }
+}
+
+/// Writes the row of the comparison `c` at `shift` to `t`: the held and towed drags and their
+/// gap, which it returns; where either run failed, what failed, and None.
+fn write_towed_row(
+    t: &mut String,
+    c: &HeldAndTowed,
+    shift: f64,
+    held: &Result<cases::SphereDrag, String>,
+    towed: &Result<cases::TowedDrag, String>,
+) -> Option<f64> {
     let weighting = if c.seed_weighting {
         "seed"
     } else {
         "Noble-Torczynski"
     };
-    let layer = d / c.reynolds.sqrt();
-    let towed = cases::towed_sphere(gpu, &case(0.0));
-    protocol::say!("lbm-server: moving-boundary: {} {towed:?}", c.operator);
-    for &shift in c.shifts {
-        let held = cases::held_sphere(gpu, &case(shift));
-        protocol::say!("lbm-server: moving-boundary: {} {held:?}", c.operator);
-        let (held, towed) = match (&held, &towed) {
-            (Ok(h), Ok(t)) => (h, t),
-            _ => {
-                let _ = writeln!(
-                    t,
-                    "| {} | {weighting} | {} | {layer:.2} | {} | | {shift} | {held:?} | {towed:?} | | |",
-                    c.operator, c.reynolds, c.tau
-                );
-                continue;
-            }
-        };
-        let gap = towed.cd / held.cd - 1.0;
-        let _ = writeln!(
-            t,
-            "| {} | {weighting} | {} | {layer:.2} | {} | {:.4} | {shift} | {:.3} | {:.3} | {:.3} | {:+.1}% |",
-            c.operator,
-            c.reynolds,
-            c.tau,
-            held.u0,
-            held.cd,
-            towed.cd_early,
-            towed.cd,
-            100.0 * gap
-        );
-        rows.push(TowedRow {
-            operator: c.operator,
-            reynolds: c.reynolds,
-            seed_weighting: c.seed_weighting,
-            gap,
-        });
-    }
-    rows
+    let layer = TOWED_DIAMETER / c.reynolds.sqrt();
+    let (held, towed) = match (held, towed) {
+        (Ok(h), Ok(t)) => (h, t),
+        _ => {
+            let _ = writeln!(
+                t,
+                "| {} | {weighting} | {} | {layer:.2} | {} | | {shift} | {held:?} | {towed:?} | | |",
+                c.operator, c.reynolds, c.tau
+            );
+            return None;
+        }
+    };
+    let gap = towed.cd / held.cd - 1.0;
+    let _ = writeln!(
+        t,
+        "| {} | {weighting} | {} | {layer:.2} | {} | {:.4} | {shift} | {:.3} | {:.3} | {:.3} | {:+.1}% |",
+        c.operator,
+        c.reynolds,
+        c.tau,
+        held.u0,
+        held.cd,
+        towed.cd_early,
+        towed.cd,
+        100.0 * gap
+    );
+    Some(gap)
 }
 
 /// The figures of the held-and-towed table: the gap by operator at E4's Reynolds number and by

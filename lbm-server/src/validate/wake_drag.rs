@@ -169,52 +169,12 @@ pub(super) fn superposition_section(gpu: &Arc<Gpu>) -> String {
 /// The held spheres' section for these runs, its heading ending in `grids`, `note` before the
 /// description.
 fn wakes(gpu: &Arc<Gpu>, grids: &str, note: &str, runs: &[Wake], check: u64) -> String {
-    let varied = if runs.iter().all(Wake::is_series) {
-        ""
-    } else {
-        ", then at 8 cells one thing changed at a time (u0, so tau and Mach; the operator; the weighting)"
-    };
-    let mut t = format!(
-        "\n## Immersed moving boundary: a held sphere at the fluidized bed's Reynolds numbers{grids}\n\n\
-         {note}The random arrays at the fluidized bed's voidage (section \"a random array at the fluidized \
-         bed's voidage\") drag 1.6-1.8 times Tenneti et al.'s at Re 250-360 and hardly less from 6 to 12 \
-         cells per diameter. Here one sphere held in a stream at Re 200 (a steady wake) and 300 (a \
-         shedding one), in the sphere-drag section's open box (velocity inlet, pressure outlet, side \
-         faces moving with the stream) of {WIDTH} x {WIDTH} x {LENGTH} diameters at every resolution, the \
-         sphere at L/3; impulsive start; {PASSES} passes of the stream, C_d over the last (mean and \
-         range); the lattice checked every {check} steps. tau = 1/2 + 3 u0 d / Re, near 1/2 as in the \
-         bed. MRT by resolution{varied}. Boundary-layer cells: d / sqrt(Re), the boundary layer's thickness \
-         in cells. Reference: Schiller & Naumann (within about 5% of experiments; resolved simulations \
-         lie a few percent below it at these Re); the box confines by about +2% (sphere-drag section, \
-         Re 50, 6 diameters wide).\n\n\
-         | Re | d (cells) | boundary-layer cells | operator | weighting | u0 | tau | steps | outcome | C_d mean | C_d range | C_d Schiller-Naumann | error |\n\
-         |---:|---:|---:|---|---|---:|---:|---:|---|---:|---:|---:|---:|\n"
-    );
+    let mut t = wakes_heading(grids, note, runs, check);
     let mut series = Vec::new();
     for w in runs {
         let s = cases::sphere_stability(gpu, &w.held(), Faces::Open, PASSES, check);
         protocol::say!("lbm-server: wake-drag: {w:?}: {s:?}");
-        let sn = schiller_naumann(w.re);
-        let (outcome, drag) = match (s.unhealthy, s.cd) {
-            (None, Some([mean, low, high])) => {
-                // C_d as the table shows it: the error and the closing lines are the table's.
-                let mean = (mean * 1e3).round() / 1e3;
-                if w.is_series() {
-                    series.push((w.re, w.d, mean));
-                }
-                (
-                    "held".to_string(),
-                    format!(
-                        "{mean:.3} | {low:.3}-{high:.3} | {sn:.3} | {:+.1}%",
-                        100.0 * (mean / sn - 1.0)
-                    ),
-                )
-            }
-            (bad, _) => (
-                bad.map_or("no drag".into(), |b| format!("blew up at {:?}", b.coords)),
-                format!(" | | {sn:.3} | "),
-            ),
-        };
+        let (outcome, drag) = outcome_and_drag(w, &s, &mut series);
         let _ = writeln!(
             t,
             "| {} | {} | {:.2} | {} | {} | {} | {:.4} | {} | {outcome} | {drag} |",
@@ -229,6 +189,58 @@ fn wakes(gpu: &Arc<Gpu>, grids: &str, note: &str, runs: &[Wake], check: u64) -> 
         );
     }
     t + &convergence(&series)
+}
+
+/// The heading, description and table header of [`wakes`].
+fn wakes_heading(grids: &str, note: &str, runs: &[Wake], check: u64) -> String {
+    let varied = if runs.iter().all(Wake::is_series) {
+        ""
+    } else {
+        ", then at 8 cells one thing changed at a time (u0, so tau and Mach; the operator; the weighting)"
+    };
+    format!(
+        "\n## Immersed moving boundary: a held sphere at the fluidized bed's Reynolds numbers{grids}\n\n\
+         {note}The random arrays at the fluidized bed's voidage (section \"a random array at the fluidized \
+         bed's voidage\") drag 1.6-1.8 times Tenneti et al.'s at Re 250-360 and hardly less from 6 to 12 \
+         cells per diameter. Here one sphere held in a stream at Re 200 (a steady wake) and 300 (a \
+         shedding one), in the sphere-drag section's open box (velocity inlet, pressure outlet, side \
+         faces moving with the stream) of {WIDTH} x {WIDTH} x {LENGTH} diameters at every resolution, the \
+         sphere at L/3; impulsive start; {PASSES} passes of the stream, C_d over the last (mean and \
+         range); the lattice checked every {check} steps. tau = 1/2 + 3 u0 d / Re, near 1/2 as in the \
+         bed. MRT by resolution{varied}. Boundary-layer cells: d / sqrt(Re), the boundary layer's thickness \
+         in cells. Reference: Schiller & Naumann (within about 5% of experiments; resolved simulations \
+         lie a few percent below it at these Re); the box confines by about +2% (sphere-drag section, \
+         Re 50, 6 diameters wide).\n\n\
+         | Re | d (cells) | boundary-layer cells | operator | weighting | u0 | tau | steps | outcome | C_d mean | C_d range | C_d Schiller-Naumann | error |\n\
+         |---:|---:|---:|---|---|---:|---:|---:|---|---:|---:|---:|---:|\n"
+    )
+}
+
+/// The outcome and drag columns of the held sphere `w`'s row from its run `s`; a held run of
+/// the MRT series adds (Re, d, C_d as the table shows it) to `series`.
+fn outcome_and_drag(w: &Wake, s: &cases::Stability, series: &mut Vec<(f64, f64, f64)>) -> (String, String) {
+    let sn = schiller_naumann(w.re);
+    match (&s.unhealthy, s.cd) {
+        (None, Some([mean, low, high])) => {
+            // C_d as the table shows it: the error and the closing lines are the table's.
+            let mean = (mean * 1e3).round() / 1e3;
+            if w.is_series() {
+                series.push((w.re, w.d, mean));
+            }
+            (
+                "held".to_string(),
+                format!(
+                    "{mean:.3} | {low:.3}-{high:.3} | {sn:.3} | {:+.1}%",
+                    100.0 * (mean / sn - 1.0)
+                ),
+            )
+        }
+        (bad, _) => (
+            bad.as_ref()
+                .map_or("no drag".into(), |b| format!("blew up at {:?}", b.coords)),
+            format!(" | | {sn:.3} | "),
+        ),
+    }
 }
 
 /// Per Reynolds number of the MRT series (Re, d, C_d): C_d and its error against

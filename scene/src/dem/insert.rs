@@ -155,6 +155,8 @@ fn resolve(scene_file: &str, path: &Path) -> PathBuf {
     }
 }
 
+/// The particles of the scene `file`'s `[[dem.csv]]` number `i`, read from `path` (beside the scene
+/// where it is found there): one a line under a header naming its columns.
 pub(super) fn read_csv(file: &str, i: usize, path: &Path) -> Result<Vec<InitialParticle>, SceneError> {
     let field = format!("dem.csv[{i}].file");
     let resolved = resolve(file, path);
@@ -171,23 +173,61 @@ pub(super) fn read_csv(file: &str, i: usize, path: &Path) -> Result<Vec<InitialP
         .lines()
         .enumerate()
         .filter(|(_, l)| !l.trim().is_empty() && !l.starts_with('#'));
-    let header: Vec<String> = match lines.next() {
-        Some((_, h)) => h.split(',').map(|c| c.trim().to_ascii_lowercase()).collect(),
+    let columns = match lines.next() {
+        Some((_, h)) => CsvColumns::of(h).ok_or_else(|| {
+            fail(
+                file,
+                &field,
+                &shown,
+                "the header must name the columns x, y, z and r (or radius)",
+            )
+        })?,
         None => return Err(fail(file, &field, &shown, "is empty (needs a header x,y,z,r)")),
     };
-    let col = |names: &[&str]| header.iter().position(|h| names.contains(&h.as_str()));
-    let (Some(x), Some(y), Some(z), Some(r)) = (col(&["x"]), col(&["y"]), col(&["z"]), col(&["r", "radius"]))
-    else {
-        return Err(fail(
-            file,
-            &field,
-            &shown,
-            "the header must name the columns x, y, z and r (or radius)",
-        ));
-    };
-    let optional = ["vx", "vy", "vz", "wx", "wy", "wz"].map(|n| col(&[n]));
-    let mut out = Vec::new();
-    for (row, line) in lines {
+    lines
+        .map(|(row, line)| columns.particle(line, row, file, &field))
+        .collect()
+}
+
+/// The columns of a particle file, from its header: the required x, y, z and r (or radius), and
+/// the optional velocity and angular velocity (0 where absent).
+struct CsvColumns {
+    /// The header's names, lower case.
+    names: Vec<String>,
+    x: usize,
+    y: usize,
+    z: usize,
+    r: usize,
+    /// vx, vy, vz, wx, wy, wz.
+    optional: [Option<usize>; 6],
+}
+
+impl CsvColumns {
+    /// The columns the header line `header` names; None where one of x, y, z and r is missing.
+    fn of(header: &str) -> Option<CsvColumns> {
+        let names: Vec<String> = header.split(',').map(|c| c.trim().to_ascii_lowercase()).collect();
+        let col = |wanted: &[&str]| names.iter().position(|h| wanted.contains(&h.as_str()));
+        let (x, y, z, r) = (col(&["x"])?, col(&["y"])?, col(&["z"])?, col(&["r", "radius"])?);
+        let optional = ["vx", "vy", "vz", "wx", "wy", "wz"].map(|n| col(&[n]));
+        Some(CsvColumns {
+            names,
+            x,
+            y,
+            z,
+            r,
+            optional,
+        })
+    }
+
+    /// The particle of the line `line` (the file's line `row`, counted from 0) of the scene `file`'s
+    /// particle file `field`.
+    fn particle(
+        &self,
+        line: &str,
+        row: usize,
+        file: &str,
+        field: &str,
+    ) -> Result<InitialParticle, SceneError> {
         let cells: Vec<&str> = line.split(',').map(str::trim).collect();
         let num = |c: Option<usize>| -> Result<f64, SceneError> {
             let Some(c) = c else { return Ok(0.0) };
@@ -195,13 +235,13 @@ pub(super) fn read_csv(file: &str, i: usize, path: &Path) -> Result<Vec<InitialP
             cell.parse::<f64>().ok().filter(|v| v.is_finite()).ok_or_else(|| {
                 fail(
                     file,
-                    format!("{field} line {} column {}", row + 1, header[c]),
+                    format!("{field} line {} column {}", row + 1, self.names[c]),
                     format!("{cell:?}"),
                     "must be a finite number",
                 )
             })
         };
-        let radius = num(Some(r))?;
+        let radius = num(Some(self.r))?;
         if radius <= 0.0 {
             return Err(fail(
                 file,
@@ -210,13 +250,13 @@ pub(super) fn read_csv(file: &str, i: usize, path: &Path) -> Result<Vec<InitialP
                 "must be a finite number > 0",
             ));
         }
-        out.push(InitialParticle {
+        let optional = self.optional;
+        Ok(InitialParticle {
             id: 0,
-            position: [num(Some(x))?, num(Some(y))?, num(Some(z))?],
+            position: [num(Some(self.x))?, num(Some(self.y))?, num(Some(self.z))?],
             velocity: [num(optional[0])?, num(optional[1])?, num(optional[2])?],
             angular_velocity: [num(optional[3])?, num(optional[4])?, num(optional[5])?],
             radius,
-        });
+        })
     }
-    Ok(out)
 }
