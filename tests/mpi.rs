@@ -42,6 +42,8 @@ fn same_on_ranks(
             return None;
         }
         assert_eq!(o.status.code(), Some(0), "{n} ranks: {}", text(&o));
+        // The run's first line names the ranks and their blocks.
+        assert!(text(&o).contains(&format!("{n} ranks in ")), "{}", text(&o));
         for ((file, want), (_, have)) in expected.iter().zip(outputs(&out)) {
             assert!(
                 *want == have,

@@ -189,12 +189,15 @@ impl FluidSide {
         self.lattice.lattice.adapter()
     }
 
-    /// On several ranks, "; " and the halo exchange the steps take (`BlockLattice::exchange_said`);
-    /// nothing on one.
+    /// On several ranks, "; ", the ranks and their blocks, and the halo exchange the steps take
+    /// (`BlockLattice::exchange_said`); nothing on one.
     pub fn exchange(&self) -> String {
-        self.lattice
-            .exchange_said()
-            .map_or(String::new(), |e| format!("; {e}"))
+        let Some(exchange) = self.lattice.exchange_said() else {
+            return String::new();
+        };
+        let b = self.lattice.decomposition.blocks;
+        let ranks = self.comm.size();
+        format!("; {ranks} ranks in {}x{}x{} blocks, {exchange}", b[0], b[1], b[2])
     }
 
     /// The fluid as `--verbose` describes it: the lattice's scales, the device, the way the
