@@ -113,11 +113,11 @@ if [ "$mode" = small ]; then
     cube=32x32x32 tencate=32x32x32 coupled=32x32x64 counts=1,8,64 dense=512 dense_dem=64 steps=30
     # lavapipe runs the per-cell kernel at a tenth of the quads' speed or less
     kernel_steps=5
-    seed_grid=32x32x64 seed_counts=64
+    seed_grid=32x32x64 seed_counts=64 ranks_particles=64
 else
     cube=256x256x256 tencate=224x224x256 coupled=256x256x512 counts=1,8,64,512,4096,32768 dense=262144 dense_dem=32768 steps=300
     kernel_steps=$steps
-    seed_grid=64x64x128 seed_counts=512,4096
+    seed_grid=64x64x128 seed_counts=512,4096 ranks_particles=4096
 fi
 # Coupled, the seed's Fig. 5 sweep (issue 5's target: 90% of LBM-only at 32^3 particles; its own
 # LBM-only row on the same grid): first, as the batch's most wanted figure (2026-12-05: skip with
@@ -158,7 +158,7 @@ step bench_ranks_4_fp16s 20 60 $bin/lbm-server bench --grid $cube --operator bgk
 # step (lbm-server/src/lbm/imb/by_region.rs).
 for way in redo skip fused; do
     step bench_ranks_coupled_$way 20 60 $bin/lbm-server bench --grid $cube --operator bgk --steps $kernel_steps \
-        --rounds 2 --thread-ranks 2 --particles 4096 --covered-cells $way --exchange both
+        --rounds 2 --thread-ranks 2 --particles $ranks_particles --covered-cells $way --exchange both
 done
 # A closed box against a periodic one on the Ten Cate grid at 16 cells, one sphere, both ways of
 # treating the covered cells, by pass (2026-12-04: the whole program's fluid step ran at 2200
