@@ -17,12 +17,8 @@
 // the run's start-up trial (lbm-server/src/trials.rs) times both on the device.
 
 @compute @workgroup_size(64)
-fn stream_collide_cells(
-    @builtin(workgroup_id) wg: vec3<u32>,
-    @builtin(num_workgroups) nwg: vec3<u32>,
-    @builtin(local_invocation_index) local: u32,
-) {
-    var k = cell_index(wg, nwg, local);
+fn stream_collide_cells(at: Invocation) {
+    var k = cell_index(at);
     if KIND == 1u {
         // A region of the step (lbm-server/src/lbm/gpu/region.rs): the cells of its list.
         if k >= params.ranges.x + params.ranges.y + params.ranges.z { return; }

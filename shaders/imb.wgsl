@@ -247,12 +247,8 @@ fn hold_slot(k: u32, rank: u32) -> Arrival {
 // One workgroup per particle, its threads over the particle's bounding box. The pairs are zero
 // here (the step clears them before the pass): a covered cell's pair gets w = 1.
 @compute @workgroup_size(64)
-fn cover(
-    @builtin(workgroup_id) wg: vec3<u32>,
-    @builtin(num_workgroups) nwg: vec3<u32>,
-    @builtin(local_invocation_index) local: u32,
-) {
-    let j = wg.y * nwg.x + wg.x;
+fn cover(at: Invocation) {
+    let j = workgroup_index(at);
     if j >= imb_info.x { return; }
     let p = particles[j];
     let m = p.edge;
@@ -260,7 +256,7 @@ fn cover(
     let cells = m * m * m;
     // Every invocation of the workgroup takes the same turns (`list_position` may gather a subgroup).
     for (var start = 0u; start < cells; start += 64u) {
-        let t = start + local;
+        let t = start + at.local;
         var k = NO_CELL;
         // The list the cell joins (the redo): FRONT, BACK or NO_LIST.
         var list = NO_LIST;

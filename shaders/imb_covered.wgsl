@@ -4,16 +4,9 @@
 // populations) and the redo's `store_covered`; the cover mask's words and SKIP's test of a quad's
 // lanes.
 
-// An invocation of a kernel over the list of covered cells.
-struct Invocation {
-    @builtin(workgroup_id) wg: vec3<u32>,
-    @builtin(num_workgroups) nwg: vec3<u32>,
-    @builtin(local_invocation_index) local: u32,
-}
-
 // The entry of `saved` of an invocation over the list, or NO_CELL past the end of its list.
 fn listed(at: Invocation) -> u32 {
-    return saved_entry(cell_index(at.wg, at.nwg, at.local));
+    return saved_entry(cell_index(at));
 }
 
 // The entry of `saved` of invocation j, or NO_CELL past the end of its list. KIND: bit 0 the

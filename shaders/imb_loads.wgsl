@@ -19,12 +19,8 @@ fn partial_load(j: u32, s: u32) -> u32 {
 // same result every run. Many invocations of few cells each, rather than one per particle over its
 // whole box: a GPU waits on one memory access per cell, and overlaps those of its many invocations.
 @compute @workgroup_size(64)
-fn reduce(
-    @builtin(workgroup_id) wg: vec3<u32>,
-    @builtin(num_workgroups) nwg: vec3<u32>,
-    @builtin(local_invocation_index) local: u32,
-) {
-    let i = cell_index(wg, nwg, local);
+fn reduce(at: Invocation) {
+    let i = cell_index(at);
     let j = i / SLICES;
     let slice = i % SLICES;
     if j >= imb_info.x { return; }
@@ -43,28 +39,24 @@ fn reduce(
             clear_cover(lattice_cell(q));
         }
     }
-    let at = partial_load(j, slice);
+    let first = partial_load(j, slice);
     let sum = array<f32, 6>(force.x, force.y, force.z, torque.x, torque.y, torque.z);
     for (var k = 0u; k < 6u; k++) {
-        loads[at + k] = sum[k];
+        loads[first + k] = sum[k];
     }
 }
 
 // One invocation per particle: its load, the sum of its slices' in slice order (the sums over the
 // covered cells of eq. 10-11 completed).
 @compute @workgroup_size(64)
-fn sum_loads(
-    @builtin(workgroup_id) wg: vec3<u32>,
-    @builtin(num_workgroups) nwg: vec3<u32>,
-    @builtin(local_invocation_index) local: u32,
-) {
-    let j = cell_index(wg, nwg, local);
+fn sum_loads(at: Invocation) {
+    let j = cell_index(at);
     if j >= imb_info.x { return; }
     var sum = array<f32, 6>(0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
     for (var s = 0u; s < SLICES; s++) {
-        let at = partial_load(j, s);
+        let first = partial_load(j, s);
         for (var k = 0u; k < 6u; k++) {
-            sum[k] += loads[at + k];
+            sum[k] += loads[first + k];
         }
     }
     for (var k = 0u; k < 6u; k++) {

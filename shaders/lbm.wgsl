@@ -157,9 +157,22 @@ fn coords(k: u32) -> vec3<i32> {
     return vec3<i32>(i32(k % nx), i32((k / nx) % ny), i32(k / (nx * ny)));
 }
 
-// The cell index of this invocation (2D dispatch for large grids).
-fn cell_index(wg: vec3<u32>, nwg: vec3<u32>, local: u32) -> u32 {
-    return (wg.y * nwg.x + wg.x) * 64u + local;
+// An invocation of a kernel of 64-invocation workgroups, dispatched in rows of workgroups (2D
+// for large grids).
+struct Invocation {
+    @builtin(workgroup_id) wg: vec3<u32>,
+    @builtin(num_workgroups) nwg: vec3<u32>,
+    @builtin(local_invocation_index) local: u32,
+}
+
+// The index of the invocation's workgroup in the dispatch.
+fn workgroup_index(at: Invocation) -> u32 {
+    return at.wg.y * at.nwg.x + at.wg.x;
+}
+
+// The index of the invocation in the dispatch (the cell, quad or entry it takes).
+fn cell_index(at: Invocation) -> u32 {
+    return workgroup_index(at) * 64u + at.local;
 }
 
 // Pre-collision populations of cell k (at p: its coordinates, found once per cell, since they
@@ -321,12 +334,8 @@ fn bounce(face: u32, c: vec3<f32>, w: f32, f_star: f32, m: Moments) -> f32 {
 // covered cells' own collision, made before them by `collide_covered`, over theirs, or (SKIP) they
 // leave alone the covered cells, which `collide_covered` updated in place before them.
 @compute @workgroup_size(64)
-fn stream_collide(
-    @builtin(workgroup_id) wg: vec3<u32>,
-    @builtin(num_workgroups) nwg: vec3<u32>,
-    @builtin(local_invocation_index) local: u32,
-) {
-    let j = cell_index(wg, nwg, local);
+fn stream_collide(at: Invocation) {
+    let j = cell_index(at);
     if j >= params.ranges.z { return; }
     let k = cell_list[params.ranges.x + params.ranges.y + j];
     if skipped(k) { return; }
@@ -379,12 +388,8 @@ fn store_sent(k: u32, p: vec3<i32>, flag: u32, out: array<f32, 19>) {
 // or branches (KIND is a constant): the cell's own slots in the even step; in the odd step the
 // neighbours at fixed index offsets (interior cells) or through the periodic wrap (wrapping cells).
 @compute @workgroup_size(64)
-fn stream_collide_fluid(
-    @builtin(workgroup_id) wg: vec3<u32>,
-    @builtin(num_workgroups) nwg: vec3<u32>,
-    @builtin(local_invocation_index) local: u32,
-) {
-    let j = cell_index(wg, nwg, local);
+fn stream_collide_fluid(at: Invocation) {
+    let j = cell_index(at);
     var start = params.quads.x;
     var count = params.ranges.x + params.ranges.y - params.quads.x - params.quads.y;
     if KIND == 1u {
@@ -457,12 +462,8 @@ fn wrapped(q: vec3<i32>) -> u32 {
 // a cell with a non-finite value, a density deviation above relax.w or a speed above relax.z goes
 // to status[0] (a ghost cell's, another rank's to check, excepted).
 @compute @workgroup_size(64)
-fn macroscopic(
-    @builtin(workgroup_id) wg: vec3<u32>,
-    @builtin(num_workgroups) nwg: vec3<u32>,
-    @builtin(local_invocation_index) local: u32,
-) {
-    let k = cell_index(wg, nwg, local);
+fn macroscopic(at: Invocation) {
+    let k = cell_index(at);
     if k >= cell_count() { return; }
     let flag = flags[k];
     if (flag & SOLID) != 0u {

@@ -4,12 +4,8 @@
 // The even step of four consecutive fluid cells none of whose links leaves the fluid: each vector
 // load or store moves four populations, where llvmpipe loops over the SIMD lanes per access.
 @compute @workgroup_size(64)
-fn stream_collide_quads(
-    @builtin(workgroup_id) wg: vec3<u32>,
-    @builtin(num_workgroups) nwg: vec3<u32>,
-    @builtin(local_invocation_index) local: u32,
-) {
-    let j = cell_index(wg, nwg, local);
+fn stream_collide_quads(at: Invocation) {
+    let j = cell_index(at);
     if j >= params.ranges.w { return; }
     let q = cell_list[params.ranges.x + params.ranges.y + params.ranges.z + j];
     var a: array<f32, 19>;
@@ -42,12 +38,8 @@ fn stream_collide_quads(
 // and one scalar load, and four scalar stores (a vector store would overwrite slots of the
 // neighbouring quads).
 @compute @workgroup_size(64)
-fn stream_collide_quads_odd(
-    @builtin(workgroup_id) wg: vec3<u32>,
-    @builtin(num_workgroups) nwg: vec3<u32>,
-    @builtin(local_invocation_index) local: u32,
-) {
-    let j = cell_index(wg, nwg, local);
+fn stream_collide_quads_odd(at: Invocation) {
+    let j = cell_index(at);
     if j >= params.quads.w { return; }
     let q = i32(cell_list[params.ranges.x + params.ranges.y + params.ranges.z + params.ranges.w + j]);
     let row = i32(params.n.x / 4u);

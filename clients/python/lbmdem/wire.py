@@ -176,15 +176,21 @@ def _field_text(raw: bytes) -> str:
     return raw.split(b"\0", 1)[0].decode("utf-8", errors="replace")
 
 
+# The fields every handshake message opens with: the prefix (PROTOCOL.md 4.1, which
+# `_check_prefix` reads: magic, protocol version, size in bytes, kind), then the sender's pid.
+_PREFIX = [
+    ("magic", _u32),
+    ("version", _u32),
+    ("size", _u32),
+    ("kind", _u32),
+    ("pid", _u64),
+]
+
+
 class Hello(ctypes.Structure):
     """DEM -> fluid, once, before step 0 (144 bytes)."""
 
-    _fields_ = [
-        ("magic", _u32),
-        ("version", _u32),
-        ("size", _u32),
-        ("kind", _u32),
-        ("pid", _u64),
+    _fields_ = _PREFIX + [
         ("state_size", _u32),
         ("reply_size", _u32),
         ("header_size", _u32),
@@ -226,12 +232,7 @@ class Hello(ctypes.Structure):
 class Welcome(ctypes.Structure):
     """Fluid -> DEM, once, in answer to Hello (360 bytes). Quantities in the DEM's units."""
 
-    _fields_ = [
-        ("magic", _u32),
-        ("version", _u32),
-        ("size", _u32),
-        ("kind", _u32),
-        ("pid", _u64),
+    _fields_ = _PREFIX + [
         ("status", _u32),
         ("periodic", _u32),  # periodic axes: bit 0 x, 1 y, 2 z; 0 none (PROTOCOL.md 4.4)
         ("capacity", _u64),
