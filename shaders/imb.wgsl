@@ -147,6 +147,14 @@ override OWN_HI_Z: i32 = 1;
 override BASE_X: i32 = 0;
 override BASE_Y: i32 = 0;
 override BASE_Z: i32 = 0;
+// The block lattice's cells outside its shell (lbm-server/src/parallel/halo.rs
+// `Halo::interior`), INTERIOR_LO_* to INTERIOR_HI_* (excluded), in its own coordinates.
+override INTERIOR_LO_X: i32 = 0;
+override INTERIOR_LO_Y: i32 = 0;
+override INTERIOR_LO_Z: i32 = 0;
+override INTERIOR_HI_X: i32 = 1;
+override INTERIOR_HI_Y: i32 = 1;
+override INTERIOR_HI_Z: i32 = 1;
 
 // The whole lattice's cells along each axis, and its periodic axes.
 fn whole_n() -> vec3<i32> {

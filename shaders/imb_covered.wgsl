@@ -170,17 +170,14 @@ fn store_covered(at: Invocation) {
     store_populations(c.k, c.out);
 }
 
-// Whether cell k of a block is in its shell, the region of a split step updated first: within
-// two layers of a face with a ghost layer (the ghost layer and the layer next to it, whose slots
-// the halo exchange reads and writes), as lbm-server/src/parallel/halo.rs `Halo::regions` draws
-// it. A face has a ghost layer where the block's lattice reaches beyond its own cells.
+// Whether cell k of a block is in its shell, the region of a split step updated first: outside
+// the box INTERIOR_LO_* to INTERIOR_HI_* that lbm-server/src/parallel/halo.rs `Halo::interior`
+// draws (the cells within two layers of a face with a ghost layer).
 fn in_shell(k: u32) -> bool {
     let x = coords(k);
-    let n = vec3<i32>(params.n.xyz);
-    let base = vec3<i32>(BASE_X, BASE_Y, BASE_Z);
-    let below = base < vec3<i32>(OWN_LO_X, OWN_LO_Y, OWN_LO_Z);
-    let above = base + n > vec3<i32>(OWN_HI_X, OWN_HI_Y, OWN_HI_Z);
-    return any((below & (x < vec3<i32>(2))) | (above & (x >= n - 2)));
+    let lo = vec3<i32>(INTERIOR_LO_X, INTERIOR_LO_Y, INTERIOR_LO_Z);
+    let hi = vec3<i32>(INTERIOR_HI_X, INTERIOR_HI_Y, INTERIOR_HI_Z);
+    return any(x < lo) || any(x >= hi);
 }
 
 // SKIP: which of the four cells of quad q (cells 4q to 4q + 3, four bits of one mask word) the

@@ -10,6 +10,7 @@
 use super::block::BlockLattice;
 use super::communicator::Communicator;
 use super::decomposition::Decomposition;
+use super::halo::Halo;
 use crate::lbm::geometry::Setup;
 use crate::lbm::imb::{ImbBlock, ImbOptions, SolidParticles};
 
@@ -21,6 +22,7 @@ pub(super) fn block_options(options: ImbOptions, d: &Decomposition, whole: &Setu
     }
     let own_lo = d.origin;
     let own_hi: [usize; 3] = std::array::from_fn(|a| d.origin[a] + d.size[a]);
+    let (interior_lo, interior_hi) = Halo::interior(d, d.local_n());
     ImbOptions {
         block: Some(ImbBlock {
             whole: whole.n,
@@ -28,6 +30,8 @@ pub(super) fn block_options(options: ImbOptions, d: &Decomposition, whole: &Setu
             own_lo,
             own_hi,
             base: std::array::from_fn(|a| own_lo[a] as i64 - d.lo(a) as i64),
+            interior_lo,
+            interior_hi,
         }),
         ..options
     }

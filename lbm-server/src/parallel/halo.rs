@@ -139,20 +139,27 @@ impl Halo {
         lattice.end_split_step();
     }
 
+    /// The box of cells `lo` to `hi` (excluded) of the block `d` of `n` cells (ghost layers
+    /// included) outside its shell: the shell is every cell within two layers of a face with a
+    /// ghost layer (the ghost layer and the layer next to it, whose slots the exchange reads and
+    /// writes). [`Halo::regions`] draws the regions by it, and the redo's store of the shell's
+    /// covered cells goes by it (`ImbBlock::interior_*`, imb_covered.wgsl `in_shell`).
+    pub fn interior(d: &Decomposition, n: [usize; 3]) -> ([usize; 3], [usize; 3]) {
+        let layers = |f: usize| if d.neighbour(f).is_some() { 2 } else { 0 };
+        (
+            std::array::from_fn(|a| layers(2 * a)),
+            std::array::from_fn(|a| n[a] - layers(2 * a + 1)),
+        )
+    }
+
     /// The regions of a step split for the overlapped exchange, and each cell's, in the block `d` of
     /// `n` cells (ghost layers included): 0, the shell, the cells of each cut face's ghost layer
     /// and of the layer next to it (those whose slots the exchange reads or writes); then the
     /// interior cut into as many parts as there are cut axes (whole, in memory order), the part
     /// `p` updated while the exchange across the `p`-th axis runs.
     pub fn regions(d: &Decomposition, n: [usize; 3]) -> (usize, Vec<u8>) {
-        let cut: Vec<usize> = (0..6).filter(|&f| d.neighbour(f).is_some()).collect();
-        let in_shell = |x: [usize; 3]| {
-            cut.iter().any(|&f| {
-                let a = f / 2;
-                let from_face = if f % 2 == 1 { n[a] - 1 - x[a] } else { x[a] };
-                from_face < 2
-            })
-        };
+        let (lo, hi) = Halo::interior(d, n);
+        let in_shell = |x: [usize; 3]| (0..3).any(|a| x[a] < lo[a] || x[a] >= hi[a]);
         let cells = n.iter().product::<usize>();
         let shell: Vec<bool> = (0..cells)
             .map(|k| in_shell([k % n[0], (k / n[0]) % n[1], k / (n[0] * n[1])]))

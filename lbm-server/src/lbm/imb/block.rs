@@ -16,10 +16,16 @@ pub struct ImbBlock {
     /// The whole-lattice coordinates of the block lattice's cell (0, 0, 0): `own_lo`, one less
     /// along an axis with a ghost layer below (-1 where that layer wraps).
     pub base: [i64; 3],
+    /// The block lattice's cells outside its shell, from `interior_lo` to `interior_hi`
+    /// (excluded), in the block lattice's coordinates (`parallel::Halo::interior`): the redo's
+    /// store of the shell's covered cells in a step split by region.
+    pub interior_lo: [usize; 3],
+    pub interior_hi: [usize; 3],
 }
 
 impl ImbBlock {
-    /// The shaders' override constants of the block (imb.wgsl's BLOCK, WHOLE_*, OWN_*, BASE_*);
+    /// The shaders' override constants of the block (imb.wgsl's BLOCK, WHOLE_*, OWN_*, BASE_*,
+    /// INTERIOR_*);
     /// without one, BLOCK false and the lattice is the whole.
     pub fn constants(block: Option<ImbBlock>) -> Vec<(&'static str, f64)> {
         let Some(b) = block else {
@@ -38,6 +44,14 @@ impl ImbBlock {
             b.own_hi.map(|v| v as f64),
         ));
         c.extend(axes(["BASE_X", "BASE_Y", "BASE_Z"], b.base.map(|v| v as f64)));
+        c.extend(axes(
+            ["INTERIOR_LO_X", "INTERIOR_LO_Y", "INTERIOR_LO_Z"],
+            b.interior_lo.map(|v| v as f64),
+        ));
+        c.extend(axes(
+            ["INTERIOR_HI_X", "INTERIOR_HI_Y", "INTERIOR_HI_Z"],
+            b.interior_hi.map(|v| v as f64),
+        ));
         c
     }
 

@@ -143,6 +143,8 @@ mod tests {
             own_lo: [0, 0, 0],
             own_hi: [4, 6, 4],
             base: [-1, 0, 0],
+            interior_lo: [2, 0, 0],
+            interior_hi: [4, 6, 3],
         }
     }
 
