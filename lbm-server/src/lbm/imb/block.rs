@@ -25,33 +25,31 @@ pub struct ImbBlock {
 
 impl ImbBlock {
     /// The shaders' override constants of the block (imb.wgsl's BLOCK, WHOLE_*, OWN_*, BASE_*,
-    /// INTERIOR_*);
-    /// without one, BLOCK false and the lattice is the whole.
+    /// INTERIOR_*); without one, BLOCK false and the lattice is the whole.
     pub fn constants(block: Option<ImbBlock>) -> Vec<(&'static str, f64)> {
         let Some(b) = block else {
             return vec![("BLOCK", 0.0)];
         };
-        let axes = |names: [&'static str; 3], v: [f64; 3]| names.into_iter().zip(v);
+        let cells = |v: [usize; 3]| v.map(|v| v as f64);
+        let vectors = [
+            (["WHOLE_X", "WHOLE_Y", "WHOLE_Z"], cells(b.whole)),
+            (["OWN_LO_X", "OWN_LO_Y", "OWN_LO_Z"], cells(b.own_lo)),
+            (["OWN_HI_X", "OWN_HI_Y", "OWN_HI_Z"], cells(b.own_hi)),
+            (["BASE_X", "BASE_Y", "BASE_Z"], b.base.map(|v| v as f64)),
+            (
+                ["INTERIOR_LO_X", "INTERIOR_LO_Y", "INTERIOR_LO_Z"],
+                cells(b.interior_lo),
+            ),
+            (
+                ["INTERIOR_HI_X", "INTERIOR_HI_Y", "INTERIOR_HI_Z"],
+                cells(b.interior_hi),
+            ),
+        ];
         let periodic = (0..3).map(|a| u32::from(b.periodic[a]) << a).sum::<u32>();
         let mut c = vec![("BLOCK", 1.0), ("WHOLE_PERIODIC", f64::from(periodic))];
-        c.extend(axes(["WHOLE_X", "WHOLE_Y", "WHOLE_Z"], b.whole.map(|v| v as f64)));
-        c.extend(axes(
-            ["OWN_LO_X", "OWN_LO_Y", "OWN_LO_Z"],
-            b.own_lo.map(|v| v as f64),
-        ));
-        c.extend(axes(
-            ["OWN_HI_X", "OWN_HI_Y", "OWN_HI_Z"],
-            b.own_hi.map(|v| v as f64),
-        ));
-        c.extend(axes(["BASE_X", "BASE_Y", "BASE_Z"], b.base.map(|v| v as f64)));
-        c.extend(axes(
-            ["INTERIOR_LO_X", "INTERIOR_LO_Y", "INTERIOR_LO_Z"],
-            b.interior_lo.map(|v| v as f64),
-        ));
-        c.extend(axes(
-            ["INTERIOR_HI_X", "INTERIOR_HI_Y", "INTERIOR_HI_Z"],
-            b.interior_hi.map(|v| v as f64),
-        ));
+        for (names, v) in vectors {
+            c.extend(names.into_iter().zip(v));
+        }
         c
     }
 
