@@ -3,6 +3,7 @@
 mod coupled;
 mod coupled_ranks;
 mod naive;
+mod paired;
 mod ranks;
 mod storage;
 
@@ -32,7 +33,8 @@ pub struct BenchArgs {
     #[arg(long, default_value = "bgk")]
     operator: String,
     /// Also run coupled steps with these particle counts (e.g. 1,8,64,512,4096,32768): spheres of
-    /// 4 cells diameter on a regular lattice, immersed moving boundary; MLUPS and ratio to LBM-only.
+    /// 4 cells diameter on a regular lattice, immersed moving boundary; MLUPS and ratio to LBM-only,
+    /// and CPU time per step against as many LBM-only steps timed in alternating blocks beside them.
     /// On several ranks the steps are coupled, with the first count and the first way of
     /// --covered-cells (the loads gathered at rank 0 as in a run).
     #[arg(long, value_delimiter = ',')]

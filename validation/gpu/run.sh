@@ -17,7 +17,8 @@
 # (the same on 2 ranks with 16^3 spheres), bench_walls.txt and bench_periodic.txt (the Ten Cate
 # grid at 16 cells, 224 x 224 x 256, closed and periodic, one sphere, both ways of treating the
 # covered cells, each pass timed: what a closed box costs), coupled_trt.txt (256 x 256 x 512, 1 to
-# 32^3 particles, ratio to LBM-only, time per pass, the covered cells fused, redone and skipped),
+# 32^3 particles, ratio to LBM-only, by CPU time beside LBM-only steps, time per pass, the covered
+# cells fused, redone and skipped),
 # coupled_seed_density.txt (lavapipe's sweep: 512 and 4096 particles on 64 x 64 x 128, by pass),
 # coupled_atomic_list.txt (32^3, the list joined with one atomic per cell, not per subgroup),
 # coupled_dense.txt (64^3 particles, a dense bed), coupled_dem.txt (1 and 32^3 particles, the

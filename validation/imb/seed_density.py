@@ -6,10 +6,13 @@ One sphere of 4 cells per 1024 cells: 512 spheres on 64 x 64 x 128, TRT. Each ro
 `lbm-server bench --passes --covered-cells all` once per build, the builds alternating, and
 reads the CPU time of the process (all threads) per pass, each pass submitted and waited for on
 its own: on a shared machine the CPU time moves far less than the wall time. Printed per build
-and way: the median and range over the rounds of each pass, and two ratios to LBM-only:
+and way: the median and range over the rounds of each pass, and three ratios to LBM-only:
 "by CPU" is the LBM-only kernels' time (the redo's "fluid" pass of the same run: the fluid-only
-step's kernels) over the way's whole step; "bench" is the bench's own wall-clock ratio (its
-LBM-only rounds and coupled steps at different moments: on a loaded machine it moves by 2x).
+step's kernels) over the way's whole step, each pass with a submit and wait of its own; "paired"
+is by CPU time too, of whole steps as a run makes them, each way's steps in blocks alternating
+with as many LBM-only steps (the bench's table by CPU time); "bench" is the bench's own wall-clock
+ratio (its LBM-only rounds and coupled steps at different moments: on a loaded machine it moves by
+2x).
 
     cargo build --release -p lbm-server
     cp target/release/lbm-server /tmp/after   # and a build of another commit as /tmp/before
@@ -28,7 +31,8 @@ WAYS = ["redo", "fused", "skip"]
 
 
 def run(binary):
-    """One bench run: {way: {pass: CPU ms}}, {way: bench ratio %}, the load average before it."""
+    """One bench run: {way: {pass: CPU ms}}, {way: [bench ratio %, paired ratio %]}, the load
+    average before it."""
     load = open("/proc/loadavg").read().split()[0]
     env = dict(os.environ, NODEVICE_SELECT="1")
     out = subprocess.run(["nice", "-n", "5", binary] + BENCH, env=env, capture_output=True,
@@ -36,8 +40,8 @@ def run(binary):
     passes, ratios = {}, {}
     for i, line in enumerate(out):
         cells = [c.strip() for c in line.split("|")[1:-1]]
-        if len(cells) == 4 and cells[0] == "512" and cells[1] in WAYS:
-            ratios[cells[1]] = float(cells[3].rstrip("%"))
+        if len(cells) in (4, 5) and cells[0] == "512" and cells[1] in WAYS:
+            ratios.setdefault(cells[1], []).append(float(cells[-1].rstrip("%")))
         m = re.match(r"coupled step by pass, covered cells (\w+), CPU", line)
         if m:
             names = [c.strip() for c in out[i + 1].split("|")[2:-1]]
@@ -62,9 +66,11 @@ def report(binary, runs):
         print("| median (range) | " + " | ".join(
             spread([r[0][way][n] for r in runs]) for n in names) + " |")
         by_cpu = [100 * lbm / r[0][way]["total"] for lbm, r in zip(lbm_only, runs)]
-        bench = [r[1][way] for r in runs]
+        bench = [r[1][way][0] for r in runs]
+        paired = [r[1][way][1] for r in runs]
         print(f"\n{way}: coupling (all but fluid) {spread([r[0][way]['total without fluid'] for r in runs])} ms; "
-              f"ratio to LBM-only by CPU {spread(by_cpu, 0)}%, bench {spread(bench, 0)}%")
+              f"ratio to LBM-only by CPU {spread(by_cpu, 0)}%, paired {spread(paired, 0)}%, "
+              f"bench {spread(bench, 0)}%")
 
 
 def main():

@@ -1,6 +1,7 @@
 //! `lbm-server bench --particles`: the coupled step against the LBM-only step of the same run,
 //! and (`--passes`) each of its passes.
 
+use super::paired::{lockstep, lockstep_step, paired, process_cpu_seconds, Paired};
 use super::BenchArgs;
 use crate::lbm::geometry::Setup;
 use crate::lbm::gpu::{Gpu, GpuLattice, Health};
@@ -55,30 +56,35 @@ impl Sweep {
         Duration::from_secs_f64(self.dem_ms / 1e3)
     }
 
-    /// Prints the sweep's table over `counts` particles, against `lbm_only` MLUPS; first the
-    /// LBM-only `lattice` of that figure stepped as the lockstep steps (then freed).
-    pub fn run(&self, lattice: GpuLattice, counts: &[usize], lbm_only: f64) -> Result<(), String> {
+    /// Prints the sweep's table over `counts` particles, against `lbm_only` MLUPS; the LBM-only
+    /// `lbm` lattice of that figure is stepped as the lockstep steps beside each row (the table by
+    /// CPU time).
+    pub fn run(&self, mut lbm: GpuLattice, counts: &[usize], lbm_only: f64) -> Result<(), String> {
         self.print_head(lbm_only);
-        let row = |particles: &str, covered_cells: &str, mlups: f64| {
+        let mut by_cpu = Vec::new();
+        let mut row = |particles: &str, covered_cells: &str, timed: Paired| {
+            let mlups = timed.steps.mlups;
             println!(
                 "| {particles} | {covered_cells} | {mlups:.1} | {:.0}% |",
                 100.0 * mlups / lbm_only
             );
+            by_cpu.push((particles.to_string(), covered_cells.to_string(), timed));
         };
-        self.lockstep_rows(lattice, &row)?;
+        self.lockstep_rows(&mut lbm, &mut row)?;
         let mut tables = PassTables::default();
         for &count in counts {
             let particles = bench_spheres(count, self.setup.n)?;
             for &mode in &self.modes {
                 let mut lattice = self.lattice(mode)?;
                 let name = lattice.covered_cells().name();
-                let mlups = self.coupled_mlups(&mut lattice, &particles)?;
-                row(&count.to_string(), name, mlups);
+                let timed = self.coupled_timed(&mut lattice, &particles, &mut lbm)?;
+                row(&count.to_string(), name, timed);
                 if self.passes {
                     tables.add(count, name, &mut lattice, &particles, self.steps)?;
                 }
             }
         }
+        print_by_cpu(&by_cpu);
         if self.passes {
             tables.print();
         }
@@ -96,20 +102,31 @@ impl Sweep {
     }
 
     /// The lockstep's own cost: LBM-only steps, each submitted and waited for as a coupled step
-    /// is; then the fluid kernels that test the cover mask (one bit per cell), no particle.
-    fn lockstep_rows(&self, mut lattice: GpuLattice, row: &dyn Fn(&str, &str, f64)) -> Result<(), String> {
-        let mlups = lockstep_mlups(&self.gpu, &mut lattice, self.steps, self.dem());
-        row("0 (no coupling: one submit and wait per step)", "-", mlups);
-        drop(lattice);
+    /// is (after 5 untimed); then the fluid kernels that test the cover mask (one bit per cell),
+    /// no particle, beside them.
+    fn lockstep_rows(
+        &self,
+        lbm: &mut GpuLattice,
+        row: &mut dyn FnMut(&str, &str, Paired),
+    ) -> Result<(), String> {
+        lbm.step(5);
+        let timed = lockstep(&self.gpu, lbm, self.steps, self.dem());
+        let alone = Paired {
+            steps: timed,
+            lbm_only: timed,
+        };
+        row("0 (no coupling: one submit and wait per step)", "-", alone);
         for mode in [CoveredCells::Fused, CoveredCells::Skip] {
             if !self.modes.contains(&mode) {
                 continue;
             }
             let name = mode.name();
             let mut lattice = self.lattice(mode)?;
-            let mlups = lockstep_mlups(&self.gpu, &mut lattice, self.steps, self.dem());
+            lattice.step(5);
+            let mut step = || lockstep_step(&self.gpu, &mut lattice);
+            let timed = self.beside(lbm, &mut step)?;
             let what = format!("0 ({name} fluid kernels, no particle: one submit and wait per step)");
-            row(&what, name, mlups);
+            row(&what, name, timed);
         }
         Ok(())
     }
@@ -127,20 +144,45 @@ impl Sweep {
         )
     }
 
-    /// MLUPS of the sweep's coupled steps with `particles` (after 5 untimed), the host idle
-    /// `dem` after each.
-    fn coupled_mlups(&self, lattice: &mut GpuLattice, particles: &[SolidParticle]) -> Result<f64, String> {
+    /// The sweep's coupled steps with `particles` (after 5 untimed), the host idle `dem` after
+    /// each, beside the LBM-only lockstep steps of `lbm`.
+    fn coupled_timed(
+        &self,
+        lattice: &mut GpuLattice,
+        particles: &[SolidParticle],
+        lbm: &mut GpuLattice,
+    ) -> Result<Paired, String> {
         for _ in 0..5 {
             lattice.step_coupled(particles)?;
         }
-        let start = Instant::now();
-        for _ in 0..self.steps {
-            lattice.step_coupled(particles)?;
-            std::thread::sleep(self.dem());
-        }
-        // The last step's fluid kernels may still run (with the redo they do not hold the loads).
-        self.gpu.wait();
-        Ok(self.setup.cells() as f64 * self.steps as f64 / start.elapsed().as_secs_f64() / 1e6)
+        let mut step = || lattice.step_coupled(particles).map(|_| ());
+        self.beside(lbm, &mut step)
+    }
+
+    /// The sweep's steps of `step` timed beside as many LBM-only lockstep steps of `lbm`.
+    fn beside(
+        &self,
+        lbm: &mut GpuLattice,
+        step: &mut dyn FnMut() -> Result<(), String>,
+    ) -> Result<Paired, String> {
+        let cells = self.setup.cells();
+        paired(&self.gpu, lbm, cells, self.steps, self.dem(), step)
+    }
+}
+
+/// The sweep's rows by CPU time per step, each against the LBM-only lockstep steps timed beside
+/// it: on a shared machine the ratio that moves least.
+fn print_by_cpu(rows: &[(String, String, Paired)]) {
+    println!("coupled steps by CPU time (this process, all threads), each beside as many LBM-only steps in alternating blocks:");
+    println!("| particles | covered cells | CPU ms per step | LBM-only beside it (CPU ms per step) | ratio to LBM-only by CPU |");
+    println!("|---:|---|---:|---:|---:|");
+    for (particles, covered_cells, timed) in rows {
+        println!(
+            "| {particles} | {covered_cells} | {:.2} | {:.2} | {:.0}% |",
+            timed.steps.cpu_ms,
+            timed.lbm_only.cpu_ms,
+            timed.ratio_by_cpu()
+        );
     }
 }
 
@@ -215,18 +257,6 @@ fn print_host_passes(host: &[(usize, [f64; 2])]) {
     }
 }
 
-/// MLUPS of `steps` fluid steps, each submitted and waited for on its own, then `dem` idle.
-fn lockstep_mlups(gpu: &Gpu, lattice: &mut GpuLattice, steps: u64, dem: Duration) -> f64 {
-    gpu.wait();
-    let start = Instant::now();
-    for _ in 0..steps {
-        lattice.step(1);
-        gpu.wait();
-        std::thread::sleep(dem);
-    }
-    lattice.setup.cells() as f64 * steps as f64 / start.elapsed().as_secs_f64() / 1e6
-}
-
 /// side^3 spheres of radius 2 cells at the centres of a regular lattice of `spacing`.
 fn sphere_lattice(side: usize, spacing: [f64; 3]) -> Vec<SolidParticle> {
     (0..side * side * side)
@@ -296,21 +326,6 @@ fn add_mean<const N: usize>(
 fn start_of_run() -> Instant {
     static START: std::sync::OnceLock<Instant> = std::sync::OnceLock::new();
     *START.get_or_init(Instant::now)
-}
-
-/// CPU seconds of this process, all threads (0 where the clock is not available).
-fn process_cpu_seconds() -> f64 {
-    let mut t = libc::timespec {
-        tv_sec: 0,
-        tv_nsec: 0,
-    };
-    // SAFETY: clock_gettime writes one timespec, which `t` is.
-    let ok = unsafe { libc::clock_gettime(libc::CLOCK_PROCESS_CPUTIME_ID, &mut t) } == 0;
-    if ok {
-        t.tv_sec as f64 + t.tv_nsec as f64 * 1e-9
-    } else {
-        0.0
-    }
 }
 
 /// Milliseconds by N clocks of each pass of a coupled step, in the order of the step.
