@@ -1,5 +1,6 @@
 //! `lbm-server bench --particles`: the coupled sweep's tables, which the GPU batch
-//! (validation/gpu/run.sh) and validation/imb/seed_density.py read, on a small grid.
+//! (validation/gpu/run.sh, its coupled_rows.py) and validation/imb/seed_density.py read, on a
+//! small grid.
 
 mod common;
 use common::*;
@@ -24,6 +25,21 @@ fn percent(cell: &str) -> f64 {
     cell.trim_end_matches('%')
         .parse()
         .unwrap_or_else(|_| panic!("not a percentage: {cell}"))
+}
+
+/// The rows that validation/gpu/SCRIPT prints from the bench output `text` (saved as `name`, as
+/// the GPU batch names it), and all it printed.
+fn script_rows(script: &str, name: &str, text: &str) -> (Vec<Vec<String>>, String) {
+    let file = temp_dir(script).join(name);
+    std::fs::write(&file, text).unwrap();
+    let script = format!("{}/validation/gpu/{script}", env!("CARGO_MANIFEST_DIR"));
+    let output = Command::new("python3")
+        .args([&script, file.to_str().unwrap(), "--print"])
+        .output()
+        .expect("python3");
+    let printed = output_text(&output);
+    assert!(output.status.success(), "{script} failed:\n{printed}");
+    (table(&format!("title\n{printed}"), "title"), printed)
 }
 
 fn number(cell: &str) -> f64 {
@@ -89,5 +105,64 @@ fn the_coupled_bench_times_each_way_by_the_wall_clock_and_beside_lbm_only_steps_
             (percent(&row[4]) - ratio).abs() <= 1.0,
             "{row:?}: ratio {ratio:.1}%:\n{text}"
         );
+    }
+    batch_rows(&text, &wall);
+}
+
+/// validation/gpu/coupled_rows.py (which folds a GPU batch's sweeps into BENCHMARKS.md) on the
+/// bench's output: a row for no particle and one for the 8 spheres, each way's MLUPS and ratio as
+/// the bench printed them, the fastest in bold.
+fn batch_rows(text: &str, wall: &[Vec<String>]) {
+    let (rows, printed) = script_rows("coupled_rows.py", "coupled_trt.txt", text);
+    assert_eq!(rows.len(), 2, "{printed}");
+    let figure = |r: &Vec<String>| format!("{} ({})", r[2], r[3]);
+    let eight: Vec<String> = wall.iter().filter(|r| r[0] == "8").map(figure).collect();
+    let cells: Vec<String> = rows[1][4..7]
+        .iter()
+        .map(|c| c.trim_matches('*').to_string())
+        .collect();
+    assert_eq!(rows[1][2], "8", "{printed}");
+    assert_eq!(cells, eight, "{printed}");
+    for row in &rows {
+        let bold = row[4..7].iter().filter(|c| c.starts_with("**")).count();
+        assert_eq!(bold, 1, "one fastest way per row: {row:?}");
+    }
+}
+
+#[test]
+fn the_kernel_bench_gives_validation_gpu_kernel_rows_each_storage_and_kernel() {
+    let output = Command::new(bin("lbm-server"))
+        .args([
+            "bench",
+            "--grid",
+            "16x16x16",
+            "--operator",
+            "bgk",
+            "--steps",
+            "2",
+            "--rounds",
+            "1",
+        ])
+        .args(["--per-cell", "--storage", "fp32,fp16s"])
+        .env("NODEVICE_SELECT", "1")
+        .output()
+        .expect("lbm-server bench");
+    let text = output_text(&output);
+    assert!(output.status.success(), "bench failed:\n{text}");
+    let (rows, printed) = script_rows("kernel_rows.py", "bench_kernels.txt", &text);
+    // What the bench printed of each storage and kernel, e.g. "storage fp16s  cells 1.6 MLUPS".
+    let mlups = |storage: &str, kernel: &str| -> String {
+        let line = text
+            .lines()
+            .find(|l| l.starts_with(&format!("storage {storage} ")) && l.contains(&format!(" {kernel} ")))
+            .unwrap_or_else(|| panic!("no {storage} {kernel} line:\n{text}"));
+        let words: Vec<&str> = line.split_whitespace().collect();
+        words[3].to_string()
+    };
+    let storages: Vec<&str> = rows.iter().map(|r| r[3].as_str()).collect();
+    assert_eq!(storages, ["FP32", "FP16S"], "{printed}");
+    for (row, storage) in rows.iter().zip(["fp32", "fp16s"]) {
+        assert_eq!(row[4], mlups(storage, "quads"), "{printed}\n{text}");
+        assert_eq!(row[5], mlups(storage, "cells"), "{printed}\n{text}");
     }
 }

@@ -4,9 +4,10 @@
 # beds into the work folders validation/imb/work/{ten_cate,experiment,fluidized_bed}/ and their records
 # into validation/imb/results/*.json (the reports rebuilt), renders the seed's sedimentation into
 # validation/sedimentation/sedimentation-41.{png,json} (with its summary.json), folds the kernels'
-# rows (bench_kernels.txt, bench_{trt,mrt}.txt: validation/gpu/kernel_rows.py) into BENCHMARKS.md,
-# and lists what goes by hand into BENCHMARKS.md
-# (bench_*.txt, coupled_*.txt, suspension*/summary.json, dem_bench_*.txt) and into
+# rows (bench_kernels.txt, bench_{trt,mrt}.txt: validation/gpu/kernel_rows.py) and the coupled
+# sweeps' (coupled_*.txt: validation/gpu/coupled_rows.py) into BENCHMARKS.md, and lists what goes
+# by hand into BENCHMARKS.md (the passes of coupled_*.txt, bench_*.txt, suspension*/summary.json,
+# dem_bench_*.txt) and into
 # validation/lbm/REPORT.md (the "finer grids" sections of validate/ and validate_wake/REPORT.md).
 #
 #     bash validation/gpu/import.sh FILES_AT     # the folder the device tool put the files in
@@ -46,6 +47,10 @@ fi
 if [ -f "$g/bench_kernels.txt" ]; then
     echo "== the kernels: per-cell against quads, each storage, into BENCHMARKS.md"
     python3 validation/gpu/kernel_rows.py "$g"
+fi
+if ls "$g"/coupled_*.txt >/dev/null 2>&1; then
+    echo "== the coupled sweeps: each way of the covered cells, into BENCHMARKS.md"
+    python3 validation/gpu/coupled_rows.py "$g"
 fi
 echo "== by hand: BENCHMARKS.md and validation/lbm/REPORT.md from"
 find "$g" -maxdepth 2 \( -name 'bench_*.txt' -o -name 'coupled_*.txt' -o -name 'dem_bench_*.txt' \

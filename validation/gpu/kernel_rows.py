@@ -10,10 +10,9 @@ round) and their ratio; the naive two-lattice kernel (FP32, BGK) and the copy ba
 run; the per-cell kernel against the naive one.
 """
 
-import argparse
-import pathlib
 import re
-import sys
+
+import folding
 
 BEGIN = "<!-- gpu-kernels:begin -->"
 END = "<!-- gpu-kernels:end -->"
@@ -71,34 +70,5 @@ def cube(grid_text):
     return f"{edges[0]}^3" if len(set(edges)) == 1 else " x ".join(edges)
 
 
-def fold(table, benchmarks):
-    """Replaces what lies between the markers of `benchmarks` with `table`."""
-    text = benchmarks.read_text()
-    if BEGIN not in text or END not in text:
-        sys.exit(f"{benchmarks}: no {BEGIN} ... {END} markers")
-    head, rest = text.split(BEGIN, 1)
-    _, tail = rest.split(END, 1)
-    benchmarks.write_text(f"{head}{BEGIN}\n{table}\n{END}{tail}")
-
-
-def main():
-    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("source", type=pathlib.Path)
-    p.add_argument("--benchmarks", type=pathlib.Path, default=pathlib.Path("BENCHMARKS.md"))
-    p.add_argument("--print", action="store_true", help="print the rows, fold nothing")
-    a = p.parse_args()
-    files = [a.source] if a.source.is_file() else [
-        a.source / f"bench_{name}.txt" for name in ("kernels", "trt", "mrt")
-    ]
-    table = [r for f in files if f.exists() for r in rows(f)]
-    if not table:
-        sys.exit(f"no kernel rows in {a.source}")
-    table = HEAD + "\n" + "\n".join(table)
-    print(table)
-    if not a.print:
-        fold(table, a.benchmarks)
-        print(f"folded into {a.benchmarks}")
-
-
 if __name__ == "__main__":
-    main()
+    folding.main(__doc__, [f"bench_{name}" for name in ("kernels", "trt", "mrt")], rows, HEAD, (BEGIN, END))
