@@ -11,7 +11,7 @@ use std::time::{Duration, Instant};
 const BLOCKS: u64 = 4;
 
 /// Steps by the two clocks.
-#[derive(Clone, Copy, Default)]
+#[derive(Clone, Copy)]
 pub(super) struct Timed {
     pub mlups: f64,
     /// CPU milliseconds per step.
