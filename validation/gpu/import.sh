@@ -15,6 +15,12 @@ set -euo pipefail
 cd "$(dirname "$0")/../.."
 src=${1:?usage: bash validation/gpu/import.sh FILES_AT}
 ls "$src"/gpu.tgz.* >/dev/null 2>&1 || { echo "no gpu.tgz.* in $src" >&2; exit 1; }
+# The reports' charts need matplotlib and numpy: installed first where missing, so that a fresh
+# machine does not stop half way, after the Ten Cate runs and before the tables are folded in.
+if ! python3 -c "import matplotlib, numpy" 2>/dev/null; then
+    python3 -m pip install --quiet --disable-pip-version-check -r validation/sedimentation/requirements.txt ||
+        { echo "import.sh needs matplotlib and numpy: python3 -m pip install -r validation/sedimentation/requirements.txt" >&2; exit 1; }
+fi
 dest=out/gpu_import
 rm -rf "$dest"
 mkdir -p "$dest"
@@ -41,8 +47,7 @@ if [ -d "$g/sedimentation" ]; then
     echo "== the seed's sedimentation: $name (validation/sedimentation/README.md)"
     cp "$g/sedimentation/summary.json" "validation/sedimentation/$name-summary.json"
     python3 validation/sedimentation/render.py "$g/sedimentation" --png "validation/sedimentation/$name.png" \
-        --json "validation/sedimentation/$name.json" ||
-        echo "render.py failed (pip install -r validation/sedimentation/requirements.txt)" >&2
+        --json "validation/sedimentation/$name.json" || echo "render.py failed" >&2
 fi
 if [ -f "$g/bench_kernels.txt" ]; then
     echo "== the kernels: per-cell against quads, each storage, into BENCHMARKS.md"
