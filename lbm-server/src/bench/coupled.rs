@@ -110,7 +110,7 @@ impl Sweep {
         row: &mut dyn FnMut(&str, &str, Paired),
     ) -> Result<(), String> {
         lbm.step(5);
-        let timed = lockstep(&self.gpu, lbm, self.steps, self.dem());
+        let timed = lockstep(&self.gpu, lbm, self.steps, self.dem())?;
         let alone = Paired {
             steps: timed,
             lbm_only: timed,

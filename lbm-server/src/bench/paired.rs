@@ -71,10 +71,10 @@ pub(super) fn paired(
 
 /// `steps` LBM-only steps of `lbm`, each submitted and waited for on its own, the host idle `dem`
 /// after each: the lockstep's own cost.
-pub(super) fn lockstep(gpu: &Gpu, lbm: &mut GpuLattice, steps: u64, dem: Duration) -> Timed {
+pub(super) fn lockstep(gpu: &Gpu, lbm: &mut GpuLattice, steps: u64, dem: Duration) -> Result<Timed, String> {
     let cells = lbm.setup.cells();
-    let clocks = timed_steps(gpu, steps, dem, &mut || lockstep_step(gpu, lbm)).expect("fluid steps");
-    Timed::of(clocks, cells, steps)
+    let clocks = timed_steps(gpu, steps, dem, &mut || lockstep_step(gpu, lbm))?;
+    Ok(Timed::of(clocks, cells, steps))
 }
 
 /// One LBM-only step of `lbm`, submitted and waited for on its own.
