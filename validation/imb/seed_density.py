@@ -31,8 +31,8 @@ WAYS = ["redo", "fused", "skip"]
 
 
 def run(binary):
-    """One bench run: {way: {pass: CPU ms}}, {way: [bench ratio %, paired ratio %]}, the load
-    average before it."""
+    """One bench run: {way: {pass: CPU ms}}, {way: {"bench": ratio %, "paired": ratio %}}, the
+    load average before it."""
     load = open("/proc/loadavg").read().split()[0]
     env = dict(os.environ, NODEVICE_SELECT="1")
     out = subprocess.run(["nice", "-n", "5", binary] + BENCH, env=env, capture_output=True,
@@ -40,8 +40,10 @@ def run(binary):
     passes, ratios = {}, {}
     for i, line in enumerate(out):
         cells = [c.strip() for c in line.split("|")[1:-1]]
-        if len(cells) in (4, 5) and cells[0] == "512" and cells[1] in WAYS:
-            ratios.setdefault(cells[1], []).append(float(cells[-1].rstrip("%")))
+        # The wall-clock table has 4 columns, the table by CPU time (paired) 5.
+        table = {4: "bench", 5: "paired"}.get(len(cells))
+        if table and cells[0] == "512" and cells[1] in WAYS:
+            ratios.setdefault(cells[1], {})[table] = float(cells[-1].rstrip("%"))
         m = re.match(r"coupled step by pass, covered cells (\w+), CPU", line)
         if m:
             names = [c.strip() for c in out[i + 1].split("|")[2:-1]]
@@ -66,8 +68,8 @@ def report(binary, runs):
         print("| median (range) | " + " | ".join(
             spread([r[0][way][n] for r in runs]) for n in names) + " |")
         by_cpu = [100 * lbm / r[0][way]["total"] for lbm, r in zip(lbm_only, runs)]
-        bench = [r[1][way][0] for r in runs]
-        paired = [r[1][way][1] for r in runs]
+        bench = [r[1][way]["bench"] for r in runs]
+        paired = [r[1][way]["paired"] for r in runs]
         print(f"\n{way}: coupling (all but fluid) {spread([r[0][way]['total without fluid'] for r in runs])} ms; "
               f"ratio to LBM-only by CPU {spread(by_cpu, 0)}%, paired {spread(paired, 0)}%, "
               f"bench {spread(bench, 0)}%")
